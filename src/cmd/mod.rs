@@ -1,0 +1,22 @@
+pub mod bench;
+pub mod inspect;
+
+use std::path::Path;
+
+/// Read a file, naming it in the error.
+pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Read and decode an image file with the default limits, naming the file in errors.
+pub fn read_image(path: &Path) -> Result<filigree::raster::Rgba8Image, String> {
+    let bytes = read_file(path)?;
+    filigree::raster::decode(&bytes, filigree::raster::Limits::default())
+        .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Median and minimum of a list of timings (seconds).
+pub fn min_median(mut v: Vec<f64>) -> (f64, f64) {
+    v.sort_by(|a, b| a.total_cmp(b));
+    (v[0], v[v.len() / 2])
+}

@@ -1,0 +1,160 @@
+//! Long work as resumable objects.
+//!
+//! A busy wasm call cannot read a cancel message, so every long computation is
+//! a [`Job`]: each [`Job::step`] call does one bounded slice of work (aim for
+//! well under 10 ms) and says how far along it is. The browser worker runs
+//! slices until ~15 ms have passed, posts progress, yields to its event loop
+//! (where a `cancel` message can arrive) and goes on. Natively,
+//! [`run_to_end`] drives the same object and checks a cancel flag between
+//! slices. Both paths execute the same slices in the same order, which is what
+//! keeps native and wasm results identical.
+use crate::core::error::{Error, Result};
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// How far a job has come.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Progress {
+    /// Fraction done in `0.0..=1.0`. Monotone over a job's life.
+    pub fraction: f64,
+    /// What the job is doing now, e.g. "solving orientations".
+    pub stage: String,
+    /// The current figure of merit, if the job has one (e.g. a loss).
+    pub figure: Option<f64>,
+}
+
+impl Progress {
+    pub fn new(fraction: f64, stage: impl Into<String>) -> Self {
+        Progress { fraction: fraction.clamp(0.0, 1.0), stage: stage.into(), figure: None }
+    }
+    pub fn with_figure(mut self, figure: f64) -> Self {
+        self.figure = Some(figure);
+        self
+    }
+}
+
+/// What one slice of work ended with.
+#[derive(Debug)]
+pub enum Step<T> {
+    /// More work to do.
+    Running(Progress),
+    /// Finished; the job must not be stepped again.
+    Done(T),
+}
+
+/// A resumable computation. `step` must do a bounded amount of work.
+pub trait Job {
+    type Output;
+    /// Do one slice of work.
+    fn step(&mut self) -> Result<Step<Self::Output>>;
+}
+
+/// A cancel flag shared between whoever drives a job and whoever may stop it.
+#[derive(Debug, Default)]
+pub struct Cancel(AtomicBool);
+
+impl Cancel {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::Relaxed)
+    }
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// Drive `job` to completion natively, reporting progress after each slice and
+/// checking `cancel` between slices.
+pub fn run_to_end<J: Job>(
+    mut job: J,
+    cancel: &Cancel,
+    mut on_progress: impl FnMut(&Progress),
+) -> Result<J::Output> {
+    loop {
+        if cancel.is_cancelled() {
+            return Err(Error::Cancelled);
+        }
+        match job.step()? {
+            Step::Running(p) => on_progress(&p),
+            Step::Done(out) => return Ok(out),
+        }
+    }
+}
+
+/// Drive a job to completion with no progress reporting and no cancellation.
+pub fn run_quietly<J: Job>(job: J) -> Result<J::Output> {
+    run_to_end(job, &Cancel::new(), |_| {})
+}
+
+/// A job that is a single function call: for work that is always short
+/// (e.g. inspecting an image) but should still travel the same protocol.
+pub struct OneShot<F>(Option<F>);
+
+impl<F> OneShot<F> {
+    pub fn new(f: F) -> Self {
+        OneShot(Some(f))
+    }
+}
+
+impl<T, F: FnOnce() -> Result<T>> Job for OneShot<F> {
+    type Output = T;
+    fn step(&mut self) -> Result<Step<T>> {
+        match self.0.take() {
+            Some(f) => f().map(Step::Done),
+            None => Err(Error::input("this job has already finished")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Count {
+        n: u32,
+        to: u32,
+    }
+    impl Job for Count {
+        type Output = u32;
+        fn step(&mut self) -> Result<Step<u32>> {
+            self.n += 1;
+            if self.n == self.to {
+                Ok(Step::Done(self.n))
+            } else {
+                Ok(Step::Running(Progress::new(self.n as f64 / self.to as f64, "counting")))
+            }
+        }
+    }
+
+    #[test]
+    fn runs_to_end_and_reports_monotone_progress() {
+        let mut seen = vec![];
+        let out = run_to_end(Count { n: 0, to: 5 }, &Cancel::new(), |p| seen.push(p.fraction)).unwrap();
+        assert_eq!(out, 5);
+        assert_eq!(seen.len(), 4);
+        assert!(seen.windows(2).all(|w| w[0] < w[1]));
+    }
+
+    #[test]
+    fn cancel_stops_between_slices() {
+        let cancel = Cancel::new();
+        let mut steps = 0;
+        let r = run_to_end(Count { n: 0, to: 100 }, &cancel, |_| {
+            steps += 1;
+            if steps == 3 {
+                cancel.cancel();
+            }
+        });
+        assert_eq!(r, Err(Error::Cancelled));
+        assert_eq!(steps, 3);
+    }
+
+    #[test]
+    fn one_shot_runs_once() {
+        let mut j = OneShot::new(|| Ok(7));
+        assert!(matches!(j.step(), Ok(Step::Done(7))));
+        assert!(j.step().is_err());
+    }
+}

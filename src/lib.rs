@@ -1,0 +1,22 @@
+//! Filigree: a procedural-pattern studio.
+//!
+//! The crate is the whole product's computational core. It builds natively
+//! (library + the `filigree` CLI, feature `cli`) and for `wasm32-unknown-unknown`
+//! (feature `web`, the only code that touches wasm-bindgen; see `src/web/`).
+//!
+//! Layers (see ARCHITECTURE.md):
+//! - [`core`]: errors, limits, the step-driven [`core::job::Job`] interface with
+//!   progress and cancellation, seeded randomness.
+//! - [`raster`]: image decoding with explicit limits, palettes, thumbnails, PNG encoding.
+//! - [`inspect`]: the shared "what is in this image" service (size, palette, thumbnail).
+//! - one folder per tool (`pixel`, ...), plain Rust with no browser types.
+#![forbid(unsafe_code)]
+
+pub mod core;
+pub mod inspect;
+pub mod raster;
+
+#[cfg(feature = "web")]
+pub mod web;
+
+pub use crate::core::error::{Error, Result};

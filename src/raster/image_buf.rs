@@ -1,0 +1,239 @@
+use crate::core::error::{Error, Result};
+use image::{ImageDecoder, ImageFormat, ImageReader};
+use std::io::Cursor;
+
+/// Size limits applied before any pixel is decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Largest accepted width and height, each.
+    pub max_side: u32,
+    /// Largest accepted pixel count (width × height).
+    pub max_pixels: u64,
+}
+
+impl Default for Limits {
+    /// 4096 × 4096 per side and at most 16 Mpx: 64 MiB of RGBA, which a
+    /// browser tab can hold twice over while a tool works on a copy.
+    fn default() -> Self {
+        Limits { max_side: 4096, max_pixels: 4096 * 4096 }
+    }
+}
+
+/// An 8-bit straight-alpha RGBA image, row-major, no padding.
+///
+/// Invariant: `data.len() == width * height * 4`.
+#[derive(Clone, PartialEq, Eq)]
+pub struct Rgba8Image {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<u8>,
+}
+
+impl std::fmt::Debug for Rgba8Image {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Rgba8Image({}×{})", self.width, self.height)
+    }
+}
+
+impl Rgba8Image {
+    /// A fully transparent image.
+    pub fn new(width: u32, height: u32) -> Self {
+        Rgba8Image { width, height, data: vec![0; width as usize * height as usize * 4] }
+    }
+
+    /// Wrap raw RGBA bytes, checking the length.
+    pub fn from_raw(width: u32, height: u32, data: Vec<u8>) -> Result<Self> {
+        let want = width as usize * height as usize * 4;
+        if data.len() != want {
+            return Err(Error::input(format!(
+                "{width}×{height} RGBA needs {want} bytes, got {}",
+                data.len()
+            )));
+        }
+        Ok(Rgba8Image { width, height, data })
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// The pixel at (x, y) as `[r, g, b, a]`. Panics when out of bounds.
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> [u8; 4] {
+        let i = (y as usize * self.width as usize + x as usize) * 4;
+        [self.data[i], self.data[i + 1], self.data[i + 2], self.data[i + 3]]
+    }
+
+    #[inline]
+    pub fn put(&mut self, x: u32, y: u32, px: [u8; 4]) {
+        let i = (y as usize * self.width as usize + x as usize) * 4;
+        self.data[i..i + 4].copy_from_slice(&px);
+    }
+
+    /// Iterate pixels as `[r, g, b, a]`.
+    pub fn pixels(&self) -> impl Iterator<Item = [u8; 4]> + '_ {
+        self.data.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]])
+    }
+
+    /// Scale down so the longer side is at most `max_side`, averaging each
+    /// source box (alpha-weighted so transparent pixels do not darken edges).
+    /// Images already small enough are returned unchanged.
+    pub fn thumbnail(&self, max_side: u32) -> Rgba8Image {
+        let long = self.width.max(self.height);
+        if long <= max_side || long == 0 {
+            return self.clone();
+        }
+        let tw = ((self.width as u64 * max_side as u64) / long as u64).max(1) as u32;
+        let th = ((self.height as u64 * max_side as u64) / long as u64).max(1) as u32;
+        let mut out = Rgba8Image::new(tw, th);
+        for ty in 0..th {
+            let y0 = (ty as u64 * self.height as u64 / th as u64) as u32;
+            let y1 = (((ty + 1) as u64 * self.height as u64 / th as u64) as u32).max(y0 + 1);
+            for tx in 0..tw {
+                let x0 = (tx as u64 * self.width as u64 / tw as u64) as u32;
+                let x1 = (((tx + 1) as u64 * self.width as u64 / tw as u64) as u32).max(x0 + 1);
+                let (mut r, mut g, mut b, mut a, mut n) = (0u64, 0u64, 0u64, 0u64, 0u64);
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let p = self.get(x, y);
+                        let pa = p[3] as u64;
+                        r += p[0] as u64 * pa;
+                        g += p[1] as u64 * pa;
+                        b += p[2] as u64 * pa;
+                        a += pa;
+                        n += 1;
+                    }
+                }
+                let px = if a == 0 {
+                    [0, 0, 0, 0]
+                } else {
+                    [(r / a) as u8, (g / a) as u8, (b / a) as u8, (a / n) as u8]
+                };
+                out.put(tx, ty, px);
+            }
+        }
+        out
+    }
+}
+
+/// Decode PNG, JPEG, WebP, GIF (first frame) or BMP bytes into RGBA, checking
+/// the declared size against `limits` before allocating pixels.
+pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
+    if bytes.is_empty() {
+        return Err(Error::input("the file is empty (0 bytes)"));
+    }
+    let format = image::guess_format(bytes).map_err(|_| {
+        Error::input("this is not an image Filigree can read (expected PNG, JPEG, WebP, GIF or BMP)")
+    })?;
+    let name = format_name(format);
+    let reader = ImageReader::with_format(Cursor::new(bytes), format);
+    let decoder = reader
+        .into_decoder()
+        .map_err(|e| Error::input(format!("the {name} header could not be read: {e}")))?;
+    let (w, h) = decoder.dimensions();
+    if w == 0 || h == 0 {
+        return Err(Error::input(format!("the {name} image has no pixels ({w}×{h})")));
+    }
+    if w > limits.max_side || h > limits.max_side {
+        return Err(Error::limit(format!(
+            "{w}×{h} exceeds the {m}×{m} limit",
+            m = limits.max_side
+        )));
+    }
+    if w as u64 * h as u64 > limits.max_pixels {
+        return Err(Error::limit(format!(
+            "{w}×{h} has {} pixels, more than the limit of {}",
+            w as u64 * h as u64,
+            limits.max_pixels
+        )));
+    }
+    let img = image::DynamicImage::from_decoder(decoder).map_err(|e| {
+        Error::input(format!("the {name} data is damaged or truncated ({e})"))
+    })?;
+    let rgba = img.into_rgba8();
+    Rgba8Image::from_raw(w, h, rgba.into_raw())
+}
+
+fn format_name(f: ImageFormat) -> &'static str {
+    match f {
+        ImageFormat::Png => "PNG",
+        ImageFormat::Jpeg => "JPEG",
+        ImageFormat::WebP => "WebP",
+        ImageFormat::Gif => "GIF",
+        ImageFormat::Bmp => "BMP",
+        _ => "image",
+    }
+}
+
+/// Encode as an 8-bit RGBA PNG.
+pub fn encode_png(img: &Rgba8Image) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(&img.data, img.width, img.height, image::ExtendedColorType::Rgba8)
+        .map_err(|e| Error::input(format!("could not encode PNG: {e}")))?;
+    Ok(out)
+}
+
+use image::ImageEncoder;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker(w: u32, h: u32) -> Rgba8Image {
+        let mut img = Rgba8Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let v = if (x + y) % 2 == 0 { 255 } else { 0 };
+                img.put(x, y, [v, 0, 255 - v, 255]);
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn png_round_trip() {
+        let img = checker(5, 3);
+        let png = encode_png(&img).unwrap();
+        assert_eq!(decode(&png, Limits::default()).unwrap(), img);
+    }
+
+    #[test]
+    fn empty_file_is_named() {
+        let e = decode(&[], Limits::default()).unwrap_err();
+        assert!(e.to_string().contains("empty"), "{e}");
+    }
+
+    #[test]
+    fn not_an_image_is_named() {
+        let e = decode(b"hello, this is text", Limits::default()).unwrap_err();
+        assert!(e.to_string().contains("not an image"), "{e}");
+    }
+
+    #[test]
+    fn truncated_png_is_named() {
+        let png = encode_png(&checker(64, 64)).unwrap();
+        let e = decode(&png[..png.len() / 2], Limits::default()).unwrap_err();
+        assert!(e.to_string().contains("truncated"), "{e}");
+    }
+
+    #[test]
+    fn too_large_is_refused_before_decoding() {
+        let png = encode_png(&checker(40, 30)).unwrap();
+        let limits = Limits { max_side: 32, max_pixels: 1 << 20 };
+        let e = decode(&png, limits).unwrap_err();
+        assert_eq!(e.to_string(), "40×30 exceeds the 32×32 limit");
+        let limits = Limits { max_side: 64, max_pixels: 1000 };
+        assert!(matches!(decode(&png, limits), Err(Error::Limit(_))));
+    }
+
+    #[test]
+    fn thumbnail_keeps_aspect_and_averages() {
+        let img = checker(100, 50);
+        let t = img.thumbnail(10);
+        assert_eq!((t.width, t.height), (10, 5));
+        let p = t.get(0, 0);
+        assert!((120..=135).contains(&p[0]), "{p:?}");
+        assert_eq!(img.thumbnail(200), img);
+    }
+}
