@@ -1,6 +1,7 @@
 //! Fit: parameters of procedural vector patterns from a target image
 //! (Riso, Sforza & Pellacini, "pOp: Parameter Optimization of
 //! Differentiable Vector Patterns", EGSR 2022).
+pub mod field;
 pub mod lang;
 pub mod record;
 pub mod sdf;
