@@ -3,6 +3,8 @@
 //! Differentiable Vector Patterns", EGSR 2022).
 pub mod field;
 pub mod lang;
+pub mod loss;
 pub mod record;
 pub mod sdf;
 pub mod tape;
+pub mod target;
