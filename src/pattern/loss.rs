@@ -397,6 +397,7 @@ mod tests {
         let mut o = objective(SRC, &truth, LossKind::Sdf, 64);
         let at = o.loss(&truth);
         assert!(at < 0.15, "{at}");
-        assert!(o.loss(&[0.25, 0.06, 0.2, 0.015]) > at + 1.0);
+        let off = o.loss(&[0.25, 0.06, 0.2, 0.015]);
+        assert!(off > at * 5.0 && off > at + 0.3, "{off} vs {at}");
     }
 }
