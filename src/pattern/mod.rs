@@ -2,8 +2,10 @@
 //! (Riso, Sforza & Pellacini, "pOp: Parameter Optimization of
 //! Differentiable Vector Patterns", EGSR 2022).
 pub mod field;
+pub mod fit;
 pub mod lang;
 pub mod loss;
+pub mod optim;
 pub mod record;
 pub mod sdf;
 pub mod tape;
