@@ -2,11 +2,13 @@
 //! (Riso, Sforza & Pellacini, "pOp: Parameter Optimization of
 //! Differentiable Vector Patterns", EGSR 2022).
 pub mod field;
+pub mod generators;
 pub mod fit;
 pub mod lang;
 pub mod loss;
 pub mod optim;
 pub mod record;
+pub mod render;
 pub mod sdf;
 pub mod tape;
 pub mod target;
