@@ -1,4 +1,5 @@
 pub mod bench;
+pub mod fit;
 pub mod inspect;
 
 use std::path::Path;

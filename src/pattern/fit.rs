@@ -123,6 +123,8 @@ pub struct FitResult {
     pub history: Vec<f64>,
     /// Loss evaluations done.
     pub evaluations: u64,
+    /// The candidates Adam started from (raw float parameter values), best first.
+    pub start_points: Vec<Vec<f64>>,
 }
 
 /// Build the scene (recorded with `values`) and target for a fit.
@@ -240,6 +242,23 @@ impl FitJob {
             #[cfg(not(target_arch = "wasm32"))]
             workers: vec![],
         }
+    }
+
+    /// A fit that skips initialisation and runs Adam from `starts` (raw
+    /// float parameter values), e.g. to compare losses from the same
+    /// initialisation.
+    pub fn refine_from(scene: Scene, target: Target, opts: FitOptions, starts: &[Vec<f64>]) -> FitJob {
+        let mut job = FitJob::from_parts(scene, target, opts);
+        job.candidates = starts
+            .iter()
+            .map(|x| Scored {
+                u: x.iter().enumerate().map(|(k, v)| ((v - job.lo[k]) / (job.hi[k] - job.lo[k])).clamp(0.0, 1.0)).collect(),
+                loss: f64::INFINITY,
+            })
+            .collect();
+        job.planned = (job.candidates.len() * opts.iterations).max(1);
+        job.phase = Phase::Refine;
+        job
     }
 
     /// Raw parameter values of a normalised point.
@@ -395,7 +414,9 @@ impl Job for FitJob {
                     for (k, &i) in self.obj.scene.rec.float_params.iter().enumerate() {
                         all_values[i] = params[k];
                     }
+                    let start_points = self.candidates.iter().map(|c| self.denormalise(&c.u)).collect();
                     return Ok(Step::Done(FitResult {
+                        start_points,
                         names: self.names.clone(),
                         params,
                         all_values,
