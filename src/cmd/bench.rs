@@ -15,10 +15,36 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Fit every shipped generator to targets drawn from random true
+    /// parameters; report parameter MSE, loss and time, the same fits with
+    /// image-space L2 from the same initialisation, and evaluations per second.
+    Fit {
+        /// Accepted for symmetry with other benches; output is always JSON.
+        #[arg(long)]
+        json: bool,
+        /// Quick budget instead of the paper's.
+        #[arg(long)]
+        quick: bool,
+        /// Random targets per generator.
+        #[arg(long, default_value_t = 1)]
+        seeds: u64,
+        /// Comma-separated generator names (default: all).
+        #[arg(long)]
+        only: Option<String>,
+        /// Threads for the GA batches (default: all cores). Throughput figures are always one core.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Skip the fits; only measure evaluations per second.
+        #[arg(long)]
+        speed_only: bool,
+    },
 }
 
 pub fn run(w: Which) -> Result<(), String> {
     match w {
+        Which::Fit { quick, seeds, only, threads, speed_only, .. } => {
+            super::fit_bench::run(quick, seeds, only.as_deref(), threads, speed_only)
+        }
         Which::Inspect { repeats, .. } => {
             let png = test_png(1024);
             let opts = InspectOptions::default();

@@ -1,5 +1,6 @@
 pub mod bench;
 pub mod fit;
+pub mod fit_bench;
 pub mod inspect;
 
 use std::path::Path;

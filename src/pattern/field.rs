@@ -60,6 +60,9 @@ struct Item {
     part: Part,
     /// Whether the shape also has a stroke (then the fill is inset).
     inset: bool,
+    /// The primitive when the geometry is a single one (fast path), else `NONE`.
+    prim: u32,
+    kind: PrimKind,
 }
 
 /// One colour's operation list.
@@ -114,13 +117,17 @@ impl Scene {
             for c in [s.fill, s.stroke].into_iter().flatten() {
                 used[c as usize] = true;
             }
+            let (prim, kind) = match s.geom {
+                Geom::Prim(p) => (p, rec.prims[p as usize].kind),
+                _ => (NONE, PrimKind::Point),
+            };
             if s.stroke.is_some() {
                 stroke_item[i] = items.len() as u32;
-                items.push(Item { shape: i as u32, part: Part::Stroke, inset: false });
+                items.push(Item { shape: i as u32, part: Part::Stroke, inset: false, prim, kind });
             }
             if s.fill.is_some() {
                 fill_item[i] = items.len() as u32;
-                items.push(Item { shape: i as u32, part: Part::Fill, inset: s.stroke.is_some() });
+                items.push(Item { shape: i as u32, part: Part::Fill, inset: s.stroke.is_some(), prim, kind });
             }
         }
         let mut channels = vec![];
@@ -226,22 +233,51 @@ impl Scene {
         }
     }
 
-    /// Item value and its winner record (before the channel's op sign).
-    #[inline]
-    fn item(&self, it: &Item, pv: &[Fields], widths: &[f64], p: [f64; 2]) -> (f64, Win) {
-        let s = &self.rec.shapes[it.shape as usize];
-        let h = self.geom(&s.geom, pv, p);
+    /// Item value and the hit that decided it (before the channel's op sign).
+    #[inline(always)]
+    fn item_hit(&self, it: &Item, pv: &[Fields], widths: &[f64], p: [f64; 2]) -> (f64, Hit) {
+        let h = if it.prim != NONE {
+            let f = &pv[it.prim as usize];
+            let d = match it.kind {
+                PrimKind::Circle => ((p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1])).sqrt() - f[2],
+                PrimKind::Point => ((p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1])).sqrt(),
+                PrimKind::Segment => sdf::segment_distance(f, p),
+                k => sdf::value(k, f, p),
+            };
+            Hit { d, prim: it.prim, sign: 1.0 }
+        } else {
+            self.geom(&self.rec.shapes[it.shape as usize].geom, pv, p)
+        };
         let w = widths[it.shape as usize];
-        match it.part {
+        let v = match it.part {
             Part::Fill => {
-                let (v, wc) = if it.inset { (h.d + 0.5 * w, 0.5) } else { (h.d, 0.0) };
-                (v, Win { prim: h.prim, wnode: s.width, psign: h.sign as f32, wcoef: wc })
+                if it.inset {
+                    h.d + 0.5 * w
+                } else {
+                    h.d
+                }
             }
+            Part::Stroke => h.d.abs() - 0.5 * w,
+        };
+        (v, h)
+    }
+
+    /// The winner record of an item's hit (before the channel's op sign).
+    fn win_of(&self, it: &Item, h: &Hit) -> Win {
+        let wnode = self.rec.shapes[it.shape as usize].width;
+        match it.part {
+            Part::Fill => Win { prim: h.prim, wnode, psign: h.sign as f32, wcoef: if it.inset { 0.5 } else { 0.0 } },
             Part::Stroke => {
                 let sg = if h.d >= 0.0 { 1.0 } else { -1.0 };
-                (h.d.abs() - 0.5 * w, Win { prim: h.prim, wnode: s.width, psign: (sg * h.sign) as f32, wcoef: -0.5 })
+                Win { prim: h.prim, wnode, psign: (sg * h.sign) as f32, wcoef: -0.5 }
             }
         }
+    }
+
+    /// Item value (tests and tile bounds).
+    fn item(&self, it: &Item, pv: &[Fields], widths: &[f64], p: [f64; 2]) -> (f64, Win) {
+        let (v, h) = self.item_hit(it, pv, widths, p);
+        (v, self.win_of(it, &h))
     }
 }
 
@@ -265,6 +301,7 @@ pub struct Evaluator {
     runs: Vec<(CombineOp, u32, u32)>,
     act: Vec<u32>,
     tile_ranges: Vec<(u32, u32)>,
+    keep: Vec<bool>,
 }
 
 impl Evaluator {
@@ -282,6 +319,7 @@ impl Evaluator {
             runs: vec![],
             act: vec![],
             tile_ranges: vec![],
+            keep: vec![],
         }
     }
 
@@ -328,11 +366,30 @@ impl Evaluator {
                 self.tile_ranges.clear();
                 for ch in &scene.channels {
                     let start = self.runs.len() as u32;
+                    // Backward pass: ops are monotone in B, so a union (diff)
+                    // whose value is everywhere ≥ a later union's (diff's) is
+                    // irrelevant in this tile.
+                    self.keep.clear();
+                    let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
+                    for (op, items) in ch.runs.iter().rev() {
+                        for &it in items.iter().rev() {
+                            let v = self.centre_vals[it as usize];
+                            let suf = if *op == CombineOp::Union { &mut suf_u } else { &mut suf_d };
+                            self.keep.push(v - h < *suf);
+                            *suf = suf.min(v + h);
+                        }
+                    }
+                    let mut kpos = self.keep.len();
                     let (mut blo, mut bhi) = (ch.init * cap, ch.init * cap);
                     for (op, items) in &ch.runs {
                         let mut m = f64::INFINITY;
                         let mut ylo = f64::INFINITY;
+                        let k0 = kpos;
                         for &it in items {
+                            kpos -= 1;
+                            if !self.keep[kpos] {
+                                continue;
+                            }
                             let v = self.centre_vals[it as usize];
                             m = m.min(v + h);
                             ylo = ylo.min(v - h);
@@ -345,8 +402,10 @@ impl Evaluator {
                             continue;
                         }
                         let a0 = self.act.len() as u32;
+                        let mut kp = k0;
                         for &it in items {
-                            if self.centre_vals[it as usize] - h <= m {
+                            kp -= 1;
+                            if self.keep[kp] && self.centre_vals[it as usize] - h <= m {
                                 self.act.push(it);
                             }
                         }
@@ -370,16 +429,17 @@ impl Evaluator {
                         let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
                         for (c, ch) in scene.channels.iter().enumerate() {
                             let mut b = ch.init * cap;
-                            let mut win = NO_WIN;
+                            // Winner: item, hit, and whether a difference flipped it.
+                            let mut win: Option<(u32, Hit, bool)> = None;
                             let (r0, r1) = self.tile_ranges[c];
                             for &(op, a0, a1) in &self.runs[r0 as usize..r1 as usize] {
                                 let mut best = f64::INFINITY;
-                                let mut bw = NO_WIN;
+                                let mut bw = (NONE, Hit { d: 0.0, prim: NONE, sign: 1.0 });
                                 for &it in &self.act[a0 as usize..a1 as usize] {
-                                    let (v, w) = scene.item(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
+                                    let (v, h) = scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
                                     if v < best {
                                         best = v;
-                                        bw = w;
+                                        bw = (it, h);
                                     }
                                 }
                                 work += (a1 - a0) as u64;
@@ -387,27 +447,35 @@ impl Evaluator {
                                     CombineOp::Union => {
                                         if best < b {
                                             b = best;
-                                            win = bw;
+                                            win = Some((bw.0, bw.1, false));
                                         }
                                     }
                                     CombineOp::Diff => {
                                         if -best > b {
                                             b = -best;
-                                            bw.psign = -bw.psign;
-                                            bw.wcoef = -bw.wcoef;
-                                            win = bw;
+                                            win = Some((bw.0, bw.1, true));
                                         }
                                     }
                                 }
                             }
+                            let idx = c * n * n + y * n + x;
                             if b.abs() >= cap {
                                 b = b.clamp(-cap, cap);
-                                win = NO_WIN;
+                                win = None;
                             }
-                            let idx = c * n * n + y * n + x;
                             self.s[idx] = b * self.scale;
                             if winners {
-                                self.win[idx] = win;
+                                self.win[idx] = match win {
+                                    None => NO_WIN,
+                                    Some((it, h, flip)) => {
+                                        let mut w = scene.win_of(&scene.items[it as usize], &h);
+                                        if flip {
+                                            w.psign = -w.psign;
+                                            w.wcoef = -w.wcoef;
+                                        }
+                                        w
+                                    }
+                                };
                             }
                         }
                     }

@@ -228,42 +228,52 @@ pub fn loss(opts: &LossOptions, s: &[f64], t: &Target, t_normals: &[[f64; 2]], d
     total
 }
 
-/// `Σ (1 − ⟨n_G, n_T⟩²) · norm` and its gradient (× `gscale`) through the stencil.
+/// Clamped neighbour indices and inverse spacings of a central difference.
+fn stencil(n: usize) -> Vec<(usize, usize, f64)> {
+    (0..n)
+        .map(|i| {
+            let (m, p) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            (m, p, 1.0 / (p - m).max(1) as f64)
+        })
+        .collect()
+}
+
+/// `Σ (1 − ⟨n_G, n_T⟩²) / (|C|·n²)` and its gradient (× `gscale`) through the stencil.
 fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mut [f64]>) -> f64 {
     let nn = n * n;
     let channels = s.len() / nn;
+    let st = stencil(n);
     let mut sum = 0.0;
     let mut ds = ds;
     for c in 0..channels {
-        let f = &s[c * nn..(c + 1) * nn];
-        for y in 0..n {
-            for x in 0..n {
-                let t = tn[c * nn + y * n + x];
-                if t == [0.0, 0.0] {
+        let o = c * nn;
+        let f = &s[o..o + nn];
+        for (y, &(ym, yp, ihy)) in st.iter().enumerate() {
+            let (row, rm, rp) = (y * n, ym * n, yp * n);
+            for (x, &(xm, xp, ihx)) in st.iter().enumerate() {
+                let t = tn[o + row + x];
+                if t[0] == 0.0 && t[1] == 0.0 {
                     continue;
                 }
-                let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
-                let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
-                let (hx, hy) = ((xp - xm).max(1) as f64, (yp - ym).max(1) as f64);
-                let gx = (f[y * n + xp] - f[y * n + xm]) / hx;
-                let gy = (f[yp * n + x] - f[ym * n + x]) / hy;
-                let l = (gx * gx + gy * gy).sqrt();
-                if l <= 1e-12 {
+                let gx = (f[row + xp] - f[row + xm]) * ihx;
+                let gy = (f[rp + x] - f[rm + x]) * ihy;
+                let l2 = gx * gx + gy * gy;
+                if l2 <= 1e-24 {
                     continue;
                 }
-                let (nx, ny) = (gx / l, gy / l);
+                let il = 1.0 / l2.sqrt();
+                let (nx, ny) = (gx * il, gy * il);
                 let dot = nx * t[0] + ny * t[1];
                 sum += 1.0 - dot * dot;
                 if let Some(d) = ds.as_deref_mut() {
                     // d(1 − dot²)/dg = −2·dot·(t − dot·n)/|g|
-                    let k = -2.0 * dot / l * gscale;
-                    let ggx = k * (t[0] - dot * nx);
-                    let ggy = k * (t[1] - dot * ny);
-                    let o = c * nn;
-                    d[o + y * n + xp] += ggx / hx;
-                    d[o + y * n + xm] -= ggx / hx;
-                    d[o + yp * n + x] += ggy / hy;
-                    d[o + ym * n + x] -= ggy / hy;
+                    let k = -2.0 * dot * il * gscale;
+                    let ggx = k * (t[0] - dot * nx) * ihx;
+                    let ggy = k * (t[1] - dot * ny) * ihy;
+                    d[o + row + xp] += ggx;
+                    d[o + row + xm] -= ggx;
+                    d[o + rp + x] += ggy;
+                    d[o + rm + x] -= ggy;
                 }
             }
         }

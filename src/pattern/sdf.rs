@@ -54,7 +54,15 @@ fn len(x: f64, y: f64) -> f64 {
     (x * x + y * y).sqrt()
 }
 
+/// Distance from `p` to the segment `[ax, ay, bx, by]`.
+#[inline(always)]
+pub fn segment_distance(f: &Fields, p: V2) -> f64 {
+    let (t, _) = segment_t(f, p);
+    len(p[0] - (f[0] + t * (f[2] - f[0])), p[1] - (f[1] + t * (f[3] - f[1])))
+}
+
 /// The distance of `p` to the primitive (signed for circles and rectangles).
+#[inline]
 pub fn value(kind: PrimKind, f: &Fields, p: V2) -> f64 {
     match kind {
         PrimKind::Point => len(p[0] - f[0], p[1] - f[1]),
@@ -119,6 +127,7 @@ pub fn grad(kind: PrimKind, f: &Fields, p: V2, out: &mut Fields) -> f64 {
 }
 
 /// Closest-point parameter on a segment, clamped to `[0, 1]`.
+#[inline(always)]
 fn segment_t(f: &Fields, p: V2) -> (f64, f64) {
     let (bx, by) = (f[2] - f[0], f[3] - f[1]);
     let l2 = bx * bx + by * by;
@@ -130,6 +139,7 @@ fn segment_t(f: &Fields, p: V2) -> (f64, f64) {
 }
 
 /// Rounded rectangle, optionally with field derivatives.
+#[inline(never)]
 fn rect(f: &Fields, p: V2, out: Option<&mut Fields>) -> f64 {
     let (c, s) = (f[5].cos(), f[5].sin());
     let (vx, vy) = (p[0] - f[0], p[1] - f[1]);
@@ -188,6 +198,7 @@ pub fn quad_point(f: &Fields, t: f64) -> V2 {
 /// trigonometric form for three real roots) are polished by Newton steps and
 /// compared with both end points, which keeps nearly straight curves (tiny
 /// leading coefficient) accurate.
+#[inline(never)]
 pub fn quad_closest(f: &Fields, p: V2) -> (f64, f64) {
     let a = [f[2] - f[0], f[3] - f[1]];
     let b = [f[0] - 2.0 * f[2] + f[4], f[1] - 2.0 * f[3] + f[5]];
