@@ -98,6 +98,9 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
     // Throughput on one core.
     let mut speed = vec![];
     for name in ["circles-grid", "stripes-dots", "circles-mix"] {
+        if speed_only && wanted.as_ref().is_some_and(|w| !w.contains(&name)) {
+            continue;
+        }
         let g = GENERATORS.iter().find(|g| g.name == name).ok_or("generator missing")?;
         for grid in [128usize, 256] {
             let c = case(g.source, 7)?;
@@ -107,7 +110,6 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
             let p: Vec<f64> = c.lo.iter().zip(&c.hi).map(|(l, h)| l + 0.45 * (h - l)).collect();
             let lo = rate(&mut obj, &p, false);
             let lg = rate(&mut obj, &p, true);
-            eprintln!("{name} {grid}: work/eval {}", obj.last_work);
             speed.push(json!({"generator": name, "grid": grid, "params": p.len(), "shapes": c.scene.shape_count(),
                               "loss_evals_per_s": lo.round(), "loss_grad_evals_per_s": lg.round()}));
         }

@@ -37,7 +37,9 @@ use super::sdf::{self, Fields, PrimKind};
 /// "Farther than anything on the canvas", in canvas units.
 pub const CAP: f64 = 2.0;
 const NONE: u32 = u32::MAX;
-const TILE: usize = 8;
+/// Big and small tile sides in pixels (two-level culling).
+const T1: usize = 16;
+const T2: usize = 4;
 
 /// How an item changes a colour's field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -72,8 +74,8 @@ pub struct Channel {
     pub colour: u16,
     /// `+1` for ordinary colours (start empty), `−1` for the background (start full).
     pub init: f64,
-    /// Runs of same-kind operations: (op, item ids).
-    runs: Vec<(CombineOp, Vec<u32>)>,
+    /// Operations in drawing order: (op, item id).
+    ops: Vec<(CombineOp, u32)>,
 }
 
 /// A recorded pattern prepared for field evaluation.
@@ -153,21 +155,13 @@ impl Scene {
                     ops.push((of, fill_item[i]));
                 }
             }
-            let mut runs: Vec<(CombineOp, Vec<u32>)> = vec![];
-            for (op, it) in ops {
-                match runs.last_mut() {
-                    Some((o, v)) if *o == op => v.push(it),
-                    _ => runs.push((op, vec![it])),
-                }
-            }
-            // A run of differences before anything was added removes nothing.
+            // Differences before anything was added remove nothing.
             let init = if c == 0 { -1.0 } else { 1.0 };
             if init > 0.0 {
-                while runs.first().is_some_and(|r| r.0 == CombineOp::Diff) {
-                    runs.remove(0);
-                }
+                let lead = ops.iter().take_while(|o| o.0 == CombineOp::Diff).count();
+                ops.drain(..lead);
             }
-            channels.push(Channel { colour: c, init, runs });
+            channels.push(Channel { colour: c, init, ops });
         }
         Scene { rec, channels, items }
     }
@@ -298,10 +292,13 @@ pub struct Evaluator {
     prim_vals: Vec<Fields>,
     widths: Vec<f64>,
     centre_vals: Vec<f64>,
-    runs: Vec<(CombineOp, u32, u32)>,
-    act: Vec<u32>,
-    tile_ranges: Vec<(u32, u32)>,
     keep: Vec<bool>,
+    stamp: Vec<u32>,
+    used: Vec<u32>,
+    chain1: Vec<(CombineOp, u32)>,
+    chain2: Vec<(CombineOp, u32)>,
+    ranges1: Vec<(usize, usize)>,
+    ranges2: Vec<(usize, usize)>,
 }
 
 impl Evaluator {
@@ -316,10 +313,13 @@ impl Evaluator {
             prim_vals: vec![],
             widths: vec![],
             centre_vals: vec![],
-            runs: vec![],
-            act: vec![],
-            tile_ranges: vec![],
             keep: vec![],
+            stamp: vec![],
+            used: vec![],
+            chain1: vec![],
+            chain2: vec![],
+            ranges1: vec![],
+            ranges2: vec![],
         }
     }
 
@@ -345,144 +345,135 @@ impl Evaluator {
         if winners {
             self.win.resize(nc * n * n, NO_WIN);
         }
-        let tiles = n.div_ceil(TILE);
-        let h = (TILE as f64 / n as f64) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
         let inv = 1.0 / n as f64;
-        let cap = CAP;
+        // Half diagonals (canvas units) of the two tile levels, a hair larger for rounding.
+        let h1 = (T1 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
+        let h2 = (T2 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
         let mut work = 0u64;
         self.centre_vals.resize(scene.items.len(), 0.0);
-        for ty in 0..tiles {
-            for tx in 0..tiles {
-                let (x0, y0) = (tx * TILE, ty * TILE);
-                let (x1, y1) = ((x0 + TILE).min(n), (y0 + TILE).min(n));
-                let pc = [(x0 + TILE / 2) as f64 * inv, (y0 + TILE / 2) as f64 * inv];
+        self.stamp.resize(scene.items.len(), u32::MAX);
+        let mut chain1 = std::mem::take(&mut self.chain1);
+        let mut chain2 = std::mem::take(&mut self.chain2);
+        let mut used = std::mem::take(&mut self.used);
+        let mut tile_id = 0u32;
+        for ty in 0..n.div_ceil(T1) {
+            for tx in 0..n.div_ceil(T1) {
+                let (x0, y0) = (tx * T1, ty * T1);
+                let pc = [(x0 + T1 / 2) as f64 * inv, (y0 + T1 / 2) as f64 * inv];
                 for (i, it) in scene.items.iter().enumerate() {
-                    self.centre_vals[i] = scene.item(it, &self.prim_vals, &self.widths, pc).0;
+                    self.centre_vals[i] = scene.item_hit(it, &self.prim_vals, &self.widths, pc).0;
                 }
                 work += scene.items.len() as u64;
-                // Cull per channel.
-                self.runs.clear();
-                self.act.clear();
-                self.tile_ranges.clear();
+                // Level 1: cull each channel's full chain for the big tile.
+                chain1.clear();
+                self.ranges1.clear();
+                used.clear();
+                tile_id = tile_id.wrapping_add(1);
                 for ch in &scene.channels {
-                    let start = self.runs.len() as u32;
-                    // Backward pass: ops are monotone in B, so a union (diff)
-                    // whose value is everywhere ≥ a later union's (diff's) is
-                    // irrelevant in this tile.
-                    self.keep.clear();
-                    let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
-                    for (op, items) in ch.runs.iter().rev() {
-                        for &it in items.iter().rev() {
-                            let v = self.centre_vals[it as usize];
-                            let suf = if *op == CombineOp::Union { &mut suf_u } else { &mut suf_d };
-                            self.keep.push(v - h < *suf);
-                            *suf = suf.min(v + h);
-                        }
-                    }
-                    let mut kpos = self.keep.len();
-                    let (mut blo, mut bhi) = (ch.init * cap, ch.init * cap);
-                    for (op, items) in &ch.runs {
-                        let mut m = f64::INFINITY;
-                        let mut ylo = f64::INFINITY;
-                        let k0 = kpos;
-                        for &it in items {
-                            kpos -= 1;
-                            if !self.keep[kpos] {
-                                continue;
-                            }
-                            let v = self.centre_vals[it as usize];
-                            m = m.min(v + h);
-                            ylo = ylo.min(v - h);
-                        }
-                        let active = match op {
-                            CombineOp::Union => ylo < bhi,
-                            CombineOp::Diff => -ylo > blo,
-                        };
-                        if !active {
-                            continue;
-                        }
-                        let a0 = self.act.len() as u32;
-                        let mut kp = k0;
-                        for &it in items {
-                            kp -= 1;
-                            if self.keep[kp] && self.centre_vals[it as usize] - h <= m {
-                                self.act.push(it);
-                            }
-                        }
-                        self.runs.push((*op, a0, self.act.len() as u32));
-                        match op {
-                            CombineOp::Union => {
-                                blo = blo.min(ylo);
-                                bhi = bhi.min(m);
-                            }
-                            CombineOp::Diff => {
-                                blo = blo.max(-m);
-                                bhi = bhi.max(-ylo);
-                            }
-                        }
-                    }
-                    self.tile_ranges.push((start, self.runs.len() as u32));
+                    let a = chain1.len();
+                    cull(&ch.ops, ch.init, &self.centre_vals, h1, &mut self.keep, &mut chain1);
+                    self.ranges1.push((a, chain1.len()));
                 }
-                // Pixels of the tile.
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                for &(_, it) in &chain1 {
+                    if self.stamp[it as usize] != tile_id {
+                        self.stamp[it as usize] = tile_id;
+                        used.push(it);
+                    }
+                }
+                // Level 2: small tiles, only the items level 1 kept.
+                for sy in (y0..(y0 + T1).min(n)).step_by(T2) {
+                    for sx in (x0..(x0 + T1).min(n)).step_by(T2) {
+                        let pc = [(sx + T2 / 2) as f64 * inv, (sy + T2 / 2) as f64 * inv];
+                        for &it in &used {
+                            self.centre_vals[it as usize] =
+                                scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, pc).0;
+                        }
+                        work += used.len() as u64;
+                        chain2.clear();
+                        self.ranges2.clear();
                         for (c, ch) in scene.channels.iter().enumerate() {
-                            let mut b = ch.init * cap;
-                            // Winner: item, hit, and whether a difference flipped it.
-                            let mut win: Option<(u32, Hit, bool)> = None;
-                            let (r0, r1) = self.tile_ranges[c];
-                            for &(op, a0, a1) in &self.runs[r0 as usize..r1 as usize] {
-                                let mut best = f64::INFINITY;
-                                let mut bw = (NONE, Hit { d: 0.0, prim: NONE, sign: 1.0 });
-                                for &it in &self.act[a0 as usize..a1 as usize] {
-                                    let (v, h) = scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
-                                    if v < best {
-                                        best = v;
-                                        bw = (it, h);
-                                    }
+                            let (a, b) = self.ranges1[c];
+                            let start = chain2.len();
+                            cull(&chain1[a..b], ch.init, &self.centre_vals, h2, &mut self.keep, &mut chain2);
+                            self.ranges2.push((start, chain2.len()));
+                        }
+                        for y in sy..(sy + T2).min(n) {
+                            for x in sx..(sx + T2).min(n) {
+                                let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                                for (c, ch) in scene.channels.iter().enumerate() {
+                                    let (a, b) = self.ranges2[c];
+                                    let ops = &chain2[a..b];
+                                    work += ops.len() as u64;
+                                    let idx = c * n * n + y * n + x;
+                                    self.pixel(scene, ch.init, ops, p, idx, winners);
                                 }
-                                work += (a1 - a0) as u64;
-                                match op {
-                                    CombineOp::Union => {
-                                        if best < b {
-                                            b = best;
-                                            win = Some((bw.0, bw.1, false));
-                                        }
-                                    }
-                                    CombineOp::Diff => {
-                                        if -best > b {
-                                            b = -best;
-                                            win = Some((bw.0, bw.1, true));
-                                        }
-                                    }
-                                }
-                            }
-                            let idx = c * n * n + y * n + x;
-                            if b.abs() >= cap {
-                                b = b.clamp(-cap, cap);
-                                win = None;
-                            }
-                            self.s[idx] = b * self.scale;
-                            if winners {
-                                self.win[idx] = match win {
-                                    None => NO_WIN,
-                                    Some((it, h, flip)) => {
-                                        let mut w = scene.win_of(&scene.items[it as usize], &h);
-                                        if flip {
-                                            w.psign = -w.psign;
-                                            w.wcoef = -w.wcoef;
-                                        }
-                                        w
-                                    }
-                                };
                             }
                         }
                     }
                 }
             }
         }
+        self.chain1 = chain1;
+        self.chain2 = chain2;
+        self.used = used;
         self.work = work;
+    }
+
+    /// Apply a culled chain at one pixel; consecutive same-kind operations
+    /// form a run whose minimum is applied once.
+    #[inline]
+    fn pixel(&mut self, scene: &Scene, init: f64, ops: &[(CombineOp, u32)], p: [f64; 2], idx: usize, winners: bool) {
+        let cap = CAP;
+        let mut b = init * cap;
+        // Winner: item, hit, and whether a difference flipped it.
+        let mut win: Option<(u32, Hit, bool)> = None;
+        let mut i = 0;
+        while i < ops.len() {
+            let op = ops[i].0;
+            let mut best = f64::INFINITY;
+            let mut bw = (NONE, Hit { d: 0.0, prim: NONE, sign: 1.0 });
+            while i < ops.len() && ops[i].0 == op {
+                let it = ops[i].1;
+                let (v, h) = scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
+                if v < best {
+                    best = v;
+                    bw = (it, h);
+                }
+                i += 1;
+            }
+            match op {
+                CombineOp::Union => {
+                    if best < b {
+                        b = best;
+                        win = Some((bw.0, bw.1, false));
+                    }
+                }
+                CombineOp::Diff => {
+                    if -best > b {
+                        b = -best;
+                        win = Some((bw.0, bw.1, true));
+                    }
+                }
+            }
+        }
+        if b.abs() >= cap {
+            b = b.clamp(-cap, cap);
+            win = None;
+        }
+        self.s[idx] = b * self.scale;
+        if winners {
+            self.win[idx] = match win {
+                None => NO_WIN,
+                Some((it, h, flip)) => {
+                    let mut w = scene.win_of(&scene.items[it as usize], &h);
+                    if flip {
+                        w.psign = -w.psign;
+                        w.wcoef = -w.wcoef;
+                    }
+                    w
+                }
+            };
+        }
     }
 
     /// Chain rule from `ds` (dL/dS per channel-pixel, same layout as
@@ -503,12 +494,25 @@ impl Evaluator {
                         continue;
                     }
                     let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
-                    let prim = &scene.rec.prims[w.prim as usize];
-                    sdf::grad(prim.kind, &self.prim_vals[w.prim as usize], p, &mut g);
+                    let kind = scene.rec.prims[w.prim as usize].kind;
+                    let f = &self.prim_vals[w.prim as usize];
                     let k = a * w.psign as f64;
                     let pa = &mut prim_adj[w.prim as usize];
-                    for j in 0..prim.kind.field_count() {
-                        pa[j] += k * g[j];
+                    if kind == PrimKind::Circle {
+                        // Fast path of sdf::grad for the most common primitive.
+                        let (dx, dy) = (p[0] - f[0], p[1] - f[1]);
+                        let l2 = dx * dx + dy * dy;
+                        if l2 > 0.0 {
+                            let kl = k / l2.sqrt();
+                            pa[0] -= kl * dx;
+                            pa[1] -= kl * dy;
+                        }
+                        pa[2] -= k;
+                    } else {
+                        sdf::grad(kind, f, p, &mut g);
+                        for j in 0..kind.field_count() {
+                            pa[j] += k * g[j];
+                        }
                     }
                     if w.wcoef != 0.0 {
                         node_adj[w.wnode as usize] += a * w.wcoef as f64;
@@ -539,6 +543,67 @@ impl Evaluator {
                 best.1
             })
             .collect()
+    }
+}
+
+/// Drop the operations of `chain` that cannot change a channel's value
+/// anywhere within `h` of the point where `vals` (item values) were taken;
+/// append the rest, in order, to `out`. Values are 1-Lipschitz, so each
+/// lies in `[v − h, v + h]` over the tile.
+///
+/// 1. Backward: every operation is monotone in the running value B, so a
+///    union (difference) whose value is everywhere ≥ that of a later union
+///    (difference) never matters.
+/// 2. Forward: track an interval for B; a run of unions (differences) that
+///    cannot go below (above) it is dropped, and inside a run (where `min`
+///    commutes) items that are never the smallest are dropped.
+fn cull(chain: &[(CombineOp, u32)], init: f64, vals: &[f64], h: f64, keep: &mut Vec<bool>, out: &mut Vec<(CombineOp, u32)>) {
+    keep.clear();
+    let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
+    for &(op, it) in chain.iter().rev() {
+        let v = vals[it as usize];
+        let suf = if op == CombineOp::Union { &mut suf_u } else { &mut suf_d };
+        keep.push(v - h < *suf);
+        *suf = suf.min(v + h);
+    }
+    keep.reverse();
+    let (mut blo, mut bhi) = (init * CAP, init * CAP);
+    let mut i = 0;
+    while i < chain.len() {
+        let op = chain[i].0;
+        let mut j = i;
+        let (mut m, mut ylo) = (f64::INFINITY, f64::INFINITY);
+        while j < chain.len() && chain[j].0 == op {
+            if keep[j] {
+                let v = vals[chain[j].1 as usize];
+                m = m.min(v + h);
+                ylo = ylo.min(v - h);
+            }
+            j += 1;
+        }
+        let active = m < f64::INFINITY
+            && match op {
+                CombineOp::Union => ylo < bhi,
+                CombineOp::Diff => -ylo > blo,
+            };
+        if active {
+            for k in i..j {
+                if keep[k] && vals[chain[k].1 as usize] - h <= m {
+                    out.push(chain[k]);
+                }
+            }
+            match op {
+                CombineOp::Union => {
+                    blo = blo.min(ylo);
+                    bhi = bhi.min(m);
+                }
+                CombineOp::Diff => {
+                    blo = blo.max(-m);
+                    bhi = bhi.max(-ylo);
+                }
+            }
+        }
+        i = j;
     }
 }
 
@@ -621,7 +686,8 @@ mod tests {
              path(fill: \"#00aa00\", stroke: \"#112233\", width: 0.01) { move(0.2, 0.2); quad(0.5, 0.0, 0.8, 0.2); line(0.5, 0.8); close(); }\n\
              difference(fill: \"#ffffff\") { rect(0.7, 0.7, 0.2, 0.2, radius: 0.03, rotation: 0.3); circle(0.7, 0.7, 0.05); }",
         );
-        let n = 64;
+        // 61 is not a multiple of either tile size: partial tiles are covered too.
+        let n = 61;
         let e = fields(&sc, n);
         let mut nodes = vec![];
         sc.rec.tape.forward(&sc.rec.float_values(), &mut nodes);
@@ -632,14 +698,12 @@ mod tests {
                 for x in 0..n {
                     let p = [(x as f64 + 0.5) / n as f64, (y as f64 + 0.5) / n as f64];
                     let mut b = ch.init * CAP;
-                    for (op, items) in &ch.runs {
-                        for &it in items {
-                            let v = sc.item(&sc.items[it as usize], &g.prim_vals, &g.widths, p).0;
-                            b = match op {
-                                CombineOp::Union => b.min(v),
-                                CombineOp::Diff => b.max(-v),
-                            };
-                        }
+                    for &(op, it) in &ch.ops {
+                        let v = sc.item(&sc.items[it as usize], &g.prim_vals, &g.widths, p).0;
+                        b = match op {
+                            CombineOp::Union => b.min(v),
+                            CombineOp::Diff => b.max(-v),
+                        };
                     }
                     let want = b.clamp(-CAP, CAP);
                     let got = e.s[c * n * n + y * n + x];

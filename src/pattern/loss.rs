@@ -154,7 +154,8 @@ pub fn loss(opts: &LossOptions, s: &[f64], t: &Target, t_normals: &[[f64; 2]], d
     }
     let norm = 1.0 / (channels * nn) as f64;
     let mut ds = ds;
-    if let Some(d) = ds.as_deref_mut() {
+    // Sdf, L1 and Pyramid assign every entry; Image only the band near edges.
+    if let (LossKind::Image, Some(d)) = (opts.kind, ds.as_deref_mut()) {
         d.iter_mut().for_each(|v| *v = 0.0);
     }
     let mut total = 0.0;
