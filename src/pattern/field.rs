@@ -268,7 +268,8 @@ impl Scene {
         }
     }
 
-    /// Item value (tests and tile bounds).
+    /// Item value with its winner record (used by tests).
+    #[cfg(test)]
     fn item(&self, it: &Item, pv: &[Fields], widths: &[f64], p: [f64; 2]) -> (f64, Win) {
         let (v, h) = self.item_hit(it, pv, widths, p);
         (v, self.win_of(it, &h))
