@@ -1,7 +1,6 @@
 //! `filigree bench <tool>`: benchmarks that print one JSON object.
 use clap::Subcommand;
 use filigree::inspect::{inspect, InspectOptions};
-use filigree::raster::{encode_png, Rgba8Image};
 use serde_json::json;
 use std::time::Instant;
 
@@ -20,12 +19,12 @@ pub enum Which {
 pub fn run(w: Which) -> Result<(), String> {
     match w {
         Which::Inspect { repeats, .. } => {
-            let png = test_png(1024);
+            let png = TEST_PNG_1024;
             let opts = InspectOptions::default();
             let mut secs = vec![];
             for _ in 0..repeats.max(1) {
                 let t = Instant::now();
-                inspect(&png, &opts).map_err(|e| e.to_string())?;
+                inspect(png, &opts).map_err(|e| e.to_string())?;
                 secs.push(t.elapsed().as_secs_f64());
             }
             let (min, median) = super::min_median(secs);
@@ -36,14 +35,6 @@ pub fn run(w: Which) -> Result<(), String> {
     }
 }
 
-/// A deterministic 1024² test picture with a few hundred colours (gradient
-/// bands), the same one the browser e2e test generates for its timing.
-pub fn test_png(side: u32) -> Vec<u8> {
-    let mut img = Rgba8Image::new(side, side);
-    for y in 0..side {
-        for x in 0..side {
-            img.put(x, y, [(x / 4) as u8, (y / 4) as u8, ((x ^ y) & 0xC0) as u8, 255]);
-        }
-    }
-    encode_png(&img).expect("encoding a valid image")
-}
+/// A 1024² PNG with 65,536 colours (gradients), the same file the browser
+/// test `tests/e2e/perf.test.mjs` inspects in the worker, so the two timings compare.
+pub const TEST_PNG_1024: &[u8] = include_bytes!("../../tests/fixtures/gradient-1024.png");

@@ -53,9 +53,11 @@ fn js_err(v: JsValue) -> String {
     v.as_string().unwrap_or_else(|| format!("{v:?}"))
 }
 
-/// Serialise to a plain JS object (maps as objects, bytes as Uint8Array).
+/// Serialise to plain JS objects: structs and maps become objects,
+/// `serde_bytes` fields become `Uint8Array`s (transferred, not copied, to the page).
 pub fn to_js<T: Serialize + ?Sized>(v: &T) -> Result<JsValue, String> {
-    v.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(|e| e.to_string())
+    v.serialize(&serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true))
+        .map_err(|e| e.to_string())
 }
 
 fn from_js<T: for<'de> Deserialize<'de>>(kind: &str, v: JsValue) -> Result<T, String> {
@@ -91,7 +93,7 @@ impl Job for DebugAbort {
         self.left -= 1;
         // Stay busy for a moment so the job is observably "running".
         let mut x = 0u64;
-        for i in 0..200_000u64 {
+        for i in 0..2_000_000u64 {
             x = x.wrapping_mul(31).wrapping_add(i);
         }
         std::hint::black_box(x);
@@ -123,7 +125,7 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
                 }
                 let t = &r.thumbnail;
                 let out = Out { info: &r, thumbnail: Thumb { width: t.width, height: t.height, rgba: &t.data } };
-                out.serialize(&serde_wasm_bindgen::Serializer::new()).map_err(|e| e.to_string())
+                to_js(&out)
             }))
         }
         "debug-abort" => {
