@@ -4,10 +4,16 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+// The CLI may time things and use threads; the library may not (clippy.toml).
+#[allow(clippy::disallowed_methods)]
 mod cmd;
 
 #[derive(Parser)]
-#[command(name = "filigree", version, about = "Filigree: a procedural-pattern studio (CLI of the same core the browser app runs)")]
+#[command(
+    name = "filigree",
+    version,
+    about = "Filigree: a procedural-pattern studio (CLI of the same core the browser app runs)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -29,7 +29,10 @@ where
 {
     fn step(&mut self) -> Result<JsValue, String> {
         match self.job.step().map_err(|e| e.to_string())? {
-            Step::Running(p) => to_js(&Running { done: false, progress: &p }),
+            Step::Running(p) => to_js(&Running {
+                done: false,
+                progress: &p,
+            }),
             Step::Done(out) => {
                 let result = (self.to_js)(out)?;
                 let obj = js_sys::Object::new();
@@ -97,7 +100,10 @@ impl Job for DebugAbort {
             x = x.wrapping_mul(31).wrapping_add(i);
         }
         std::hint::black_box(x);
-        Ok(Step::Running(Progress::new(1.0 - self.left as f64 / self.total as f64, "about to crash")))
+        Ok(Step::Running(Progress::new(
+            1.0 - self.left as f64 / self.total as f64,
+            "about to crash",
+        )))
     }
 }
 
@@ -109,28 +115,44 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
             if let Some(t) = req.tolerance {
                 opts.tolerance = t;
             }
-            Ok(wrap(OneShot::new(move || inspect(&req.bytes, &opts)), |r| {
-                #[derive(Serialize)]
-                struct Out<'a> {
-                    #[serde(flatten)]
-                    info: &'a crate::inspect::Inspection,
-                    thumbnail: Thumb<'a>,
-                }
-                #[derive(Serialize)]
-                struct Thumb<'a> {
-                    width: u32,
-                    height: u32,
-                    #[serde(with = "serde_bytes")]
-                    rgba: &'a [u8],
-                }
-                let t = &r.thumbnail;
-                let out = Out { info: &r, thumbnail: Thumb { width: t.width, height: t.height, rgba: &t.data } };
-                to_js(&out)
-            }))
+            Ok(wrap(
+                OneShot::new(move || inspect(&req.bytes, &opts)),
+                |r| {
+                    #[derive(Serialize)]
+                    struct Out<'a> {
+                        #[serde(flatten)]
+                        info: &'a crate::inspect::Inspection,
+                        thumbnail: Thumb<'a>,
+                    }
+                    #[derive(Serialize)]
+                    struct Thumb<'a> {
+                        width: u32,
+                        height: u32,
+                        #[serde(with = "serde_bytes")]
+                        rgba: &'a [u8],
+                    }
+                    let t = &r.thumbnail;
+                    let out = Out {
+                        info: &r,
+                        thumbnail: Thumb {
+                            width: t.width,
+                            height: t.height,
+                            rgba: &t.data,
+                        },
+                    };
+                    to_js(&out)
+                },
+            ))
         }
         "debug-abort" => {
             let req: AbortRequest = from_js(kind, payload)?;
-            Ok(wrap(DebugAbort { left: req.steps, total: req.steps.max(1) }, |()| Ok(JsValue::NULL)))
+            Ok(wrap(
+                DebugAbort {
+                    left: req.steps,
+                    total: req.steps.max(1),
+                },
+                |()| Ok(JsValue::NULL),
+            ))
         }
         other => Err(Error::input(format!("unknown request kind '{other}'")).to_string()),
     }
