@@ -2,7 +2,10 @@
 use std::process::Command;
 
 fn filigree(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_filigree")).args(args).output().expect("run filigree")
+    Command::new(env!("CARGO_BIN_EXE_filigree"))
+        .args(args)
+        .output()
+        .expect("run filigree")
 }
 
 #[test]
@@ -17,12 +20,19 @@ fn version_and_help() {
 #[test]
 fn inspect_json_reports_size_and_palette() {
     let out = filigree(&["inspect", "tests/fixtures/fish.png", "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["width"], 128);
     assert_eq!(v["height"], 128);
     assert_eq!(v["colour_count"], 3);
-    assert_eq!(v["palette"][0]["rgba"], serde_json::json!([82, 99, 202, 255]));
+    assert_eq!(
+        v["palette"][0]["rgba"],
+        serde_json::json!([82, 99, 202, 255])
+    );
 }
 
 #[test]
@@ -34,7 +44,10 @@ fn inspect_errors_name_the_file_and_the_problem() {
     let out = filigree(&["inspect", bad.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("bad.png") && err.contains("not an image"), "{err}");
+    assert!(
+        err.contains("bad.png") && err.contains("not an image"),
+        "{err}"
+    );
     let out = filigree(&["inspect", "does/not/exist.png"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("does/not/exist.png"));
 }
