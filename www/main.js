@@ -3,8 +3,9 @@
 // the switcher lists only the tools registered in TOOLS.
 import { WorkerPool } from './client.js';
 import inspectTool from './inspect-panel.js';
+import pixelTool from './pixel-panel.js';
 
-const TOOLS = [inspectTool];
+const TOOLS = [pixelTool, inspectTool];
 
 const $ = (sel) => document.querySelector(sel);
 

@@ -3,6 +3,7 @@
 use crate::core::error::Error;
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::inspect::{inspect, InspectOptions};
+use crate::raster::{decode, Limits};
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::JsValue;
 
@@ -74,6 +75,25 @@ struct InspectRequest {
     tolerance: Option<f64>,
 }
 
+/// An image as it crosses the boundary undecoded: straight RGBA bytes.
+#[derive(Serialize)]
+pub struct RawImage<'a> {
+    pub width: u32,
+    pub height: u32,
+    #[serde(with = "serde_bytes")]
+    pub rgba: &'a [u8],
+}
+
+impl<'a> RawImage<'a> {
+    pub fn of(img: &'a crate::raster::Rgba8Image) -> Self {
+        RawImage {
+            width: img.width,
+            height: img.height,
+            rgba: &img.data,
+        }
+    }
+}
+
 #[derive(Deserialize)]
 struct AbortRequest {
     /// Steps to run before aborting, so the page sees a job "mid-way".
@@ -122,26 +142,21 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
                     struct Out<'a> {
                         #[serde(flatten)]
                         info: &'a crate::inspect::Inspection,
-                        thumbnail: Thumb<'a>,
+                        thumbnail: RawImage<'a>,
                     }
-                    #[derive(Serialize)]
-                    struct Thumb<'a> {
-                        width: u32,
-                        height: u32,
-                        #[serde(with = "serde_bytes")]
-                        rgba: &'a [u8],
-                    }
-                    let t = &r.thumbnail;
                     let out = Out {
                         info: &r,
-                        thumbnail: Thumb {
-                            width: t.width,
-                            height: t.height,
-                            rgba: &t.data,
-                        },
+                        thumbnail: RawImage::of(&r.thumbnail),
                     };
                     to_js(&out)
                 },
+            ))
+        }
+        "decode-image" => {
+            let req: InspectRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || decode(&req.bytes, Limits::default())),
+                |img| to_js(&RawImage::of(&img)),
             ))
         }
         "debug-abort" => {

@@ -10,7 +10,7 @@ after(async () => { await env?.close(); });
 const resultText = (page, field) => page.textContent(`[data-testid=inspect-result] [data-field=${field}]`);
 
 test('dropping a PNG shows its size, palette and thumbnail', async () => {
-  const page = await env.newPage();
+  const page = await env.newPage({ path: '#tool=inspect' });
   await dropFile(page, '[data-testid=drop-zone]', fixture('fish.png'));
   await page.waitForSelector('[data-testid=palette] li');
   assert.equal(await resultText(page, 'size'), '128 × 128 px');
@@ -28,7 +28,7 @@ test('dropping a PNG shows its size, palette and thumbnail', async () => {
 });
 
 test('bad files get a clear error and the next good file still works', async () => {
-  const page = await env.newPage();
+  const page = await env.newPage({ path: '#tool=inspect' });
   const zone = '[data-testid=drop-zone]';
   const error = '[data-testid=inspect-result] .error';
   await dropFile(page, zone, fixture('fish.png'));

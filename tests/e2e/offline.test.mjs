@@ -7,7 +7,7 @@ before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 test('after one visit the app loads and inspects offline', async () => {
-  const page = await env.newPage();
+  const page = await env.newPage({ path: '#tool=inspect' });
   // Wait until the service worker controls the page (first install claims clients).
   await page.evaluate(async () => {
     await navigator.serviceWorker.ready;

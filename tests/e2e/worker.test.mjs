@@ -7,7 +7,7 @@ before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 test('a worker that crashes mid-job is reported and replaced; the next job succeeds', async () => {
-  const page = await env.newPage();
+  const page = await env.newPage({ path: '#tool=inspect' });
   const outcome = await page.evaluate(async () => {
     const progress = [];
     try {
@@ -31,7 +31,7 @@ test('a worker that crashes mid-job is reported and replaced; the next job succe
 });
 
 test('cancelling a running job stops it quickly without killing the worker', async () => {
-  const page = await env.newPage();
+  const page = await env.newPage({ path: '#tool=inspect' });
   const r = await page.evaluate(async () => {
     const ctrl = new AbortController();
     let t0 = 0;

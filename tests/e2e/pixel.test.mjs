@@ -1,0 +1,93 @@
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import { launch } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+// Wait until the panel shows a result for the current state.
+async function waitForResult(page, previousStatus = null) {
+  await page.waitForFunction((prev) => {
+    const s = document.querySelector('[data-testid=pixel-status]').textContent;
+    return s.startsWith('done') && s !== prev;
+  }, previousStatus, { timeout: 30000 });
+  return page.textContent('[data-testid=pixel-status]');
+}
+
+const stat = (page, name) => page.$eval(`[data-stat="${name}"]`, (e) => Number(e.textContent));
+
+async function dragStroke(page, points) {
+  const box = await page.locator('[data-testid=pixel-canvas]').boundingBox();
+  const w = await page.$eval('[data-testid=pixel-canvas]', (c) => c.width);
+  const z = box.width / 128; // the fish is 128 px wide
+  const at = ([x, y]) => [box.x + x * z, box.y + y * z];
+  await page.mouse.move(...at(points[0]));
+  await page.mouse.down();
+  for (const p of points.slice(1)) await page.mouse.move(...at(p), { steps: 6 });
+  await page.mouse.up();
+  return w;
+}
+
+test('texture the fish: strokes, mask-only changes, palette, density, export', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await page.click('button[data-example=fish]');
+  let status = await waitForResult(page);
+  await page.click('button[data-act=clear-strokes]');
+  status = await waitForResult(page, status);
+
+  // Two strokes drawn with the mouse, head to tail along the body.
+  await dragStroke(page, [[20, 70], [45, 62], [70, 66], [95, 80]]);
+  status = await waitForResult(page, status);
+  await dragStroke(page, [[25, 90], [50, 92], [75, 95], [100, 100]]);
+  status = await waitForResult(page, status);
+  const strokes = await page.evaluate(() => window.filigreePixel.state().strokes.length);
+  assert.equal(strokes, 2);
+
+  // The result differs from the source only inside the mask and adds no colour.
+  const check = await page.evaluate(async () => {
+    const { state, result } = window.filigreePixel;
+    const doc = state();
+    const r = result();
+    const src = await window.filigree.pool.run('decode-image', { bytes: doc.source.slice() });
+    const colours = new Set();
+    for (let i = 0; i < src.rgba.length; i += 4) colours.add(src.rgba.slice(i, i + 4).join());
+    let outside = 0, changed = 0, foreign = 0;
+    for (let p = 0; p < r.width * r.height; p++) {
+      const a = src.rgba.subarray(4 * p, 4 * p + 4), b = r.rgba.subarray(4 * p, 4 * p + 4);
+      const same = a.every((v, i) => v === b[i]);
+      if (!same) { changed++; if (!doc.mask.bits[p]) outside++; }
+      if (!colours.has([...b].join())) foreign++;
+    }
+    return { outside, changed, foreign, placed: r.placed };
+  });
+  assert.ok(check.changed > 100, `the texture changed ${check.changed} pixels`);
+  assert.equal(check.outside, 0, 'no pixel outside the mask changed');
+  assert.equal(check.foreign, 0, 'only source colours are used');
+
+  // Lower density: fewer elements.
+  const before = await stat(page, 'Elements placed');
+  await page.$eval('[data-key=density] input', (el) => { el.value = '0.4'; el.dispatchEvent(new Event('input', { bubbles: true })); el.dispatchEvent(new Event('change', { bubbles: true })); });
+  status = await waitForResult(page, status);
+  const after = await stat(page, 'Elements placed');
+  assert.ok(after < before, `density 40% placed ${after}, 100% placed ${before}`);
+
+  // Export PNG downloads a valid PNG of the upscaled result.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-png]')]);
+  const file = await download.path();
+  const bytes = fs.readFileSync(file);
+  assert.deepEqual([...bytes.subarray(0, 8)], [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]);
+  assert.equal(bytes.readUInt32BE(16), 128 * 4, 'width is 4× the source');
+  assert.match(download.suggestedFilename(), /\.png$/);
+
+  // Autosave: a reload brings back the strokes and the density.
+  await page.waitForTimeout(600);
+  await page.reload();
+  await waitForResult(page);
+  const restored = await page.evaluate(() => {
+    const d = window.filigreePixel.state();
+    return { strokes: d.strokes.length, density: d.params.density };
+  });
+  assert.deepEqual(restored, { strokes: 2, density: 0.4 });
+});
