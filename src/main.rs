@@ -7,7 +7,11 @@ use std::process::ExitCode;
 mod cmd;
 
 #[derive(Parser)]
-#[command(name = "filigree", version, about = "Filigree: a procedural-pattern studio (CLI of the same core the browser app runs)")]
+#[command(
+    name = "filigree",
+    version,
+    about = "Filigree: a procedural-pattern studio (CLI of the same core the browser app runs)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -18,7 +22,7 @@ enum Command {
     /// Describe an image: size, palette, colour clusters.
     Inspect(cmd::inspect::Args),
     /// Texture pixel art with oriented elements in the image's own palette.
-    Pixel(cmd::pixel::Args),
+    Pixel(Box<cmd::pixel::Args>),
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -30,7 +34,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
-        Command::Pixel(a) => cmd::pixel::run(a),
+        Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

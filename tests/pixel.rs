@@ -2,8 +2,11 @@
 //! (`tests/fixtures/pixel/cases.json`) and hand-made inputs.
 //!
 //! `REPLACE=1 cargo test --test pixel` rewrites `tests/golden/pixel/fish.png`.
+// Index loops mirror the maths (rows, pixels) more plainly than iterator chains here.
+#![allow(clippy::needless_range_loop)]
 use filigree::pixel::{
-    self, laplace, ColourMapKind, ColourStrategy, Elements, PixelInputs, PixelJob, PixelParams, PositionStrategy,
+    self, laplace, ColourMapKind, ColourStrategy, Elements, PixelInputs, PixelJob, PixelParams,
+    PositionStrategy,
 };
 use filigree::raster::{decode, encode_png, exact_palette, Limits, Rgba8Image};
 use std::collections::HashSet;
@@ -19,14 +22,16 @@ fn image(name: &str) -> Rgba8Image {
 }
 
 fn case(name: &str) -> (PixelInputs, PixelParams) {
-    let cases: serde_json::Value = serde_json::from_slice(&std::fs::read(fixtures().join("cases.json")).unwrap()).unwrap();
+    let cases: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fixtures().join("cases.json")).unwrap()).unwrap();
     let c = &cases[name];
     let s = |k: &str| c[k].as_str().unwrap().to_string();
     #[derive(serde::Deserialize)]
     struct Strokes {
         strokes: Vec<pixel::Stroke>,
     }
-    let strokes: Strokes = serde_json::from_slice(&std::fs::read(fixtures().join(s("strokes"))).unwrap()).unwrap();
+    let strokes: Strokes =
+        serde_json::from_slice(&std::fs::read(fixtures().join(s("strokes"))).unwrap()).unwrap();
     let params: PixelParams = serde_json::from_value(c["params"].clone()).unwrap();
     let inputs = PixelInputs {
         source: image(&s("source")),
@@ -48,7 +53,11 @@ fn mask_of(inputs: &PixelInputs) -> Vec<bool> {
 #[test]
 fn palette_strategies_add_no_colour() {
     for name in ["fish", "trunk"] {
-        for strategy in [ColourStrategy::Auto, ColourStrategy::Difference, ColourStrategy::Border] {
+        for strategy in [
+            ColourStrategy::Auto,
+            ColourStrategy::Difference,
+            ColourStrategy::Border,
+        ] {
             for element_colour in [pixel::ElementColour::Region, pixel::ElementColour::Pixel] {
                 let (inputs, mut params) = case(name);
                 params.colour = strategy;
@@ -56,9 +65,24 @@ fn palette_strategies_add_no_colour() {
                 let before = colours(&inputs.source);
                 let out = pixel::texture(inputs, params).unwrap();
                 let after = colours(&out.image);
-                assert!(after.is_subset(&before), "{name} {strategy:?}: new colours {:?}", after.difference(&before));
-                assert!(out.stats.placed > 20, "{name} {strategy:?}: only {} placed", out.stats.placed);
-                assert_ne!(out.image, image(if name == "fish" { "fish.png" } else { "trunk_unpatterned.png" }));
+                assert!(
+                    after.is_subset(&before),
+                    "{name} {strategy:?}: new colours {:?}",
+                    after.difference(&before)
+                );
+                assert!(
+                    out.stats.placed > 20,
+                    "{name} {strategy:?}: only {} placed",
+                    out.stats.placed
+                );
+                assert_ne!(
+                    out.image,
+                    image(if name == "fish" {
+                        "fish.png"
+                    } else {
+                        "trunk_unpatterned.png"
+                    })
+                );
                 assert_eq!(out.stats.colours_after, after.len());
             }
         }
@@ -80,7 +104,14 @@ fn auto_picks_shared_border_on_the_thesis_cases() {
     // Appendix A reports "Auto (SB)" for both.
     for name in ["fish", "trunk"] {
         let (inputs, params) = case(name);
-        assert_eq!(pixel::texture(inputs, params).unwrap().stats.colour_map_used, ColourMapKind::Border, "{name}");
+        assert_eq!(
+            pixel::texture(inputs, params)
+                .unwrap()
+                .stats
+                .colour_map_used,
+            ColourMapKind::Border,
+            "{name}"
+        );
     }
 }
 
@@ -99,7 +130,13 @@ fn no_overlap_and_nothing_outside_the_mask() {
                 // Nothing outside the mask changes.
                 for i in 0..src.pixel_count() {
                     if !mask[i] {
-                        assert_eq!(src.data[4 * i..4 * i + 4], out.image.data[4 * i..4 * i + 4], "{name}: pixel {} {}", i % w, i / w);
+                        assert_eq!(
+                            src.data[4 * i..4 * i + 4],
+                            out.image.data[4 * i..4 * i + 4],
+                            "{name}: pixel {} {}",
+                            i % w,
+                            i / w
+                        );
                     }
                 }
                 // Cells never overlap, and are at least the margins apart.
@@ -109,7 +146,10 @@ fn no_overlap_and_nothing_outside_the_mask() {
                     for b in &p[i + 1..] {
                         let gx = (a.0 - b.0).abs() - cell;
                         let gy = (a.1 - b.1).abs() - cell;
-                        assert!(gx >= margins[0] || gy >= margins[1], "{name} {strategy:?} {margins:?}: {a:?} {b:?}");
+                        assert!(
+                            gx >= margins[0] || gy >= margins[1],
+                            "{name} {strategy:?} {margins:?}: {a:?} {b:?}"
+                        );
                     }
                 }
                 // Without `partial`, every cell is fully inside the mask.
@@ -119,7 +159,10 @@ fn no_overlap_and_nothing_outside_the_mask() {
                 for &(x, y) in &out.positions {
                     for yy in y..y + cell {
                         for xx in x..x + cell {
-                            assert!(mask[yy as usize * w + xx as usize], "{name}: cell at {x},{y}");
+                            assert!(
+                                mask[yy as usize * w + xx as usize],
+                                "{name}: cell at {x},{y}"
+                            );
                         }
                     }
                 }
@@ -132,7 +175,9 @@ fn no_overlap_and_nothing_outside_the_mask() {
 fn gauss(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
     let n = b.len();
     for k in 0..n {
-        let piv = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs())).unwrap();
+        let piv = (k..n)
+            .max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))
+            .unwrap();
         a.swap(k, piv);
         b.swap(k, piv);
         for i in k + 1..n {
@@ -157,7 +202,13 @@ fn laplace_matches_a_dense_solve() {
     let (w, h) = (13usize, 9usize);
     let mut fixed = vec![false; w * h];
     let mut values = vec![[0.0; 2]; w * h];
-    for (x, y, v) in [(1, 1, [1.0, 0.0]), (11, 2, [0.0, -1.0]), (6, 7, [-0.5, 0.5]), (7, 7, [-0.6, 0.4]), (3, 5, [0.2, 0.9])] {
+    for (x, y, v) in [
+        (1, 1, [1.0, 0.0]),
+        (11, 2, [0.0, -1.0]),
+        (6, 7, [-0.5, 0.5]),
+        (7, 7, [-0.6, 0.4]),
+        (3, 5, [0.2, 0.9]),
+    ] {
         fixed[y * w + x] = true;
         values[y * w + x] = v;
     }
@@ -181,11 +232,16 @@ fn laplace_matches_a_dense_solve() {
                     b[i] = values[i][c];
                     continue;
                 }
-                let nbrs: Vec<usize> = [(x > 0, i.wrapping_sub(1)), (x + 1 < w, i + 1), (y > 0, i.wrapping_sub(w)), (y + 1 < h, i + w)]
-                    .into_iter()
-                    .filter(|t| t.0)
-                    .map(|t| t.1)
-                    .collect();
+                let nbrs: Vec<usize> = [
+                    (x > 0, i.wrapping_sub(1)),
+                    (x + 1 < w, i + 1),
+                    (y > 0, i.wrapping_sub(w)),
+                    (y + 1 < h, i + w),
+                ]
+                .into_iter()
+                .filter(|t| t.0)
+                .map(|t| t.1)
+                .collect();
                 a[i][i] = nbrs.len() as f64;
                 for j in nbrs {
                     a[i][j] = -1.0;
@@ -194,7 +250,12 @@ fn laplace_matches_a_dense_solve() {
         }
         let x = gauss(a.clone(), b);
         for i in 0..n {
-            assert!((x[i] - field[i][c]).abs() < 1e-7, "component {c} pixel {i}: dense {} vs {}", x[i], field[i][c]);
+            assert!(
+                (x[i] - field[i][c]).abs() < 1e-7,
+                "component {c} pixel {i}: dense {} vs {}",
+                x[i],
+                field[i][c]
+            );
             if !fixed[i] {
                 let lap: f64 = (0..n).map(|j| a[i][j] * field[j][c]).sum();
                 assert!(lap.abs() < 1e-7, "Laplacian {lap} at free pixel {i}");
@@ -232,16 +293,31 @@ fn same_seed_same_bytes_and_golden_fish() {
     assert_eq!(a.image, b.image);
     assert_eq!(a.field, b.field);
     let (inputs, params) = case("trunk");
-    let other = pixel::texture(inputs, PixelParams { seed: 8, ..params.clone() }).unwrap();
+    let other = pixel::texture(
+        inputs,
+        PixelParams {
+            seed: 8,
+            ..params.clone()
+        },
+    )
+    .unwrap();
     let (inputs, _) = case("trunk");
-    assert_ne!(other.image, pixel::texture(inputs, params).unwrap().image, "a different seed should move the bark");
+    assert_ne!(
+        other.image,
+        pixel::texture(inputs, params).unwrap().image,
+        "a different seed should move the bark"
+    );
 
     let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/pixel/fish.png");
     if std::env::var_os("REPLACE").is_some() {
         std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
         std::fs::write(&golden, encode_png(&a.image).unwrap()).unwrap();
     }
-    let want = decode(&std::fs::read(&golden).expect("golden missing: run with REPLACE=1"), Limits::default()).unwrap();
+    let want = decode(
+        &std::fs::read(&golden).expect("golden missing: run with REPLACE=1"),
+        Limits::default(),
+    )
+    .unwrap();
     assert!(want == a.image, "fish differs from tests/golden/pixel/fish.png (REPLACE=1 rewrites it if the change is intended)");
 }
 
@@ -267,18 +343,29 @@ fn job_steps_through_the_stages_in_order() {
         }
     }
     use pixel::Stage::*;
-    assert_eq!(stages, vec![Positions, ColourMap, Orientation, Placement, Done]);
+    assert_eq!(
+        stages,
+        vec![Positions, ColourMap, Orientation, Placement, Done]
+    );
 }
 
 #[test]
 fn bad_inputs_get_clear_errors() {
-    let err = |inputs: PixelInputs| PixelJob::new(inputs, PixelParams::default()).err().expect("should fail").to_string();
+    let err = |inputs: PixelInputs| {
+        PixelJob::new(inputs, PixelParams::default())
+            .err()
+            .expect("should fail")
+            .to_string()
+    };
     let (base, _) = case("trunk");
 
     let mut i = base.clone();
     i.mask = image("fish_body_boundary.png");
     let e = err(i);
-    assert!(e.contains("128×128") && e.contains("64×64") && e.contains("same size"), "{e}");
+    assert!(
+        e.contains("128×128") && e.contains("64×64") && e.contains("same size"),
+        "{e}"
+    );
 
     let mut i = base.clone();
     i.elements = Elements::Sheet(Rgba8Image::new(13, 12));
@@ -300,7 +387,16 @@ fn bad_inputs_get_clear_errors() {
     let e = err(i);
     assert!(e.contains("stroke 1 point 2"), "{e}");
 
-    let e = PixelJob::new(base.clone(), PixelParams { margins: [-3, 0], ..PixelParams::default() }).err().unwrap().to_string();
+    let e = PixelJob::new(
+        base.clone(),
+        PixelParams {
+            margins: [-3, 0],
+            ..PixelParams::default()
+        },
+    )
+    .err()
+    .unwrap()
+    .to_string();
     assert!(e.contains("mx = -3"), "{e}");
 }
 

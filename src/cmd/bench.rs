@@ -1,7 +1,7 @@
 //! `filigree bench <tool>`: benchmarks that print one JSON object.
 use clap::Subcommand;
-use filigree::inspect::{inspect, InspectOptions};
 use filigree::core::job::{Job, Step};
+use filigree::inspect::{inspect, InspectOptions};
 use filigree::pixel::{Elements, PixelInputs, PixelJob, PixelParams, Stage};
 use filigree::raster::{decode, encode_png, Limits, Rgba8Image};
 use serde_json::json;
@@ -52,34 +52,79 @@ pub fn run(w: Which) -> Result<(), String> {
 
 /// Fixture files of the pixel cases, embedded so the bench runs from any directory.
 const PIXEL_FIXTURES: [(&str, &[u8]); 9] = [
-    ("cases.json", include_bytes!("../../tests/fixtures/pixel/cases.json")),
-    ("fish.png", include_bytes!("../../tests/fixtures/pixel/fish.png")),
-    ("fish_body_boundary.png", include_bytes!("../../tests/fixtures/pixel/fish_body_boundary.png")),
-    ("fish_scale.png", include_bytes!("../../tests/fixtures/pixel/fish_scale.png")),
-    ("fish_strokes.json", include_bytes!("../../tests/fixtures/pixel/fish_strokes.json")),
-    ("trunk_unpatterned.png", include_bytes!("../../tests/fixtures/pixel/trunk_unpatterned.png")),
-    ("trunk_boundary.png", include_bytes!("../../tests/fixtures/pixel/trunk_boundary.png")),
-    ("bark_scale.png", include_bytes!("../../tests/fixtures/pixel/bark_scale.png")),
-    ("trunk_strokes.json", include_bytes!("../../tests/fixtures/pixel/trunk_strokes.json")),
+    (
+        "cases.json",
+        include_bytes!("../../tests/fixtures/pixel/cases.json"),
+    ),
+    (
+        "fish.png",
+        include_bytes!("../../tests/fixtures/pixel/fish.png"),
+    ),
+    (
+        "fish_body_boundary.png",
+        include_bytes!("../../tests/fixtures/pixel/fish_body_boundary.png"),
+    ),
+    (
+        "fish_scale.png",
+        include_bytes!("../../tests/fixtures/pixel/fish_scale.png"),
+    ),
+    (
+        "fish_strokes.json",
+        include_bytes!("../../tests/fixtures/pixel/fish_strokes.json"),
+    ),
+    (
+        "trunk_unpatterned.png",
+        include_bytes!("../../tests/fixtures/pixel/trunk_unpatterned.png"),
+    ),
+    (
+        "trunk_boundary.png",
+        include_bytes!("../../tests/fixtures/pixel/trunk_boundary.png"),
+    ),
+    (
+        "bark_scale.png",
+        include_bytes!("../../tests/fixtures/pixel/bark_scale.png"),
+    ),
+    (
+        "trunk_strokes.json",
+        include_bytes!("../../tests/fixtures/pixel/trunk_strokes.json"),
+    ),
 ];
 
 fn fixture(name: &str) -> Result<&'static [u8], String> {
-    PIXEL_FIXTURES.iter().find(|f| f.0 == name).map(|f| f.1).ok_or_else(|| format!("no embedded fixture {name}"))
+    PIXEL_FIXTURES
+        .iter()
+        .find(|f| f.0 == name)
+        .map(|f| f.1)
+        .ok_or_else(|| format!("no embedded fixture {name}"))
 }
 
 /// Inputs and parameters of one case of `tests/fixtures/pixel/cases.json`.
 fn pixel_case(name: &str) -> Result<(PixelInputs, PixelParams), String> {
-    let cases: serde_json::Value = serde_json::from_slice(fixture("cases.json")?).map_err(|e| e.to_string())?;
+    let cases: serde_json::Value =
+        serde_json::from_slice(fixture("cases.json")?).map_err(|e| e.to_string())?;
     let c = &cases[name];
-    let file = |k: &str| -> Result<&'static [u8], String> { fixture(c[k].as_str().ok_or_else(|| format!("case {name}: no {k}"))?) };
-    let img = |k: &str| -> Result<Rgba8Image, String> { decode(file(k)?, Limits::default()).map_err(|e| format!("{name} {k}: {e}")) };
+    let file = |k: &str| -> Result<&'static [u8], String> {
+        fixture(
+            c[k].as_str()
+                .ok_or_else(|| format!("case {name}: no {k}"))?,
+        )
+    };
+    let img = |k: &str| -> Result<Rgba8Image, String> {
+        decode(file(k)?, Limits::default()).map_err(|e| format!("{name} {k}: {e}"))
+    };
     #[derive(serde::Deserialize)]
     struct Strokes {
         strokes: Vec<filigree::pixel::Stroke>,
     }
     let strokes: Strokes = serde_json::from_slice(file("strokes")?).map_err(|e| e.to_string())?;
-    let params: PixelParams = serde_json::from_value(c["params"].clone()).map_err(|e| format!("case {name}: {e}"))?;
-    let inputs = PixelInputs { source: img("source")?, mask: img("mask")?, elements: Elements::Sheet(img("sheet")?), strokes: strokes.strokes };
+    let params: PixelParams =
+        serde_json::from_value(c["params"].clone()).map_err(|e| format!("case {name}: {e}"))?;
+    let inputs = PixelInputs {
+        source: img("source")?,
+        mask: img("mask")?,
+        elements: Elements::Sheet(img("sheet")?),
+        strokes: strokes.strokes,
+    };
     Ok((inputs, params))
 }
 
@@ -101,7 +146,8 @@ fn pixel_bench(repeats: usize) -> Result<serde_json::Value, String> {
             let t_all = Instant::now();
             let mut per = [0.0f64; 6];
             let t = Instant::now();
-            let mut job = PixelJob::new(inputs.clone(), params.clone()).map_err(|e| e.to_string())?;
+            let mut job =
+                PixelJob::new(inputs.clone(), params.clone()).map_err(|e| e.to_string())?;
             per[0] = t.elapsed().as_secs_f64();
             let out = loop {
                 let slot = match job.stage() {
@@ -150,12 +196,14 @@ fn pixel_bench(repeats: usize) -> Result<serde_json::Value, String> {
         vec![[60.0, 450.0], [256.0, 300.0], [450.0, 460.0]],
         vec![[256.0, 180.0], [256.0, 260.0]],
     ];
-    let ann = filigree::pixel::orientation::annotate(side as u32, side as u32, &strokes, 4).map_err(|e| e.to_string())?;
+    let ann = filigree::pixel::orientation::annotate(side as u32, side as u32, &strokes, 4)
+        .map_err(|e| e.to_string())?;
     let mut times = vec![];
     let mut stats = None;
     for _ in 0..repeats {
         let t = Instant::now();
-        let (_, st) = filigree::pixel::laplace::solve(side, side, ann.fixed.clone(), ann.values.clone());
+        let (_, st) =
+            filigree::pixel::laplace::solve(side, side, ann.fixed.clone(), ann.values.clone());
         times.push(t.elapsed().as_secs_f64());
         stats = Some(st);
     }
@@ -173,7 +221,11 @@ pub fn test_png(side: u32) -> Vec<u8> {
     let mut img = Rgba8Image::new(side, side);
     for y in 0..side {
         for x in 0..side {
-            img.put(x, y, [(x / 4) as u8, (y / 4) as u8, ((x ^ y) & 0xC0) as u8, 255]);
+            img.put(
+                x,
+                y,
+                [(x / 4) as u8, (y / 4) as u8, ((x ^ y) & 0xC0) as u8, 255],
+            );
         }
     }
     encode_png(&img).expect("encoding a valid image")

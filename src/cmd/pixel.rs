@@ -76,7 +76,10 @@ struct StrokesFile {
 pub fn read_strokes(path: &Path) -> Result<Vec<Stroke>, String> {
     let text = super::read_file(path)?;
     let f: StrokesFile = serde_json::from_slice(&text).map_err(|e| {
-        format!("{}: {e} (expected {{\"strokes\": [[[x, y], [x, y], ...], ...]}})", path.display())
+        format!(
+            "{}: {e} (expected {{\"strokes\": [[[x, y], [x, y], ...], ...]}})",
+            path.display()
+        )
     })?;
     Ok(f.strokes)
 }
@@ -87,7 +90,8 @@ fn numbers<const N: usize>(s: &str, what: &str) -> Result<[f64; N], String> {
         .map(|t| t.trim().parse::<f64>())
         .collect::<Result<_, _>>()
         .map_err(|_| format!("--{what} '{s}': expected {N} comma-separated numbers"))?;
-    v.try_into().map_err(|_| format!("--{what} '{s}': expected {N} comma-separated numbers"))
+    v.try_into()
+        .map_err(|_| format!("--{what} '{s}': expected {N} comma-separated numbers"))
 }
 
 fn parse_density(s: &str) -> Result<f64, String> {
@@ -95,7 +99,10 @@ fn parse_density(s: &str) -> Result<f64, String> {
         Some(t) => (t, 100.0),
         None => (s, 1.0),
     };
-    let v: f64 = t.trim().parse().map_err(|_| format!("--density '{s}': expected 0..1 or a percentage like 80%"))?;
+    let v: f64 = t
+        .trim()
+        .parse()
+        .map_err(|_| format!("--density '{s}': expected 0..1 or a percentage like 80%"))?;
     Ok(v / scale)
 }
 
@@ -108,7 +115,10 @@ fn parse_colours(s: &str) -> Result<Vec<[u8; 3]>, String> {
             let h = t.trim().trim_start_matches('#');
             let ok = h.len() == 6 && h.chars().all(|c| c.is_ascii_hexdigit());
             if !ok {
-                return Err(format!("--exclude: '{}' is not a colour like #1a2b3c", t.trim()));
+                return Err(format!(
+                    "--exclude: '{}' is not a colour like #1a2b3c",
+                    t.trim()
+                ));
             }
             let b = |i: usize| u8::from_str_radix(&h[i..i + 2], 16).expect("checked hex");
             Ok([b(0), b(2), b(4)])
@@ -125,7 +135,10 @@ fn enum_from<T: for<'de> Deserialize<'de>>(value: &str, flag: &str) -> Result<T,
 fn params(a: &Args) -> Result<PixelParams, String> {
     let m = numbers::<2>(&a.margins, "margins")?;
     if m.iter().any(|v| v.fract() != 0.0) {
-        return Err(format!("--margins '{}': margins are whole pixels", a.margins));
+        return Err(format!(
+            "--margins '{}': margins are whole pixels",
+            a.margins
+        ));
     }
     Ok(PixelParams {
         annotation_scale: a.annotation_scale,
@@ -159,14 +172,25 @@ pub fn run(a: Args) -> Result<(), String> {
         }
         (None, Some(p)) => {
             let img = super::read_image(p)?;
-            pixel::ElementSheet::from_sprite(&img, params.sprite_direction).map_err(|e| format!("{}: {e}", p.display()))?;
+            pixel::ElementSheet::from_sprite(&img, params.sprite_direction)
+                .map_err(|e| format!("{}: {e}", p.display()))?;
             Elements::Sprite(img)
         }
         (None, None) => return Err("give the element as --sheet FILE or --sprite FILE".into()),
     };
     let strokes = read_strokes(&a.strokes)?;
-    orientation::check_strokes(source.width, source.height, &strokes).map_err(|e| format!("{}: {e}", a.strokes.display()))?;
-    let out = pixel::texture(PixelInputs { source, mask, elements, strokes }, params).map_err(|e| e.to_string())?;
+    orientation::check_strokes(source.width, source.height, &strokes)
+        .map_err(|e| format!("{}: {e}", a.strokes.display()))?;
+    let out = pixel::texture(
+        PixelInputs {
+            source,
+            mask,
+            elements,
+            strokes,
+        },
+        params,
+    )
+    .map_err(|e| e.to_string())?;
     let png = encode_png(&out.image).map_err(|e| e.to_string())?;
     std::fs::write(&a.out, png).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let s = &out.stats;

@@ -25,7 +25,11 @@ pub struct Progress {
 
 impl Progress {
     pub fn new(fraction: f64, stage: impl Into<String>) -> Self {
-        Progress { fraction: fraction.clamp(0.0, 1.0), stage: stage.into(), figure: None }
+        Progress {
+            fraction: fraction.clamp(0.0, 1.0),
+            stage: stage.into(),
+            figure: None,
+        }
     }
     pub fn with_figure(mut self, figure: f64) -> Self {
         self.figure = Some(figure);
@@ -123,7 +127,10 @@ mod tests {
             if self.n == self.to {
                 Ok(Step::Done(self.n))
             } else {
-                Ok(Step::Running(Progress::new(self.n as f64 / self.to as f64, "counting")))
+                Ok(Step::Running(Progress::new(
+                    self.n as f64 / self.to as f64,
+                    "counting",
+                )))
             }
         }
     }
@@ -131,7 +138,10 @@ mod tests {
     #[test]
     fn runs_to_end_and_reports_monotone_progress() {
         let mut seen = vec![];
-        let out = run_to_end(Count { n: 0, to: 5 }, &Cancel::new(), |p| seen.push(p.fraction)).unwrap();
+        let out = run_to_end(Count { n: 0, to: 5 }, &Cancel::new(), |p| {
+            seen.push(p.fraction)
+        })
+        .unwrap();
         assert_eq!(out, 5);
         assert_eq!(seen.len(), 4);
         assert!(seen.windows(2).all(|w| w[0] < w[1]));

@@ -93,7 +93,11 @@ pub fn lab_distance(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// Shift hue (degrees), saturation and value (percentage points) of one colour.
 /// Only arithmetic, so every platform rounds the same.
 pub fn hsv_shift(c: [u8; 4], d: [f64; 3]) -> [u8; 4] {
-    let (r, g, b) = (c[0] as f64 / 255.0, c[1] as f64 / 255.0, c[2] as f64 / 255.0);
+    let (r, g, b) = (
+        c[0] as f64 / 255.0,
+        c[1] as f64 / 255.0,
+        c[2] as f64 / 255.0,
+    );
     let max = r.max(g).max(b);
     let min = r.min(g).min(b);
     let delta = max - min;
@@ -146,7 +150,14 @@ pub struct Regions {
 /// diagonal touch does not join two areas of flat colour.
 pub fn regions(img: &Rgba8Image) -> Regions {
     let (w, h) = (img.width as usize, img.height as usize);
-    let px = |i: usize| -> [u8; 4] { [img.data[4 * i], img.data[4 * i + 1], img.data[4 * i + 2], img.data[4 * i + 3]] };
+    let px = |i: usize| -> [u8; 4] {
+        [
+            img.data[4 * i],
+            img.data[4 * i + 1],
+            img.data[4 * i + 2],
+            img.data[4 * i + 3],
+        ]
+    };
     let mut label = vec![u32::MAX; w * h];
     let (mut colour, mut pixels, mut start) = (Vec::new(), Vec::with_capacity(w * h), vec![0u32]);
     let mut stack = Vec::new();
@@ -183,7 +194,12 @@ pub fn regions(img: &Rgba8Image) -> Regions {
         }
         start.push(pixels.len() as u32);
     }
-    Regions { label, colour, pixels, start }
+    Regions {
+        label,
+        colour,
+        pixels,
+        start,
+    }
 }
 
 /// Palette of an image: distinct colours of non-transparent pixels, sorted.
@@ -225,9 +241,20 @@ pub fn difference_table(pal: &[[u8; 4]], exclude: &[[u8; 3]]) -> HashMap<[u8; 4]
 /// the distinct pixels 4-adjacent to it (transparent and excluded colours
 /// skipped). Ties go to the colour nearer the region's own in CIELAB, then to
 /// the smaller RGBA value. `None` when no usable colour borders the region.
-pub fn border_colours(img: &Rgba8Image, reg: &Regions, exclude: &[[u8; 3]]) -> Vec<Option<[u8; 4]>> {
+pub fn border_colours(
+    img: &Rgba8Image,
+    reg: &Regions,
+    exclude: &[[u8; 3]],
+) -> Vec<Option<[u8; 4]>> {
     let (w, h) = (img.width as usize, img.height as usize);
-    let px = |i: usize| -> [u8; 4] { [img.data[4 * i], img.data[4 * i + 1], img.data[4 * i + 2], img.data[4 * i + 3]] };
+    let px = |i: usize| -> [u8; 4] {
+        [
+            img.data[4 * i],
+            img.data[4 * i + 1],
+            img.data[4 * i + 2],
+            img.data[4 * i + 3],
+        ]
+    };
     // stamp[j] == r + 1 means pixel j was already counted for region r.
     let mut stamp = vec![0u32; w * h];
     let mut out = Vec::with_capacity(reg.colour.len());
@@ -292,7 +319,10 @@ pub fn colour_map(src: &Rgba8Image, mask: &[bool], p: &ColourParams) -> ColourMa
         ColourStrategy::Border => ColourMapKind::Border,
         ColourStrategy::Auto => {
             let pal = palette(src);
-            let usable = pal.iter().filter(|c| !p.exclude.contains(&rgb(**c))).count();
+            let usable = pal
+                .iter()
+                .filter(|c| !p.exclude.contains(&rgb(**c)))
+                .count();
             if usable <= 1 {
                 ColourMapKind::Hsv
             } else {
@@ -310,7 +340,10 @@ pub fn colour_map(src: &Rgba8Image, mask: &[bool], p: &ColourParams) -> ColourMa
                 });
                 let map = border_map(src, &reg, &border, &diff);
                 if !far {
-                    return ColourMap { map, kind: ColourMapKind::Border };
+                    return ColourMap {
+                        map,
+                        kind: ColourMapKind::Border,
+                    };
                 }
                 ColourMapKind::Difference
             }
@@ -388,26 +421,53 @@ mod tests {
     }
 
     fn params(strategy: ColourStrategy) -> ColourParams {
-        ColourParams { strategy, hsv: [0.0, 0.0, -30.0], exclude: vec![[0, 0, 0]], d_max: 50.0 }
+        ColourParams {
+            strategy,
+            hsv: [0.0, 0.0, -30.0],
+            exclude: vec![[0, 0, 0]],
+            d_max: 50.0,
+        }
     }
 
     #[test]
     fn lab_matches_reference_values() {
         let w = lab([255, 255, 255, 255]);
-        assert!((w[0] - 100.0).abs() < 0.01 && w[1].abs() < 0.01 && w[2].abs() < 0.01, "{w:?}");
+        assert!(
+            (w[0] - 100.0).abs() < 0.01 && w[1].abs() < 0.01 && w[2].abs() < 0.01,
+            "{w:?}"
+        );
         // sRGB red is L 53.24, a 80.09, b 67.20.
         let r = lab([255, 0, 0, 255]);
-        assert!((r[0] - 53.24).abs() < 0.02 && (r[1] - 80.09).abs() < 0.05 && (r[2] - 67.20).abs() < 0.05, "{r:?}");
+        assert!(
+            (r[0] - 53.24).abs() < 0.02
+                && (r[1] - 80.09).abs() < 0.05
+                && (r[2] - 67.20).abs() < 0.05,
+            "{r:?}"
+        );
     }
 
     #[test]
     fn hsv_shift_round_trips_and_shifts() {
-        for c in [[12, 200, 99, 255], [255, 255, 255, 7], [0, 0, 0, 255], [128, 64, 250, 255]] {
+        for c in [
+            [12, 200, 99, 255],
+            [255, 255, 255, 7],
+            [0, 0, 0, 255],
+            [128, 64, 250, 255],
+        ] {
             assert_eq!(hsv_shift(c, [0.0, 0.0, 0.0]), c);
         }
-        assert_eq!(hsv_shift([255, 0, 0, 255], [120.0, 0.0, 0.0]), [0, 255, 0, 255]);
-        assert_eq!(hsv_shift([200, 100, 100, 255], [0.0, 0.0, -100.0]), [0, 0, 0, 255]);
-        assert_eq!(hsv_shift([200, 100, 100, 255], [0.0, -100.0, 0.0]), [200, 200, 200, 255]);
+        assert_eq!(
+            hsv_shift([255, 0, 0, 255], [120.0, 0.0, 0.0]),
+            [0, 255, 0, 255]
+        );
+        assert_eq!(
+            hsv_shift([200, 100, 100, 255], [0.0, 0.0, -100.0]),
+            [0, 0, 0, 255]
+        );
+        assert_eq!(
+            hsv_shift([200, 100, 100, 255], [0.0, -100.0, 0.0]),
+            [200, 200, 200, 255]
+        );
     }
 
     #[test]
@@ -420,7 +480,10 @@ mod tests {
         assert_eq!(m.map.get(0, 0), P);
         assert_eq!(m.map.get(1, 0), R);
         let lg = lab(G);
-        let want_g = [R, P, B].into_iter().min_by(|a, b| lab_distance(lg, lab(*a)).total_cmp(&lab_distance(lg, lab(*b)))).unwrap();
+        let want_g = [R, P, B]
+            .into_iter()
+            .min_by(|a, b| lab_distance(lg, lab(*a)).total_cmp(&lab_distance(lg, lab(*b))))
+            .unwrap();
         assert_eq!(m.map.get(2, 0), want_g);
         // Black itself may be recoloured (it is a source colour) but never chosen.
         for x in 0..5 {
@@ -428,10 +491,16 @@ mod tests {
         }
         // Without the exclusion, black's nearest other colour is chosen as usual
         // and blue's nearest may be black.
-        let no_ex = ColourParams { exclude: vec![], ..params(ColourStrategy::Difference) };
+        let no_ex = ColourParams {
+            exclude: vec![],
+            ..params(ColourStrategy::Difference)
+        };
         let m = colour_map(&src, &[true; 5], &no_ex);
         let lb = lab(B);
-        let want_b = [R, P, G, K].into_iter().min_by(|a, b| lab_distance(lb, lab(*a)).total_cmp(&lab_distance(lb, lab(*b)))).unwrap();
+        let want_b = [R, P, G, K]
+            .into_iter()
+            .min_by(|a, b| lab_distance(lb, lab(*a)).total_cmp(&lab_distance(lb, lab(*b))))
+            .unwrap();
         assert_eq!(m.map.get(3, 0), want_b);
     }
 
@@ -439,12 +508,7 @@ mod tests {
     fn border_picks_most_frequent_neighbour_skipping_excluded() {
         // The R region (2×2 in the middle) is bordered by 4 K, 3 G, 1 B pixels.
         // Black is excluded, so G wins; without exclusion K wins.
-        let src = img(&[
-            &[K, K, K, K],
-            &[G, R, R, K],
-            &[G, R, R, B],
-            &[G, G, K, K],
-        ]);
+        let src = img(&[&[K, K, K, K], &[G, R, R, K], &[G, R, R, B], &[G, G, K, K]]);
         // Counting distinct bordering pixels: above (1,0),(2,0)=K,K; right
         // (3,1)=K,(3,2)=B; below (1,3)=G,(2,3)=K; left (0,1),(0,2)=G,G.
         // K:4, G:3, B:1.
@@ -453,7 +517,10 @@ mod tests {
         assert_eq!(m.kind, ColourMapKind::Border);
         assert_eq!(m.map.get(1, 1), G);
         assert_eq!(m.map.get(2, 2), G);
-        let no_ex = ColourParams { exclude: vec![], ..params(ColourStrategy::Border) };
+        let no_ex = ColourParams {
+            exclude: vec![],
+            ..params(ColourStrategy::Border)
+        };
         assert_eq!(colour_map(&src, &mask, &no_ex).map.get(1, 1), K);
     }
 
@@ -471,21 +538,36 @@ mod tests {
     fn auto_selects_by_palette_and_distance() {
         // One usable colour (plus excluded black): HSV shift.
         let one = img(&[&[R, R, K]]);
-        assert_eq!(colour_map(&one, &[true; 3], &params(ColourStrategy::Auto)).kind, ColourMapKind::Hsv);
+        assert_eq!(
+            colour_map(&one, &[true; 3], &params(ColourStrategy::Auto)).kind,
+            ColourMapKind::Hsv
+        );
         // R and P are close (shared border moves each by < 50): border.
         let close = img(&[&[R, R, P, P]]);
         assert!(lab_distance(lab(R), lab(P)) < 50.0);
-        assert_eq!(colour_map(&close, &[true; 4], &params(ColourStrategy::Auto)).kind, ColourMapKind::Border);
+        assert_eq!(
+            colour_map(&close, &[true; 4], &params(ColourStrategy::Auto)).kind,
+            ColourMapKind::Border
+        );
         // R next to B: far apart, so colour difference.
         let far = img(&[&[R, R, B, B]]);
         assert!(lab_distance(lab(R), lab(B)) >= 50.0);
         let m = colour_map(&far, &[true; 4], &params(ColourStrategy::Auto));
         assert_eq!(m.kind, ColourMapKind::Difference);
         // ... unless d_max is raised above the distance.
-        let lax = ColourParams { d_max: 500.0, ..params(ColourStrategy::Auto) };
-        assert_eq!(colour_map(&far, &[true; 4], &lax).kind, ColourMapKind::Border);
+        let lax = ColourParams {
+            d_max: 500.0,
+            ..params(ColourStrategy::Auto)
+        };
+        assert_eq!(
+            colour_map(&far, &[true; 4], &lax).kind,
+            ColourMapKind::Border
+        );
         // Regions outside the mask do not count: with no region under the
         // mask nothing is "too far", so shared border stays.
-        assert_eq!(colour_map(&far, &[false; 4], &params(ColourStrategy::Auto)).kind, ColourMapKind::Border);
+        assert_eq!(
+            colour_map(&far, &[false; 4], &params(ColourStrategy::Auto)).kind,
+            ColourMapKind::Border
+        );
     }
 }

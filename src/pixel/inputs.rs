@@ -46,20 +46,42 @@ impl Direction8 {
 
     /// The grid step `(dx, dy)`, each in `-1..=1`.
     pub fn step(self) -> (i32, i32) {
-        const STEPS: [(i32, i32); 8] = [(1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1)];
+        const STEPS: [(i32, i32); 8] = [
+            (1, 0),
+            (1, 1),
+            (0, 1),
+            (-1, 1),
+            (-1, 0),
+            (-1, -1),
+            (0, -1),
+            (1, -1),
+        ];
         STEPS[self.index()]
     }
 
     /// Unit vector of this direction.
     pub fn unit(self) -> [f64; 2] {
         let (dx, dy) = self.step();
-        let s = if dx != 0 && dy != 0 { std::f64::consts::FRAC_1_SQRT_2 } else { 1.0 };
+        let s = if dx != 0 && dy != 0 {
+            std::f64::consts::FRAC_1_SQRT_2
+        } else {
+            1.0
+        };
         [dx as f64 * s, dy as f64 * s]
     }
 
     /// The name used in sheets, errors and JSON ("up-left", "down", ...).
     pub fn name(self) -> &'static str {
-        const NAMES: [&str; 8] = ["right", "down-right", "down", "down-left", "left", "up-left", "up", "up-right"];
+        const NAMES: [&str; 8] = [
+            "right",
+            "down-right",
+            "down",
+            "down-left",
+            "left",
+            "up-left",
+            "up",
+            "up-right",
+        ];
         NAMES[self.index()]
     }
 
@@ -69,7 +91,8 @@ impl Direction8 {
     /// bit for bit.
     pub fn nearest(v: [f64; 2]) -> Option<Direction8> {
         let len2 = v[0] * v[0] + v[1] * v[1];
-        if !(len2 > 1e-24) || !len2.is_finite() {
+        // Written so NaN fails too.
+        if !len2.is_finite() || len2 <= 1e-24 || len2.is_nan() {
             return None;
         }
         let mut best = Direction8::Right;
@@ -359,7 +382,13 @@ mod tests {
     }
 
     fn rows(s: &Sprite) -> Vec<String> {
-        (0..s.side).map(|y| (0..s.side).map(|x| if s.get(x, y) { '#' } else { '.' }).collect()).collect()
+        (0..s.side)
+            .map(|y| {
+                (0..s.side)
+                    .map(|x| if s.get(x, y) { '#' } else { '.' })
+                    .collect()
+            })
+            .collect()
     }
 
     #[test]
@@ -369,7 +398,10 @@ mod tests {
         assert_eq!(Direction8::nearest([-3.0, -3.1]), Some(Direction8::UpLeft));
         assert_eq!(Direction8::nearest([0.3, -1.0]), Some(Direction8::Up));
         // Magnitude does not matter: a short vector snaps the same as a long one.
-        assert_eq!(Direction8::nearest([1e-6, -0.9e-6]), Some(Direction8::UpRight));
+        assert_eq!(
+            Direction8::nearest([1e-6, -0.9e-6]),
+            Some(Direction8::UpRight)
+        );
         assert_eq!(Direction8::nearest([0.0, 0.0]), None);
         assert_eq!(Direction8::nearest([f64::NAN, 1.0]), None);
     }
@@ -379,10 +411,22 @@ mod tests {
         // An "arrow" pointing up.
         let img = sprite_img(&["..#..", ".###.", "#.#.#", "..#..", "..#.."]);
         let sheet = ElementSheet::from_sprite(&img, Direction8::Up).unwrap();
-        assert_eq!(rows(sheet.sprite(Direction8::Up)), vec!["..#..", ".###.", "#.#.#", "..#..", "..#.."]);
-        assert_eq!(rows(sheet.sprite(Direction8::Right)), vec!["..#..", "...#.", "#####", "...#.", "..#.."]);
-        assert_eq!(rows(sheet.sprite(Direction8::Down)), vec!["..#..", "..#..", "#.#.#", ".###.", "..#.."]);
-        assert_eq!(rows(sheet.sprite(Direction8::Left)), vec!["..#..", ".#...", "#####", ".#...", "..#.."]);
+        assert_eq!(
+            rows(sheet.sprite(Direction8::Up)),
+            vec!["..#..", ".###.", "#.#.#", "..#..", "..#.."]
+        );
+        assert_eq!(
+            rows(sheet.sprite(Direction8::Right)),
+            vec!["..#..", "...#.", "#####", "...#.", "..#.."]
+        );
+        assert_eq!(
+            rows(sheet.sprite(Direction8::Down)),
+            vec!["..#..", "..#..", "#.#.#", ".###.", "..#.."]
+        );
+        assert_eq!(
+            rows(sheet.sprite(Direction8::Left)),
+            vec!["..#..", ".#...", "#####", ".#...", "..#.."]
+        );
         for d in Direction8::ALL {
             assert!(sheet.sprite(d).count() > 0, "{d:?}");
         }
@@ -408,7 +452,11 @@ mod tests {
         for d in Direction8::ALL {
             let (dx, dy) = d.step();
             let (cx, cy) = ((dx + 1) as u32 * 3, (dy + 1) as u32 * 3);
-            img.put(cx + d.index() as u32 % 3, cy + d.index() as u32 / 3, [0, 0, 0, 11]);
+            img.put(
+                cx + d.index() as u32 % 3,
+                cy + d.index() as u32 / 3,
+                [0, 0, 0, 11],
+            );
         }
         let sheet = ElementSheet::from_sheet(&img).unwrap();
         for d in Direction8::ALL {
@@ -420,14 +468,21 @@ mod tests {
 
     #[test]
     fn sheet_errors_name_the_layout() {
-        let e = ElementSheet::from_sheet(&Rgba8Image::new(20, 18)).unwrap_err().to_string();
+        let e = ElementSheet::from_sheet(&Rgba8Image::new(20, 18))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("20×18") && e.contains("3×3 grid"), "{e}");
-        let e = ElementSheet::from_sheet(&Rgba8Image::new(18, 9)).unwrap_err().to_string();
+        let e = ElementSheet::from_sheet(&Rgba8Image::new(18, 9))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("square"), "{e}");
         let mut img = Rgba8Image::new(9, 9);
         img.put(0, 0, [0, 0, 0, 255]);
         let e = ElementSheet::from_sheet(&img).unwrap_err().to_string();
-        assert!(e.contains("draws nothing") && e.contains("alpha > 10"), "{e}");
+        assert!(
+            e.contains("draws nothing") && e.contains("alpha > 10"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -65,7 +65,14 @@ impl Level {
 
     fn finest(w: usize, h: usize, fixed: &[bool]) -> Level {
         let n = (w + 2) * (h + 2);
-        let mut lv = Level { w, h, diag: vec![0.0; n], inv: vec![0.0; n], east: vec![0.0; n], south: vec![0.0; n] };
+        let mut lv = Level {
+            w,
+            h,
+            diag: vec![0.0; n],
+            inv: vec![0.0; n],
+            east: vec![0.0; n],
+            south: vec![0.0; n],
+        };
         for y in 0..h {
             for x in 0..w {
                 let i = y * w + x;
@@ -101,7 +108,14 @@ impl Level {
     fn coarsen(&self) -> Level {
         let (cw, ch) = (self.w.div_ceil(2), self.h.div_ceil(2));
         let n = (cw + 2) * (ch + 2);
-        let mut c = Level { w: cw, h: ch, diag: vec![0.0; n], inv: vec![0.0; n], east: vec![0.0; n], south: vec![0.0; n] };
+        let mut c = Level {
+            w: cw,
+            h: ch,
+            diag: vec![0.0; n],
+            inv: vec![0.0; n],
+            east: vec![0.0; n],
+            south: vec![0.0; n],
+        };
         for y in 0..self.h {
             for x in 0..self.w {
                 let i = self.at(x, y);
@@ -130,7 +144,10 @@ impl Level {
 
     #[inline(always)]
     fn off(&self, x: &[f64], i: usize, s: usize) -> f64 {
-        self.east[i] * x[i + 1] + self.east[i - 1] * x[i - 1] + self.south[i] * x[i + s] + self.south[i - s] * x[i - s]
+        self.east[i] * x[i + 1]
+            + self.east[i - 1] * x[i - 1]
+            + self.south[i] * x[i + s]
+            + self.south[i - s] * x[i - s]
     }
 
     /// `y = A x` on interior cells (inactive cells get 0: all their weights are 0).
@@ -215,17 +232,11 @@ impl Dense {
         let m = self.cells.len();
         let mut y: Vec<f64> = self.cells.iter().map(|&i| b[i]).collect();
         for i in 0..m {
-            let mut s = y[i];
-            for k in 0..i {
-                s -= self.l[i * m + k] * y[k];
-            }
+            let s: f64 = y[i] - (0..i).map(|k| self.l[i * m + k] * y[k]).sum::<f64>();
             y[i] = s / self.l[i * m + i];
         }
         for i in (0..m).rev() {
-            let mut s = y[i];
-            for k in i + 1..m {
-                s -= self.l[k * m + i] * y[k];
-            }
+            let s: f64 = y[i] - (i + 1..m).map(|k| self.l[k * m + i] * y[k]).sum::<f64>();
             y[i] = s / self.l[i * m + i];
         }
         x.fill(0.0);
@@ -255,7 +266,13 @@ impl Multigrid {
         let coarsest = Dense::new(levels.last().expect("non-empty"));
         let sizes: Vec<usize> = levels.iter().map(Level::len).collect();
         let bufs = || sizes.iter().map(|&n| vec![0.0; n]).collect::<Vec<_>>();
-        Multigrid { levels, coarsest, x: bufs(), b: bufs(), r: bufs() }
+        Multigrid {
+            levels,
+            coarsest,
+            x: bufs(),
+            b: bufs(),
+            r: bufs(),
+        }
     }
 
     /// `z = M⁻¹ r` by one V-cycle from zero (padded vectors of the finest level).
@@ -405,7 +422,11 @@ impl LaplaceSolver {
                     let cg = self.cg.take().expect("running");
                     let c = self.component;
                     self.iterations[c] = cg.iterations;
-                    self.residual[c] = if cg.b_norm == 0.0 { 0.0 } else { dot(&cg.r, &cg.r).sqrt() / cg.b_norm };
+                    self.residual[c] = if cg.b_norm == 0.0 {
+                        0.0
+                    } else {
+                        dot(&cg.r, &cg.r).sqrt() / cg.b_norm
+                    };
                     self.solution[c] = cg.x;
                     self.component += 1;
                 }
@@ -453,7 +474,17 @@ impl LaplaceSolver {
             rz = dot(&r, &z);
         }
         let p = z.clone();
-        Cg { x, r, z, p, ap: vec![0.0; n], rz, b_norm, iterations: 0, done }
+        Cg {
+            x,
+            r,
+            z,
+            p,
+            ap: vec![0.0; n],
+            rz,
+            b_norm,
+            iterations: 0,
+            done,
+        }
     }
 
     /// One PCG iteration; `true` when converged (or capped).
@@ -465,7 +496,7 @@ impl LaplaceSolver {
         }
         mg.levels[0].apply(&cg.p, &mut cg.ap);
         let pap = dot(&cg.p, &cg.ap);
-        if !(pap > 0.0) {
+        if pap.is_nan() || pap <= 0.0 {
             // Exactly converged (p = 0) or no unknowns at all.
             cg.done = true;
             return true;
@@ -492,7 +523,10 @@ impl LaplaceSolver {
 
     /// Fraction done, for progress: components finished plus a guess within one.
     pub fn fraction(&self) -> f64 {
-        let within = self.cg.as_ref().map_or(0.0, |c| (c.iterations as f64 / 30.0).min(0.95));
+        let within = self
+            .cg
+            .as_ref()
+            .map_or(0.0, |c| (c.iterations as f64 / 30.0).min(0.95));
         ((self.component as f64 + within) / 2.0).min(1.0)
     }
 
@@ -517,12 +551,20 @@ impl LaplaceSolver {
 
     /// Iterations and residuals of the finished solve.
     pub fn stats(&self) -> SolveStats {
-        SolveStats { iterations: self.iterations, relative_residual: self.residual }
+        SolveStats {
+            iterations: self.iterations,
+            relative_residual: self.residual,
+        }
     }
 }
 
 /// Solve at once: the field and the solve's figures.
-pub fn solve(w: usize, h: usize, fixed: Vec<bool>, values: Vec<[f64; 2]>) -> (Vec<[f64; 2]>, SolveStats) {
+pub fn solve(
+    w: usize,
+    h: usize,
+    fixed: Vec<bool>,
+    values: Vec<[f64; 2]>,
+) -> (Vec<[f64; 2]>, SolveStats) {
     let mut s = LaplaceSolver::new(w, h, fixed, values);
     while !s.run(usize::MAX / 2) {}
     (s.field(), s.stats())
@@ -533,6 +575,7 @@ mod tests {
     use super::*;
 
     /// Max |Δ| over free pixels with the Neumann stencil.
+    #[allow(clippy::needless_range_loop)]
     fn max_laplacian(w: usize, h: usize, fixed: &[bool], f: &[[f64; 2]]) -> f64 {
         let mut worst: f64 = 0.0;
         for y in 0..h {
@@ -544,7 +587,12 @@ mod tests {
                 for c in 0..2 {
                     let mut s = 0.0;
                     let mut n = 0.0;
-                    for (ok, j) in [(x > 0, i.wrapping_sub(1)), (x + 1 < w, i + 1), (y > 0, i.wrapping_sub(w)), (y + 1 < h, i + w)] {
+                    for (ok, j) in [
+                        (x > 0, i.wrapping_sub(1)),
+                        (x + 1 < w, i + 1),
+                        (y > 0, i.wrapping_sub(w)),
+                        (y + 1 < h, i + w),
+                    ] {
                         if ok {
                             s += f[j][c];
                             n += 1.0;
@@ -568,7 +616,10 @@ mod tests {
         values[5 * w + 7] = [0.6, -0.8];
         let (f, st) = solve(w, h, fixed, values);
         for v in &f {
-            assert!((v[0] - 0.6).abs() < 1e-8 && (v[1] + 0.8).abs() < 1e-8, "{v:?}");
+            assert!(
+                (v[0] - 0.6).abs() < 1e-8 && (v[1] + 0.8).abs() < 1e-8,
+                "{v:?}"
+            );
         }
         assert!(st.iterations[0] < 40, "{st:?}");
     }

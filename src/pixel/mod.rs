@@ -199,13 +199,20 @@ pub struct PixelJob {
 impl PixelJob {
     /// Check every input and parameter; errors say what to change.
     pub fn new(inputs: PixelInputs, params: PixelParams) -> Result<PixelJob> {
-        let PixelInputs { source, mask, elements, strokes } = inputs;
+        let PixelInputs {
+            source,
+            mask,
+            elements,
+            strokes,
+        } = inputs;
         let mask = inputs::check_source_and_mask(&source, &mask)?;
         let sheet = match &elements {
             Elements::Sheet(img) => ElementSheet::from_sheet(img)?,
             Elements::Sprite(img) => ElementSheet::from_sprite(img, params.sprite_direction)?,
         };
-        if params.annotation_scale == 0 || params.annotation_scale > orientation::MAX_ANNOTATION_SCALE {
+        if params.annotation_scale == 0
+            || params.annotation_scale > orientation::MAX_ANNOTATION_SCALE
+        {
             return Err(Error::input(format!(
                 "annotation scale {} is outside 1..={}",
                 params.annotation_scale,
@@ -217,7 +224,10 @@ impl PixelJob {
             return Err(Error::input("the HSV shift must be three finite numbers"));
         }
         if !(params.d_max.is_finite() && params.d_max >= 0.0) {
-            return Err(Error::input(format!("d_max {} must be a number ≥ 0", params.d_max)));
+            return Err(Error::input(format!(
+                "d_max {} must be a number ≥ 0",
+                params.d_max
+            )));
         }
         if params.colour != ColourStrategy::Hsv {
             let n = exact_palette(&source, 0).len();
@@ -234,7 +244,14 @@ impl PixelJob {
             density: params.density,
             partial: params.partial,
         };
-        let sampler = position::PositionSampler::new(source.width, source.height, &mask, sheet.side, pp, params.seed)?;
+        let sampler = position::PositionSampler::new(
+            source.width,
+            source.height,
+            &mask,
+            sheet.side,
+            pp,
+            params.seed,
+        )?;
         let initial_candidates = sampler.remaining();
         Ok(PixelJob {
             params,
@@ -275,7 +292,10 @@ impl Job for PixelJob {
     fn step(&mut self) -> Result<Step<PixelOutput>> {
         match self.stage {
             Stage::Positions => {
-                let s = self.sampler.as_mut().expect("sampler until positions are done");
+                let s = self
+                    .sampler
+                    .as_mut()
+                    .expect("sampler until positions are done");
                 if s.run(POSITION_BUDGET) {
                     self.positions = self.sampler.take().expect("present").into_positions();
                     self.stage = Stage::ColourMap;
@@ -299,7 +319,12 @@ impl Job for PixelJob {
                 let (w, h) = (self.source.width, self.source.height);
                 match self.solver.as_mut() {
                     None => {
-                        let a = orientation::annotate(w, h, &self.strokes, self.params.annotation_scale)?;
+                        let a = orientation::annotate(
+                            w,
+                            h,
+                            &self.strokes,
+                            self.params.annotation_scale,
+                        )?;
                         self.annotated = a.count();
                         if self.annotated == 0 {
                             let u = self.params.default_direction.unit();
@@ -307,12 +332,18 @@ impl Job for PixelJob {
                             self.stage = Stage::Placement;
                             return Ok(self.progress(0.9));
                         }
-                        self.solver = Some(laplace::LaplaceSolver::new(w as usize, h as usize, a.fixed, a.values));
+                        self.solver = Some(laplace::LaplaceSolver::new(
+                            w as usize, h as usize, a.fixed, a.values,
+                        ));
                         Ok(self.progress(0.36))
                     }
                     Some(solver) => {
                         if solver.run(SOLVER_BUDGET) {
-                            self.field = solver.field().iter().map(|v| [v[0] as f32, v[1] as f32]).collect();
+                            self.field = solver
+                                .field()
+                                .iter()
+                                .map(|v| [v[0] as f32, v[1] as f32])
+                                .collect();
                             self.solve = Some(solver.stats());
                             self.solver = None;
                             self.stage = Stage::Placement;
@@ -380,7 +411,9 @@ mod tests {
         assert_eq!(p.element_colour, ElementColour::Pixel);
         assert_eq!(p.default_direction, Direction8::UpLeft);
         assert_eq!(p.margins, [-1, 2]);
-        let e = serde_json::from_str::<PixelParams>(r#"{"dmax": 3}"#).unwrap_err().to_string();
+        let e = serde_json::from_str::<PixelParams>(r#"{"dmax": 3}"#)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("dmax"), "{e}");
     }
 }

@@ -48,7 +48,12 @@ pub fn check_strokes(width: u32, height: u32, strokes: &[Stroke]) -> Result<()> 
     let (w, h) = (width as f32, height as f32);
     for (s, stroke) in strokes.iter().enumerate() {
         for (k, p) in stroke.iter().enumerate() {
-            let ok = p[0].is_finite() && p[1].is_finite() && p[0] >= -1.0 && p[1] >= -1.0 && p[0] <= w + 1.0 && p[1] <= h + 1.0;
+            let ok = p[0].is_finite()
+                && p[1].is_finite()
+                && p[0] >= -1.0
+                && p[1] >= -1.0
+                && p[0] <= w + 1.0
+                && p[1] <= h + 1.0;
             if !ok {
                 return Err(Error::input(format!(
                     "stroke {} point {} ({}, {}) is outside the {width}×{height} image \
@@ -81,7 +86,12 @@ pub fn annotate(width: u32, height: u32, strokes: &[Stroke], k: u32) -> Result<A
         let kf = k as f64;
         let pts: Vec<(i64, i64)> = stroke
             .iter()
-            .map(|p| ((p[0] as f64 * kf).floor() as i64, (p[1] as f64 * kf).floor() as i64))
+            .map(|p| {
+                (
+                    (p[0] as f64 * kf).floor() as i64,
+                    (p[1] as f64 * kf).floor() as i64,
+                )
+            })
             .collect();
         for (i, &p) in pts.iter().enumerate() {
             if i == 0 {
@@ -96,10 +106,17 @@ pub fn annotate(width: u32, height: u32, strokes: &[Stroke], k: u32) -> Result<A
             continue;
         }
         for i in 0..path.len() {
-            let (a, b) = if i + 1 < path.len() { (path[i], path[i + 1]) } else { (path[i - 1], path[i]) };
+            let (a, b) = if i + 1 < path.len() {
+                (path[i], path[i + 1])
+            } else {
+                (path[i - 1], path[i])
+            };
             let (dx, dy) = ((b.0 - a.0) as f64, (b.1 - a.1) as f64);
             let len = (dx * dx + dy * dy).sqrt();
-            let (sx, sy) = (path[i].0.div_euclid(k as i64), path[i].1.div_euclid(k as i64));
+            let (sx, sy) = (
+                path[i].0.div_euclid(k as i64),
+                path[i].1.div_euclid(k as i64),
+            );
             if sx < 0 || sy < 0 || sx >= w as i64 || sy >= h as i64 {
                 continue;
             }
@@ -113,9 +130,20 @@ pub fn annotate(width: u32, height: u32, strokes: &[Stroke], k: u32) -> Result<A
     let values = sum
         .iter()
         .zip(&count)
-        .map(|(s, &c)| if c > 0 { [s[0] / c as f64, s[1] / c as f64] } else { [0.0, 0.0] })
+        .map(|(s, &c)| {
+            if c > 0 {
+                [s[0] / c as f64, s[1] / c as f64]
+            } else {
+                [0.0, 0.0]
+            }
+        })
         .collect();
-    Ok(Annotations { width, height, fixed, values })
+    Ok(Annotations {
+        width,
+        height,
+        fixed,
+        values,
+    })
 }
 
 /// Append the 8-connected line from `a` (exclusive) to `b` (inclusive).
@@ -162,25 +190,49 @@ mod tests {
         for i in 0..8 {
             let v = a.values[i * 8 + i];
             assert!(a.fixed[i * 8 + i]);
-            assert!((v[0] + r).abs() < 1e-12 && (v[1] + r).abs() < 1e-12, "{v:?}");
+            assert!(
+                (v[0] + r).abs() < 1e-12 && (v[1] + r).abs() < 1e-12,
+                "{v:?}"
+            );
         }
     }
 
     #[test]
     fn crossing_strokes_average() {
         // One stroke right, one down, crossing pixel (2, 2).
-        let a = annotate(5, 5, &[vec![[0.5, 2.5], [4.5, 2.5]], vec![[2.5, 0.5], [2.5, 4.5]]], 1).unwrap();
+        let a = annotate(
+            5,
+            5,
+            &[vec![[0.5, 2.5], [4.5, 2.5]], vec![[2.5, 0.5], [2.5, 4.5]]],
+            1,
+        )
+        .unwrap();
         let v = a.values[2 * 5 + 2];
-        assert!((v[0] - 0.5).abs() < 1e-12 && (v[1] - 0.5).abs() < 1e-12, "{v:?}");
+        assert!(
+            (v[0] - 0.5).abs() < 1e-12 && (v[1] - 0.5).abs() < 1e-12,
+            "{v:?}"
+        );
     }
 
     #[test]
     fn bad_strokes_are_named() {
-        let e = annotate(10, 10, &[vec![[1.0, 1.0]], vec![[0.0, 0.0], [50.0, 3.0]]], 4).unwrap_err().to_string();
+        let e = annotate(
+            10,
+            10,
+            &[vec![[1.0, 1.0]], vec![[0.0, 0.0], [50.0, 3.0]]],
+            4,
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("stroke 2 point 2") && e.contains("10×10"), "{e}");
         let e = annotate(10, 10, &[], 0).unwrap_err().to_string();
         assert!(e.contains("annotation scale 0"), "{e}");
         // A single point or a stroke inside one upscaled pixel annotates nothing.
-        assert_eq!(annotate(10, 10, &[vec![[3.0, 3.0]], vec![[3.1, 3.1], [3.2, 3.2]]], 4).unwrap().count(), 0);
+        assert_eq!(
+            annotate(10, 10, &[vec![[3.0, 3.0]], vec![[3.1, 3.1], [3.2, 3.2]]], 4)
+                .unwrap()
+                .count(),
+            0
+        );
     }
 }

@@ -21,7 +21,15 @@ pub enum ElementColour {
 /// The orientation for an element whose cell is `side`² at (x, y): the
 /// nearest direction to the mean of `field` over the cell's in-image pixels,
 /// or `default` when that mean is (almost) zero.
-pub fn orientation_at(field: &[[f32; 2]], width: u32, height: u32, x: i32, y: i32, side: u32, default: Direction8) -> Direction8 {
+pub fn orientation_at(
+    field: &[[f32; 2]],
+    width: u32,
+    height: u32,
+    x: i32,
+    y: i32,
+    side: u32,
+    default: Direction8,
+) -> Direction8 {
     let mut s = [0.0f64; 2];
     for yy in y.max(0)..(y + side as i32).min(height as i32) {
         for xx in x.max(0)..(x + side as i32).min(width as i32) {
@@ -55,7 +63,15 @@ pub fn place(
     let mut pixels: Vec<usize> = Vec::with_capacity((side * side) as usize);
     let mut tally: Vec<([u8; 4], u32)> = Vec::new();
     for &(x, y) in positions {
-        let dir = orientation_at(field, source.width, source.height, x, y, sheet.side, default);
+        let dir = orientation_at(
+            field,
+            source.width,
+            source.height,
+            x,
+            y,
+            sheet.side,
+            default,
+        );
         let sprite = sheet.sprite(dir);
         pixels.clear();
         for sy in 0..side {
@@ -95,7 +111,11 @@ pub fn place(
                         None => tally.push((c, 1)),
                     }
                 }
-                let c = tally.iter().min_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0))).expect("non-empty").0;
+                let c = tally
+                    .iter()
+                    .min_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)))
+                    .expect("non-empty")
+                    .0;
                 for &i in &pixels {
                     out.data[4 * i..4 * i + 4].copy_from_slice(&c);
                 }
@@ -122,15 +142,24 @@ mod tests {
     #[test]
     fn field_picks_orientation_and_default_applies_to_zero() {
         let field = vec![[0.1f32, 1.0]; 16];
-        assert_eq!(orientation_at(&field, 4, 4, 0, 0, 3, Direction8::Up), Direction8::Down);
+        assert_eq!(
+            orientation_at(&field, 4, 4, 0, 0, 3, Direction8::Up),
+            Direction8::Down
+        );
         let zero = vec![[0.0f32; 2]; 16];
-        assert_eq!(orientation_at(&zero, 4, 4, 0, 0, 3, Direction8::Left), Direction8::Left);
+        assert_eq!(
+            orientation_at(&zero, 4, 4, 0, 0, 3, Direction8::Left),
+            Direction8::Left
+        );
         // Opposite halves cancel: the default is used rather than a random pick.
         let mut half = vec![[1.0f32, 0.0]; 16];
         for v in half.iter_mut().skip(8) {
             *v = [-1.0, 0.0];
         }
-        assert_eq!(orientation_at(&half, 4, 4, 0, 0, 4, Direction8::Up), Direction8::Up);
+        assert_eq!(
+            orientation_at(&half, 4, 4, 0, 0, 4, Direction8::Up),
+            Direction8::Up
+        );
     }
 
     #[test]
@@ -148,18 +177,45 @@ mod tests {
         let mask = vec![true; 9];
         let field = vec![[0.0f32, -1.0]; 9];
         let sheet = bar_sheet();
-        let (out, n) = place(&src, &mask, &sheet, &[(0, 0)], &field, &cmap, ElementColour::Region, Direction8::Up);
+        let (out, n) = place(
+            &src,
+            &mask,
+            &sheet,
+            &[(0, 0)],
+            &field,
+            &cmap,
+            ElementColour::Region,
+            Direction8::Up,
+        );
         assert_eq!(n, 1);
         for y in 0..3 {
             assert_eq!(out.get(1, y), [7, 7, 7, 255]);
             assert_eq!(out.get(0, y), [1, 1, 1, 255]);
         }
-        let (out, _) = place(&src, &mask, &sheet, &[(0, 0)], &field, &cmap, ElementColour::Pixel, Direction8::Up);
+        let (out, _) = place(
+            &src,
+            &mask,
+            &sheet,
+            &[(0, 0)],
+            &field,
+            &cmap,
+            ElementColour::Pixel,
+            Direction8::Up,
+        );
         assert_eq!(out.get(1, 0), [9, 9, 9, 255]);
         // Mask out the middle column's top pixel: it is never drawn.
         let mut m2 = mask.clone();
         m2[1] = false;
-        let (out, _) = place(&src, &m2, &sheet, &[(0, 0)], &field, &cmap, ElementColour::Pixel, Direction8::Up);
+        let (out, _) = place(
+            &src,
+            &m2,
+            &sheet,
+            &[(0, 0)],
+            &field,
+            &cmap,
+            ElementColour::Pixel,
+            Direction8::Up,
+        );
         assert_eq!(out.get(1, 0), [1, 1, 1, 255]);
         assert_eq!(out.get(1, 1), [7, 7, 7, 255]);
     }

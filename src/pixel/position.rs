@@ -60,7 +60,14 @@ pub struct PositionSampler {
 impl PositionSampler {
     /// Prepare the search over a `width`×`height` mask for square elements of
     /// `side` pixels.
-    pub fn new(width: u32, height: u32, mask: &[bool], side: u32, p: PositionParams, seed: u64) -> Result<Self> {
+    pub fn new(
+        width: u32,
+        height: u32,
+        mask: &[bool],
+        side: u32,
+        p: PositionParams,
+        seed: u64,
+    ) -> Result<Self> {
         let (w, h, s) = (width as i32, height as i32, side as i32);
         assert_eq!(mask.len(), (w * h) as usize, "mask size");
         for (i, m) in p.margins.iter().enumerate() {
@@ -74,7 +81,10 @@ impl PositionSampler {
             }
         }
         if !(0.0..=1.0).contains(&p.density) {
-            return Err(Error::input(format!("density {} is outside 0..=1 (0% to 100%)", p.density)));
+            return Err(Error::input(format!(
+                "density {} is outside 0..=1 (0% to 100%)",
+                p.density
+            )));
         }
         let stride = (w + 1) as usize;
         let mut sat = vec![0u32; stride * (h + 1) as usize];
@@ -113,8 +123,15 @@ impl PositionSampler {
 
     fn mask_count(&self, x: i32, y: i32) -> u32 {
         let stride = (self.w + 1) as usize;
-        let (x0, y0, x1, y1) = (x as usize, y as usize, (x + self.side) as usize, (y + self.side) as usize);
-        self.sat[y1 * stride + x1] + self.sat[y0 * stride + x0] - self.sat[y0 * stride + x1] - self.sat[y1 * stride + x0]
+        let (x0, y0, x1, y1) = (
+            x as usize,
+            y as usize,
+            (x + self.side) as usize,
+            (y + self.side) as usize,
+        );
+        self.sat[y1 * stride + x1] + self.sat[y0 * stride + x0]
+            - self.sat[y0 * stride + x1]
+            - self.sat[y1 * stride + x0]
     }
 
     /// Whether the cell at (x, y) is inside the image and passes the mask test.
@@ -133,7 +150,9 @@ impl PositionSampler {
     fn free(&self, x: i32, y: i32) -> bool {
         (y..y + self.side).all(|yy| {
             let row = (yy * self.w) as usize;
-            !self.occupied[row + x as usize..row + (x + self.side) as usize].iter().any(|&o| o)
+            !self.occupied[row + x as usize..row + (x + self.side) as usize]
+                .iter()
+                .any(|&o| o)
         })
     }
 
@@ -157,7 +176,16 @@ impl PositionSampler {
             // Neighbours sit one element plus one margin away, so a packed
             // pattern is a regular grid with gaps of exactly (mx, my).
             let (px, py) = (self.side + mx, self.side + my);
-            for (dx, dy) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+            for (dx, dy) in [
+                (-1, -1),
+                (0, -1),
+                (1, -1),
+                (-1, 0),
+                (1, 0),
+                (-1, 1),
+                (0, 1),
+                (1, 1),
+            ] {
                 self.queue.push_back((x + dx * px, y + dy * py));
             }
         }
@@ -205,7 +233,14 @@ impl PositionSampler {
 }
 
 /// Run the whole search at once.
-pub fn find_positions(width: u32, height: u32, mask: &[bool], side: u32, p: PositionParams, seed: u64) -> Result<Vec<(i32, i32)>> {
+pub fn find_positions(
+    width: u32,
+    height: u32,
+    mask: &[bool],
+    side: u32,
+    p: PositionParams,
+    seed: u64,
+) -> Result<Vec<(i32, i32)>> {
     let mut s = PositionSampler::new(width, height, mask, side, p, seed)?;
     while !s.run(usize::MAX / 2) {}
     Ok(s.into_positions())
@@ -216,12 +251,21 @@ mod tests {
     use super::*;
 
     fn params(strategy: PositionStrategy) -> PositionParams {
-        PositionParams { strategy, margins: [0, 0], density: 1.0, partial: false }
+        PositionParams {
+            strategy,
+            margins: [0, 0],
+            density: 1.0,
+            partial: false,
+        }
     }
 
     /// Lattice points (pitch `p`) through `first` whose cells fit in a `w`×`h` image.
     fn lattice_count(first: (i32, i32), p: i32, side: i32, w: i32, h: i32) -> usize {
-        let fits = |o: i32, n: i32| (0..=n - side).filter(|v| (v - o).rem_euclid(p) == 0).count();
+        let fits = |o: i32, n: i32| {
+            (0..=n - side)
+                .filter(|v| (v - o).rem_euclid(p) == 0)
+                .count()
+        };
         fits(first.0, w) * fits(first.1, h)
     }
 
@@ -232,10 +276,15 @@ mod tests {
         // grid through the random first one, and all of that grid must be used.
         let mask = vec![true; 40 * 40];
         for seed in 0..10 {
-            let pos = find_positions(40, 40, &mask, 4, params(PositionStrategy::Packed), seed).unwrap();
+            let pos =
+                find_positions(40, 40, &mask, 4, params(PositionStrategy::Packed), seed).unwrap();
             let first = pos[0];
             for p in &pos {
-                assert_eq!(((p.0 - first.0).rem_euclid(4), (p.1 - first.1).rem_euclid(4)), (0, 0), "seed {seed}: {p:?}");
+                assert_eq!(
+                    ((p.0 - first.0).rem_euclid(4), (p.1 - first.1).rem_euclid(4)),
+                    (0, 0),
+                    "seed {seed}: {p:?}"
+                );
             }
             assert_eq!(pos.len(), lattice_count(first, 4, 4, 40, 40), "seed {seed}");
         }
@@ -244,7 +293,10 @@ mod tests {
     #[test]
     fn margins_space_packed_elements() {
         let mask = vec![true; 40 * 40];
-        let p = PositionParams { margins: [2, 1], ..params(PositionStrategy::Packed) };
+        let p = PositionParams {
+            margins: [2, 1],
+            ..params(PositionStrategy::Packed)
+        };
         let pos = find_positions(40, 40, &mask, 4, p, 3).unwrap();
         for (i, a) in pos.iter().enumerate() {
             for b in &pos[i + 1..] {
@@ -258,20 +310,34 @@ mod tests {
     #[test]
     fn negative_margins_allow_overlap_but_not_duplicates() {
         let mask = vec![true; 30 * 30];
-        let p = PositionParams { margins: [-1, -1], ..params(PositionStrategy::Random) };
+        let p = PositionParams {
+            margins: [-1, -1],
+            ..params(PositionStrategy::Random)
+        };
         let pos = find_positions(30, 30, &mask, 4, p, 9).unwrap();
         let overlapping = pos.iter().enumerate().any(|(i, a)| {
-            pos[i + 1..].iter().any(|b| (a.0 - b.0).abs() < 4 && (a.1 - b.1).abs() < 4)
+            pos[i + 1..]
+                .iter()
+                .any(|b| (a.0 - b.0).abs() < 4 && (a.1 - b.1).abs() < 4)
         });
         assert!(overlapping, "margins (-1,-1) should let some cells overlap");
         for (i, a) in pos.iter().enumerate() {
             for b in &pos[i + 1..] {
                 // Occupied regions are the inner 2×2 of each cell: they never overlap.
-                assert!((a.0 - b.0).abs() >= 2 || (a.1 - b.1).abs() >= 2, "{a:?} {b:?}");
+                assert!(
+                    (a.0 - b.0).abs() >= 2 || (a.1 - b.1).abs() >= 2,
+                    "{a:?} {b:?}"
+                );
             }
         }
-        let too_neg = PositionParams { margins: [-2, 0], ..p };
-        let e = PositionSampler::new(30, 30, &mask, 4, too_neg, 0).err().unwrap().to_string();
+        let too_neg = PositionParams {
+            margins: [-2, 0],
+            ..p
+        };
+        let e = PositionSampler::new(30, 30, &mask, 4, too_neg, 0)
+            .err()
+            .unwrap()
+            .to_string();
         assert!(e.contains("mx = -2") && e.contains("at least -1"), "{e}");
     }
 
@@ -279,16 +345,25 @@ mod tests {
     fn density_thins_but_keeps_occupancy() {
         let mask = vec![true; 64 * 64];
         let full = find_positions(64, 64, &mask, 4, params(PositionStrategy::Packed), 1).unwrap();
-        let half = PositionParams { density: 0.5, ..params(PositionStrategy::Packed) };
+        let half = PositionParams {
+            density: 0.5,
+            ..params(PositionStrategy::Packed)
+        };
         let some = find_positions(64, 64, &mask, 4, half, 1).unwrap();
         // Same seed: the same first position, and rejected positions still
         // occupy their cells, so the kept ones are a subset of the full run's
         // lattice (about half of it).
         assert!(full.len() >= 225, "{}", full.len());
         let n = full.len() as f64;
-        assert!((some.len() as f64 - n / 2.0).abs() < 4.0 * (n / 4.0).sqrt(), "{} of {n}", some.len());
+        assert!(
+            (some.len() as f64 - n / 2.0).abs() < 4.0 * (n / 4.0).sqrt(),
+            "{} of {n}",
+            some.len()
+        );
         let first = full[0];
-        assert!(some.iter().all(|p| (p.0 - first.0) % 4 == 0 && (p.1 - first.1) % 4 == 0));
+        assert!(some
+            .iter()
+            .all(|p| (p.0 - first.0) % 4 == 0 && (p.1 - first.1) % 4 == 0));
     }
 
     #[test]
@@ -296,8 +371,15 @@ mod tests {
         // One mask pixel: only partial placement can use it, and only cells covering it.
         let mut mask = vec![false; 10 * 10];
         mask[5 * 10 + 5] = true;
-        assert!(find_positions(10, 10, &mask, 3, params(PositionStrategy::Random), 0).unwrap().is_empty());
-        let p = PositionParams { partial: true, ..params(PositionStrategy::Random) };
+        assert!(
+            find_positions(10, 10, &mask, 3, params(PositionStrategy::Random), 0)
+                .unwrap()
+                .is_empty()
+        );
+        let p = PositionParams {
+            partial: true,
+            ..params(PositionStrategy::Random)
+        };
         let pos = find_positions(10, 10, &mask, 3, p, 0).unwrap();
         assert_eq!(pos.len(), 1);
         let (x, y) = pos[0];
@@ -306,8 +388,13 @@ mod tests {
 
     #[test]
     fn same_seed_same_positions() {
-        let mask: Vec<bool> = (0..50 * 40).map(|i| (i % 50) > 3 && (i / 50) < 35).collect();
-        let p = PositionParams { density: 0.7, ..params(PositionStrategy::Random) };
+        let mask: Vec<bool> = (0..50 * 40)
+            .map(|i| (i % 50) > 3 && (i / 50) < 35)
+            .collect();
+        let p = PositionParams {
+            density: 0.7,
+            ..params(PositionStrategy::Random)
+        };
         let a = find_positions(50, 40, &mask, 5, p, 42).unwrap();
         assert_eq!(a, find_positions(50, 40, &mask, 5, p, 42).unwrap());
         assert_ne!(a, find_positions(50, 40, &mask, 5, p, 43).unwrap());
