@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Describe an image: size, palette, colour clusters.
     Inspect(cmd::inspect::Args),
+    /// Texture pixel art with oriented elements in the image's own palette.
+    Pixel(Box<cmd::pixel::Args>),
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -34,6 +36,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
+        Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

@@ -169,13 +169,17 @@ export default {
     async function loadExample(name) {
       setError('');
       status(`loading the ${name} example…`);
-      const spec = await (await fetch(new URL('examples.json', ASSETS))).json();
-      const ex = spec[name];
-      const [source, maskPng, sheet] = await Promise.all([ex.source, ex.mask, ex.sheet].map((f) => fetchBytes(new URL(f, ASSETS))));
+      // The same cases (files, parameters, strokes) the native benchmark runs.
+      const cases = await (await fetch(new URL('cases.json', ASSETS))).json();
+      const ex = cases[name];
+      const [source, maskPng, sheet, strokesJson] = await Promise.all(
+        [ex.source, ex.mask, ex.sheet, ex.strokes].map((f) => fetchBytes(new URL(f, ASSETS))),
+      );
       const mask = await pool.run('pixel-mask', { bytes: maskPng });
       await loadDocument({
         example: name, source, sheet, sprite: null, mask,
-        strokes: ex.strokes, params: { ...DEFAULT_PARAMS, ...ex.params },
+        strokes: JSON.parse(new TextDecoder().decode(strokesJson)).strokes,
+        params: { ...DEFAULT_PARAMS, ...ex.params },
         names: { source: ex.source, sheet: ex.sheet },
       });
     }

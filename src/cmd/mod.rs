@@ -1,5 +1,6 @@
 pub mod bench;
 pub mod inspect;
+pub mod pixel;
 
 use std::path::Path;
 

@@ -94,6 +94,79 @@ impl<'a> RawImage<'a> {
     }
 }
 
+/// A mask as the browser edits it: one byte per pixel, non-zero = textured.
+#[derive(Deserialize, Serialize)]
+struct MaskBits {
+    width: u32,
+    height: u32,
+    #[serde(with = "serde_bytes")]
+    bits: Vec<u8>,
+}
+
+impl MaskBits {
+    /// The mask as an image that `pixel::inputs::mask_from_image` reads back
+    /// exactly: opaque white inside, transparent outside.
+    fn to_image(&self) -> Result<crate::raster::Rgba8Image, String> {
+        if self.bits.len() != self.width as usize * self.height as usize {
+            return Err(format!(
+                "the mask has {} values but is declared {}×{}",
+                self.bits.len(),
+                self.width,
+                self.height
+            ));
+        }
+        let data = self
+            .bits
+            .iter()
+            .flat_map(|&b| if b != 0 { [255; 4] } else { [0; 4] })
+            .collect();
+        crate::raster::Rgba8Image::from_raw(self.width, self.height, data)
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// Payload of a `"pixel"` request. Images are encoded files (PNG, ...); the
+/// mask is bits (a mask file becomes bits through `"pixel-mask"`); exactly one
+/// of `sheet` and `sprite` is given.
+#[derive(Deserialize)]
+struct PixelRequest {
+    #[serde(with = "serde_bytes")]
+    source: Vec<u8>,
+    mask: MaskBits,
+    #[serde(default, with = "serde_bytes")]
+    sheet: Option<Vec<u8>>,
+    #[serde(default, with = "serde_bytes")]
+    sprite: Option<Vec<u8>>,
+    #[serde(default)]
+    strokes: Vec<crate::pixel::Stroke>,
+    #[serde(default)]
+    params: crate::pixel::PixelParams,
+}
+
+fn decode_named(what: &str, bytes: &[u8]) -> Result<crate::raster::Rgba8Image, String> {
+    crate::raster::decode(bytes, crate::raster::Limits::default())
+        .map_err(|e| format!("{what}: {e}"))
+}
+
+fn pixel_job(req: PixelRequest) -> Result<crate::pixel::PixelJob, String> {
+    use crate::pixel::{Elements, PixelInputs, PixelJob};
+    let elements = match (req.sheet, req.sprite) {
+        (Some(b), None) => Elements::Sheet(decode_named("element sheet", &b)?),
+        (None, Some(b)) => Elements::Sprite(decode_named("element sprite", &b)?),
+        (Some(_), Some(_)) => {
+            return Err("give either an element sheet or a single sprite, not both".into())
+        }
+        (None, None) => return Err("an element sheet (3×3) or a single sprite is needed".into()),
+    };
+    let inputs = PixelInputs {
+        source: decode_named("source image", &req.source)?,
+        mask: req.mask.to_image()?,
+        elements,
+        strokes: req.strokes,
+    };
+    PixelJob::new(inputs, req.params).map_err(|e| e.to_string())
+}
+
 #[derive(Deserialize)]
 struct AbortRequest {
     /// Steps to run before aborting, so the page sees a job "mid-way".
@@ -157,6 +230,60 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
             Ok(wrap(
                 OneShot::new(move || decode(&req.bytes, Limits::default())),
                 |img| to_js(&RawImage::of(&img)),
+            ))
+        }
+        "pixel" => {
+            let req: PixelRequest = from_js(kind, payload)?;
+            Ok(wrap(pixel_job(req)?, |out| {
+                /// Result of a `"pixel"` job; `rgba` is a Uint8Array of
+                /// `width*height*4` bytes, `field` an array of `2*width*height`
+                /// numbers (x, y per pixel, row-major, y down).
+                #[derive(Serialize)]
+                struct Out<'a> {
+                    width: u32,
+                    height: u32,
+                    #[serde(with = "serde_bytes")]
+                    rgba: &'a [u8],
+                    #[serde(with = "serde_bytes")]
+                    colour_map: &'a [u8],
+                    field: Vec<f32>,
+                    positions: &'a [(i32, i32)],
+                    placed: usize,
+                    colours_before: usize,
+                    colours_after: usize,
+                    colour_map_used: &'static str,
+                    stats: &'a crate::pixel::PixelStats,
+                }
+                let field: Vec<f32> = out.field.iter().flat_map(|v| [v[0], v[1]]).collect();
+                let s = &out.stats;
+                let o = Out {
+                    width: out.image.width,
+                    height: out.image.height,
+                    rgba: &out.image.data,
+                    colour_map: &out.colour_map.data,
+                    field,
+                    positions: &out.positions,
+                    placed: s.placed,
+                    colours_before: s.colours_before,
+                    colours_after: s.colours_after,
+                    colour_map_used: s.colour_map_used.name(),
+                    stats: s,
+                };
+                to_js(&o)
+            }))
+        }
+        "pixel-mask" => {
+            let req: InspectRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || decode(&req.bytes, Limits::default())),
+                |img| {
+                    let inside = crate::pixel::inputs::mask_from_image(&img);
+                    to_js(&MaskBits {
+                        width: img.width,
+                        height: img.height,
+                        bits: inside.into_iter().map(u8::from).collect(),
+                    })
+                },
             ))
         }
         "debug-abort" => {

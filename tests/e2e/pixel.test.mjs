@@ -34,6 +34,22 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
   const page = await env.newPage({ path: '#tool=pixel' });
   await page.click('button[data-example=fish]');
   let status = await waitForResult(page);
+
+  // Native and wasm agree: the example's first result is byte-identical to
+  // the golden image the native test suite renders (tests/golden/pixel/fish.png).
+  const golden = fs.readFileSync(new URL('../golden/pixel/fish.png', import.meta.url)).toString('base64');
+  const same = await page.evaluate(async (b64) => {
+    const bin = atob(b64);
+    const bytes = Uint8Array.from(bin, (c) => c.charCodeAt(0));
+    const want = await window.filigree.pool.run('decode-image', { bytes });
+    const got = window.filigreePixel.result();
+    if (got.width !== want.width || got.height !== want.height) return `size ${got.width}×${got.height}`;
+    let diff = 0;
+    for (let i = 0; i < want.rgba.length; i++) if (want.rgba[i] !== got.rgba[i]) diff++;
+    return diff;
+  }, golden);
+  assert.equal(same, 0, 'wasm result equals the native golden fish');
+
   await page.click('button[data-act=clear-strokes]');
   status = await waitForResult(page, status);
 
