@@ -302,12 +302,23 @@ export default {
       ctx.imageSmoothingEnabled = false;
       const base = view.showResult && resultBitmap ? resultBitmap : sourceBitmap;
       ctx.drawImage(base, 0, 0, w * z, h * z);
+      if (z >= 8) drawGrid(w, h, z);
       if (view.showMask || view.mode !== 'stroke') drawMask(doc.mask, z);
       if (view.showArrows && result?.field) drawArrows(result.field, w, h, z);
       if (view.showStrokes) {
         for (const s of doc.strokes) drawStroke(s, z, '#ff5db1');
         if (drawing?.kind === 'stroke') drawStroke(drawing.points, z, '#ffd166');
       }
+    }
+
+    // The pixel grid, once cells are big enough to aim at.
+    function drawGrid(w, h, z) {
+      ctx.strokeStyle = 'rgba(0, 0, 0, 0.18)';
+      ctx.lineWidth = 1;
+      ctx.beginPath();
+      for (let x = 0; x <= w; x++) { ctx.moveTo(x * z + 0.5, 0); ctx.lineTo(x * z + 0.5, h * z); }
+      for (let y = 0; y <= h; y++) { ctx.moveTo(0, y * z + 0.5); ctx.lineTo(w * z, y * z + 0.5); }
+      ctx.stroke();
     }
 
     function drawMask(mask, z) {

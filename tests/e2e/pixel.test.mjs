@@ -1,6 +1,8 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
 import { launch } from './harness.mjs';
 
 let env;
@@ -106,4 +108,43 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
     return { strokes: d.strokes.length, density: d.params.density };
   });
   assert.deepEqual(restored, { strokes: 2, density: 0.4 });
+});
+
+test('a wrong-size mask is refused with a clear error; a saved project reopens', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await page.click('button[data-example=trunk]');
+  await waitForResult(page);
+  const before = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
+
+  // The fish mask (128×128) does not fit the trunk (64×64).
+  await page.setInputFiles('input[data-input=mask]', new URL('../../assets/pixel/fish_body_boundary.png', import.meta.url).pathname);
+  await page.waitForSelector('.pixel-stage .error:not([hidden])');
+  assert.match(await page.textContent('.pixel-stage .error'),
+    /fish_body_boundary\.png: the mask is 128×128 pixels but the source image is 64×64/);
+  const after = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
+  assert.equal(after, before, 'the mask the user had is untouched');
+
+  // Paint a little more mask, save the project, start over, reopen it.
+  await page.click('button[data-mode=paint]');
+  const box = await page.locator('[data-testid=pixel-canvas]').boundingBox();
+  await page.mouse.move(box.x + 3, box.y + 3);
+  await page.mouse.down();
+  await page.mouse.move(box.x + 20, box.y + 6, { steps: 5 });
+  await page.mouse.up();
+  const painted = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
+  assert.ok(painted > before, 'painting added mask pixels');
+  await page.click('button[data-act=undo]');
+  assert.equal(await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0)), before, 'one undo removes the whole brush drag');
+  await page.click('button[data-act=redo]');
+
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
+  const project = fs.readFileSync(await download.path(), 'utf8');
+  assert.equal(JSON.parse(project).tool, 'pixel');
+  await page.click('button[data-example=fish]');
+  await waitForResult(page);
+  const file = path.join(os.tmpdir(), `trunk-${process.pid}.filigree.json`);
+  fs.writeFileSync(file, project);
+  await page.setInputFiles('input[data-input=project]', file);
+  await page.waitForFunction((n) => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0) === n, painted);
+  assert.equal(await page.evaluate(() => window.filigreePixel.state().example), 'trunk');
 });
