@@ -21,6 +21,10 @@ pub struct Progress {
     pub stage: String,
     /// The current figure of merit, if the job has one (e.g. a loss).
     pub figure: Option<f64>,
+    /// The current best answer's values, if the job has them (e.g. the
+    /// parameters of the best fit so far), so a view can show it live.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub values: Option<Vec<f64>>,
 }
 
 impl Progress {
@@ -33,6 +37,10 @@ impl Progress {
     }
     pub fn with_figure(mut self, figure: f64) -> Self {
         self.figure = Some(figure);
+        self
+    }
+    pub fn with_values(mut self, values: Vec<f64>) -> Self {
+        self.values = Some(values);
         self
     }
 }

@@ -150,14 +150,7 @@ pub struct Regions {
 /// diagonal touch does not join two areas of flat colour.
 pub fn regions(img: &Rgba8Image) -> Regions {
     let (w, h) = (img.width as usize, img.height as usize);
-    let px = |i: usize| -> [u8; 4] {
-        [
-            img.data[4 * i],
-            img.data[4 * i + 1],
-            img.data[4 * i + 2],
-            img.data[4 * i + 3],
-        ]
-    };
+    let px = |i: usize| img.at(i);
     let mut label = vec![u32::MAX; w * h];
     let (mut colour, mut pixels, mut start) = (Vec::new(), Vec::with_capacity(w * h), vec![0u32]);
     let mut stack = Vec::new();
@@ -247,14 +240,7 @@ pub fn border_colours(
     exclude: &[[u8; 3]],
 ) -> Vec<Option<[u8; 4]>> {
     let (w, h) = (img.width as usize, img.height as usize);
-    let px = |i: usize| -> [u8; 4] {
-        [
-            img.data[4 * i],
-            img.data[4 * i + 1],
-            img.data[4 * i + 2],
-            img.data[4 * i + 3],
-        ]
-    };
+    let px = |i: usize| img.at(i);
     // stamp[j] == r + 1 means pixel j was already counted for region r.
     let mut stamp = vec![0u32; w * h];
     let mut out = Vec::with_capacity(reg.colour.len());

@@ -80,6 +80,13 @@ impl Rgba8Image {
         ]
     }
 
+    /// The pixel at row-major index `i` (= y·width + x) as `[r, g, b, a]`.
+    #[inline]
+    pub fn at(&self, i: usize) -> [u8; 4] {
+        let d = &self.data[4 * i..4 * i + 4];
+        [d[0], d[1], d[2], d[3]]
+    }
+
     #[inline]
     pub fn put(&mut self, x: u32, y: u32, px: [u8; 4]) {
         let i = (y as usize * self.width as usize + x as usize) * 4;
