@@ -33,6 +33,7 @@ impl Progress {
             fraction: fraction.clamp(0.0, 1.0),
             stage: stage.into(),
             figure: None,
+            values: None,
         }
     }
     pub fn with_figure(mut self, figure: f64) -> Self {
