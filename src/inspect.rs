@@ -21,7 +21,12 @@ pub struct InspectOptions {
 
 impl Default for InspectOptions {
     fn default() -> Self {
-        InspectOptions { limits: Limits::default(), tolerance: 24.0, thumbnail_side: 128, max_listed_colours: 256 }
+        InspectOptions {
+            limits: Limits::default(),
+            tolerance: 24.0,
+            thumbnail_side: 128,
+            max_listed_colours: 256,
+        }
     }
 }
 
@@ -77,7 +82,15 @@ mod tests {
         let mut img = Rgba8Image::new(300, 100);
         for y in 0..100 {
             for x in 0..300 {
-                img.put(x, y, if x < 100 { [10, 20, 30, 255] } else { [250, 240, 230, 255] });
+                img.put(
+                    x,
+                    y,
+                    if x < 100 {
+                        [10, 20, 30, 255]
+                    } else {
+                        [250, 240, 230, 255]
+                    },
+                );
             }
         }
         let r = inspect(&encode_png(&img).unwrap(), &InspectOptions::default()).unwrap();

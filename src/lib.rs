@@ -15,6 +15,7 @@
 pub mod core;
 pub mod inspect;
 pub mod pattern;
+pub mod pixel;
 pub mod raster;
 
 #[cfg(feature = "web")]

@@ -4,10 +4,16 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+// The CLI may time things and use threads; the library may not (clippy.toml).
+#[allow(clippy::disallowed_methods)]
 mod cmd;
 
 #[derive(Parser)]
-#[command(name = "filigree", version, about = "Filigree: a procedural-pattern studio (CLI of the same core the browser app runs)")]
+#[command(
+    name = "filigree",
+    version,
+    about = "Filigree: a procedural-pattern studio (CLI of the same core the browser app runs)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -21,6 +27,8 @@ enum Command {
     Fit(cmd::fit::FitArgs),
     /// Draw a pattern program with given parameters to PNG or SVG.
     Render(cmd::fit::RenderArgs),
+    /// Texture pixel art with oriented elements in the image's own palette.
+    Pixel(Box<cmd::pixel::Args>),
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -34,6 +42,7 @@ fn main() -> ExitCode {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Fit(a) => cmd::fit::run_fit(a),
         Command::Render(a) => cmd::fit::run_render(a),
+        Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

@@ -21,7 +21,11 @@ fn program(name: &str) -> Program {
 fn small_opts(seed: u64) -> FitOptions {
     let mut o = FitOptions::budget(Budget::Quick);
     o.loss.grid = 48;
-    o.ga = GaOptions { population: 40, generations: 6, ..GaOptions::default() };
+    o.ga = GaOptions {
+        population: 40,
+        generations: 6,
+        ..GaOptions::default()
+    };
     o.candidates = 2;
     o.iterations = 80;
     o.seed = seed;
@@ -29,7 +33,11 @@ fn small_opts(seed: u64) -> FitOptions {
 }
 
 fn float_index(p: &Program, name: &str) -> usize {
-    p.params().iter().filter(|d| !d.integer).position(|d| d.name == name).expect("param")
+    p.params()
+        .iter()
+        .filter(|d| !d.integer)
+        .position(|d| d.name == name)
+        .expect("param")
 }
 
 /// The fit finds the known parameters of a synthetic circles-grid target.
@@ -37,15 +45,35 @@ fn float_index(p: &Program, name: &str) -> usize {
 fn fit_recovers_known_parameters_of_circles_grid() {
     let p = program("circles-grid");
     let truth = [0.19, 0.15, 0.09, 0.14, 0.045]; // dx, dy, ox, oy, r
-    let job = FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), small_opts(3)).unwrap();
+    let job = FitJob::new(
+        &p,
+        &p.defaults(),
+        &TargetSource::Params(&truth),
+        small_opts(3),
+    )
+    .unwrap();
     let r = run_quietly(job).unwrap();
     let decls: Vec<_> = p.params().iter().filter(|d| !d.integer).collect();
     for (k, d) in decls.iter().enumerate() {
         let err = (r.params[k] - truth[k]).abs() / (d.hi - d.lo);
-        assert!(err < 0.04, "{}: fitted {} vs true {} (normalised error {err})", d.name, r.params[k], truth[k]);
+        assert!(
+            err < 0.04,
+            "{}: fitted {} vs true {} (normalised error {err})",
+            d.name,
+            r.params[k],
+            truth[k]
+        );
     }
-    assert!(r.loss <= r.init_loss, "Adam made things worse: {} > {}", r.loss, r.init_loss);
-    assert!(r.history.windows(2).all(|w| w[1] <= w[0]), "best-so-far history must not increase");
+    assert!(
+        r.loss <= r.init_loss,
+        "Adam made things worse: {} > {}",
+        r.loss,
+        r.init_loss
+    );
+    assert!(
+        r.history.windows(2).all(|w| w[1] <= w[0]),
+        "best-so-far history must not increase"
+    );
 }
 
 /// A fit from an image file (PNG round trip, palette snapping) lands where
@@ -59,7 +87,16 @@ fn fit_from_a_png_target() {
     let img = render::render(&scene, &truth, 96, 2).unwrap(); // anti-aliased edges
     let png = encode_png(&img).unwrap();
     let img = decode(&png, Limits::default()).unwrap();
-    let r = run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Image(&img, 60.0), small_opts(5)).unwrap()).unwrap();
+    let r = run_quietly(
+        FitJob::new(
+            &p,
+            &p.defaults(),
+            &TargetSource::Image(&img, 60.0),
+            small_opts(5),
+        )
+        .unwrap(),
+    )
+    .unwrap();
     let k = float_index(&p, "r");
     assert!((r.params[k] - 0.05).abs() < 0.004, "radius {}", r.params[k]);
     let k = float_index(&p, "dx");
@@ -75,20 +112,37 @@ fn a_target_in_foreign_colours_is_rejected_with_the_palette_named() {
             img.put(x, y, [0, 200, 0, 255]);
         }
     }
-    let e = FitJob::new(&p, &p.defaults(), &TargetSource::Image(&img, 30.0), small_opts(1)).err().expect("must fail");
+    let e = FitJob::new(
+        &p,
+        &p.defaults(),
+        &TargetSource::Image(&img, 30.0),
+        small_opts(1),
+    )
+    .err()
+    .expect("must fail");
     let m = e.to_string();
-    assert!(m.contains("#1f4e79") && m.contains("#ffffff") && m.contains("tolerance"), "{m}");
+    assert!(
+        m.contains("#1f4e79") && m.contains("#ffffff") && m.contains("tolerance"),
+        "{m}"
+    );
 }
 
 /// Same seed, same result; another seed, another path.
 #[test]
 fn fits_are_deterministic_by_seed() {
     let p = program("stripes-dots");
-    let truth: Vec<f64> = p.params().iter().map(|d| d.lo + 0.4 * (d.hi - d.lo)).collect();
+    let truth: Vec<f64> = p
+        .params()
+        .iter()
+        .map(|d| d.lo + 0.4 * (d.hi - d.lo))
+        .collect();
     let mut o = small_opts(7);
     o.iterations = 20;
     o.ga.generations = 2;
-    let run = |o: FitOptions| run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap()).unwrap();
+    let run = |o: FitOptions| {
+        run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap())
+            .unwrap()
+    };
     let a = run(o);
     let b = run(o);
     assert_eq!(a, b);
@@ -106,16 +160,31 @@ fn fits_are_deterministic_by_seed() {
 fn every_initialiser_runs_and_the_job_can_be_cancelled() {
     let p = program("circles-grid");
     let truth = [0.19, 0.15, 0.09, 0.14, 0.045];
-    for init in [InitMethod::Genetic, InitMethod::Random, InitMethod::NelderMead] {
+    for init in [
+        InitMethod::Genetic,
+        InitMethod::Random,
+        InitMethod::NelderMead,
+    ] {
         let mut o = small_opts(2);
         o.init = init;
         o.iterations = 10;
-        let r = run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap()).unwrap();
-        assert!(r.loss.is_finite() && r.loss < r.history[0] + 1e-12, "{init:?}");
+        let r =
+            run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap())
+                .unwrap();
+        assert!(
+            r.loss.is_finite() && r.loss < r.history[0] + 1e-12,
+            "{init:?}"
+        );
     }
     let cancel = Cancel::new();
     let mut steps = 0;
-    let job = FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), small_opts(2)).unwrap();
+    let job = FitJob::new(
+        &p,
+        &p.defaults(),
+        &TargetSource::Params(&truth),
+        small_opts(2),
+    )
+    .unwrap();
     let res = run_to_end(job, &cancel, |prog| {
         steps += 1;
         assert!(prog.fraction <= 1.0 && prog.figure.is_some());
@@ -125,16 +194,17 @@ fn every_initialiser_runs_and_the_job_can_be_cancelled() {
     });
     assert_eq!(res, Err(Error::Cancelled));
     // Progress is monotone and steps are bounded.
-    let mut job = FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), small_opts(2)).unwrap();
+    let mut job = FitJob::new(
+        &p,
+        &p.defaults(),
+        &TargetSource::Params(&truth),
+        small_opts(2),
+    )
+    .unwrap();
     let mut last = 0.0;
-    loop {
-        match job.step().unwrap() {
-            Step::Running(pr) => {
-                assert!(pr.fraction >= last, "{} < {last}", pr.fraction);
-                last = pr.fraction;
-            }
-            Step::Done(_) => break,
-        }
+    while let Step::Running(pr) = job.step().unwrap() {
+        assert!(pr.fraction >= last, "{} < {last}", pr.fraction);
+        last = pr.fraction;
     }
 }
 
@@ -143,7 +213,13 @@ fn every_initialiser_runs_and_the_job_can_be_cancelled() {
 /// rectangles, Bézier paths and the on-top operator.
 #[test]
 fn pipeline_gradients_match_central_differences() {
-    for name in ["stripes-dots", "shingles", "spades", "rectangles", "circles-mix"] {
+    for name in [
+        "stripes-dots",
+        "shingles",
+        "spades",
+        "rectangles",
+        "circles-mix",
+    ] {
         let p = program(name);
         let rec = p.record(&p.defaults(), &RecordLimits::default()).unwrap();
         let scene = Scene::new(rec);
@@ -151,8 +227,14 @@ fn pipeline_gradients_match_central_differences() {
         let truth: Vec<f64> = decls.iter().map(|d| d.lo + 0.6 * (d.hi - d.lo)).collect();
         // An irregular point: round fractions can put pixel centres exactly
         // between two shapes, a kink where one-sided derivatives differ.
-        let x: Vec<f64> = decls.iter().map(|d| d.lo + 0.4371 * (d.hi - d.lo)).collect();
-        let opts = LossOptions { grid: 40, ..LossOptions::default() };
+        let x: Vec<f64> = decls
+            .iter()
+            .map(|d| d.lo + 0.4371 * (d.hi - d.lo))
+            .collect();
+        let opts = LossOptions {
+            grid: 40,
+            ..LossOptions::default()
+        };
         let idx = colour_indices(&scene, &truth, opts.grid).unwrap();
         let t = Target::from_indices(&scene, &idx, opts.grid, opts.scale());
         let mut obj = Objective::new(scene, t, opts);
@@ -165,7 +247,12 @@ fn pipeline_gradients_match_central_differences() {
             b[k] -= h;
             let fd = (obj.loss(&a) - obj.loss(&b)) / (2.0 * h);
             let tol = 2e-3 * (1.0 + fd.abs().max(g[k].abs()));
-            assert!((fd - g[k]).abs() < tol, "{name} / {}: fd {fd} vs analytic {}", decls[k].name, g[k]);
+            assert!(
+                (fd - g[k]).abs() < tol,
+                "{name} / {}: fd {fd} vs analytic {}",
+                decls[k].name,
+                g[k]
+            );
         }
     }
 }
@@ -181,17 +268,35 @@ fn generators_render_and_the_truth_is_a_minimum() {
         let rec = p.record(&p.defaults(), &RecordLimits::default()).unwrap();
         let scene = Scene::new(rec);
         let decls = scene.rec.float_decls();
-        let truth: Vec<f64> = decls.iter().map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.2, 0.8)).collect();
-        let other: Vec<f64> = decls.iter().map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.2, 0.8)).collect();
-        let opts = LossOptions { grid: 48, kind: LossKind::Sdf, ..LossOptions::default() };
+        let truth: Vec<f64> = decls
+            .iter()
+            .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.2, 0.8))
+            .collect();
+        let other: Vec<f64> = decls
+            .iter()
+            .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.2, 0.8))
+            .collect();
+        let opts = LossOptions {
+            grid: 48,
+            kind: LossKind::Sdf,
+            ..LossOptions::default()
+        };
         let idx = colour_indices(&scene, &truth, 48).unwrap();
         let t = Target::from_indices(&scene, &idx, 48, opts.scale());
         let mut obj = Objective::new(scene.clone(), t, opts);
         let at = obj.loss(&truth);
         let off = obj.loss(&other);
-        assert!(at * 3.0 < off, "{}: loss at truth {at} vs elsewhere {off}", g.name);
+        assert!(
+            at * 3.0 < off,
+            "{}: loss at truth {at} vs elsewhere {off}",
+            g.name
+        );
         let svg = render::svg(&scene, &truth, 256.0).unwrap();
-        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{}", g.name);
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{}",
+            g.name
+        );
         let mut ev = Evaluator::new(16, 1.0);
         let mut nodes = vec![];
         scene.rec.tape.forward(&truth, &mut nodes);
@@ -203,20 +308,42 @@ fn generators_render_and_the_truth_is_a_minimum() {
 #[test]
 fn program_errors_are_clear_and_located() {
     let e = Program::parse("param a in [0, 1] = 0.5;\ncircle(0.5, 0.5 0.1);").unwrap_err();
-    assert_eq!(e, Error::Syntax { line: 2, column: 17, message: "expected ',' but found number 0.1".into() });
+    assert_eq!(
+        e,
+        Error::Syntax {
+            line: 2,
+            column: 17,
+            message: "expected ',' but found number 0.1".into()
+        }
+    );
     let p = Program::parse("int param n in [1, 3] = 2;\nlet k = 0;\nfor i in 0..n {\n  for j in 0..1e15 { k = k + 1; }\n}").unwrap();
-    let e = p.record(&p.defaults(), &RecordLimits::default()).unwrap_err();
+    let e = p
+        .record(&p.defaults(), &RecordLimits::default())
+        .unwrap_err();
     assert!(matches!(e, Error::Limit(_)), "{e:?}");
     assert!(e.to_string().starts_with("line 4, column"), "{e}");
     let p = Program::parse("param a in [0, 1] = 0.5;\nwhile_not_a_thing(a);").unwrap();
-    let e = p.record(&p.defaults(), &RecordLimits::default()).unwrap_err();
-    assert_eq!(e, Error::Syntax { line: 2, column: 1, message: "unknown function 'while_not_a_thing'".into() });
+    let e = p
+        .record(&p.defaults(), &RecordLimits::default())
+        .unwrap_err();
+    assert_eq!(
+        e,
+        Error::Syntax {
+            line: 2,
+            column: 1,
+            message: "unknown function 'while_not_a_thing'".into()
+        }
+    );
     let e = Program::parse("fn circle(x) { }").unwrap_err();
     assert!(e.to_string().contains("built-in"), "{e}");
-    let p = Program::parse("param a in [0, 1] = 0.5;\ncircle(0.5, 0.5, 0.1, fill: \"#000\");").unwrap();
+    let p =
+        Program::parse("param a in [0, 1] = 0.5;\ncircle(0.5, 0.5, 0.1, fill: \"#000\");").unwrap();
     let e = p.record(&[0.5, 2.0], &RecordLimits::default()).unwrap_err();
     assert!(e.to_string().contains("declares 1 parameters but 2"), "{e}");
-    let tiny = RecordLimits { max_shapes: 3, ..RecordLimits::default() };
+    let tiny = RecordLimits {
+        max_shapes: 3,
+        ..RecordLimits::default()
+    };
     let p = Program::parse("for i in 0..10 { circle(0.5, 0.5, 0.1); }").unwrap();
     let e = p.record(&[], &tiny).unwrap_err();
     assert!(e.to_string().contains("more than 3 shapes"), "{e}");

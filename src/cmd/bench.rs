@@ -1,7 +1,9 @@
 //! `filigree bench <tool>`: benchmarks that print one JSON object.
 use clap::Subcommand;
+use filigree::core::job::{Job, Step};
 use filigree::inspect::{inspect, InspectOptions};
-use filigree::raster::{encode_png, Rgba8Image};
+use filigree::pixel::{Elements, PixelInputs, PixelJob, PixelParams, Stage};
+use filigree::raster::{decode, Limits, Rgba8Image};
 use serde_json::json;
 use std::time::Instant;
 
@@ -38,20 +40,33 @@ pub enum Which {
         #[arg(long)]
         speed_only: bool,
     },
+    /// Pixel-art texturing: the fish and trunk cases stage by stage, plus a 512² Laplace solve.
+    Pixel {
+        #[arg(long, default_value_t = 10)]
+        repeats: usize,
+        /// Accepted for symmetry with other benches; output is always JSON.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 pub fn run(w: Which) -> Result<(), String> {
     match w {
-        Which::Fit { quick, seeds, only, threads, speed_only, .. } => {
-            super::fit_bench::run(quick, seeds, only.as_deref(), threads, speed_only)
-        }
+        Which::Fit {
+            quick,
+            seeds,
+            only,
+            threads,
+            speed_only,
+            ..
+        } => super::fit_bench::run(quick, seeds, only.as_deref(), threads, speed_only),
         Which::Inspect { repeats, .. } => {
-            let png = test_png(1024);
+            let png = TEST_PNG_1024;
             let opts = InspectOptions::default();
             let mut secs = vec![];
             for _ in 0..repeats.max(1) {
                 let t = Instant::now();
-                inspect(&png, &opts).map_err(|e| e.to_string())?;
+                inspect(png, &opts).map_err(|e| e.to_string())?;
                 secs.push(t.elapsed().as_secs_f64());
             }
             let (min, median) = super::min_median(secs);
@@ -59,17 +74,174 @@ pub fn run(w: Which) -> Result<(), String> {
             println!("{out}");
             Ok(())
         }
+        Which::Pixel { repeats, .. } => {
+            println!("{}", pixel_bench(repeats.max(1))?);
+            Ok(())
+        }
     }
 }
 
-/// A deterministic 1024² test picture with a few hundred colours (gradient
-/// bands), the same one the browser e2e test generates for its timing.
-pub fn test_png(side: u32) -> Vec<u8> {
-    let mut img = Rgba8Image::new(side, side);
-    for y in 0..side {
-        for x in 0..side {
-            img.put(x, y, [(x / 4) as u8, (y / 4) as u8, ((x ^ y) & 0xC0) as u8, 255]);
-        }
+/// A 1024² PNG with 65,536 colours (gradients), the same file the browser
+/// test `tests/e2e/perf.test.mjs` inspects in the worker, so the two timings compare.
+pub const TEST_PNG_1024: &[u8] = include_bytes!("../../tests/fixtures/gradient-1024.png");
+/// Fixture files of the pixel cases, embedded so the bench runs from any directory.
+const PIXEL_FIXTURES: [(&str, &[u8]); 9] = [
+    (
+        "cases.json",
+        include_bytes!("../../assets/pixel/cases.json"),
+    ),
+    ("fish.png", include_bytes!("../../assets/pixel/fish.png")),
+    (
+        "fish_body_boundary.png",
+        include_bytes!("../../assets/pixel/fish_body_boundary.png"),
+    ),
+    (
+        "fish_scale.png",
+        include_bytes!("../../assets/pixel/fish_scale.png"),
+    ),
+    (
+        "fish_strokes.json",
+        include_bytes!("../../assets/pixel/fish_strokes.json"),
+    ),
+    (
+        "trunk_unpatterned.png",
+        include_bytes!("../../assets/pixel/trunk_unpatterned.png"),
+    ),
+    (
+        "trunk_boundary.png",
+        include_bytes!("../../assets/pixel/trunk_boundary.png"),
+    ),
+    (
+        "bark_scale.png",
+        include_bytes!("../../assets/pixel/bark_scale.png"),
+    ),
+    (
+        "trunk_strokes.json",
+        include_bytes!("../../assets/pixel/trunk_strokes.json"),
+    ),
+];
+
+fn fixture(name: &str) -> Result<&'static [u8], String> {
+    PIXEL_FIXTURES
+        .iter()
+        .find(|f| f.0 == name)
+        .map(|f| f.1)
+        .ok_or_else(|| format!("no embedded fixture {name}"))
+}
+
+/// Inputs and parameters of one case of `assets/pixel/cases.json`.
+fn pixel_case(name: &str) -> Result<(PixelInputs, PixelParams), String> {
+    let cases: serde_json::Value =
+        serde_json::from_slice(fixture("cases.json")?).map_err(|e| e.to_string())?;
+    let c = &cases[name];
+    let file = |k: &str| -> Result<&'static [u8], String> {
+        fixture(
+            c[k].as_str()
+                .ok_or_else(|| format!("case {name}: no {k}"))?,
+        )
+    };
+    let img = |k: &str| -> Result<Rgba8Image, String> {
+        decode(file(k)?, Limits::default()).map_err(|e| format!("{name} {k}: {e}"))
+    };
+    #[derive(serde::Deserialize)]
+    struct Strokes {
+        strokes: Vec<filigree::pixel::Stroke>,
     }
-    encode_png(&img).expect("encoding a valid image")
+    let strokes: Strokes = serde_json::from_slice(file("strokes")?).map_err(|e| e.to_string())?;
+    let params: PixelParams =
+        serde_json::from_value(c["params"].clone()).map_err(|e| format!("case {name}: {e}"))?;
+    let inputs = PixelInputs {
+        source: img("source")?,
+        mask: img("mask")?,
+        elements: Elements::Sheet(img("sheet")?),
+        strokes: strokes.strokes,
+    };
+    Ok((inputs, params))
+}
+
+fn min_median_json(v: Vec<f64>) -> serde_json::Value {
+    let (min, median) = super::min_median(v);
+    json!({"min": min, "median": median})
+}
+
+fn pixel_bench(repeats: usize) -> Result<serde_json::Value, String> {
+    let mut cases = vec![];
+    for name in ["fish", "trunk"] {
+        let (inputs, params) = pixel_case(name)?;
+        // Seconds per stage per repeat: setup (input checks), positions,
+        // colour map, orientation solve, placement, total. Stages are timed
+        // at the job's step boundaries, so this is exactly what the browser runs.
+        let mut secs: Vec<Vec<f64>> = vec![vec![]; 6];
+        let mut last = None;
+        for _ in 0..repeats {
+            let t_all = Instant::now();
+            let mut per = [0.0f64; 6];
+            let t = Instant::now();
+            let mut job =
+                PixelJob::new(inputs.clone(), params.clone()).map_err(|e| e.to_string())?;
+            per[0] = t.elapsed().as_secs_f64();
+            let out = loop {
+                let slot = match job.stage() {
+                    Stage::Positions => 1,
+                    Stage::ColourMap => 2,
+                    Stage::Orientation => 3,
+                    Stage::Placement | Stage::Done => 4,
+                };
+                let t = Instant::now();
+                let step = job.step().map_err(|e| e.to_string())?;
+                per[slot] += t.elapsed().as_secs_f64();
+                if let Step::Done(out) = step {
+                    break out;
+                }
+            };
+            per[5] = t_all.elapsed().as_secs_f64();
+            for (k, v) in per.iter().enumerate() {
+                secs[k].push(*v);
+            }
+            last = Some(out);
+        }
+        let out = last.expect("at least one repeat");
+        let s = &out.stats;
+        let mut it = secs.into_iter().map(min_median_json);
+        let mut next = || it.next().expect("six stages");
+        cases.push(json!({
+            "case": name,
+            "size": [out.image.width, out.image.height],
+            "placed": s.placed,
+            "positions": s.positions,
+            "colours_before": s.colours_before,
+            "colours_after": s.colours_after,
+            "colour_map_used": s.colour_map_used.name(),
+            "annotated_pixels": s.annotated_pixels,
+            "solve_iterations": s.solve.map(|v| v.iterations),
+            "seconds": {
+                "setup": next(), "positions": next(), "colour_map": next(),
+                "orientation_solve": next(), "placement": next(), "total": next()
+            }
+        }));
+    }
+    // A 512² field with three annotated strokes, for scale.
+    let side = 512usize;
+    let strokes: Vec<filigree::pixel::Stroke> = vec![
+        vec![[40.0, 60.0], [250.0, 120.0], [470.0, 80.0]],
+        vec![[60.0, 450.0], [256.0, 300.0], [450.0, 460.0]],
+        vec![[256.0, 180.0], [256.0, 260.0]],
+    ];
+    let ann = filigree::pixel::orientation::annotate(side as u32, side as u32, &strokes, 4)
+        .map_err(|e| e.to_string())?;
+    let mut times = vec![];
+    let mut stats = None;
+    for _ in 0..repeats {
+        let t = Instant::now();
+        let (_, st) =
+            filigree::pixel::laplace::solve(side, side, ann.fixed.clone(), ann.values.clone());
+        times.push(t.elapsed().as_secs_f64());
+        stats = Some(st);
+    }
+    Ok(json!({
+        "bench": "pixel",
+        "repeats": repeats,
+        "cases": cases,
+        "laplace_512": {"size": [side, side], "annotated_pixels": ann.count(), "iterations": stats.map(|s| s.iterations), "seconds": min_median_json(times)}
+    }))
 }

@@ -80,12 +80,18 @@ pub fn load_program(spec: &str) -> Result<(String, Program), String> {
     let p = Path::new(spec);
     let (name, src) = if p.exists() {
         let bytes = super::read_file(p)?;
-        (spec.to_string(), String::from_utf8(bytes).map_err(|_| format!("{spec}: not UTF-8 text"))?)
+        (
+            spec.to_string(),
+            String::from_utf8(bytes).map_err(|_| format!("{spec}: not UTF-8 text"))?,
+        )
     } else if let Some(g) = generator(spec) {
         (g.name.to_string(), g.source.to_string())
     } else {
         let names: Vec<&str> = GENERATORS.iter().map(|g| g.name).collect();
-        return Err(format!("'{spec}' is neither a file nor a generator ({})", names.join(", ")));
+        return Err(format!(
+            "'{spec}' is neither a file nor a generator ({})",
+            names.join(", ")
+        ));
     };
     let prog = Program::parse(&src).map_err(|e| format!("{name}: {e}"))?;
     Ok((name, prog))
@@ -98,33 +104,63 @@ pub fn param_values(prog: &Program, spec: Option<&str>) -> Result<Vec<f64>, Stri
     let text = if spec.trim_start().starts_with('{') {
         spec.to_string()
     } else {
-        String::from_utf8(super::read_file(Path::new(spec))?).map_err(|_| format!("{spec}: not UTF-8"))?
+        String::from_utf8(super::read_file(Path::new(spec))?)
+            .map_err(|_| format!("{spec}: not UTF-8"))?
     };
     let v: Value = serde_json::from_str(&text).map_err(|e| format!("parameters: {e}"))?;
-    let obj = v.as_object().ok_or("parameters must be a JSON object {\"name\": number}")?;
+    let obj = v
+        .as_object()
+        .ok_or("parameters must be a JSON object {\"name\": number}")?;
     for (k, x) in obj {
-        let i = prog.params().iter().position(|p| &p.name == k).ok_or_else(|| {
-            let names: Vec<&str> = prog.params().iter().map(|p| p.name.as_str()).collect();
-            format!("the program has no parameter '{k}' (it has {})", names.join(", "))
-        })?;
-        vals[i] = x.as_f64().ok_or_else(|| format!("parameter '{k}' must be a number"))?;
+        let i = prog
+            .params()
+            .iter()
+            .position(|p| &p.name == k)
+            .ok_or_else(|| {
+                let names: Vec<&str> = prog.params().iter().map(|p| p.name.as_str()).collect();
+                format!(
+                    "the program has no parameter '{k}' (it has {})",
+                    names.join(", ")
+                )
+            })?;
+        vals[i] = x
+            .as_f64()
+            .ok_or_else(|| format!("parameter '{k}' must be a number"))?;
     }
     Ok(vals)
 }
 
 fn float_of(prog: &Program, vals: &[f64]) -> Vec<f64> {
-    prog.params().iter().zip(vals).filter(|(p, _)| !p.integer).map(|(_, v)| *v).collect()
+    prog.params()
+        .iter()
+        .zip(vals)
+        .filter(|(p, _)| !p.integer)
+        .map(|(_, v)| *v)
+        .collect()
 }
 
-pub fn options(budget: &str, loss: &str, init: &str, grid: Option<usize>, units: &str, seed: u64) -> Result<FitOptions, String> {
-    let b = Budget::parse(budget).ok_or_else(|| format!("unknown budget '{budget}' (quick, paper)"))?;
+pub fn options(
+    budget: &str,
+    loss: &str,
+    init: &str,
+    grid: Option<usize>,
+    units: &str,
+    seed: u64,
+) -> Result<FitOptions, String> {
+    let b =
+        Budget::parse(budget).ok_or_else(|| format!("unknown budget '{budget}' (quick, paper)"))?;
     let mut o = FitOptions::budget(b);
-    o.loss.kind = LossKind::parse(loss).ok_or_else(|| format!("unknown loss '{loss}' (sdf, l1, pyramid, image)"))?;
+    o.loss.kind = LossKind::parse(loss)
+        .ok_or_else(|| format!("unknown loss '{loss}' (sdf, l1, pyramid, image)"))?;
     o.init = match init {
         "genetic" | "ga" => InitMethod::Genetic,
         "random" => InitMethod::Random,
         "nelder-mead" | "nm" => InitMethod::NelderMead,
-        _ => return Err(format!("unknown init '{init}' (genetic, random, nelder-mead)")),
+        _ => {
+            return Err(format!(
+                "unknown init '{init}' (genetic, random, nelder-mead)"
+            ))
+        }
     };
     if let Some(g) = grid {
         o.loss.grid = g;
@@ -142,7 +178,11 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let (name, prog) = load_program(&a.program)?;
     let vals = param_values(&prog, a.params.as_deref())?;
     let mut opts = options(&a.budget, &a.loss, &a.init, a.grid, &a.units, a.seed)?;
-    opts.threads = a.threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    opts.threads = a.threads.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
     let target_img;
     let target_vals;
     let target = match (&a.target, &a.target_params) {
@@ -164,7 +204,12 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let r = run_to_end(job, &Cancel::new(), |p| {
         if !quiet && (p.fraction - last >= 0.05) {
             last = p.fraction;
-            eprintln!("{:>3.0}%  {}  best loss {:.5}", p.fraction * 100.0, p.stage, p.figure.unwrap_or(f64::NAN));
+            eprintln!(
+                "{:>3.0}%  {}  best loss {:.5}",
+                p.fraction * 100.0,
+                p.stage,
+                p.figure.unwrap_or(f64::NAN)
+            );
         }
     })
     .map_err(|e| e.to_string())?;
@@ -174,7 +219,12 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
         std::fs::write(out, s).map_err(|e| format!("{}: {e}", out.display()))?;
     }
     if a.json {
-        let params: Map<String, Value> = r.names.iter().zip(&r.params).map(|(n, v)| (n.clone(), json!(v))).collect();
+        let params: Map<String, Value> = r
+            .names
+            .iter()
+            .zip(&r.params)
+            .map(|(n, v)| (n.clone(), json!(v)))
+            .collect();
         let out = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss,
             "evaluations": r.evaluations, "seconds": secs, "history": r.history});
         println!("{out}");
@@ -182,7 +232,10 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
         for (n, v) in r.names.iter().zip(&r.params) {
             println!("{n:>14} = {v:.5}");
         }
-        println!("loss {:.6} (after initialisation {:.6}), {} evaluations, {secs:.2} s", r.loss, r.init_loss, r.evaluations);
+        println!(
+            "loss {:.6} (after initialisation {:.6}), {} evaluations, {secs:.2} s",
+            r.loss, r.init_loss, r.evaluations
+        );
     }
     Ok(())
 }
@@ -190,17 +243,32 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
 pub fn run_render(a: RenderArgs) -> Result<(), String> {
     let (name, prog) = load_program(&a.program)?;
     let vals = param_values(&prog, a.params.as_deref())?;
-    let rec = prog.record(&vals, &RecordLimits::default()).map_err(|e| format!("{name}: {e}"))?;
+    let rec = prog
+        .record(&vals, &RecordLimits::default())
+        .map_err(|e| format!("{name}: {e}"))?;
     let fl = rec.float_values();
     let scene = Scene::new(rec);
-    let ext = a.out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = a
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     let bytes = match ext.as_str() {
-        "svg" => render::svg(&scene, &fl, a.size as f64).map_err(|e| e.to_string())?.into_bytes(),
+        "svg" => render::svg(&scene, &fl, a.size as f64)
+            .map_err(|e| e.to_string())?
+            .into_bytes(),
         "png" => {
-            let img = render::render(&scene, &fl, a.size, a.supersample).map_err(|e| e.to_string())?;
+            let img =
+                render::render(&scene, &fl, a.size, a.supersample).map_err(|e| e.to_string())?;
             filigree::raster::encode_png(&img).map_err(|e| e.to_string())?
         }
-        _ => return Err(format!("{}: the output must end in .png or .svg", a.out.display())),
+        _ => {
+            return Err(format!(
+                "{}: the output must end in .png or .svg",
+                a.out.display()
+            ))
+        }
     };
     std::fs::write(&a.out, bytes).map_err(|e| format!("{}: {e}", a.out.display()))
 }

@@ -19,24 +19,44 @@ struct Case {
 
 fn case(src: &str, seed: u64) -> Result<Case, String> {
     let prog = Program::parse(src).map_err(|e| e.to_string())?;
-    let rec = prog.record(&prog.defaults(), &RecordLimits::default()).map_err(|e| e.to_string())?;
+    let rec = prog
+        .record(&prog.defaults(), &RecordLimits::default())
+        .map_err(|e| e.to_string())?;
     let decls = rec.float_decls();
     let lo: Vec<f64> = decls.iter().map(|d| d.lo).collect();
     let hi: Vec<f64> = decls.iter().map(|d| d.hi).collect();
     // True parameters inside the middle 80% of each range.
     let mut rng = Rng::new(seed);
-    let truth = lo.iter().zip(&hi).map(|(l, h)| l + (h - l) * rng.range_f64(0.1, 0.9)).collect();
-    Ok(Case { scene: Scene::new(rec), truth, lo, hi })
+    let truth = lo
+        .iter()
+        .zip(&hi)
+        .map(|(l, h)| l + (h - l) * rng.range_f64(0.1, 0.9))
+        .collect();
+    Ok(Case {
+        scene: Scene::new(rec),
+        truth,
+        lo,
+        hi,
+    })
 }
 
 fn target(c: &Case, loss: &LossOptions) -> Result<Target, String> {
     let idx = colour_indices(&c.scene, &c.truth, loss.grid).map_err(|e| e.to_string())?;
-    Ok(Target::from_indices(&c.scene, &idx, loss.grid, loss.scale()))
+    Ok(Target::from_indices(
+        &c.scene,
+        &idx,
+        loss.grid,
+        loss.scale(),
+    ))
 }
 
 fn mse(c: &Case, p: &[f64]) -> f64 {
     let n = p.len().max(1) as f64;
-    p.iter().enumerate().map(|(k, v)| ((v - c.truth[k]) / (c.hi[k] - c.lo[k])).powi(2)).sum::<f64>() / n
+    p.iter()
+        .enumerate()
+        .map(|(k, v)| ((v - c.truth[k]) / (c.hi[k] - c.lo[k])).powi(2))
+        .sum::<f64>()
+        / n
 }
 
 fn report(c: &Case, r: &FitResult, secs: f64) -> Value {
@@ -59,9 +79,19 @@ fn rate(obj: &mut Objective, p: &[f64], grad: bool) -> f64 {
     n as f64 / t.elapsed().as_secs_f64()
 }
 
-pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, speed_only: bool) -> Result<(), String> {
+pub fn run(
+    quick: bool,
+    seeds: u64,
+    only: Option<&str>,
+    threads: Option<usize>,
+    speed_only: bool,
+) -> Result<(), String> {
     let budget = if quick { Budget::Quick } else { Budget::Paper };
-    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1));
+    let threads = threads.unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    });
     let wanted: Option<Vec<&str>> = only.map(|s| s.split(',').map(str::trim).collect());
     let mut fits = vec![];
     if !speed_only {
@@ -76,13 +106,15 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
                 opts.threads = threads;
                 let t = target(&c, &opts.loss)?;
                 let t0 = Instant::now();
-                let r = run_quietly(FitJob::from_parts(c.scene.clone(), t.clone(), opts)).map_err(|e| e.to_string())?;
+                let r = run_quietly(FitJob::from_parts(c.scene.clone(), t.clone(), opts))
+                    .map_err(|e| e.to_string())?;
                 let sdf_secs = t0.elapsed().as_secs_f64();
                 // Image-space L2 from the same initial candidates.
                 let mut io = opts;
                 io.loss.kind = LossKind::Image;
                 let t1 = Instant::now();
-                let ri = run_quietly(FitJob::refine_from(c.scene.clone(), t, io, &r.start_points)).map_err(|e| e.to_string())?;
+                let ri = run_quietly(FitJob::refine_from(c.scene.clone(), t, io, &r.start_points))
+                    .map_err(|e| e.to_string())?;
                 let img_secs = t1.elapsed().as_secs_f64();
                 let row = json!({
                     "generator": g.name, "paper_row": g.paper, "seed": seed,
@@ -101,13 +133,23 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
         if speed_only && wanted.as_ref().is_some_and(|w| !w.contains(&name)) {
             continue;
         }
-        let g = GENERATORS.iter().find(|g| g.name == name).ok_or("generator missing")?;
+        let g = GENERATORS
+            .iter()
+            .find(|g| g.name == name)
+            .ok_or("generator missing")?;
         for grid in [128usize, 256] {
             let c = case(g.source, 7)?;
-            let loss = LossOptions { grid, ..LossOptions::default() };
+            let loss = LossOptions {
+                grid,
+                ..LossOptions::default()
+            };
             let t = target(&c, &loss)?;
             let mut obj = Objective::new(c.scene.clone(), t, loss);
-            let p: Vec<f64> = c.lo.iter().zip(&c.hi).map(|(l, h)| l + 0.45 * (h - l)).collect();
+            let p: Vec<f64> =
+                c.lo.iter()
+                    .zip(&c.hi)
+                    .map(|(l, h)| l + 0.45 * (h - l))
+                    .collect();
             let lo = rate(&mut obj, &p, false);
             let lg = rate(&mut obj, &p, true);
             speed.push(json!({"generator": name, "grid": grid, "params": p.len(), "shapes": c.scene.shape_count(),
@@ -121,7 +163,10 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
             if wanted.as_ref().is_some_and(|w| !w.contains(&name)) {
                 continue;
             }
-            let g = GENERATORS.iter().find(|g| g.name == name).ok_or("generator missing")?;
+            let g = GENERATORS
+                .iter()
+                .find(|g| g.name == name)
+                .ok_or("generator missing")?;
             let c = case(g.source, 2000)?;
             let mut row = json!({"generator": name});
             for (key, u) in [("pixels", SdfUnits::Pixels), ("canvas", SdfUnits::Canvas)] {
@@ -129,7 +174,8 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
                 opts.loss.units = u;
                 opts.threads = threads;
                 let t = target(&c, &opts.loss)?;
-                let r = run_quietly(FitJob::from_parts(c.scene.clone(), t, opts)).map_err(|e| e.to_string())?;
+                let r = run_quietly(FitJob::from_parts(c.scene.clone(), t, opts))
+                    .map_err(|e| e.to_string())?;
                 row[key] = json!({"param_mse": mse(&c, &r.params), "loss": r.loss});
             }
             units.push(row);
@@ -137,6 +183,9 @@ pub fn run(quick: bool, seeds: u64, only: Option<&str>, threads: Option<usize>, 
     }
     let out = json!({"bench": "fit", "budget": if quick {"quick"} else {"paper"}, "threads": threads,
                      "fits": fits, "throughput_one_core": speed, "units": units});
-    println!("{}", serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
     Ok(())
 }

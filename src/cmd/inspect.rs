@@ -15,17 +15,33 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), String> {
     let bytes = super::read_file(&a.image)?;
-    let opts = InspectOptions { tolerance: a.tolerance, ..Default::default() };
+    let opts = InspectOptions {
+        tolerance: a.tolerance,
+        ..Default::default()
+    };
     let r = inspect(&bytes, &opts).map_err(|e| format!("{}: {e}", a.image.display()))?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?);
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
+        );
         return Ok(());
     }
-    println!("{}: {}×{}, {} colours, {} translucent pixels", a.image.display(), r.width, r.height, r.colour_count, r.translucent_pixels);
+    println!(
+        "{}: {}×{}, {} colours, {} translucent pixels",
+        a.image.display(),
+        r.width,
+        r.height,
+        r.colour_count,
+        r.translucent_pixels
+    );
     println!("clusters (tolerance {}):", a.tolerance);
     for c in r.clusters.iter().take(32) {
         let [red, g, b, al] = c.rgba;
-        println!("  #{red:02x}{g:02x}{b:02x}{al:02x}  {:>8} px  ({} colours)", c.count, c.members);
+        println!(
+            "  #{red:02x}{g:02x}{b:02x}{al:02x}  {:>8} px  ({} colours)",
+            c.count, c.members
+        );
     }
     Ok(())
 }

@@ -2,6 +2,7 @@ pub mod bench;
 pub mod fit;
 pub mod fit_bench;
 pub mod inspect;
+pub mod pixel;
 
 use std::path::Path;
 
@@ -11,6 +12,7 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
 }
 
 /// Read and decode an image file with the default limits, naming the file in errors.
+#[allow(dead_code)] // used by the tool subcommands
 pub fn read_image(path: &Path) -> Result<filigree::raster::Rgba8Image, String> {
     let bytes = read_file(path)?;
     filigree::raster::decode(&bytes, filigree::raster::Limits::default())

@@ -14,7 +14,11 @@ pub enum Error {
     /// An explicit limit was exceeded (image size, shape count, operations ...).
     Limit(String),
     /// A text input (script, grammar, JSON) failed to parse at a place.
-    Syntax { line: usize, column: usize, message: String },
+    Syntax {
+        line: usize,
+        column: usize,
+        message: String,
+    },
     /// The job was cancelled through its cancel flag.
     Cancelled,
 }
@@ -43,7 +47,11 @@ impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::InvalidInput(m) | Error::Limit(m) => f.write_str(m),
-            Error::Syntax { line, column, message } => {
+            Error::Syntax {
+                line,
+                column,
+                message,
+            } => {
                 write!(f, "line {line}, column {column}: {message}")
             }
             Error::Cancelled => f.write_str("cancelled"),

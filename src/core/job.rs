@@ -21,14 +21,27 @@ pub struct Progress {
     pub stage: String,
     /// The current figure of merit, if the job has one (e.g. a loss).
     pub figure: Option<f64>,
+    /// The current best answer's values, if the job has them (e.g. the
+    /// parameters of the best fit so far), so a view can show it live.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub values: Option<Vec<f64>>,
 }
 
 impl Progress {
     pub fn new(fraction: f64, stage: impl Into<String>) -> Self {
-        Progress { fraction: fraction.clamp(0.0, 1.0), stage: stage.into(), figure: None }
+        Progress {
+            fraction: fraction.clamp(0.0, 1.0),
+            stage: stage.into(),
+            figure: None,
+            values: None,
+        }
     }
     pub fn with_figure(mut self, figure: f64) -> Self {
         self.figure = Some(figure);
+        self
+    }
+    pub fn with_values(mut self, values: Vec<f64>) -> Self {
+        self.values = Some(values);
         self
     }
 }
@@ -123,7 +136,10 @@ mod tests {
             if self.n == self.to {
                 Ok(Step::Done(self.n))
             } else {
-                Ok(Step::Running(Progress::new(self.n as f64 / self.to as f64, "counting")))
+                Ok(Step::Running(Progress::new(
+                    self.n as f64 / self.to as f64,
+                    "counting",
+                )))
             }
         }
     }
@@ -131,7 +147,10 @@ mod tests {
     #[test]
     fn runs_to_end_and_reports_monotone_progress() {
         let mut seen = vec![];
-        let out = run_to_end(Count { n: 0, to: 5 }, &Cancel::new(), |p| seen.push(p.fraction)).unwrap();
+        let out = run_to_end(Count { n: 0, to: 5 }, &Cancel::new(), |p| {
+            seen.push(p.fraction)
+        })
+        .unwrap();
         assert_eq!(out, 5);
         assert_eq!(seen.len(), 4);
         assert!(seen.windows(2).all(|w| w[0] < w[1]));

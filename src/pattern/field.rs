@@ -99,7 +99,12 @@ pub struct Win {
     pub wcoef: f32,
 }
 
-const NO_WIN: Win = Win { prim: NONE, wnode: 0, psign: 0.0, wcoef: 0.0 };
+const NO_WIN: Win = Win {
+    prim: NONE,
+    wnode: 0,
+    psign: 0.0,
+    wcoef: 0.0,
+};
 
 #[derive(Debug, Clone, Copy)]
 struct Hit {
@@ -125,11 +130,23 @@ impl Scene {
             };
             if s.stroke.is_some() {
                 stroke_item[i] = items.len() as u32;
-                items.push(Item { shape: i as u32, part: Part::Stroke, inset: false, prim, kind });
+                items.push(Item {
+                    shape: i as u32,
+                    part: Part::Stroke,
+                    inset: false,
+                    prim,
+                    kind,
+                });
             }
             if s.fill.is_some() {
                 fill_item[i] = items.len() as u32;
-                items.push(Item { shape: i as u32, part: Part::Fill, inset: s.stroke.is_some(), prim, kind });
+                items.push(Item {
+                    shape: i as u32,
+                    part: Part::Fill,
+                    inset: s.stroke.is_some(),
+                    prim,
+                    kind,
+                });
             }
         }
         let mut channels = vec![];
@@ -161,9 +178,17 @@ impl Scene {
                 let lead = ops.iter().take_while(|o| o.0 == CombineOp::Diff).count();
                 ops.drain(..lead);
             }
-            channels.push(Channel { colour: c, init, ops });
+            channels.push(Channel {
+                colour: c,
+                init,
+                ops,
+            });
         }
-        Scene { rec, channels, items }
+        Scene {
+            rec,
+            channels,
+            items,
+        }
     }
 
     /// Number of shapes.
@@ -175,10 +200,18 @@ impl Scene {
         match g {
             Geom::Prim(i) => {
                 let k = self.rec.prims[*i as usize].kind;
-                Hit { d: sdf::value(k, &pv[*i as usize], p), prim: *i, sign: 1.0 }
+                Hit {
+                    d: sdf::value(k, &pv[*i as usize], p),
+                    prim: *i,
+                    sign: 1.0,
+                }
             }
             Geom::Path { first, len, closed } => {
-                let mut best = Hit { d: f64::INFINITY, prim: *first, sign: 1.0 };
+                let mut best = Hit {
+                    d: f64::INFINITY,
+                    prim: *first,
+                    sign: 1.0,
+                };
                 let mut w = 0;
                 for i in *first..first + len {
                     let k = self.rec.prims[i as usize].kind;
@@ -233,12 +266,20 @@ impl Scene {
         let h = if it.prim != NONE {
             let f = &pv[it.prim as usize];
             let d = match it.kind {
-                PrimKind::Circle => ((p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1])).sqrt() - f[2],
-                PrimKind::Point => ((p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1])).sqrt(),
+                PrimKind::Circle => {
+                    ((p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1])).sqrt() - f[2]
+                }
+                PrimKind::Point => {
+                    ((p[0] - f[0]) * (p[0] - f[0]) + (p[1] - f[1]) * (p[1] - f[1])).sqrt()
+                }
                 PrimKind::Segment => sdf::segment_distance(f, p),
                 k => sdf::value(k, f, p),
             };
-            Hit { d, prim: it.prim, sign: 1.0 }
+            Hit {
+                d,
+                prim: it.prim,
+                sign: 1.0,
+            }
         } else {
             self.geom(&self.rec.shapes[it.shape as usize].geom, pv, p)
         };
@@ -260,10 +301,20 @@ impl Scene {
     fn win_of(&self, it: &Item, h: &Hit) -> Win {
         let wnode = self.rec.shapes[it.shape as usize].width;
         match it.part {
-            Part::Fill => Win { prim: h.prim, wnode, psign: h.sign as f32, wcoef: if it.inset { 0.5 } else { 0.0 } },
+            Part::Fill => Win {
+                prim: h.prim,
+                wnode,
+                psign: h.sign as f32,
+                wcoef: if it.inset { 0.5 } else { 0.0 },
+            },
             Part::Stroke => {
                 let sg = if h.d >= 0.0 { 1.0 } else { -1.0 };
-                Win { prim: h.prim, wnode, psign: (sg * h.sign) as f32, wcoef: -0.5 }
+                Win {
+                    prim: h.prim,
+                    wnode,
+                    psign: (sg * h.sign) as f32,
+                    wcoef: -0.5,
+                }
             }
         }
     }
@@ -334,7 +385,13 @@ impl Evaluator {
             self.prim_vals.push(f);
         }
         self.widths.clear();
-        self.widths.extend(scene.rec.shapes.iter().map(|s| nodes[s.width as usize].max(0.0)));
+        self.widths.extend(
+            scene
+                .rec
+                .shapes
+                .iter()
+                .map(|s| nodes[s.width as usize].max(0.0)),
+        );
     }
 
     /// Evaluate every channel's field from the tape's node values.
@@ -372,7 +429,14 @@ impl Evaluator {
                 tile_id = tile_id.wrapping_add(1);
                 for ch in &scene.channels {
                     let a = chain1.len();
-                    cull(&ch.ops, ch.init, &self.centre_vals, h1, &mut self.keep, &mut chain1);
+                    cull(
+                        &ch.ops,
+                        ch.init,
+                        &self.centre_vals,
+                        h1,
+                        &mut self.keep,
+                        &mut chain1,
+                    );
                     self.ranges1.push((a, chain1.len()));
                 }
                 for &(_, it) in &chain1 {
@@ -386,8 +450,14 @@ impl Evaluator {
                     for sx in (x0..(x0 + T1).min(n)).step_by(T2) {
                         let pc = [(sx + T2 / 2) as f64 * inv, (sy + T2 / 2) as f64 * inv];
                         for &it in &used {
-                            self.centre_vals[it as usize] =
-                                scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, pc).0;
+                            self.centre_vals[it as usize] = scene
+                                .item_hit(
+                                    &scene.items[it as usize],
+                                    &self.prim_vals,
+                                    &self.widths,
+                                    pc,
+                                )
+                                .0;
                         }
                         work += used.len() as u64;
                         chain2.clear();
@@ -395,7 +465,14 @@ impl Evaluator {
                         for (c, ch) in scene.channels.iter().enumerate() {
                             let (a, b) = self.ranges1[c];
                             let start = chain2.len();
-                            cull(&chain1[a..b], ch.init, &self.centre_vals, h2, &mut self.keep, &mut chain2);
+                            cull(
+                                &chain1[a..b],
+                                ch.init,
+                                &self.centre_vals,
+                                h2,
+                                &mut self.keep,
+                                &mut chain2,
+                            );
                             self.ranges2.push((start, chain2.len()));
                         }
                         for y in sy..(sy + T2).min(n) {
@@ -423,7 +500,15 @@ impl Evaluator {
     /// Apply a culled chain at one pixel; consecutive same-kind operations
     /// form a run whose minimum is applied once.
     #[inline]
-    fn pixel(&mut self, scene: &Scene, init: f64, ops: &[(CombineOp, u32)], p: [f64; 2], idx: usize, winners: bool) {
+    fn pixel(
+        &mut self,
+        scene: &Scene,
+        init: f64,
+        ops: &[(CombineOp, u32)],
+        p: [f64; 2],
+        idx: usize,
+        winners: bool,
+    ) {
         let cap = CAP;
         let mut b = init * cap;
         // Winner: item, hit, and whether a difference flipped it.
@@ -432,10 +517,18 @@ impl Evaluator {
         while i < ops.len() {
             let op = ops[i].0;
             let mut best = f64::INFINITY;
-            let mut bw = (NONE, Hit { d: 0.0, prim: NONE, sign: 1.0 });
+            let mut bw = (
+                NONE,
+                Hit {
+                    d: 0.0,
+                    prim: NONE,
+                    sign: 1.0,
+                },
+            );
             while i < ops.len() && ops[i].0 == op {
                 let it = ops[i].1;
-                let (v, h) = scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
+                let (v, h) =
+                    scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
                 if v < best {
                     best = v;
                     bw = (it, h);
@@ -558,12 +651,23 @@ impl Evaluator {
 /// 2. Forward: track an interval for B; a run of unions (differences) that
 ///    cannot go below (above) it is dropped, and inside a run (where `min`
 ///    commutes) items that are never the smallest are dropped.
-fn cull(chain: &[(CombineOp, u32)], init: f64, vals: &[f64], h: f64, keep: &mut Vec<bool>, out: &mut Vec<(CombineOp, u32)>) {
+fn cull(
+    chain: &[(CombineOp, u32)],
+    init: f64,
+    vals: &[f64],
+    h: f64,
+    keep: &mut Vec<bool>,
+    out: &mut Vec<(CombineOp, u32)>,
+) {
     keep.clear();
     let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
     for &(op, it) in chain.iter().rev() {
         let v = vals[it as usize];
-        let suf = if op == CombineOp::Union { &mut suf_u } else { &mut suf_d };
+        let suf = if op == CombineOp::Union {
+            &mut suf_u
+        } else {
+            &mut suf_d
+        };
         keep.push(v - h < *suf);
         *suf = suf.min(v + h);
     }
@@ -638,7 +742,11 @@ mod tests {
     }
 
     fn at(e: &Evaluator, sc: &Scene, colour: [u8; 3], x: f64, y: f64) -> f64 {
-        let c = sc.channels.iter().position(|ch| sc.rec.colours[ch.colour as usize] == colour).expect("channel");
+        let c = sc
+            .channels
+            .iter()
+            .position(|ch| sc.rec.colours[ch.colour as usize] == colour)
+            .expect("channel");
         let n = e.n;
         let (i, j) = ((x * n as f64) as usize, (y * n as f64) as usize);
         e.s[c * n * n + j * n + i]
@@ -700,7 +808,9 @@ mod tests {
                     let p = [(x as f64 + 0.5) / n as f64, (y as f64 + 0.5) / n as f64];
                     let mut b = ch.init * CAP;
                     for &(op, it) in &ch.ops {
-                        let v = sc.item(&sc.items[it as usize], &g.prim_vals, &g.widths, p).0;
+                        let v = sc
+                            .item(&sc.items[it as usize], &g.prim_vals, &g.widths, p)
+                            .0;
                         b = match op {
                             CombineOp::Union => b.min(v),
                             CombineOp::Diff => b.max(-v),
@@ -708,10 +818,17 @@ mod tests {
                     }
                     let want = b.clamp(-CAP, CAP);
                     let got = e.s[c * n * n + y * n + x];
-                    assert!((got - want).abs() < 1e-12, "channel {c} pixel ({x},{y}): {got} vs {want}");
+                    assert!(
+                        (got - want).abs() < 1e-12,
+                        "channel {c} pixel ({x},{y}): {got} vs {want}"
+                    );
                 }
             }
         }
-        assert!(e.work < (sc.items.len() * n * n * sc.channels.len()) as u64 / 2, "culling saved little: {}", e.work);
+        assert!(
+            e.work < (sc.items.len() * n * n * sc.channels.len()) as u64 / 2,
+            "culling saved little: {}",
+            e.work
+        );
     }
 }

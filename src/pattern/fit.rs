@@ -80,11 +80,18 @@ impl FitOptions {
         match b {
             Budget::Paper => paper,
             Budget::Quick => FitOptions {
-                ga: GaOptions { population: 64, generations: 8, ..GaOptions::default() },
+                ga: GaOptions {
+                    population: 64,
+                    generations: 8,
+                    ..GaOptions::default()
+                },
                 candidates: 3,
                 iterations: 120,
                 patience: 40,
-                loss: LossOptions { grid: 64, ..LossOptions::default() },
+                loss: LossOptions {
+                    grid: 64,
+                    ..LossOptions::default()
+                },
                 ..paper
             },
         }
@@ -128,17 +135,29 @@ pub struct FitResult {
 }
 
 /// Build the scene (recorded with `values`) and target for a fit.
-pub fn prepare(program: &Program, values: &[f64], target: &TargetSource, loss: &LossOptions) -> Result<(Scene, Target)> {
+pub fn prepare(
+    program: &Program,
+    values: &[f64],
+    target: &TargetSource,
+    loss: &LossOptions,
+) -> Result<(Scene, Target)> {
     if !(8..=1024).contains(&loss.grid) {
-        return Err(Error::input(format!("loss grid {} is outside 8..=1024 pixels", loss.grid)));
+        return Err(Error::input(format!(
+            "loss grid {} is outside 8..=1024 pixels",
+            loss.grid
+        )));
     }
     let rec = program.record(values, &RecordLimits::default())?;
     let scene = Scene::new(rec);
     if scene.channels.is_empty() {
-        return Err(Error::input("the program draws no shapes, so there is nothing to fit"));
+        return Err(Error::input(
+            "the program draws no shapes, so there is nothing to fit",
+        ));
     }
     let t = match target {
-        TargetSource::Image(img, tol) => Target::from_image(&scene, img, loss.grid, loss.scale(), *tol)?,
+        TargetSource::Image(img, tol) => {
+            Target::from_image(&scene, img, loss.grid, loss.scale(), *tol)?
+        }
         TargetSource::Params(p) => {
             let idx = colour_indices(&scene, p, loss.grid)?;
             Target::from_indices(&scene, &idx, loss.grid, loss.scale())
@@ -200,7 +219,12 @@ pub struct FitJob {
 impl FitJob {
     /// A fit of `program` (recorded with `values`, one per declared
     /// parameter; the integer ones stay fixed) to `target`.
-    pub fn new(program: &Program, values: &[f64], target: &TargetSource, opts: FitOptions) -> Result<FitJob> {
+    pub fn new(
+        program: &Program,
+        values: &[f64],
+        target: &TargetSource,
+        opts: FitOptions,
+    ) -> Result<FitJob> {
         let (scene, t) = prepare(program, values, target, &opts.loss)?;
         Ok(FitJob::from_parts(scene, t, opts))
     }
@@ -231,7 +255,10 @@ impl FitJob {
             candidates: vec![],
             cand: 0,
             adam: None,
-            best: Scored { u: vec![0.5; dim], loss: f64::INFINITY },
+            best: Scored {
+                u: vec![0.5; dim],
+                loss: f64::INFINITY,
+            },
             init_loss: f64::INFINITY,
             history: vec![],
             done: 0,
@@ -247,12 +274,20 @@ impl FitJob {
     /// A fit that skips initialisation and runs Adam from `starts` (raw
     /// float parameter values), e.g. to compare losses from the same
     /// initialisation.
-    pub fn refine_from(scene: Scene, target: Target, opts: FitOptions, starts: &[Vec<f64>]) -> FitJob {
+    pub fn refine_from(
+        scene: Scene,
+        target: Target,
+        opts: FitOptions,
+        starts: &[Vec<f64>],
+    ) -> FitJob {
         let mut job = FitJob::from_parts(scene, target, opts);
         job.candidates = starts
             .iter()
             .map(|x| Scored {
-                u: x.iter().enumerate().map(|(k, v)| ((v - job.lo[k]) / (job.hi[k] - job.lo[k])).clamp(0.0, 1.0)).collect(),
+                u: x.iter()
+                    .enumerate()
+                    .map(|(k, v)| ((v - job.lo[k]) / (job.hi[k] - job.lo[k])).clamp(0.0, 1.0))
+                    .collect(),
                 loss: f64::INFINITY,
             })
             .collect();
@@ -263,7 +298,10 @@ impl FitJob {
 
     /// Raw parameter values of a normalised point.
     pub fn denormalise(&self, u: &[f64]) -> Vec<f64> {
-        u.iter().enumerate().map(|(k, v)| self.lo[k] + v * (self.hi[k] - self.lo[k])).collect()
+        u.iter()
+            .enumerate()
+            .map(|(k, v)| self.lo[k] + v * (self.hi[k] - self.lo[k]))
+            .collect()
     }
 
     /// The objective (scene, target, loss).
@@ -278,14 +316,25 @@ impl FitJob {
 
     fn consider(&mut self, u: &[f64], loss: f64) {
         if loss < self.best.loss {
-            self.best = Scored { u: u.to_vec(), loss };
+            self.best = Scored {
+                u: u.to_vec(),
+                loss,
+            };
         }
     }
 
     fn progress(&self) -> Progress {
         let stage = match self.phase {
-            Phase::Init => format!("initialisation ({:?}), batch {}", self.opts.init, self.generation + 1),
-            Phase::Refine => format!("Adam on candidate {} of {}", (self.cand + 1).min(self.candidates.len()), self.candidates.len()),
+            Phase::Init => format!(
+                "initialisation ({:?}), batch {}",
+                self.opts.init,
+                self.generation + 1
+            ),
+            Phase::Refine => format!(
+                "Adam on candidate {} of {}",
+                (self.cand + 1).min(self.candidates.len()),
+                self.candidates.len()
+            ),
             Phase::Finished => "done".into(),
         };
         let p = Progress::new(self.done as f64 / self.planned as f64, stage);
@@ -306,13 +355,21 @@ impl FitJob {
                 self.workers.push(self.obj.clone());
             }
             let end = (i + 4 * t).min(self.batch.len());
-            let points: Vec<Vec<f64>> = self.batch[i..end].iter().map(|u| self.denormalise(u)).collect();
+            let points: Vec<Vec<f64>> = self.batch[i..end]
+                .iter()
+                .map(|u| self.denormalise(u))
+                .collect();
             let chunk = points.len().div_ceil(t).max(1);
             let mut out = vec![0.0; points.len()];
             let mut work = 0u64;
             std::thread::scope(|s| {
                 let mut handles = vec![];
-                for ((w, ps), os) in self.workers.iter_mut().zip(points.chunks(chunk)).zip(out.chunks_mut(chunk)) {
+                for ((w, ps), os) in self
+                    .workers
+                    .iter_mut()
+                    .zip(points.chunks(chunk))
+                    .zip(out.chunks_mut(chunk))
+                {
                     handles.push(s.spawn(move || {
                         let mut wk = 0;
                         for (p, o) in ps.iter().zip(os.iter_mut()) {
@@ -366,7 +423,8 @@ impl Job for FitJob {
                         }
                         self.batch = self.init.ask(&mut self.rng);
                         if self.batch.is_empty() {
-                            self.candidates = best_distinct(&self.archive, self.opts.candidates.max(1));
+                            self.candidates =
+                                best_distinct(&self.archive, self.opts.candidates.max(1));
                             self.archive = vec![];
                             self.init_loss = self.best.loss;
                             self.done = self.done.max(self.init.budget());
@@ -384,7 +442,12 @@ impl Job for FitJob {
                             continue;
                         }
                         let c = self.candidates[self.cand].clone();
-                        self.adam = Some(Adam::new(c, self.opts.lr, self.opts.patience, self.opts.refinements));
+                        self.adam = Some(Adam::new(
+                            c,
+                            self.opts.lr,
+                            self.opts.patience,
+                            self.opts.refinements,
+                        ));
                     }
                     let u = self.adam.as_ref().expect("adam").u.clone();
                     let x = self.denormalise(&u);
@@ -414,7 +477,11 @@ impl Job for FitJob {
                     for (k, &i) in self.obj.scene.rec.float_params.iter().enumerate() {
                         all_values[i] = params[k];
                     }
-                    let start_points = self.candidates.iter().map(|c| self.denormalise(&c.u)).collect();
+                    let start_points = self
+                        .candidates
+                        .iter()
+                        .map(|c| self.denormalise(&c.u))
+                        .collect();
                     return Ok(Step::Done(FitResult {
                         start_points,
                         names: self.names.clone(),

@@ -14,15 +14,51 @@ pub struct Generator {
 
 /// Every shipped generator.
 pub const GENERATORS: &[Generator] = &[
-    Generator { name: "circles-grid", paper: Some("Circles1"), source: include_str!("../../assets/patterns/circles-grid.flg") },
-    Generator { name: "stripes-dots", paper: None, source: include_str!("../../assets/patterns/stripes-dots.flg") },
-    Generator { name: "honeycomb", paper: Some("Honeycomb"), source: include_str!("../../assets/patterns/honeycomb.flg") },
-    Generator { name: "spades", paper: Some("Spades"), source: include_str!("../../assets/patterns/spades.flg") },
-    Generator { name: "rectangles", paper: Some("Rectangles"), source: include_str!("../../assets/patterns/rectangles.flg") },
-    Generator { name: "circles-mix", paper: Some("Circles2"), source: include_str!("../../assets/patterns/circles-mix.flg") },
-    Generator { name: "circles-checker", paper: Some("Circles3"), source: include_str!("../../assets/patterns/circles-checker.flg") },
-    Generator { name: "stripes", paper: Some("Stripes"), source: include_str!("../../assets/patterns/stripes.flg") },
-    Generator { name: "shingles", paper: Some("Shingles"), source: include_str!("../../assets/patterns/shingles.flg") },
+    Generator {
+        name: "circles-grid",
+        paper: Some("Circles1"),
+        source: include_str!("../../assets/patterns/circles-grid.flg"),
+    },
+    Generator {
+        name: "stripes-dots",
+        paper: None,
+        source: include_str!("../../assets/patterns/stripes-dots.flg"),
+    },
+    Generator {
+        name: "honeycomb",
+        paper: Some("Honeycomb"),
+        source: include_str!("../../assets/patterns/honeycomb.flg"),
+    },
+    Generator {
+        name: "spades",
+        paper: Some("Spades"),
+        source: include_str!("../../assets/patterns/spades.flg"),
+    },
+    Generator {
+        name: "rectangles",
+        paper: Some("Rectangles"),
+        source: include_str!("../../assets/patterns/rectangles.flg"),
+    },
+    Generator {
+        name: "circles-mix",
+        paper: Some("Circles2"),
+        source: include_str!("../../assets/patterns/circles-mix.flg"),
+    },
+    Generator {
+        name: "circles-checker",
+        paper: Some("Circles3"),
+        source: include_str!("../../assets/patterns/circles-checker.flg"),
+    },
+    Generator {
+        name: "stripes",
+        paper: Some("Stripes"),
+        source: include_str!("../../assets/patterns/stripes.flg"),
+    },
+    Generator {
+        name: "shingles",
+        paper: Some("Shingles"),
+        source: include_str!("../../assets/patterns/shingles.flg"),
+    },
 ];
 
 /// The generator called `name`.
@@ -40,10 +76,17 @@ mod tests {
     fn every_generator_records_with_sensible_counts() {
         for g in GENERATORS {
             let p = Program::parse(g.source).unwrap_or_else(|e| panic!("{}: {e}", g.name));
-            let rec = p.record(&p.defaults(), &RecordLimits::default()).unwrap_or_else(|e| panic!("{}: {e}", g.name));
+            let rec = p
+                .record(&p.defaults(), &RecordLimits::default())
+                .unwrap_or_else(|e| panic!("{}: {e}", g.name));
             let n = rec.float_params.len();
             assert!((4..=14).contains(&n), "{}: {n} parameters", g.name);
-            assert!((10..=200).contains(&rec.shapes.len()), "{}: {} shapes", g.name, rec.shapes.len());
+            assert!(
+                (10..=200).contains(&rec.shapes.len()),
+                "{}: {} shapes",
+                g.name,
+                rec.shapes.len()
+            );
             let sc = Scene::new(rec);
             assert!(!sc.channels.is_empty());
         }

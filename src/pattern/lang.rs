@@ -30,7 +30,11 @@ pub struct Pos {
 impl Pos {
     /// An error at this place.
     pub fn err(self, message: impl Into<String>) -> Error {
-        Error::Syntax { line: self.line, column: self.column, message: message.into() }
+        Error::Syntax {
+            line: self.line,
+            column: self.column,
+            message: message.into(),
+        }
     }
 }
 
@@ -44,8 +48,8 @@ enum Tok {
 }
 
 const SYMS: [&str; 26] = [
-    "..", "==", "!=", "<=", ">=", "&&", "||", "+", "-", "*", "/", "%", "^", "<", ">", "!", "=", "(", ")", "{",
-    "}", "[", "]", ",", ";", ":",
+    "..", "==", "!=", "<=", ">=", "&&", "||", "+", "-", "*", "/", "%", "^", "<", ">", "!", "=",
+    "(", ")", "{", "}", "[", "]", ",", ";", ":",
 ];
 
 fn lex(src: &str) -> Result<Vec<(Tok, Pos)>> {
@@ -72,9 +76,12 @@ fn lex(src: &str) -> Result<Vec<(Tok, Pos)>> {
             }
             continue;
         }
-        if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(|d| d.is_ascii_digit())) {
+        if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(|d| d.is_ascii_digit()))
+        {
             let start = i;
-            while i < chars.len() && (chars[i].is_ascii_digit() || (chars[i] == '.' && chars.get(i + 1) != Some(&'.')))
+            while i < chars.len()
+                && (chars[i].is_ascii_digit()
+                    || (chars[i] == '.' && chars.get(i + 1) != Some(&'.')))
             {
                 i += 1;
             }
@@ -93,7 +100,9 @@ fn lex(src: &str) -> Result<Vec<(Tok, Pos)>> {
                 }
             }
             let text: String = chars[start..i].iter().collect();
-            let v: f64 = text.parse().map_err(|_| pos.err(format!("bad number '{text}'")))?;
+            let v: f64 = text
+                .parse()
+                .map_err(|_| pos.err(format!("bad number '{text}'")))?;
             col += i - start;
             out.push((Tok::Num(v), pos));
             continue;
@@ -172,7 +181,11 @@ impl Expr {
     /// Where the expression starts.
     pub fn pos(&self) -> Pos {
         match self {
-            Expr::Num(_, p) | Expr::Str(_, p) | Expr::Var(_, p) | Expr::Neg(_, p) | Expr::Not(_, p) => *p,
+            Expr::Num(_, p)
+            | Expr::Str(_, p)
+            | Expr::Var(_, p)
+            | Expr::Neg(_, p)
+            | Expr::Not(_, p) => *p,
             Expr::Bin(_, a, _, _) => a.pos(),
             Expr::Call(c) => c.pos,
         }
@@ -253,8 +266,16 @@ struct Parser {
 
 /// Parse program text. Errors carry line and column.
 pub fn parse(src: &str) -> Result<Ast> {
-    let mut p = Parser { toks: lex(src)?, i: 0 };
-    let mut ast = Ast { params: vec![], fns: vec![], body: vec![], background: None };
+    let mut p = Parser {
+        toks: lex(src)?,
+        i: 0,
+    };
+    let mut ast = Ast {
+        params: vec![],
+        fns: vec![],
+        body: vec![],
+        background: None,
+    };
     while !p.at_eof() {
         let pos = p.pos();
         if p.is_ident("param") || (p.is_ident("int") && p.peek_ident(1, "param")) {
@@ -270,21 +291,36 @@ pub fn parse(src: &str) -> Result<Ast> {
             p.expect(",")?;
             let hi = p.const_expr()?;
             p.expect("]")?;
-            let default = if p.eat("=") { p.const_expr()? } else { 0.5 * (lo + hi) };
+            let default = if p.eat("=") {
+                p.const_expr()?
+            } else {
+                0.5 * (lo + hi)
+            };
             p.expect(";")?;
-            if !(lo < hi) {
+            if lo >= hi {
                 return Err(npos.err(format!("parameter '{name}': range [{lo}, {hi}] is empty; write [low, high] with low < high")));
             }
             if !(lo..=hi).contains(&default) {
-                return Err(npos.err(format!("parameter '{name}': default {default} is outside [{lo}, {hi}]")));
+                return Err(npos.err(format!(
+                    "parameter '{name}': default {default} is outside [{lo}, {hi}]"
+                )));
             }
             if integer && (lo.fract() != 0.0 || hi.fract() != 0.0 || default.fract() != 0.0) {
-                return Err(npos.err(format!("int parameter '{name}': bounds and default must be whole numbers")));
+                return Err(npos.err(format!(
+                    "int parameter '{name}': bounds and default must be whole numbers"
+                )));
             }
             if ast.params.iter().any(|q| q.name == name) {
                 return Err(npos.err(format!("parameter '{name}' is declared twice")));
             }
-            ast.params.push(ParamDecl { name, lo, hi, default, integer, pos });
+            ast.params.push(ParamDecl {
+                name,
+                lo,
+                hi,
+                default,
+                integer,
+                pos,
+            });
         } else if p.is_ident("fn") {
             p.next();
             let (name, npos) = p.ident()?;
@@ -303,7 +339,12 @@ pub fn parse(src: &str) -> Result<Ast> {
             if ast.fns.iter().any(|f| f.name == name) {
                 return Err(npos.err(format!("function '{name}' is defined twice")));
             }
-            ast.fns.push(FnDecl { name, params, body, pos: npos });
+            ast.fns.push(FnDecl {
+                name,
+                params,
+                body,
+                pos: npos,
+            });
         } else if p.is_ident("background") && matches!(p.toks[p.i + 1].0, Tok::Str(_)) {
             p.next();
             if let (Tok::Str(s), spos) = p.next() {
@@ -361,7 +402,9 @@ impl Parser {
         if self.eat(s) {
             Ok(())
         } else {
-            Err(self.pos().err(format!("expected '{s}' but found {}", self.describe())))
+            Err(self
+                .pos()
+                .err(format!("expected '{s}' but found {}", self.describe())))
         }
     }
     fn expect_ident(&mut self, s: &str) -> Result<()> {
@@ -369,7 +412,9 @@ impl Parser {
             self.i += 1;
             Ok(())
         } else {
-            Err(self.pos().err(format!("expected '{s}' but found {}", self.describe())))
+            Err(self
+                .pos()
+                .err(format!("expected '{s}' but found {}", self.describe())))
         }
     }
     fn ident(&mut self) -> Result<(String, Pos)> {
@@ -378,7 +423,9 @@ impl Parser {
                 self.i += 1;
                 Ok((s, p))
             }
-            _ => Err(self.pos().err(format!("expected a name but found {}", self.describe()))),
+            _ => Err(self
+                .pos()
+                .err(format!("expected a name but found {}", self.describe()))),
         }
     }
     /// Literal numbers with unary minus, `PI`, and `* /` between them.
@@ -404,7 +451,9 @@ impl Parser {
                 _ => None,
             }
         }
-        ev(&e).filter(|v| v.is_finite()).ok_or_else(|| pos.err("expected a constant number here (literals, PI, + - * /)"))
+        ev(&e)
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| pos.err("expected a constant number here (literals, PI, + - * /)"))
     }
     fn block(&mut self) -> Result<Vec<Stmt>> {
         self.expect("{")?;
@@ -471,7 +520,10 @@ impl Parser {
                 return Ok(Stmt::Call(call));
             }
         }
-        Err(pos.err(format!("expected a statement (let, if, for, return, a call or an assignment) but found {}", self.describe())))
+        Err(pos.err(format!(
+            "expected a statement (let, if, for, return, a call or an assignment) but found {}",
+            self.describe()
+        )))
     }
     fn if_stmt(&mut self) -> Result<Stmt> {
         let pos = self.pos();
@@ -510,7 +562,12 @@ impl Parser {
                 self.expect(",")?;
             }
         }
-        Ok(Call { name, args, block: None, pos })
+        Ok(Call {
+            name,
+            args,
+            block: None,
+            pos,
+        })
     }
     fn expr(&mut self) -> Result<Expr> {
         self.binary(0)
@@ -519,7 +576,14 @@ impl Parser {
         const LEVELS: [&[(&str, BinOp)]; 5] = [
             &[("||", BinOp::Or)],
             &[("&&", BinOp::And)],
-            &[("==", BinOp::Eq), ("!=", BinOp::Ne), ("<=", BinOp::Le), (">=", BinOp::Ge), ("<", BinOp::Lt), (">", BinOp::Gt)],
+            &[
+                ("==", BinOp::Eq),
+                ("!=", BinOp::Ne),
+                ("<=", BinOp::Le),
+                (">=", BinOp::Ge),
+                ("<", BinOp::Lt),
+                (">", BinOp::Gt),
+            ],
             &[("+", BinOp::Add), ("-", BinOp::Sub)],
             &[("*", BinOp::Mul), ("/", BinOp::Div), ("%", BinOp::Mod)],
         ];
@@ -608,11 +672,38 @@ mod tests {
     #[test]
     fn syntax_errors_have_line_and_column() {
         let e = parse("let a = 1;\nlet b = (2 + ;\n").unwrap_err();
-        assert_eq!(e, Error::Syntax { line: 2, column: 14, message: "expected a value but found ';'".into() });
+        assert_eq!(
+            e,
+            Error::Syntax {
+                line: 2,
+                column: 14,
+                message: "expected a value but found ';'".into()
+            }
+        );
         let e = parse("param a in [1, 0];").unwrap_err();
-        assert!(matches!(e, Error::Syntax { line: 1, column: 7, .. }), "{e:?}");
+        assert!(
+            matches!(
+                e,
+                Error::Syntax {
+                    line: 1,
+                    column: 7,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
         let e = parse("circle(0.5, 0.5, 0.1)\ncircle(1,1,1);").unwrap_err();
-        assert!(matches!(e, Error::Syntax { line: 2, column: 1, .. }), "{e:?}");
+        assert!(
+            matches!(
+                e,
+                Error::Syntax {
+                    line: 2,
+                    column: 1,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
         let e = parse("let s = \"abc;\n").unwrap_err();
         assert!(e.to_string().contains("unterminated string"), "{e}");
     }

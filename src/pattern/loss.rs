@@ -72,7 +72,12 @@ pub struct LossOptions {
 
 impl Default for LossOptions {
     fn default() -> Self {
-        LossOptions { kind: LossKind::Sdf, grid: 128, normal_weight: 0.05, units: SdfUnits::Pixels }
+        LossOptions {
+            kind: LossKind::Sdf,
+            grid: 128,
+            normal_weight: 0.05,
+            units: SdfUnits::Pixels,
+        }
     }
 }
 
@@ -99,7 +104,11 @@ fn normals(s: &[f64], n: usize, out: &mut Vec<[f64; 2]>) {
                 let gx = (f[y * n + xp] - f[y * n + xm]) / (xp - xm).max(1) as f64;
                 let gy = (f[yp * n + x] - f[ym * n + x]) / (yp - ym).max(1) as f64;
                 let l = (gx * gx + gy * gy).sqrt();
-                out.push(if l > 1e-12 { [gx / l, gy / l] } else { [0.0, 0.0] });
+                out.push(if l > 1e-12 {
+                    [gx / l, gy / l]
+                } else {
+                    [0.0, 0.0]
+                });
             }
         }
     }
@@ -145,7 +154,13 @@ fn down_t(g: &[f64], n: usize, out: &mut [f64]) {
 }
 
 /// The loss of fields `s` against `t`; with `ds`, also dL/dS (same layout).
-pub fn loss(opts: &LossOptions, s: &[f64], t: &Target, t_normals: &[[f64; 2]], ds: Option<&mut [f64]>) -> f64 {
+pub fn loss(
+    opts: &LossOptions,
+    s: &[f64],
+    t: &Target,
+    t_normals: &[[f64; 2]],
+    ds: Option<&mut [f64]>,
+) -> f64 {
     let n = t.n;
     let nn = n * n;
     let channels = s.len() / nn;
@@ -169,7 +184,8 @@ pub fn loss(opts: &LossOptions, s: &[f64], t: &Target, t_normals: &[[f64; 2]], d
                 }
             }
             if opts.normal_weight != 0.0 {
-                total += opts.normal_weight * normal_term(s, n, t_normals, norm * opts.normal_weight, ds);
+                total += opts.normal_weight
+                    * normal_term(s, n, t_normals, norm * opts.normal_weight, ds);
             }
         }
         LossKind::L1 => {
@@ -198,7 +214,8 @@ pub fn loss(opts: &LossOptions, s: &[f64], t: &Target, t_normals: &[[f64; 2]], d
         }
         LossKind::Pyramid => {
             for c in 0..channels {
-                let mut level: Vec<f64> = (0..nn).map(|i| s[c * nn + i] - t.sdf[c * nn + i]).collect();
+                let mut level: Vec<f64> =
+                    (0..nn).map(|i| s[c * nn + i] - t.sdf[c * nn + i]).collect();
                 let mut sizes = vec![n];
                 let mut grads: Vec<Vec<f64>> = vec![];
                 loop {
@@ -308,7 +325,18 @@ impl Objective {
         let mut tn = vec![];
         normals(&target.sdf, target.n, &mut tn);
         let eval = Evaluator::new(opts.grid, opts.scale());
-        Objective { scene, target, opts, target_normals: tn, eval, nodes: vec![], adj: vec![], ds: vec![], evaluations: 0, last_work: 0 }
+        Objective {
+            scene,
+            target,
+            opts,
+            target_normals: tn,
+            eval,
+            nodes: vec![],
+            adj: vec![],
+            ds: vec![],
+            evaluations: 0,
+            last_work: 0,
+        }
     }
 
     /// Number of float parameters.
@@ -322,7 +350,13 @@ impl Objective {
         self.eval.eval(&self.scene, &self.nodes, false);
         self.evaluations += 1;
         self.last_work = self.eval.work;
-        let l = loss(&self.opts, &self.eval.s, &self.target, &self.target_normals, None);
+        let l = loss(
+            &self.opts,
+            &self.eval.s,
+            &self.target,
+            &self.target_normals,
+            None,
+        );
         if l.is_finite() {
             l
         } else {
@@ -337,12 +371,21 @@ impl Objective {
         self.evaluations += 1;
         self.last_work = self.eval.work * 2;
         self.ds.resize(self.eval.s.len(), 0.0);
-        let l = loss(&self.opts, &self.eval.s, &self.target, &self.target_normals, Some(&mut self.ds));
+        let l = loss(
+            &self.opts,
+            &self.eval.s,
+            &self.target,
+            &self.target_normals,
+            Some(&mut self.ds),
+        );
         self.adj.clear();
         self.adj.resize(self.nodes.len(), 0.0);
         self.eval.backward(&self.scene, &self.ds, &mut self.adj);
         grad.iter_mut().for_each(|g| *g = 0.0);
-        self.scene.rec.tape.backward(&self.nodes, &mut self.adj, grad);
+        self.scene
+            .rec
+            .tape
+            .backward(&self.nodes, &mut self.adj, grad);
         if !l.is_finite() {
             grad.iter_mut().for_each(|g| *g = 0.0);
             return f64::INFINITY;
@@ -365,7 +408,11 @@ mod tests {
         let p = Program::parse(src).unwrap();
         let rec = p.record(&p.defaults(), &RecordLimits::default()).unwrap();
         let scene = Scene::new(rec);
-        let opts = LossOptions { kind, grid: n, ..Default::default() };
+        let opts = LossOptions {
+            kind,
+            grid: n,
+            ..Default::default()
+        };
         let mut ev = Evaluator::new(n, opts.scale());
         let mut nodes = vec![];
         scene.rec.tape.forward(truth, &mut nodes);
@@ -384,7 +431,12 @@ mod tests {
 
     #[test]
     fn gradients_match_central_differences_for_every_loss() {
-        for kind in [LossKind::Sdf, LossKind::L1, LossKind::Pyramid, LossKind::Image] {
+        for kind in [
+            LossKind::Sdf,
+            LossKind::L1,
+            LossKind::Pyramid,
+            LossKind::Image,
+        ] {
             let mut o = objective(SRC, &[0.22, 0.06, 0.2, 0.015], kind, 48);
             let p = [0.2, 0.045, 0.05, 0.012];
             let mut g = [0.0; 4];
@@ -397,7 +449,11 @@ mod tests {
                 b[k] -= h;
                 let fd = (o.loss(&a) - o.loss(&b)) / (2.0 * h);
                 let tol = 1e-3 * (1.0 + fd.abs().max(g[k].abs()));
-                assert!((fd - g[k]).abs() < tol, "{kind:?} param {k}: fd {fd} vs analytic {}", g[k]);
+                assert!(
+                    (fd - g[k]).abs() < tol,
+                    "{kind:?} param {k}: fd {fd} vs analytic {}",
+                    g[k]
+                );
             }
         }
     }

@@ -2,8 +2,8 @@
 //! (Riso, Sforza & Pellacini, "pOp: Parameter Optimization of
 //! Differentiable Vector Patterns", EGSR 2022).
 pub mod field;
-pub mod generators;
 pub mod fit;
+pub mod generators;
 pub mod lang;
 pub mod loss;
 pub mod optim;

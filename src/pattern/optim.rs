@@ -43,7 +43,14 @@ pub struct GaOptions {
 
 impl Default for GaOptions {
     fn default() -> Self {
-        GaOptions { population: 250, generations: 25, crossover: 0.7, mutation: 0.3, sigma: 0.1, elite: 5 }
+        GaOptions {
+            population: 250,
+            generations: 25,
+            crossover: 0.7,
+            mutation: 0.3,
+            sigma: 0.1,
+            elite: 5,
+        }
     }
 }
 
@@ -64,7 +71,13 @@ pub fn best_distinct(all: &[Scored], k: usize) -> Vec<Scored> {
             break;
         }
         let s = &all[i];
-        let near = out.iter().any(|o| o.u.iter().zip(&s.u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) < 1e-3);
+        let near = out.iter().any(|o| {
+            o.u.iter()
+                .zip(&s.u)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max)
+                < 1e-3
+        });
         if !near {
             out.push(s.clone());
         }
@@ -97,8 +110,20 @@ impl Initializer {
     pub fn new(method: InitMethod, dim: usize, ga: GaOptions) -> Initializer {
         let budget = ga.population * (ga.generations + 1);
         match method {
-            InitMethod::Genetic => Initializer::Genetic(Ga { opts: ga, dim, pop: vec![], gen: 0 }),
-            InitMethod::Random => Initializer::Random(RandomSearch { dim, batch: ga.population, budget, used: 0, best: None, coord: 0 }),
+            InitMethod::Genetic => Initializer::Genetic(Ga {
+                opts: ga,
+                dim,
+                pop: vec![],
+                gen: 0,
+            }),
+            InitMethod::Random => Initializer::Random(RandomSearch {
+                dim,
+                batch: ga.population,
+                budget,
+                used: 0,
+                best: None,
+                coord: 0,
+            }),
             InitMethod::NelderMead => Initializer::NelderMead(NelderMead::new(dim, budget)),
         }
     }
@@ -106,7 +131,10 @@ impl Initializer {
     /// Total evaluations this initialiser will ask for (an upper bound).
     pub fn budget(&self) -> usize {
         match self {
-            Initializer::Genetic(g) => g.opts.population + g.opts.generations * g.opts.population.saturating_sub(g.opts.elite),
+            Initializer::Genetic(g) => {
+                g.opts.population
+                    + g.opts.generations * g.opts.population.saturating_sub(g.opts.elite)
+            }
             Initializer::Random(r) => r.budget,
             Initializer::NelderMead(n) => n.budget,
         }
@@ -145,7 +173,9 @@ impl Ga {
     fn ask(&mut self, rng: &mut Rng) -> Vec<Vec<f64>> {
         let p = self.opts.population.max(2);
         if self.pop.is_empty() && self.gen == 0 {
-            return (0..p).map(|_| (0..self.dim).map(|_| rng.f64()).collect()).collect();
+            return (0..p)
+                .map(|_| (0..self.dim).map(|_| rng.f64()).collect())
+                .collect();
         }
         if self.gen > self.opts.generations {
             return vec![];
@@ -195,9 +225,18 @@ impl Ga {
     }
 
     fn tell(&mut self, batch: Vec<Vec<f64>>, losses: &[f64]) {
-        let elite = if self.pop.is_empty() { 0 } else { self.opts.elite.min(self.pop.len()) };
+        let elite = if self.pop.is_empty() {
+            0
+        } else {
+            self.opts.elite.min(self.pop.len())
+        };
         let mut next: Vec<Scored> = self.pop[..elite].to_vec();
-        next.extend(batch.into_iter().zip(losses).map(|(u, &loss)| Scored { u, loss }));
+        next.extend(
+            batch
+                .into_iter()
+                .zip(losses)
+                .map(|(u, &loss)| Scored { u, loss }),
+        );
         next.sort_by(|a, b| a.loss.total_cmp(&b.loss));
         self.pop = next;
         self.gen += 1;
@@ -227,7 +266,9 @@ impl RandomSearch {
             return vec![];
         }
         match &self.best {
-            None => (0..n).map(|_| (0..self.dim).map(|_| rng.f64()).collect()).collect(),
+            None => (0..n)
+                .map(|_| (0..self.dim).map(|_| rng.f64()).collect())
+                .collect(),
             Some(b) => (0..n)
                 .map(|_| {
                     let mut u = b.u.clone();
@@ -274,7 +315,15 @@ pub struct NelderMead {
 
 impl NelderMead {
     fn new(dim: usize, budget: usize) -> Self {
-        NelderMead { dim, budget, used: 0, simplex: vec![], stage: NmStage::Start, xr: None, centroid: vec![] }
+        NelderMead {
+            dim,
+            budget,
+            used: 0,
+            simplex: vec![],
+            stage: NmStage::Start,
+            xr: None,
+            centroid: vec![],
+        }
     }
 
     fn along(&self, from: &[f64], to: &[f64], t: f64) -> Vec<f64> {
@@ -302,7 +351,9 @@ impl NelderMead {
             NmStage::Reflect => {
                 self.simplex.sort_by(|a, b| a.loss.total_cmp(&b.loss));
                 let d = self.dim;
-                self.centroid = (0..d).map(|k| self.simplex[..d].iter().map(|s| s.u[k]).sum::<f64>() / d as f64).collect();
+                self.centroid = (0..d)
+                    .map(|k| self.simplex[..d].iter().map(|s| s.u[k]).sum::<f64>() / d as f64)
+                    .collect();
                 vec![self.along(&self.simplex[d].u, &self.centroid, 2.0)]
             }
             NmStage::Expand => {
@@ -317,7 +368,10 @@ impl NelderMead {
             }
             NmStage::Shrink => {
                 let b = self.simplex[0].u.clone();
-                self.simplex[1..].iter().map(|s| self.along(&b, &s.u, 0.5)).collect()
+                self.simplex[1..]
+                    .iter()
+                    .map(|s| self.along(&b, &s.u, 0.5))
+                    .collect()
             }
             NmStage::Init => unreachable!("Init is always told before the next ask"),
         }
@@ -325,7 +379,11 @@ impl NelderMead {
 
     fn tell(&mut self, batch: Vec<Vec<f64>>, losses: &[f64]) {
         self.used += batch.len();
-        let mut pts: Vec<Scored> = batch.into_iter().zip(losses).map(|(u, &loss)| Scored { u, loss }).collect();
+        let mut pts: Vec<Scored> = batch
+            .into_iter()
+            .zip(losses)
+            .map(|(u, &loss)| Scored { u, loss })
+            .collect();
         let d = self.dim;
         match self.stage {
             NmStage::Init => {
@@ -334,7 +392,11 @@ impl NelderMead {
             }
             NmStage::Reflect => {
                 let xr = pts.pop().expect("one point");
-                let (fb, fs, fw) = (self.simplex[0].loss, self.simplex[d.saturating_sub(1)].loss, self.simplex[d].loss);
+                let (fb, fs, fw) = (
+                    self.simplex[0].loss,
+                    self.simplex[d.saturating_sub(1)].loss,
+                    self.simplex[d].loss,
+                );
                 if xr.loss < fb {
                     self.xr = Some(xr);
                     self.stage = NmStage::Expand;
@@ -356,7 +418,11 @@ impl NelderMead {
             NmStage::Contract { outside } => {
                 let xc = pts.pop().expect("one point");
                 let xr = self.xr.take().expect("reflected");
-                let bar = if outside { xr.loss } else { self.simplex[d].loss };
+                let bar = if outside {
+                    xr.loss
+                } else {
+                    self.simplex[d].loss
+                };
                 if xc.loss <= bar {
                     self.simplex[d] = xc;
                     self.stage = NmStage::Reflect;
@@ -376,7 +442,12 @@ impl NelderMead {
             // Restart when the simplex has collapsed.
             let size = self.simplex[1..]
                 .iter()
-                .map(|s| s.u.iter().zip(&self.simplex[0].u).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max))
+                .map(|s| {
+                    s.u.iter()
+                        .zip(&self.simplex[0].u)
+                        .map(|(a, b)| (a - b).abs())
+                        .fold(0.0, f64::max)
+                })
                 .fold(0.0, f64::max);
             if size < 1e-4 {
                 self.stage = NmStage::Start;
@@ -428,7 +499,10 @@ impl Adam {
     pub fn update(&mut self, loss: f64, grad: &[f64]) -> bool {
         self.iterations += 1;
         if loss < self.best.loss {
-            self.best = Scored { u: self.u.clone(), loss };
+            self.best = Scored {
+                u: self.u.clone(),
+                loss,
+            };
             self.since_best = 0;
         } else {
             self.since_best += 1;
@@ -450,8 +524,8 @@ impl Adam {
         self.t += 1;
         let c1 = 1.0 - b1.powi(self.t);
         let c2 = 1.0 - b2.powi(self.t);
-        for k in 0..self.u.len() {
-            let g = if grad[k].is_finite() { grad[k] } else { 0.0 };
+        for (k, &gk) in grad.iter().enumerate().take(self.u.len()) {
+            let g = if gk.is_finite() { gk } else { 0.0 };
             self.m[k] = b1 * self.m[k] + (1.0 - b1) * g;
             self.v[k] = b2 * self.v[k] + (1.0 - b2) * g * g;
             let step = self.lr * (self.m[k] / c1) / ((self.v[k] / c2).sqrt() + eps);
@@ -467,7 +541,11 @@ mod tests {
 
     fn drive(method: InitMethod, f: impl Fn(&[f64]) -> f64) -> Vec<Scored> {
         let mut rng = Rng::new(1);
-        let ga = GaOptions { population: 40, generations: 15, ..Default::default() };
+        let ga = GaOptions {
+            population: 40,
+            generations: 15,
+            ..Default::default()
+        };
         let mut init = Initializer::new(method, 3, ga);
         let mut all = vec![];
         loop {
@@ -476,17 +554,30 @@ mod tests {
                 break;
             }
             let l: Vec<f64> = b.iter().map(|u| f(u)).collect();
-            all.extend(b.iter().zip(&l).map(|(u, &loss)| Scored { u: u.clone(), loss }));
+            all.extend(
+                b.iter()
+                    .zip(&l)
+                    .map(|(u, &loss)| Scored { u: u.clone(), loss }),
+            );
             init.tell(b, &l);
         }
-        assert!(all.len() <= init.budget() + 3, "{} > {}", all.len(), init.budget());
+        assert!(
+            all.len() <= init.budget() + 3,
+            "{} > {}",
+            all.len(),
+            init.budget()
+        );
         best_distinct(&all, 5)
     }
 
     #[test]
     fn initialisers_find_a_quadratic_bowl() {
         let f = |u: &[f64]| (u[0] - 0.3).powi(2) + (u[1] - 0.7).powi(2) + (u[2] - 0.5).powi(2);
-        for m in [InitMethod::Genetic, InitMethod::Random, InitMethod::NelderMead] {
+        for m in [
+            InitMethod::Genetic,
+            InitMethod::Random,
+            InitMethod::NelderMead,
+        ] {
             let best = drive(m, f);
             assert!(best[0].loss < 2e-3, "{m:?}: {}", best[0].loss);
             assert_eq!(best.len(), 5);
@@ -495,7 +586,15 @@ mod tests {
 
     #[test]
     fn adam_converges_and_stops_after_refinements() {
-        let mut a = Adam::new(Scored { u: vec![0.9, 0.1], loss: f64::INFINITY }, 0.025, 20, 3);
+        let mut a = Adam::new(
+            Scored {
+                u: vec![0.9, 0.1],
+                loss: f64::INFINITY,
+            },
+            0.025,
+            20,
+            3,
+        );
         let mut n = 0;
         while n < 2000 {
             let u = a.u.clone();

@@ -28,7 +28,11 @@ pub struct RecordLimits {
 impl Default for RecordLimits {
     /// One million operations (a few ms), 5,000 shapes, depth 64.
     fn default() -> Self {
-        RecordLimits { max_ops: 1_000_000, max_shapes: 5_000, max_depth: 64 }
+        RecordLimits {
+            max_ops: 1_000_000,
+            max_shapes: 5_000,
+            max_depth: 64,
+        }
     }
 }
 
@@ -118,7 +122,10 @@ impl Program {
         let ast = parse(src)?;
         for f in &ast.fns {
             if builtin_arity(&f.name).is_some() || is_statement_name(&f.name) {
-                return Err(f.pos.err(format!("'{}' is a built-in name; pick another function name", f.name)));
+                return Err(f.pos.err(format!(
+                    "'{}' is a built-in name; pick another function name",
+                    f.name
+                )));
             }
         }
         let p = Program { ast };
@@ -147,7 +154,10 @@ impl Program {
         let mut vals = vec![];
         for (i, (d, &v)) in self.ast.params.iter().zip(values).enumerate() {
             if !v.is_finite() {
-                return Err(Error::input(format!("parameter '{}' has no finite value", d.name)));
+                return Err(Error::input(format!(
+                    "parameter '{}' has no finite value",
+                    d.name
+                )));
             }
             let v = v.clamp(d.lo, d.hi);
             let val = if d.integer {
@@ -180,7 +190,9 @@ impl Program {
 }
 
 fn colour_error(s: &str) -> String {
-    format!("'{s}' is not a colour; write \"#rgb\" or \"#rrggbb\" (or black, white, red, green, blue)")
+    format!(
+        "'{s}' is not a colour; write \"#rgb\" or \"#rrggbb\" (or black, white, red, green, blue)"
+    )
 }
 
 /// Parse `#rgb`, `#rrggbb` or a few names.
@@ -194,7 +206,10 @@ pub fn parse_colour(s: &str) -> Option<Rgb> {
         _ => {}
     }
     let h = s.strip_prefix('#')?;
-    let d: Vec<u8> = h.chars().map(|c| c.to_digit(16).map(|v| v as u8)).collect::<Option<_>>()?;
+    let d: Vec<u8> = h
+        .chars()
+        .map(|c| c.to_digit(16).map(|v| v as u8))
+        .collect::<Option<_>>()?;
     match d.len() {
         3 => Some([d[0] * 17, d[1] * 17, d[2] * 17]),
         6 => Some([d[0] * 16 + d[1], d[2] * 16 + d[3], d[4] * 16 + d[5]]),
@@ -241,20 +256,38 @@ struct PathB {
 fn is_statement_name(n: &str) -> bool {
     matches!(
         n,
-        "circle" | "point" | "segment" | "line" | "rect" | "path" | "union" | "intersect" | "difference" | "translate"
-            | "rotate" | "scale" | "move" | "quad" | "cubic" | "close"
+        "circle"
+            | "point"
+            | "segment"
+            | "line"
+            | "rect"
+            | "path"
+            | "union"
+            | "intersect"
+            | "difference"
+            | "translate"
+            | "rotate"
+            | "scale"
+            | "move"
+            | "quad"
+            | "cubic"
+            | "close"
     )
 }
 
 fn builtin_arity(n: &str) -> Option<(usize, usize)> {
     Some(match n {
-        "sin" | "cos" | "tan" | "atan" | "sqrt" | "abs" | "exp" | "ln" | "floor" | "ceil" | "round" => (1, 1),
+        "sin" | "cos" | "tan" | "atan" | "sqrt" | "abs" | "exp" | "ln" | "floor" | "ceil"
+        | "round" => (1, 1),
         "atan2" | "pow" | "mod" | "hypot" => (2, 2),
         "min" | "max" => (1, 64),
         "clamp" | "select" | "lerp" | "rgb" => (3, 3),
         _ => return None,
     })
 }
+
+/// Named call arguments with their positions.
+type Named = HashMap<String, (Val, Pos)>;
 
 struct Rec<'a> {
     fns: HashMap<&'a str, &'a FnDecl>,
@@ -283,7 +316,14 @@ impl<'a> Rec<'a> {
             frames: vec![vec![HashMap::new()]],
             ops: 0,
             limits,
-            xf: vec![Xf { cos: V::C(1.0), sin: V::C(0.0), angle: V::C(0.0), scale: V::C(1.0), tx: V::C(0.0), ty: V::C(0.0) }],
+            xf: vec![Xf {
+                cos: V::C(1.0),
+                sin: V::C(0.0),
+                angle: V::C(0.0),
+                scale: V::C(1.0),
+                tx: V::C(0.0),
+                ty: V::C(0.0),
+            }],
             bool_sinks: vec![],
             path: None,
             prims: vec![],
@@ -393,9 +433,13 @@ impl<'a> Rec<'a> {
             }
         }
         if self.globals.contains_key(name) {
-            return Err(pos.err(format!("'{name}' is a parameter and cannot be assigned; use 'let {name}2 = ...;'")));
+            return Err(pos.err(format!(
+                "'{name}' is a parameter and cannot be assigned; use 'let {name}2 = ...;'"
+            )));
         }
-        Err(pos.err(format!("'{name}' is not defined; declare it first with 'let {name} = ...;'")))
+        Err(pos.err(format!(
+            "'{name}' is not defined; declare it first with 'let {name} = ...;'"
+        )))
     }
 
     // ---- statements --------------------------------------------------
@@ -423,7 +467,9 @@ impl<'a> Rec<'a> {
     fn num(&mut self, e: &Expr) -> Result<V> {
         match self.expr(e)? {
             Val::Num(v) => Ok(v),
-            Val::Str(s) => Err(e.pos().err(format!("expected a number but got the string \"{s}\""))),
+            Val::Str(s) => Err(e
+                .pos()
+                .err(format!("expected a number but got the string \"{s}\""))),
         }
     }
 
@@ -443,7 +489,12 @@ impl<'a> Rec<'a> {
             Stmt::Let(name, e, pos) => {
                 self.tick(*pos)?;
                 let v = self.expr(e)?;
-                self.frames.last_mut().expect("frame").last_mut().expect("scope").insert(name.clone(), v);
+                self.frames
+                    .last_mut()
+                    .expect("frame")
+                    .last_mut()
+                    .expect("scope")
+                    .insert(name.clone(), v);
             }
             Stmt::Assign(name, e, pos) => {
                 self.tick(*pos)?;
@@ -463,7 +514,10 @@ impl<'a> Rec<'a> {
                     self.tick(*pos)?;
                     let frame = self.frames.last_mut().expect("frame");
                     frame.push(HashMap::new());
-                    frame.last_mut().expect("scope").insert(var.clone(), Val::Num(V::C(i)));
+                    frame
+                        .last_mut()
+                        .expect("scope")
+                        .insert(var.clone(), Val::Num(V::C(i)));
                     let r = self.block(body, true);
                     self.frames.last_mut().expect("frame").pop();
                     if let Flow::Return(v, p) = r? {
@@ -487,7 +541,9 @@ impl<'a> Rec<'a> {
                     self.shape_stmt(c)?;
                 } else {
                     if c.block.is_some() {
-                        return Err(c.pos.err(format!("'{}' does not take a {{ block }}", c.name)));
+                        return Err(c
+                            .pos
+                            .err(format!("'{}' does not take a {{ block }}", c.name)));
                     }
                     self.call(c)?;
                 }
@@ -544,7 +600,10 @@ impl<'a> Rec<'a> {
                     return Err(c.pos.err("a call with a block cannot be used as a value"));
                 }
                 if is_statement_name(&c.name) && !self.fns.contains_key(c.name.as_str()) {
-                    return Err(c.pos.err(format!("'{}' draws a shape; use it as a statement, not as a value", c.name)));
+                    return Err(c.pos.err(format!(
+                        "'{}' draws a shape; use it as a statement, not as a value",
+                        c.name
+                    )));
                 }
                 self.call(c)?
             }
@@ -559,11 +618,22 @@ impl<'a> Rec<'a> {
             return Err(c.pos.err(format!("unknown function '{}'", c.name)));
         };
         if let Some(a) = c.args.iter().find(|a| a.name.is_some()) {
-            return Err(a.value.pos().err(format!("'{}' takes no named arguments", c.name)));
+            return Err(a
+                .value
+                .pos()
+                .err(format!("'{}' takes no named arguments", c.name)));
         }
         if c.args.len() < lo || c.args.len() > hi {
-            let want = if lo == hi { format!("{lo}") } else { format!("{lo} to {hi}") };
-            return Err(c.pos.err(format!("'{}' takes {want} arguments, got {}", c.name, c.args.len())));
+            let want = if lo == hi {
+                format!("{lo}")
+            } else {
+                format!("{lo} to {hi}")
+            };
+            return Err(c.pos.err(format!(
+                "'{}' takes {want} arguments, got {}",
+                c.name,
+                c.args.len()
+            )));
         }
         let mut a = vec![];
         for arg in &c.args {
@@ -625,8 +695,15 @@ impl<'a> Rec<'a> {
                 let mut s = String::from("#");
                 for (arg, v) in c.args.iter().zip(&a) {
                     match v {
-                        V::C(x) => s.push_str(&format!("{:02x}", x.round().clamp(0.0, 255.0) as u8)),
-                        V::N(_) => return Err(arg.value.pos().err("colours cannot depend on float parameters")),
+                        V::C(x) => {
+                            s.push_str(&format!("{:02x}", x.round().clamp(0.0, 255.0) as u8))
+                        }
+                        V::N(_) => {
+                            return Err(arg
+                                .value
+                                .pos()
+                                .err("colours cannot depend on float parameters"))
+                        }
                     }
                 }
                 return Ok(Val::Str(Rc::from(s.as_str())));
@@ -637,10 +714,18 @@ impl<'a> Rec<'a> {
 
     fn user_call(&mut self, f: &'a FnDecl, c: &Call) -> Result<Val> {
         if c.args.len() != f.params.len() {
-            return Err(c.pos.err(format!("'{}' takes {} arguments, got {}", f.name, f.params.len(), c.args.len())));
+            return Err(c.pos.err(format!(
+                "'{}' takes {} arguments, got {}",
+                f.name,
+                f.params.len(),
+                c.args.len()
+            )));
         }
         if let Some(a) = c.args.iter().find(|a| a.name.is_some()) {
-            return Err(a.value.pos().err(format!("'{}' takes no named arguments", f.name)));
+            return Err(a
+                .value
+                .pos()
+                .err(format!("'{}' takes no named arguments", f.name)));
         }
         if self.frames.len() > self.limits.max_depth {
             return Err(Error::limit(format!(
@@ -707,21 +792,30 @@ impl<'a> Rec<'a> {
     }
 
     /// Split positional and named arguments; check the named ones.
-    fn args(&mut self, c: &Call, positional: usize, allowed: &[&str]) -> Result<(Vec<V>, HashMap<String, (Val, Pos)>)> {
+    fn args(&mut self, c: &Call, positional: usize, allowed: &[&str]) -> Result<(Vec<V>, Named)> {
         let mut pos_args = vec![];
         let mut named = HashMap::new();
         for Arg { name, value } in &c.args {
             match name {
                 None => {
                     if !named.is_empty() {
-                        return Err(value.pos().err("positional arguments must come before named ones"));
+                        return Err(value
+                            .pos()
+                            .err("positional arguments must come before named ones"));
                     }
                     pos_args.push(self.num(value)?);
                 }
                 Some(n) => {
                     if !allowed.contains(&n.as_str()) {
-                        let list = if allowed.is_empty() { "none".to_string() } else { allowed.join(", ") };
-                        return Err(value.pos().err(format!("'{}' has no option '{n}' (options: {list})", c.name)));
+                        let list = if allowed.is_empty() {
+                            "none".to_string()
+                        } else {
+                            allowed.join(", ")
+                        };
+                        return Err(value.pos().err(format!(
+                            "'{}' has no option '{n}' (options: {list})",
+                            c.name
+                        )));
                     }
                     let v = self.expr(value)?;
                     named.insert(n.clone(), (v, value.pos()));
@@ -729,7 +823,11 @@ impl<'a> Rec<'a> {
             }
         }
         if pos_args.len() != positional {
-            return Err(c.pos.err(format!("'{}' takes {positional} numbers, got {}", c.name, pos_args.len())));
+            return Err(c.pos.err(format!(
+                "'{}' takes {positional} numbers, got {}",
+                c.name,
+                pos_args.len()
+            )));
         }
         Ok((pos_args, named))
     }
@@ -743,13 +841,26 @@ impl<'a> Rec<'a> {
     }
 
     /// Emit a finished geometry with its style, or hand it to an enclosing boolean block.
-    fn emit(&mut self, c: &Call, geom: Geom, named: &HashMap<String, (Val, Pos)>, closed: bool) -> Result<()> {
+    fn emit(
+        &mut self,
+        c: &Call,
+        geom: Geom,
+        named: &HashMap<String, (Val, Pos)>,
+        closed: bool,
+    ) -> Result<()> {
         if !self.bool_sinks.is_empty() {
-            if let Some((_, p)) = named.get("fill").or(named.get("stroke")).or(named.get("width")) {
+            if let Some((_, p)) = named
+                .get("fill")
+                .or(named.get("stroke"))
+                .or(named.get("width"))
+            {
                 return Err(p.err("shapes inside union/intersect/difference take their style from the enclosing block"));
             }
             if !closed {
-                return Err(c.pos.err(format!("'{}' has no inside; boolean blocks need closed shapes", c.name)));
+                return Err(c.pos.err(format!(
+                    "'{}' has no inside; boolean blocks need closed shapes",
+                    c.name
+                )));
             }
             self.bool_sinks.last_mut().expect("sink").push(geom);
             return Ok(());
@@ -763,7 +874,10 @@ impl<'a> Rec<'a> {
             None => None,
         };
         if fill.is_some() && !closed {
-            return Err(named["fill"].1.err(format!("'{}' has no inside to fill; use stroke: instead", c.name)));
+            return Err(named["fill"].1.err(format!(
+                "'{}' has no inside to fill; use stroke: instead",
+                c.name
+            )));
         }
         let stroke = match (fill, stroke) {
             (None, None) => {
@@ -786,20 +900,38 @@ impl<'a> Rec<'a> {
                 c.pos.line, c.pos.column, self.limits.max_shapes
             )));
         }
-        self.shapes.push(Shape { geom, fill, stroke, width, pos: c.pos });
+        self.shapes.push(Shape {
+            geom,
+            fill,
+            stroke,
+            width,
+            pos: c.pos,
+        });
         Ok(())
     }
 
     fn shape_stmt(&mut self, c: &Call) -> Result<()> {
         let in_path = self.path.is_some();
-        let path_cmd = matches!(c.name.as_str(), "move" | "line" | "quad" | "cubic" | "close");
+        let path_cmd = matches!(
+            c.name.as_str(),
+            "move" | "line" | "quad" | "cubic" | "close"
+        );
         if in_path && !path_cmd {
-            return Err(c.pos.err(format!("'{}' is not allowed inside a path; use move, line, quad, cubic, close", c.name)));
+            return Err(c.pos.err(format!(
+                "'{}' is not allowed inside a path; use move, line, quad, cubic, close",
+                c.name
+            )));
         }
         if !in_path && matches!(c.name.as_str(), "move" | "quad" | "cubic" | "close") {
-            return Err(c.pos.err(format!("'{}' is a path command; use it inside path(...) {{ }}", c.name)));
+            return Err(c.pos.err(format!(
+                "'{}' is a path command; use it inside path(...) {{ }}",
+                c.name
+            )));
         }
-        let needs_block = matches!(c.name.as_str(), "path" | "union" | "intersect" | "difference" | "translate" | "rotate" | "scale");
+        let needs_block = matches!(
+            c.name.as_str(),
+            "path" | "union" | "intersect" | "difference" | "translate" | "rotate" | "scale"
+        );
         if needs_block != c.block.is_some() {
             return Err(c.pos.err(if needs_block {
                 format!("'{}' needs a {{ block }} after it", c.name)
@@ -833,7 +965,8 @@ impl<'a> Rec<'a> {
                 self.emit(c, Geom::Prim(p), &named, false)
             }
             "rect" => {
-                let (a, named) = self.args(c, 4, &["fill", "stroke", "width", "radius", "rotation"])?;
+                let (a, named) =
+                    self.args(c, 4, &["fill", "stroke", "width", "radius", "rotation"])?;
                 let (x, y) = self.xf_point(a[0], a[1]);
                 let hw = self.mul(a[2], V::C(0.5));
                 let hh = self.mul(a[3], V::C(0.5));
@@ -850,7 +983,13 @@ impl<'a> Rec<'a> {
             "path" => {
                 let (_, named) = self.args(c, 0, &STYLE)?;
                 let first = self.prims.len() as u32;
-                self.path = Some(PathB { start: (V::C(0.0), V::C(0.0)), cur: (V::C(0.0), V::C(0.0)), first, started: false, closed: false });
+                self.path = Some(PathB {
+                    start: (V::C(0.0), V::C(0.0)),
+                    cur: (V::C(0.0), V::C(0.0)),
+                    first,
+                    started: false,
+                    closed: false,
+                });
                 let r = self.block(c.block.as_deref().unwrap_or(&[]), false);
                 let mut pb = self.path.take().expect("path builder");
                 r?;
@@ -862,9 +1001,20 @@ impl<'a> Rec<'a> {
                 }
                 let len = self.prims.len() as u32 - pb.first;
                 if len == 0 {
-                    return Err(c.pos.err("this path draws nothing; start with move(x, y) and add line/quad/cubic"));
+                    return Err(c.pos.err(
+                        "this path draws nothing; start with move(x, y) and add line/quad/cubic",
+                    ));
                 }
-                self.emit(c, Geom::Path { first: pb.first, len, closed }, &named, closed)
+                self.emit(
+                    c,
+                    Geom::Path {
+                        first: pb.first,
+                        len,
+                        closed,
+                    },
+                    &named,
+                    closed,
+                )
             }
             "union" | "intersect" | "difference" => {
                 let (_, named) = self.args(c, 0, &STYLE)?;
@@ -895,7 +1045,12 @@ impl<'a> Rec<'a> {
                         let angle = self.add(t.angle, a[0]);
                         let cos = self.op(&[angle], |o| Op::Cos(o[0]));
                         let sin = self.op(&[angle], |o| Op::Sin(o[0]));
-                        Xf { angle, cos, sin, ..t }
+                        Xf {
+                            angle,
+                            cos,
+                            sin,
+                            ..t
+                        }
                     }
                     _ => {
                         let scale = self.mul(t.scale, a[0]);
@@ -907,7 +1062,9 @@ impl<'a> Rec<'a> {
                 self.xf.pop();
                 match r? {
                     Flow::Normal => Ok(()),
-                    Flow::Return(_, p) => Err(p.err("'return' inside a transform block is not supported")),
+                    Flow::Return(_, p) => {
+                        Err(p.err("'return' inside a transform block is not supported"))
+                    }
                 }
             }
             _ => unreachable!("statement names are listed in is_statement_name"),
@@ -946,7 +1103,10 @@ impl<'a> Rec<'a> {
                 self.push_prim(PrimKind::Segment, &[cur.0, cur.1, pts[0].0, pts[0].1]);
             }
             "quad" => {
-                self.push_prim(PrimKind::Quad, &[cur.0, cur.1, pts[0].0, pts[0].1, pts[1].0, pts[1].1]);
+                self.push_prim(
+                    PrimKind::Quad,
+                    &[cur.0, cur.1, pts[0].0, pts[0].1, pts[1].0, pts[1].1],
+                );
             }
             "cubic" => {
                 // Eight quadratic pieces (see sdf::cubic_piece_weights).
@@ -1022,8 +1182,19 @@ mod tests {
 
     #[test]
     fn branching_on_a_float_parameter_is_an_error_with_position() {
-        let e = rec("param a in [0, 1] = 0.5;\nif a > 0.2 {\n circle(0.5, 0.5, 0.1);\n}").unwrap_err();
-        assert!(matches!(e, Error::Syntax { line: 2, column: 4, .. }), "{e:?}");
+        let e =
+            rec("param a in [0, 1] = 0.5;\nif a > 0.2 {\n circle(0.5, 0.5, 0.1);\n}").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::Syntax {
+                    line: 2,
+                    column: 4,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
         assert!(e.to_string().contains("int param"), "{e}");
         let e = rec("param a in [0, 1] = 0.5;\nfor i in 0..a * 4 { }").unwrap_err();
         assert!(matches!(e, Error::Syntax { line: 2, .. }), "{e:?}");
@@ -1033,22 +1204,38 @@ mod tests {
     fn infinite_loop_and_recursion_hit_limits_with_position() {
         let e = rec("let i = 0;\nfor k in 0..1e12 {\n  i = i + 1;\n}").unwrap_err();
         assert!(matches!(e, Error::Limit(_)), "{e:?}");
-        assert!(e.to_string().contains("line 3") || e.to_string().contains("line 2"), "{e}");
+        assert!(
+            e.to_string().contains("line 3") || e.to_string().contains("line 2"),
+            "{e}"
+        );
         assert!(e.to_string().contains("never end"), "{e}");
         let e = rec("fn f(x) { return f(x + 1); }\nlet y = f(0);").unwrap_err();
-        assert!(e.to_string().contains("line 1, column 18") && e.to_string().contains("deeper"), "{e}");
+        assert!(
+            e.to_string().contains("line 1, column 18") && e.to_string().contains("deeper"),
+            "{e}"
+        );
     }
 
     #[test]
     fn runtime_errors_name_the_problem() {
         let e = rec("circle(0.5, 0.5);").unwrap_err();
-        assert!(e.to_string().contains("'circle' takes 3 numbers, got 2"), "{e}");
+        assert!(
+            e.to_string().contains("'circle' takes 3 numbers, got 2"),
+            "{e}"
+        );
         let e = rec("circle(0.5, 0.5, 0.1, fill: \"#12\");").unwrap_err();
         assert!(e.to_string().contains("not a colour"), "{e}");
         let e = rec("segment(0, 0, 1, 1, fill: \"#fff\");").unwrap_err();
         assert!(e.to_string().contains("no option 'fill'"), "{e}");
         let e = rec("let a = b + 1;").unwrap_err();
-        assert_eq!(e, Error::Syntax { line: 1, column: 9, message: "'b' is not defined".into() });
+        assert_eq!(
+            e,
+            Error::Syntax {
+                line: 1,
+                column: 9,
+                message: "'b' is not defined".into()
+            }
+        );
     }
 
     #[test]
@@ -1061,10 +1248,20 @@ mod tests {
         let mut v = vec![];
         r.tape.forward(&[], &mut v);
         let c = r.prims[0];
-        assert!((v[c.fields[0] as usize] - 0.5).abs() < 1e-12 && (v[c.fields[1] as usize] - 0.7).abs() < 1e-12);
+        assert!(
+            (v[c.fields[0] as usize] - 0.5).abs() < 1e-12
+                && (v[c.fields[1] as usize] - 0.7).abs() < 1e-12
+        );
         assert!((v[c.fields[2] as usize] - 0.1).abs() < 1e-12);
         // quad + 8 cubic pieces + closing segment
-        assert!(matches!(r.shapes[1].geom, Geom::Path { len: 10, closed: true, .. }));
+        assert!(matches!(
+            r.shapes[1].geom,
+            Geom::Path {
+                len: 10,
+                closed: true,
+                ..
+            }
+        ));
         assert!(matches!(&r.shapes[2].geom, Geom::Bool(BoolOp::Difference, ch) if ch.len() == 2));
     }
 }

@@ -12,10 +12,17 @@ pub const MAX_RENDER_SIDE: usize = 4096;
 
 /// Rasterise the scene with `params` (float parameters) at `size × size`,
 /// averaging `supersample²` samples per pixel (1 = crisp palette colours).
-pub fn render(scene: &Scene, params: &[f64], size: usize, supersample: usize) -> Result<Rgba8Image> {
+pub fn render(
+    scene: &Scene,
+    params: &[f64],
+    size: usize,
+    supersample: usize,
+) -> Result<Rgba8Image> {
     let ss = supersample.max(1);
     if size == 0 || size * ss > MAX_RENDER_SIDE {
-        return Err(Error::limit(format!("render size {size}×{ss} samples is outside 1..={MAX_RENDER_SIDE}")));
+        return Err(Error::limit(format!(
+            "render size {size}×{ss} samples is outside 1..={MAX_RENDER_SIDE}"
+        )));
     }
     let idx = super::fit::colour_indices(scene, params, size * ss)?;
     let n = size * ss;
@@ -33,7 +40,16 @@ pub fn render(scene: &Scene, params: &[f64], size: usize, supersample: usize) ->
                 }
             }
             let d = (ss * ss) as u32;
-            img.put(x as u32, y as u32, [((acc[0] + d / 2) / d) as u8, ((acc[1] + d / 2) / d) as u8, ((acc[2] + d / 2) / d) as u8, 255]);
+            img.put(
+                x as u32,
+                y as u32,
+                [
+                    ((acc[0] + d / 2) / d) as u8,
+                    ((acc[1] + d / 2) / d) as u8,
+                    ((acc[2] + d / 2) / d) as u8,
+                    255,
+                ],
+            );
         }
     }
     Ok(img)
@@ -113,7 +129,10 @@ impl SvgOut<'_> {
             }
             Geom::Bool(..) => {
                 let id = self.mask(g);
-                format!("<rect width=\"{0}\" height=\"{0}\" mask=\"url(#{id})\" {style}/>", num(self.k))
+                format!(
+                    "<rect width=\"{0}\" height=\"{0}\" mask=\"url(#{id})\" {style}/>",
+                    num(self.k)
+                )
             }
         }
     }
@@ -131,7 +150,14 @@ impl SvgOut<'_> {
                     let _ = write!(d, " L{} {}", self.p(f(2)), self.p(f(3)));
                 }
                 _ => {
-                    let _ = write!(d, " Q{} {} {} {}", self.p(f(2)), self.p(f(3)), self.p(f(4)), self.p(f(5)));
+                    let _ = write!(
+                        d,
+                        " Q{} {} {} {}",
+                        self.p(f(2)),
+                        self.p(f(3)),
+                        self.p(f(4)),
+                        self.p(f(5))
+                    );
                 }
             }
         }
@@ -194,14 +220,26 @@ pub fn svg(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
     }
     let mut vals = vec![];
     scene.rec.tape.forward(params, &mut vals);
-    let mut out = SvgOut { scene, vals: &vals, k: size, defs: String::new(), masks: 0 };
+    let mut out = SvgOut {
+        scene,
+        vals: &vals,
+        k: size,
+        defs: String::new(),
+        masks: 0,
+    };
     let mut body = String::new();
     let pal = &scene.rec.colours;
     for s in &scene.rec.shapes {
         let w = out.p(vals[s.width as usize].max(0.0));
-        let fill = s.fill.map(|c| format!("fill=\"{}\"", hex(pal[c as usize]))).unwrap_or_else(|| "fill=\"none\"".into());
+        let fill = s
+            .fill
+            .map(|c| format!("fill=\"{}\"", hex(pal[c as usize])))
+            .unwrap_or_else(|| "fill=\"none\"".into());
         let style = match s.stroke {
-            Some(c) if !matches!(s.geom, Geom::Bool(..)) => format!("{fill} stroke=\"{}\" stroke-width=\"{w}\"", hex(pal[c as usize])),
+            Some(c) if !matches!(s.geom, Geom::Bool(..)) => format!(
+                "{fill} stroke=\"{}\" stroke-width=\"{w}\"",
+                hex(pal[c as usize])
+            ),
             _ => fill,
         };
         body += &out.element(&s.geom, &style);
@@ -239,7 +277,10 @@ mod tests {
         assert_eq!(img.get(50, 80), [238, 238, 238, 255]); // hole of the difference
         assert_eq!(img.get(50, 72), [0, 255, 0, 255]);
         let s = svg(&scene, &[0.1], 100.0).unwrap();
-        assert!(s.contains("<circle cx=\"25\" cy=\"25\" r=\"10\" fill=\"#ff0000\"/>"), "{s}");
+        assert!(
+            s.contains("<circle cx=\"25\" cy=\"25\" r=\"10\" fill=\"#ff0000\"/>"),
+            "{s}"
+        );
         assert!(s.contains("mask=\"url(#m0)\""));
         assert!(s.contains(" Q90 60 90 90 L60 90 L60 60 Z"), "{s}");
         assert!(render(&scene, &[0.1], 5000, 1).is_err());

@@ -58,7 +58,10 @@ fn len(x: f64, y: f64) -> f64 {
 #[inline(always)]
 pub fn segment_distance(f: &Fields, p: V2) -> f64 {
     let (t, _) = segment_t(f, p);
-    len(p[0] - (f[0] + t * (f[2] - f[0])), p[1] - (f[1] + t * (f[3] - f[1])))
+    len(
+        p[0] - (f[0] + t * (f[2] - f[0])),
+        p[1] - (f[1] + t * (f[3] - f[1])),
+    )
 }
 
 /// The distance of `p` to the primitive (signed for circles and rectangles).
@@ -69,7 +72,10 @@ pub fn value(kind: PrimKind, f: &Fields, p: V2) -> f64 {
         PrimKind::Circle => len(p[0] - f[0], p[1] - f[1]) - f[2],
         PrimKind::Segment => {
             let (t, _) = segment_t(f, p);
-            len(p[0] - (f[0] + t * (f[2] - f[0])), p[1] - (f[1] + t * (f[3] - f[1])))
+            len(
+                p[0] - (f[0] + t * (f[2] - f[0])),
+                p[1] - (f[1] + t * (f[3] - f[1])),
+            )
         }
         PrimKind::Rect => rect(f, p, None),
         PrimKind::Quad => quad_closest(f, p).1,
@@ -187,7 +193,10 @@ fn rect(f: &Fields, p: V2, out: Option<&mut Fields>) -> f64 {
 /// Point of a quadratic Bézier at `t`.
 pub fn quad_point(f: &Fields, t: f64) -> V2 {
     let u = 1.0 - t;
-    [u * u * f[0] + 2.0 * u * t * f[2] + t * t * f[4], u * u * f[1] + 2.0 * u * t * f[3] + t * t * f[5]]
+    [
+        u * u * f[0] + 2.0 * u * t * f[2] + t * t * f[4],
+        u * u * f[1] + 2.0 * u * t * f[3] + t * t * f[5],
+    ]
 }
 
 /// Closest point on a quadratic Bézier: `(t, distance)`.
@@ -359,7 +368,12 @@ pub fn cubic_piece_weights(ta: f64, tb: f64) -> [[f64; 4]; 3] {
     };
     let dbern = |t: f64| {
         let u = 1.0 - t;
-        [-3.0 * u * u, 3.0 * u * u - 6.0 * u * t, 6.0 * u * t - 3.0 * t * t, 3.0 * t * t]
+        [
+            -3.0 * u * u,
+            3.0 * u * u - 6.0 * u * t,
+            6.0 * u * t - 3.0 * t * t,
+            3.0 * t * t,
+        ]
     };
     let h = (tb - ta) / 3.0;
     let (q0, q3) = (bern(ta), bern(tb));
@@ -410,7 +424,10 @@ mod tests {
             let p = [r.range_f64(-0.5, 1.5), r.range_f64(-0.5, 1.5)];
             let d = value(PrimKind::Quad, &f, p);
             let b = brute(PrimKind::Quad, &f, p);
-            assert!(d <= b + 1e-9 && b - d < 2e-4, "case {case}: quad {d} vs brute {b}");
+            assert!(
+                d <= b + 1e-9 && b - d < 2e-4,
+                "case {case}: quad {d} vs brute {b}"
+            );
             let ds = value(PrimKind::Segment, &f, p);
             let bs = brute(PrimKind::Segment, &f, p);
             assert!((ds - bs).abs() < 2e-4, "segment {ds} vs {bs}");
@@ -421,7 +438,14 @@ mod tests {
     fn rect_matches_brute_force_boundary_distance() {
         let mut r = Rng::new(5);
         for case in 0..100 {
-            let f = [0.5, 0.5, r.range_f64(0.05, 0.3), r.range_f64(0.05, 0.3), r.range_f64(0.0, 0.05), r.range_f64(-3.0, 3.0)];
+            let f = [
+                0.5,
+                0.5,
+                r.range_f64(0.05, 0.3),
+                r.range_f64(0.05, 0.3),
+                r.range_f64(0.0, 0.05),
+                r.range_f64(-3.0, 3.0),
+            ];
             // Boundary samples: straight sides and quarter-circle corners in local coordinates.
             let (hw, hh, rr) = (f[2], f[3], f[4].min(f[2]).min(f[3]));
             let mut pts = vec![];
@@ -444,7 +468,10 @@ mod tests {
                 let (qx, qy) = (lx.abs() - (hw - rr), ly.abs() - (hh - rr));
                 !(qx > 0.0 && qy > 0.0 && len(qx, qy) > rr)
             };
-            let b = pts.iter().map(|q| len(lx - q[0], ly - q[1])).fold(f64::INFINITY, f64::min);
+            let b = pts
+                .iter()
+                .map(|q| len(lx - q[0], ly - q[1]))
+                .fold(f64::INFINITY, f64::min);
             let b = if inside { -b } else { b };
             let d = value(PrimKind::Rect, &f, p);
             assert!((d - b).abs() < 1e-3, "case {case}: rect {d} vs brute {b}");
@@ -454,7 +481,13 @@ mod tests {
     #[test]
     fn field_gradients_match_finite_differences() {
         let mut r = Rng::new(9);
-        for kind in [PrimKind::Point, PrimKind::Segment, PrimKind::Circle, PrimKind::Rect, PrimKind::Quad] {
+        for kind in [
+            PrimKind::Point,
+            PrimKind::Segment,
+            PrimKind::Circle,
+            PrimKind::Rect,
+            PrimKind::Quad,
+        ] {
             for _ in 0..50 {
                 let mut f = [0.0; 6];
                 for v in f.iter_mut() {
@@ -474,7 +507,11 @@ mod tests {
                     a[k] += h;
                     b[k] -= h;
                     let fd = (value(kind, &a, p) - value(kind, &b, p)) / (2.0 * h);
-                    assert!((fd - g[k]).abs() < 1e-4, "{kind:?} field {k}: fd {fd} vs {} at {p:?} {f:?}", g[k]);
+                    assert!(
+                        (fd - g[k]).abs() < 1e-4,
+                        "{kind:?} field {k}: fd {fd} vs {} at {p:?} {f:?}",
+                        g[k]
+                    );
                 }
             }
         }
@@ -489,7 +526,7 @@ mod tests {
         assert_ne!(w([0.5, 0.45]), 0);
         assert_ne!(w([0.5, 0.55]), 0);
         assert_eq!(w([0.5, 0.2]), 0);
-        assert_eq!(w([0.1, 0.5]) , 0);
+        assert_eq!(w([0.1, 0.5]), 0);
         assert_eq!(w([0.9, 0.5]), 0);
     }
 
@@ -499,7 +536,10 @@ mod tests {
         let cubic = |t: f64| {
             let u = 1.0 - t;
             let w = [u * u * u, 3.0 * u * u * t, 3.0 * u * t * t, t * t * t];
-            [(0..4).map(|i| w[i] * c[i][0]).sum::<f64>(), (0..4).map(|i| w[i] * c[i][1]).sum::<f64>()]
+            [
+                (0..4).map(|i| w[i] * c[i][0]).sum::<f64>(),
+                (0..4).map(|i| w[i] * c[i][1]).sum::<f64>(),
+            ]
         };
         let n = 8;
         let mut worst: f64 = 0.0;

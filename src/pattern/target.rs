@@ -63,7 +63,8 @@ fn dt1(f: &[f64], d: &mut [f64], v: &mut [usize], z: &mut [f64]) {
         }
         loop {
             let p = v[k as usize];
-            let s = ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64));
+            let s =
+                ((f[q] + (q * q) as f64) - (f[p] + (p * p) as f64)) / (2.0 * (q as f64 - p as f64));
             if s <= z[k as usize] {
                 k -= 1;
                 if k < 0 {
@@ -106,7 +107,13 @@ pub fn signed_distance(mask: &[bool], w: usize, h: usize, big: f64) -> Vec<f64> 
     let to_out = edt_squared(&outside, w, h);
     mask.iter()
         .enumerate()
-        .map(|(i, &m)| if m { -(to_out[i].sqrt() - 0.5).min(big) } else { (to_in[i].sqrt() - 0.5).min(big) })
+        .map(|(i, &m)| {
+            if m {
+                -(to_out[i].sqrt() - 0.5).min(big)
+            } else {
+                (to_in[i].sqrt() - 0.5).min(big)
+            }
+        })
         .collect()
 }
 
@@ -128,7 +135,12 @@ pub struct Target {
 /// Palette index of every grid pixel: nearest palette colour (RGB distance).
 /// Transparent pixels (alpha < 128) count as background. Returns the indices
 /// and the fraction of pixels farther than `tolerance` from their colour.
-pub fn snap_to_palette(img: &Rgba8Image, palette: &[Rgb], n: usize, tolerance: f64) -> (Vec<u16>, f64) {
+pub fn snap_to_palette(
+    img: &Rgba8Image,
+    palette: &[Rgb],
+    n: usize,
+    tolerance: f64,
+) -> (Vec<u16>, f64) {
     let mut out = Vec::with_capacity(n * n);
     let mut far = 0usize;
     let (w, h) = (img.width as usize, img.height as usize);
@@ -143,7 +155,9 @@ pub fn snap_to_palette(img: &Rgba8Image, palette: &[Rgb], n: usize, tolerance: f
             }
             let mut best = (f64::INFINITY, 0u16);
             for (i, c) in palette.iter().enumerate() {
-                let d: f64 = (0..3).map(|k| (px[k] as f64 - c[k] as f64).powi(2)).sum::<f64>();
+                let d: f64 = (0..3)
+                    .map(|k| (px[k] as f64 - c[k] as f64).powi(2))
+                    .sum::<f64>();
                 if d < best.0 {
                     best = (d, i as u16);
                 }
@@ -171,7 +185,13 @@ impl Target {
             sdf.extend(d.iter().map(|v| v * px_to_units));
             mask.extend(m.iter().map(|&b| if b { 1.0f32 } else { 0.0 }));
         }
-        Target { n, scale, sdf, mask, unmatched: 0.0 }
+        Target {
+            n,
+            scale,
+            sdf,
+            mask,
+            unmatched: 0.0,
+        }
     }
 
     /// Build a target from an image: snap pixels to the program's palette
@@ -180,14 +200,24 @@ impl Target {
     ///
     /// Fails when more than half of the pixels are farther than `tolerance`
     /// (RGB distance, 0..441) from every colour the program uses.
-    pub fn from_image(scene: &Scene, img: &Rgba8Image, n: usize, scale: f64, tolerance: f64) -> Result<Target> {
+    pub fn from_image(
+        scene: &Scene,
+        img: &Rgba8Image,
+        n: usize,
+        scale: f64,
+        tolerance: f64,
+    ) -> Result<Target> {
         if img.width == 0 || img.height == 0 {
             return Err(Error::input("the target image is empty"));
         }
         let (idx, far) = snap_to_palette(img, &scene.rec.colours, n, tolerance);
         if far > 0.5 {
-            let names: Vec<String> =
-                scene.rec.colours.iter().map(|c| format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])).collect();
+            let names: Vec<String> = scene
+                .rec
+                .colours
+                .iter()
+                .map(|c| format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]))
+                .collect();
             return Err(Error::input(format!(
                 "{:.0}% of the target's pixels are not close to any colour of the program ({}); \
                  draw the target in these colours or raise the tolerance (now {tolerance})",
@@ -220,7 +250,8 @@ mod tests {
                     for yy in 0..h {
                         for xx in 0..w {
                             if m[yy * w + xx] {
-                                let d = ((x as f64 - xx as f64).powi(2) + (y as f64 - yy as f64).powi(2)) as f64;
+                                let d =
+                                    (x as f64 - xx as f64).powi(2) + (y as f64 - yy as f64).powi(2);
                                 best = best.min(d);
                             }
                         }

@@ -15,7 +15,10 @@ impl Default for Limits {
     /// 4096 × 4096 per side and at most 16 Mpx: 64 MiB of RGBA, which a
     /// browser tab can hold twice over while a tool works on a copy.
     fn default() -> Self {
-        Limits { max_side: 4096, max_pixels: 4096 * 4096 }
+        Limits {
+            max_side: 4096,
+            max_pixels: 4096 * 4096,
+        }
     }
 }
 
@@ -38,7 +41,11 @@ impl std::fmt::Debug for Rgba8Image {
 impl Rgba8Image {
     /// A fully transparent image.
     pub fn new(width: u32, height: u32) -> Self {
-        Rgba8Image { width, height, data: vec![0; width as usize * height as usize * 4] }
+        Rgba8Image {
+            width,
+            height,
+            data: vec![0; width as usize * height as usize * 4],
+        }
     }
 
     /// Wrap raw RGBA bytes, checking the length.
@@ -50,7 +57,11 @@ impl Rgba8Image {
                 data.len()
             )));
         }
-        Ok(Rgba8Image { width, height, data })
+        Ok(Rgba8Image {
+            width,
+            height,
+            data,
+        })
     }
 
     pub fn pixel_count(&self) -> usize {
@@ -61,7 +72,19 @@ impl Rgba8Image {
     #[inline]
     pub fn get(&self, x: u32, y: u32) -> [u8; 4] {
         let i = (y as usize * self.width as usize + x as usize) * 4;
-        [self.data[i], self.data[i + 1], self.data[i + 2], self.data[i + 3]]
+        [
+            self.data[i],
+            self.data[i + 1],
+            self.data[i + 2],
+            self.data[i + 3],
+        ]
+    }
+
+    /// The pixel at row-major index `i` (= y·width + x) as `[r, g, b, a]`.
+    #[inline]
+    pub fn at(&self, i: usize) -> [u8; 4] {
+        let d = &self.data[4 * i..4 * i + 4];
+        [d[0], d[1], d[2], d[3]]
     }
 
     #[inline]
@@ -104,10 +127,10 @@ impl Rgba8Image {
                         n += 1;
                     }
                 }
-                let px = if a == 0 {
-                    [0, 0, 0, 0]
-                } else {
-                    [(r / a) as u8, (g / a) as u8, (b / a) as u8, (a / n) as u8]
+                // Alpha-weighted mean colour; fully transparent boxes stay transparent.
+                let px = match (r.checked_div(a), g.checked_div(a), b.checked_div(a)) {
+                    (Some(r), Some(g), Some(b)) => [r as u8, g as u8, b as u8, (a / n) as u8],
+                    _ => [0, 0, 0, 0],
                 };
                 out.put(tx, ty, px);
             }
@@ -123,7 +146,9 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
         return Err(Error::input("the file is empty (0 bytes)"));
     }
     let format = image::guess_format(bytes).map_err(|_| {
-        Error::input("this is not an image Filigree can read (expected PNG, JPEG, WebP, GIF or BMP)")
+        Error::input(
+            "this is not an image Filigree can read (expected PNG, JPEG, WebP, GIF or BMP)",
+        )
     })?;
     let name = format_name(format);
     let reader = ImageReader::with_format(Cursor::new(bytes), format);
@@ -132,7 +157,9 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
         .map_err(|e| Error::input(format!("the {name} header could not be read: {e}")))?;
     let (w, h) = decoder.dimensions();
     if w == 0 || h == 0 {
-        return Err(Error::input(format!("the {name} image has no pixels ({w}×{h})")));
+        return Err(Error::input(format!(
+            "the {name} image has no pixels ({w}×{h})"
+        )));
     }
     if w > limits.max_side || h > limits.max_side {
         return Err(Error::limit(format!(
@@ -147,9 +174,8 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
             limits.max_pixels
         )));
     }
-    let img = image::DynamicImage::from_decoder(decoder).map_err(|e| {
-        Error::input(format!("the {name} data is damaged or truncated ({e})"))
-    })?;
+    let img = image::DynamicImage::from_decoder(decoder)
+        .map_err(|e| Error::input(format!("the {name} data is damaged or truncated ({e})")))?;
     let rgba = img.into_rgba8();
     Rgba8Image::from_raw(w, h, rgba.into_raw())
 }
@@ -169,7 +195,12 @@ fn format_name(f: ImageFormat) -> &'static str {
 pub fn encode_png(img: &Rgba8Image) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(&img.data, img.width, img.height, image::ExtendedColorType::Rgba8)
+        .write_image(
+            &img.data,
+            img.width,
+            img.height,
+            image::ExtendedColorType::Rgba8,
+        )
         .map_err(|e| Error::input(format!("could not encode PNG: {e}")))?;
     Ok(out)
 }
@@ -220,10 +251,16 @@ mod tests {
     #[test]
     fn too_large_is_refused_before_decoding() {
         let png = encode_png(&checker(40, 30)).unwrap();
-        let limits = Limits { max_side: 32, max_pixels: 1 << 20 };
+        let limits = Limits {
+            max_side: 32,
+            max_pixels: 1 << 20,
+        };
         let e = decode(&png, limits).unwrap_err();
         assert_eq!(e.to_string(), "40×30 exceeds the 32×32 limit");
-        let limits = Limits { max_side: 64, max_pixels: 1000 };
+        let limits = Limits {
+            max_side: 64,
+            max_pixels: 1000,
+        };
         assert!(matches!(decode(&png, limits), Err(Error::Limit(_))));
     }
 

@@ -16,7 +16,10 @@ pub fn exact_palette(img: &Rgba8Image, min_alpha: u8) -> Vec<PaletteEntry> {
     for p in img.pixels().filter(|p| p[3] > min_alpha) {
         *counts.entry(p).or_insert(0) += 1;
     }
-    let mut v: Vec<PaletteEntry> = counts.into_iter().map(|(rgba, count)| PaletteEntry { rgba, count }).collect();
+    let mut v: Vec<PaletteEntry> = counts
+        .into_iter()
+        .map(|(rgba, count)| PaletteEntry { rgba, count })
+        .collect();
     v.sort_by(|a, b| b.count.cmp(&a.count).then(a.rgba.cmp(&b.rgba)));
     v
 }
@@ -41,13 +44,19 @@ pub fn cluster_palette(exact: &[PaletteEntry], tolerance: f64) -> Vec<Cluster> {
     let tol2 = tolerance * tolerance;
     let mut clusters: Vec<Cluster> = Vec::new();
     for e in exact {
-        let near = clusters.iter_mut().find(|c| rgb_dist2(c.rgba, e.rgba) <= tol2);
+        let near = clusters
+            .iter_mut()
+            .find(|c| rgb_dist2(c.rgba, e.rgba) <= tol2);
         match near {
             Some(c) => {
                 c.count += e.count;
                 c.members += 1;
             }
-            None => clusters.push(Cluster { rgba: e.rgba, count: e.count, members: 1 }),
+            None => clusters.push(Cluster {
+                rgba: e.rgba,
+                count: e.count,
+                members: 1,
+            }),
         }
     }
     clusters.sort_by(|a, b| b.count.cmp(&a.count).then(a.rgba.cmp(&b.rgba)));
@@ -70,24 +79,59 @@ mod tests {
         img.put(2, 0, [0, 0, 255, 255]);
         // (0,1),(1,1),(2,1) stay transparent and are skipped.
         let p = exact_palette(&img, 0);
-        assert_eq!(p, vec![
-            PaletteEntry { rgba: [255, 0, 0, 255], count: 2 },
-            PaletteEntry { rgba: [0, 0, 255, 255], count: 1 },
-        ]);
+        assert_eq!(
+            p,
+            vec![
+                PaletteEntry {
+                    rgba: [255, 0, 0, 255],
+                    count: 2
+                },
+                PaletteEntry {
+                    rgba: [0, 0, 255, 255],
+                    count: 1
+                },
+            ]
+        );
     }
 
     #[test]
     fn clustering_merges_near_colours_only() {
         let exact = vec![
-            PaletteEntry { rgba: [200, 10, 10, 255], count: 50 },
-            PaletteEntry { rgba: [0, 0, 250, 255], count: 30 },
-            PaletteEntry { rgba: [205, 12, 8, 255], count: 5 },
-            PaletteEntry { rgba: [3, 2, 255, 255], count: 2 },
+            PaletteEntry {
+                rgba: [200, 10, 10, 255],
+                count: 50,
+            },
+            PaletteEntry {
+                rgba: [0, 0, 250, 255],
+                count: 30,
+            },
+            PaletteEntry {
+                rgba: [205, 12, 8, 255],
+                count: 5,
+            },
+            PaletteEntry {
+                rgba: [3, 2, 255, 255],
+                count: 2,
+            },
         ];
         let c = cluster_palette(&exact, 10.0);
         assert_eq!(c.len(), 2);
-        assert_eq!(c[0], Cluster { rgba: [200, 10, 10, 255], count: 55, members: 2 });
-        assert_eq!(c[1], Cluster { rgba: [0, 0, 250, 255], count: 32, members: 2 });
+        assert_eq!(
+            c[0],
+            Cluster {
+                rgba: [200, 10, 10, 255],
+                count: 55,
+                members: 2
+            }
+        );
+        assert_eq!(
+            c[1],
+            Cluster {
+                rgba: [0, 0, 250, 255],
+                count: 32,
+                members: 2
+            }
+        );
         assert_eq!(cluster_palette(&exact, 0.0).len(), 4);
     }
 }

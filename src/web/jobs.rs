@@ -3,6 +3,7 @@
 use crate::core::error::Error;
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::inspect::{inspect, InspectOptions};
+use crate::raster::{decode, Limits};
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::JsValue;
 
@@ -29,7 +30,10 @@ where
 {
     fn step(&mut self) -> Result<JsValue, String> {
         match self.job.step().map_err(|e| e.to_string())? {
-            Step::Running(p) => to_js(&Running { done: false, progress: &p }),
+            Step::Running(p) => to_js(&Running {
+                done: false,
+                progress: &p,
+            }),
             Step::Done(out) => {
                 let result = (self.to_js)(out)?;
                 let obj = js_sys::Object::new();
@@ -53,9 +57,11 @@ fn js_err(v: JsValue) -> String {
     v.as_string().unwrap_or_else(|| format!("{v:?}"))
 }
 
-/// Serialise to a plain JS object (maps as objects, bytes as Uint8Array).
+/// Serialise to plain JS objects: structs and maps become objects,
+/// `serde_bytes` fields become `Uint8Array`s (transferred, not copied, to the page).
 pub fn to_js<T: Serialize + ?Sized>(v: &T) -> Result<JsValue, String> {
-    v.serialize(&serde_wasm_bindgen::Serializer::json_compatible()).map_err(|e| e.to_string())
+    v.serialize(&serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true))
+        .map_err(|e| e.to_string())
 }
 
 fn from_js<T: for<'de> Deserialize<'de>>(kind: &str, v: JsValue) -> Result<T, String> {
@@ -67,6 +73,98 @@ struct InspectRequest {
     #[serde(with = "serde_bytes")]
     bytes: Vec<u8>,
     tolerance: Option<f64>,
+}
+
+/// An image as it crosses the boundary undecoded: straight RGBA bytes.
+#[derive(Serialize)]
+pub struct RawImage<'a> {
+    pub width: u32,
+    pub height: u32,
+    #[serde(with = "serde_bytes")]
+    pub rgba: &'a [u8],
+}
+
+impl<'a> RawImage<'a> {
+    pub fn of(img: &'a crate::raster::Rgba8Image) -> Self {
+        RawImage {
+            width: img.width,
+            height: img.height,
+            rgba: &img.data,
+        }
+    }
+}
+
+/// A mask as the browser edits it: one byte per pixel, non-zero = textured.
+#[derive(Deserialize, Serialize)]
+struct MaskBits {
+    width: u32,
+    height: u32,
+    #[serde(with = "serde_bytes")]
+    bits: Vec<u8>,
+}
+
+impl MaskBits {
+    /// The mask as an image that `pixel::inputs::mask_from_image` reads back
+    /// exactly: opaque white inside, transparent outside.
+    fn to_image(&self) -> Result<crate::raster::Rgba8Image, String> {
+        if self.bits.len() != self.width as usize * self.height as usize {
+            return Err(format!(
+                "the mask has {} values but is declared {}×{}",
+                self.bits.len(),
+                self.width,
+                self.height
+            ));
+        }
+        let data = self
+            .bits
+            .iter()
+            .flat_map(|&b| if b != 0 { [255; 4] } else { [0; 4] })
+            .collect();
+        crate::raster::Rgba8Image::from_raw(self.width, self.height, data)
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// Payload of a `"pixel"` request. Images are encoded files (PNG, ...); the
+/// mask is bits (a mask file becomes bits through `"pixel-mask"`); exactly one
+/// of `sheet` and `sprite` is given.
+#[derive(Deserialize)]
+struct PixelRequest {
+    #[serde(with = "serde_bytes")]
+    source: Vec<u8>,
+    mask: MaskBits,
+    #[serde(default, with = "serde_bytes")]
+    sheet: Option<Vec<u8>>,
+    #[serde(default, with = "serde_bytes")]
+    sprite: Option<Vec<u8>>,
+    #[serde(default)]
+    strokes: Vec<crate::pixel::Stroke>,
+    #[serde(default)]
+    params: crate::pixel::PixelParams,
+}
+
+fn decode_named(what: &str, bytes: &[u8]) -> Result<crate::raster::Rgba8Image, String> {
+    crate::raster::decode(bytes, crate::raster::Limits::default())
+        .map_err(|e| format!("{what}: {e}"))
+}
+
+fn pixel_job(req: PixelRequest) -> Result<crate::pixel::PixelJob, String> {
+    use crate::pixel::{Elements, PixelInputs, PixelJob};
+    let elements = match (req.sheet, req.sprite) {
+        (Some(b), None) => Elements::Sheet(decode_named("element sheet", &b)?),
+        (None, Some(b)) => Elements::Sprite(decode_named("element sprite", &b)?),
+        (Some(_), Some(_)) => {
+            return Err("give either an element sheet or a single sprite, not both".into())
+        }
+        (None, None) => return Err("an element sheet (3×3) or a single sprite is needed".into()),
+    };
+    let inputs = PixelInputs {
+        source: decode_named("source image", &req.source)?,
+        mask: req.mask.to_image()?,
+        elements,
+        strokes: req.strokes,
+    };
+    PixelJob::new(inputs, req.params).map_err(|e| e.to_string())
 }
 
 #[derive(Deserialize)]
@@ -91,11 +189,14 @@ impl Job for DebugAbort {
         self.left -= 1;
         // Stay busy for a moment so the job is observably "running".
         let mut x = 0u64;
-        for i in 0..200_000u64 {
+        for i in 0..2_000_000u64 {
             x = x.wrapping_mul(31).wrapping_add(i);
         }
         std::hint::black_box(x);
-        Ok(Step::Running(Progress::new(1.0 - self.left as f64 / self.total as f64, "about to crash")))
+        Ok(Step::Running(Progress::new(
+            1.0 - self.left as f64 / self.total as f64,
+            "about to crash",
+        )))
     }
 }
 
@@ -107,28 +208,93 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
             if let Some(t) = req.tolerance {
                 opts.tolerance = t;
             }
-            Ok(wrap(OneShot::new(move || inspect(&req.bytes, &opts)), |r| {
+            Ok(wrap(
+                OneShot::new(move || inspect(&req.bytes, &opts)),
+                |r| {
+                    #[derive(Serialize)]
+                    struct Out<'a> {
+                        #[serde(flatten)]
+                        info: &'a crate::inspect::Inspection,
+                        thumbnail: RawImage<'a>,
+                    }
+                    let out = Out {
+                        info: &r,
+                        thumbnail: RawImage::of(&r.thumbnail),
+                    };
+                    to_js(&out)
+                },
+            ))
+        }
+        "decode-image" => {
+            let req: InspectRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || decode(&req.bytes, Limits::default())),
+                |img| to_js(&RawImage::of(&img)),
+            ))
+        }
+        "pixel" => {
+            let req: PixelRequest = from_js(kind, payload)?;
+            Ok(wrap(pixel_job(req)?, |out| {
+                /// Result of a `"pixel"` job; `rgba` is a Uint8Array of
+                /// `width*height*4` bytes, `field` an array of `2*width*height`
+                /// numbers (x, y per pixel, row-major, y down).
                 #[derive(Serialize)]
                 struct Out<'a> {
-                    #[serde(flatten)]
-                    info: &'a crate::inspect::Inspection,
-                    thumbnail: Thumb<'a>,
-                }
-                #[derive(Serialize)]
-                struct Thumb<'a> {
                     width: u32,
                     height: u32,
                     #[serde(with = "serde_bytes")]
                     rgba: &'a [u8],
+                    #[serde(with = "serde_bytes")]
+                    colour_map: &'a [u8],
+                    field: Vec<f32>,
+                    positions: &'a [(i32, i32)],
+                    placed: usize,
+                    colours_before: usize,
+                    colours_after: usize,
+                    colour_map_used: &'static str,
+                    stats: &'a crate::pixel::PixelStats,
                 }
-                let t = &r.thumbnail;
-                let out = Out { info: &r, thumbnail: Thumb { width: t.width, height: t.height, rgba: &t.data } };
-                out.serialize(&serde_wasm_bindgen::Serializer::new()).map_err(|e| e.to_string())
+                let field: Vec<f32> = out.field.iter().flat_map(|v| [v[0], v[1]]).collect();
+                let s = &out.stats;
+                let o = Out {
+                    width: out.image.width,
+                    height: out.image.height,
+                    rgba: &out.image.data,
+                    colour_map: &out.colour_map.data,
+                    field,
+                    positions: &out.positions,
+                    placed: s.placed,
+                    colours_before: s.colours_before,
+                    colours_after: s.colours_after,
+                    colour_map_used: s.colour_map_used.name(),
+                    stats: s,
+                };
+                to_js(&o)
             }))
+        }
+        "pixel-mask" => {
+            let req: InspectRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || decode(&req.bytes, Limits::default())),
+                |img| {
+                    let inside = crate::pixel::inputs::mask_from_image(&img);
+                    to_js(&MaskBits {
+                        width: img.width,
+                        height: img.height,
+                        bits: inside.into_iter().map(u8::from).collect(),
+                    })
+                },
+            ))
         }
         "debug-abort" => {
             let req: AbortRequest = from_js(kind, payload)?;
-            Ok(wrap(DebugAbort { left: req.steps, total: req.steps.max(1) }, |()| Ok(JsValue::NULL)))
+            Ok(wrap(
+                DebugAbort {
+                    left: req.steps,
+                    total: req.steps.max(1),
+                },
+                |()| Ok(JsValue::NULL),
+            ))
         }
         other => Err(Error::input(format!("unknown request kind '{other}'")).to_string()),
     }

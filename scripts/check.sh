@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Runs every check CI runs, in the same order, from a fresh clone on a fresh
+# Debian machine with Rust: installs what is missing (Chromium via apt, npm dev
+# dependencies, the wasm target and the matching wasm-bindgen-cli), then
+# fmt, clippy (native and wasm32, -D warnings), cargo tests, the release wasm
+# build, and the browser end-to-end tests in headless Chromium.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+step() { printf '\n== %s\n' "$*"; }
+
+step "installing what is missing"
+if [ ! -x "${CHROMIUM_PATH:-/usr/bin/chromium}" ]; then
+  sudo=""; [ "$(id -u)" = 0 ] || sudo="sudo"
+  $sudo apt-get update
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y chromium
+fi
+if [ ! -d node_modules/playwright-core ]; then
+  # The browser is Debian's; never let a tool download its own.
+  PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund
+fi
+rustup component list --installed | grep -q '^clippy' || rustup component add clippy
+rustup component list --installed | grep -q '^rustfmt' || rustup component add rustfmt
+bash scripts/setup.sh
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "clippy (native, all targets)"
+cargo clippy --all-targets -- -D warnings
+step "clippy (wasm32, web feature)"
+cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --features web -- -D warnings
+
+step "cargo test"
+cargo test
+
+step "release wasm build"
+bash scripts/build.sh
+
+step "browser end-to-end tests (headless Chromium)"
+node --test --test-concurrency=1 tests/e2e/
+
+step "all checks passed"

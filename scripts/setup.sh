@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs what building the app needs, only when missing:
+# the wasm32 target and the wasm-bindgen-cli whose version equals the
+# wasm-bindgen crate in Cargo.lock (they must match exactly).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
+  echo "setup: adding the wasm32-unknown-unknown target"
+  rustup target add wasm32-unknown-unknown
+fi
+
+# The one place that reads the pinned version: Cargo.toml pins wasm-bindgen
+# with "=", Cargo.lock records it, and the CLI must be that same version.
+want=$(awk '/^name = "wasm-bindgen"$/ { getline; gsub(/version = |"/, ""); print; exit }' Cargo.lock)
+have=$(wasm-bindgen --version 2>/dev/null | awk '{print $2}' || true)
+if [ "$have" != "$want" ]; then
+  echo "setup: installing wasm-bindgen-cli $want (found '${have:-none}'); takes a few minutes"
+  cargo install wasm-bindgen-cli --version "=$want"
+fi

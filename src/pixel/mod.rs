@@ -1,0 +1,419 @@
+//! Pixel-art texturing ("Pixel"), after Cunha 2025, *Procedural texturing for
+//! pixel art* (`papers/pixel-art-texturing.txt`). Files follow Section 3:
+//!
+//! - [`inputs`]      — §3 intro: source, mask, 3×3 element sheet or one sprite turned eight ways
+//! - [`position`]    — §3.1 positions: random / packed, margins, density, partial
+//! - [`colour`]      — §3.2 colour maps: HSV shift, colour difference, shared border, auto (d_max)
+//! - [`orientation`] — §3.3 strokes → annotated vectors on a K× upscaled grid, averaged down
+//! - [`laplace`]     — §3.3 ΔI = 0 with annotations fixed (Neumann border, multigrid-preconditioned CG)
+//! - [`placement`]   — §3.4 nearest of eight orientations, per-pixel or region colouring, mask clipping
+//!
+//! The entry point is [`PixelJob`] (a [`Job`] whose steps are the paper's
+//! stages) or [`texture`] to run it at once. Everything random draws from one
+//! seeded [`crate::core::rng::Rng`], so the same inputs and seed give the same
+//! bytes natively and in wasm.
+pub mod colour;
+pub mod inputs;
+pub mod laplace;
+pub mod orientation;
+pub mod placement;
+pub mod position;
+
+pub use colour::{ColourMapKind, ColourStrategy};
+pub use inputs::{Direction8, ElementSheet};
+pub use laplace::SolveStats;
+pub use orientation::Stroke;
+pub use placement::ElementColour;
+pub use position::PositionStrategy;
+
+use crate::core::error::{Error, Result};
+use crate::core::job::{run_quietly, Job, Progress, Step};
+use crate::raster::{exact_palette, Rgba8Image};
+use serde::{Deserialize, Serialize};
+
+/// Largest palette the colour-difference and shared-border maps accept:
+/// their cost grows with the square of the colour count, and pixel art
+/// palettes are small. (HSV shift has no such limit.)
+pub const MAX_PALETTE: usize = 4096;
+
+/// Every setting of the method, as plain data. Missing fields take the
+/// defaults, which follow the thesis (appendix A's most common values and the
+/// reference tool's defaults); unknown fields are an error so a typo is seen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PixelParams {
+    /// Upscale factor K of the annotation grid, `1..=32` (reference tool: 4).
+    pub annotation_scale: u32,
+    /// Position strategy (random).
+    pub positions: PositionStrategy,
+    /// Density ρ in `0..=1` (1 = 100%).
+    pub density: f64,
+    /// Margins `[mx, my]` in pixels, may be negative ([0, 0]).
+    pub margins: [i32; 2],
+    /// Allow elements only partly inside the mask (false).
+    pub partial: bool,
+    /// Colour strategy (auto).
+    pub colour: ColourStrategy,
+    /// HSV displacement: hue in degrees, saturation and value in percentage
+    /// points ([0, 0, -30], the thesis' Fig. 5b).
+    pub hsv: [f64; 3],
+    /// RGB colours never used for elements ([[0, 0, 0]]: black outlines).
+    pub exclude: Vec<[u8; 3]>,
+    /// Maximum CIELAB distance for the automatic choice (50).
+    pub d_max: f64,
+    /// Per-pixel or region colouring (region).
+    pub element_colour: ElementColour,
+    /// Orientation of every element when there are no strokes, and where the
+    /// field averages to zero (down, as in the thesis' Fig. 8c).
+    pub default_direction: Direction8,
+    /// Which way a single sprite (not a sheet) points as drawn (up).
+    pub sprite_direction: Direction8,
+    /// Seed of every random choice.
+    pub seed: u64,
+}
+
+impl Default for PixelParams {
+    fn default() -> Self {
+        PixelParams {
+            annotation_scale: 4,
+            positions: PositionStrategy::Random,
+            density: 1.0,
+            margins: [0, 0],
+            partial: false,
+            colour: ColourStrategy::Auto,
+            hsv: [0.0, 0.0, -30.0],
+            exclude: vec![[0, 0, 0]],
+            d_max: 50.0,
+            element_colour: ElementColour::Region,
+            default_direction: Direction8::Down,
+            sprite_direction: Direction8::Up,
+            seed: 0,
+        }
+    }
+}
+
+/// The element as given by the user.
+#[derive(Debug, Clone)]
+pub enum Elements {
+    /// A 3×3 sheet (see [`ElementSheet::from_sheet`]).
+    Sheet(Rgba8Image),
+    /// One sprite, turned into eight orientations (see [`ElementSheet::from_sprite`]).
+    Sprite(Rgba8Image),
+}
+
+/// The images and strokes of one run.
+#[derive(Debug, Clone)]
+pub struct PixelInputs {
+    /// The pixel art to texture.
+    pub source: Rgba8Image,
+    /// Same size as `source`; see [`inputs::mask_from_image`].
+    pub mask: Rgba8Image,
+    pub elements: Elements,
+    /// Brush strokes in source-pixel coordinates; may be empty.
+    pub strokes: Vec<Stroke>,
+}
+
+/// Figures of a finished run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PixelStats {
+    /// Elements that drew at least one pixel.
+    pub placed: usize,
+    /// Positions chosen (after density).
+    pub positions: usize,
+    /// Distinct colours (alpha > 0) in the source and in the result.
+    pub colours_before: usize,
+    pub colours_after: usize,
+    /// The colour map used (what `auto` resolved to).
+    pub colour_map_used: ColourMapKind,
+    /// Source pixels carrying a stroke vector.
+    pub annotated_pixels: usize,
+    /// The Laplace solve, when there were strokes.
+    pub solve: Option<SolveStats>,
+}
+
+/// Everything a run produces.
+#[derive(Debug, Clone)]
+pub struct PixelOutput {
+    /// The textured image, same size as the source.
+    pub image: Rgba8Image,
+    /// The colour map elements were coloured from.
+    pub colour_map: Rgba8Image,
+    /// The diffused orientation field, one `[x, y]` per pixel, row-major
+    /// (y down). Not normalised; without strokes every entry is the default
+    /// direction's unit vector.
+    pub field: Vec<[f32; 2]>,
+    /// Top-left corners of the placed cells, in placement order.
+    pub positions: Vec<(i32, i32)>,
+    pub stats: PixelStats,
+}
+
+/// The stage a [`PixelJob`] will work on at its next step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Stage {
+    Positions,
+    ColourMap,
+    Orientation,
+    Placement,
+    Done,
+}
+
+impl Stage {
+    /// Name used in progress messages and benchmarks.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Positions => "positions",
+            Stage::ColourMap => "colour map",
+            Stage::Orientation => "orientation solve",
+            Stage::Placement => "placement",
+            Stage::Done => "done",
+        }
+    }
+}
+
+/// Pixel tests per positions step and pixel visits per solver step: each
+/// well under 5 ms on a laptop, and in wasm.
+const POSITION_BUDGET: usize = 1_000_000;
+const SOLVER_BUDGET: usize = 1_000_000;
+
+/// The whole method as a resumable [`Job`]: positions (several steps on big
+/// masks), colour map (one step), orientation (annotation, then solver
+/// iterations over several steps), placement (one step).
+pub struct PixelJob {
+    params: PixelParams,
+    source: Rgba8Image,
+    mask: Vec<bool>,
+    sheet: ElementSheet,
+    strokes: Vec<Stroke>,
+    stage: Stage,
+    sampler: Option<position::PositionSampler>,
+    initial_candidates: usize,
+    positions: Vec<(i32, i32)>,
+    colour_map: Option<colour::ColourMap>,
+    annotated: usize,
+    solver: Option<laplace::LaplaceSolver>,
+    field: Vec<[f32; 2]>,
+    solve: Option<SolveStats>,
+}
+
+impl PixelJob {
+    /// Check every input and parameter; errors say what to change.
+    pub fn new(inputs: PixelInputs, params: PixelParams) -> Result<PixelJob> {
+        let PixelInputs {
+            source,
+            mask,
+            elements,
+            strokes,
+        } = inputs;
+        let mask = inputs::check_source_and_mask(&source, &mask)?;
+        let sheet = match &elements {
+            Elements::Sheet(img) => ElementSheet::from_sheet(img)?,
+            Elements::Sprite(img) => ElementSheet::from_sprite(img, params.sprite_direction)?,
+        };
+        if params.annotation_scale == 0
+            || params.annotation_scale > orientation::MAX_ANNOTATION_SCALE
+        {
+            return Err(Error::input(format!(
+                "annotation scale {} is outside 1..={}",
+                params.annotation_scale,
+                orientation::MAX_ANNOTATION_SCALE
+            )));
+        }
+        orientation::check_strokes(source.width, source.height, &strokes)?;
+        if !params.hsv.iter().all(|v| v.is_finite()) {
+            return Err(Error::input("the HSV shift must be three finite numbers"));
+        }
+        if !(params.d_max.is_finite() && params.d_max >= 0.0) {
+            return Err(Error::input(format!(
+                "d_max {} must be a number ≥ 0",
+                params.d_max
+            )));
+        }
+        if params.colour != ColourStrategy::Hsv {
+            let n = exact_palette(&source, 0).len();
+            if n > MAX_PALETTE {
+                return Err(Error::limit(format!(
+                    "the source has {n} colours; the palette-based colour maps accept at most {MAX_PALETTE} \
+                     (is it pixel art? the HSV shift has no such limit)"
+                )));
+            }
+        }
+        let pp = position::PositionParams {
+            strategy: params.positions,
+            margins: params.margins,
+            density: params.density,
+            partial: params.partial,
+        };
+        let sampler = position::PositionSampler::new(
+            source.width,
+            source.height,
+            &mask,
+            sheet.side,
+            pp,
+            params.seed,
+        )?;
+        let initial_candidates = sampler.remaining();
+        Ok(PixelJob {
+            params,
+            source,
+            mask,
+            sheet,
+            strokes,
+            stage: Stage::Positions,
+            sampler: Some(sampler),
+            initial_candidates,
+            positions: vec![],
+            colour_map: None,
+            annotated: 0,
+            solver: None,
+            field: vec![],
+            solve: None,
+        })
+    }
+
+    /// The stage the next [`Job::step`] works on.
+    pub fn stage(&self) -> Stage {
+        self.stage
+    }
+
+    /// The element sheet in use (eight sprites).
+    pub fn sheet(&self) -> &ElementSheet {
+        &self.sheet
+    }
+
+    fn progress(&self, fraction: f64) -> Step<PixelOutput> {
+        Step::Running(Progress::new(fraction, self.stage.name()))
+    }
+}
+
+impl Job for PixelJob {
+    type Output = PixelOutput;
+
+    fn step(&mut self) -> Result<Step<PixelOutput>> {
+        match self.stage {
+            Stage::Positions => {
+                let s = self
+                    .sampler
+                    .as_mut()
+                    .expect("sampler until positions are done");
+                if s.run(POSITION_BUDGET) {
+                    self.positions = self.sampler.take().expect("present").into_positions();
+                    self.stage = Stage::ColourMap;
+                    return Ok(self.progress(0.25));
+                }
+                let f = s.fraction(self.initial_candidates);
+                Ok(self.progress(0.25 * f))
+            }
+            Stage::ColourMap => {
+                let p = colour::ColourParams {
+                    strategy: self.params.colour,
+                    hsv: self.params.hsv,
+                    exclude: self.params.exclude.clone(),
+                    d_max: self.params.d_max,
+                };
+                self.colour_map = Some(colour::colour_map(&self.source, &self.mask, &p));
+                self.stage = Stage::Orientation;
+                Ok(self.progress(0.35))
+            }
+            Stage::Orientation => {
+                let (w, h) = (self.source.width, self.source.height);
+                match self.solver.as_mut() {
+                    None => {
+                        let a = orientation::annotate(
+                            w,
+                            h,
+                            &self.strokes,
+                            self.params.annotation_scale,
+                        )?;
+                        self.annotated = a.count();
+                        if self.annotated == 0 {
+                            let u = self.params.default_direction.unit();
+                            self.field = vec![[u[0] as f32, u[1] as f32]; (w * h) as usize];
+                            self.stage = Stage::Placement;
+                            return Ok(self.progress(0.9));
+                        }
+                        self.solver = Some(laplace::LaplaceSolver::new(
+                            w as usize, h as usize, a.fixed, a.values,
+                        ));
+                        Ok(self.progress(0.36))
+                    }
+                    Some(solver) => {
+                        if solver.run(SOLVER_BUDGET) {
+                            self.field = solver
+                                .field()
+                                .iter()
+                                .map(|v| [v[0] as f32, v[1] as f32])
+                                .collect();
+                            self.solve = Some(solver.stats());
+                            self.solver = None;
+                            self.stage = Stage::Placement;
+                            return Ok(self.progress(0.9));
+                        }
+                        let f = 0.36 + 0.54 * solver.fraction();
+                        Ok(self.progress(f))
+                    }
+                }
+            }
+            Stage::Placement => {
+                let cm = self.colour_map.take().expect("colour map before placement");
+                let (image, placed) = placement::place(
+                    &self.source,
+                    &self.mask,
+                    &self.sheet,
+                    &self.positions,
+                    &self.field,
+                    &cm.map,
+                    self.params.element_colour,
+                    self.params.default_direction,
+                );
+                self.stage = Stage::Done;
+                let stats = PixelStats {
+                    placed,
+                    positions: self.positions.len(),
+                    colours_before: exact_palette(&self.source, 0).len(),
+                    colours_after: exact_palette(&image, 0).len(),
+                    colour_map_used: cm.kind,
+                    annotated_pixels: self.annotated,
+                    solve: self.solve,
+                };
+                Ok(Step::Done(PixelOutput {
+                    image,
+                    colour_map: cm.map,
+                    field: std::mem::take(&mut self.field),
+                    positions: std::mem::take(&mut self.positions),
+                    stats,
+                }))
+            }
+            Stage::Done => Err(Error::input("this pixel job has already finished")),
+        }
+    }
+}
+
+/// Run the whole method at once (native callers and tests).
+pub fn texture(inputs: PixelInputs, params: PixelParams) -> Result<PixelOutput> {
+    run_quietly(PixelJob::new(inputs, params)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_defaults_and_json_names() {
+        let p: PixelParams = serde_json::from_str("{}").unwrap();
+        assert_eq!(p, PixelParams::default());
+        let p: PixelParams = serde_json::from_str(
+            r#"{"positions":"packed","colour":"border","element_colour":"pixel","default_direction":"up-left","margins":[-1,2]}"#,
+        )
+        .unwrap();
+        assert_eq!(p.positions, PositionStrategy::Packed);
+        assert_eq!(p.colour, ColourStrategy::Border);
+        assert_eq!(p.element_colour, ElementColour::Pixel);
+        assert_eq!(p.default_direction, Direction8::UpLeft);
+        assert_eq!(p.margins, [-1, 2]);
+        let e = serde_json::from_str::<PixelParams>(r#"{"dmax": 3}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("dmax"), "{e}");
+    }
+}

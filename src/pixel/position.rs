@@ -1,0 +1,402 @@
+//! Section 3.1: element positions (random and packed strategies, margins,
+//! density, partial placement).
+//!
+//! A position is the top-left corner of an element's square cell. It is valid
+//! when the cell lies inside the image, none of its pixels is occupied, and it
+//! lies within the original mask (every pixel, or — with `partial` — at least
+//! one). Choosing a position occupies its cell grown by `mx` pixels left and
+//! right and `my` pixels top and bottom (negative margins shrink it, letting
+//! neighbours overlap). Density is drawn *after* validation: a rejected
+//! position still occupies its region, exactly as the paper describes.
+use crate::core::error::{Error, Result};
+use crate::core::rng::Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+
+/// How subsequent positions are chosen after the first (random) one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PositionStrategy {
+    /// Every position is drawn at random among the remaining candidates:
+    /// irregular, natural patterns (bark, fur).
+    #[default]
+    Random,
+    /// The eight neighbouring element positions of each accepted one are tried
+    /// next (a queue); only when it runs dry is a random candidate drawn:
+    /// regular patterns (scales, bricks).
+    Packed,
+}
+
+/// Parameters of [`PositionSampler`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PositionParams {
+    pub strategy: PositionStrategy,
+    /// `(mx, my)`; each must satisfy `side + 2·m ≥ 1` so an accepted element
+    /// always occupies at least one of its own pixels.
+    pub margins: [i32; 2],
+    /// Probability in `0..=1` that a valid position is kept.
+    pub density: f64,
+    /// Accept cells with at least one pixel in the mask instead of all.
+    pub partial: bool,
+}
+
+/// The position search as a resumable object: [`PositionSampler::run`] does a
+/// bounded amount of work, so a huge mask never blocks a browser worker.
+pub struct PositionSampler {
+    w: i32,
+    h: i32,
+    side: i32,
+    p: PositionParams,
+    /// Summed-area table of the original mask, `(w+1)·(h+1)`.
+    sat: Vec<u32>,
+    occupied: Vec<bool>,
+    /// Top-left corners valid against the original mask and still untried.
+    candidates: Vec<(i32, i32)>,
+    queue: VecDeque<(i32, i32)>,
+    rng: Rng,
+    positions: Vec<(i32, i32)>,
+}
+
+impl PositionSampler {
+    /// Prepare the search over a `width`×`height` mask for square elements of
+    /// `side` pixels.
+    pub fn new(
+        width: u32,
+        height: u32,
+        mask: &[bool],
+        side: u32,
+        p: PositionParams,
+        seed: u64,
+    ) -> Result<Self> {
+        let (w, h, s) = (width as i32, height as i32, side as i32);
+        assert_eq!(mask.len(), (w * h) as usize, "mask size");
+        for (i, m) in p.margins.iter().enumerate() {
+            if s + 2 * m < 1 {
+                return Err(Error::input(format!(
+                    "margin {} = {m} is too negative for {side}-pixel elements: it must be at least {} \
+                     so every element still occupies a pixel",
+                    ["mx", "my"][i],
+                    -((s - 1) / 2)
+                )));
+            }
+        }
+        if !(0.0..=1.0).contains(&p.density) {
+            return Err(Error::input(format!(
+                "density {} is outside 0..=1 (0% to 100%)",
+                p.density
+            )));
+        }
+        let stride = (w + 1) as usize;
+        let mut sat = vec![0u32; stride * (h + 1) as usize];
+        for y in 0..h as usize {
+            let mut row = 0u32;
+            for x in 0..w as usize {
+                row += mask[y * w as usize + x] as u32;
+                sat[(y + 1) * stride + x + 1] = sat[y * stride + x + 1] + row;
+            }
+        }
+        let mut me = PositionSampler {
+            w,
+            h,
+            side: s,
+            p,
+            sat,
+            occupied: vec![false; (w * h) as usize],
+            candidates: Vec::new(),
+            queue: VecDeque::new(),
+            rng: Rng::new(seed),
+            positions: Vec::new(),
+        };
+        // Candidates are every corner whose cell passes the mask test on its
+        // own: the paper's "random position within the original mask",
+        // widened so that with `partial` a cell poking into the mask from
+        // outside can be drawn too.
+        for y in 0..=(h - s).max(-1) {
+            for x in 0..=(w - s).max(-1) {
+                if me.in_mask(x, y) {
+                    me.candidates.push((x, y));
+                }
+            }
+        }
+        Ok(me)
+    }
+
+    fn mask_count(&self, x: i32, y: i32) -> u32 {
+        let stride = (self.w + 1) as usize;
+        let (x0, y0, x1, y1) = (
+            x as usize,
+            y as usize,
+            (x + self.side) as usize,
+            (y + self.side) as usize,
+        );
+        self.sat[y1 * stride + x1] + self.sat[y0 * stride + x0]
+            - self.sat[y0 * stride + x1]
+            - self.sat[y1 * stride + x0]
+    }
+
+    /// Whether the cell at (x, y) is inside the image and passes the mask test.
+    fn in_mask(&self, x: i32, y: i32) -> bool {
+        if x < 0 || y < 0 || x + self.side > self.w || y + self.side > self.h {
+            return false;
+        }
+        let n = self.mask_count(x, y);
+        if self.p.partial {
+            n > 0
+        } else {
+            n == (self.side * self.side) as u32
+        }
+    }
+
+    fn free(&self, x: i32, y: i32) -> bool {
+        (y..y + self.side).all(|yy| {
+            let row = (yy * self.w) as usize;
+            !self.occupied[row + x as usize..row + (x + self.side) as usize]
+                .iter()
+                .any(|&o| o)
+        })
+    }
+
+    /// Test one position; on success keep it (with probability ρ), occupy its
+    /// region and, when packing, queue its eight neighbours.
+    fn try_position(&mut self, x: i32, y: i32) {
+        if !self.in_mask(x, y) || !self.free(x, y) {
+            return;
+        }
+        if self.p.density >= 1.0 || self.rng.f64() < self.p.density {
+            self.positions.push((x, y));
+        }
+        let [mx, my] = self.p.margins;
+        let (x0, x1) = ((x - mx).max(0), (x + self.side + mx).min(self.w));
+        let (y0, y1) = ((y - my).max(0), (y + self.side + my).min(self.h));
+        for yy in y0..y1 {
+            let row = (yy * self.w) as usize;
+            self.occupied[row + x0 as usize..row + x1 as usize].fill(true);
+        }
+        if self.p.strategy == PositionStrategy::Packed {
+            // Neighbours sit one element plus one margin away, so a packed
+            // pattern is a regular grid with gaps of exactly (mx, my).
+            let (px, py) = (self.side + mx, self.side + my);
+            for (dx, dy) in [
+                (-1, -1),
+                (0, -1),
+                (1, -1),
+                (-1, 0),
+                (1, 0),
+                (-1, 1),
+                (0, 1),
+                (1, 1),
+            ] {
+                self.queue.push_back((x + dx * px, y + dy * py));
+            }
+        }
+    }
+
+    /// Work until about `budget` pixel tests have been made or the search is
+    /// over. Returns `true` when no suitable position is left.
+    pub fn run(&mut self, budget: usize) -> bool {
+        let cost = (self.side * self.side) as usize + 1;
+        let mut spent = 0usize;
+        while spent < budget {
+            spent += cost;
+            if let Some((x, y)) = self.queue.pop_front() {
+                self.try_position(x, y);
+            } else if !self.candidates.is_empty() {
+                let i = self.rng.below(self.candidates.len());
+                let (x, y) = self.candidates.swap_remove(i);
+                self.try_position(x, y);
+            } else {
+                return true;
+            }
+        }
+        self.queue.is_empty() && self.candidates.is_empty()
+    }
+
+    /// Rough fraction of the search done, for progress reports.
+    pub fn fraction(&self, initial_candidates: usize) -> f64 {
+        1.0 - self.candidates.len() as f64 / initial_candidates.max(1) as f64
+    }
+
+    /// Untried candidates left.
+    pub fn remaining(&self) -> usize {
+        self.candidates.len()
+    }
+
+    /// The positions chosen so far (top-left corners), in the order chosen.
+    pub fn positions(&self) -> &[(i32, i32)] {
+        &self.positions
+    }
+
+    /// Finish and hand over the positions.
+    pub fn into_positions(self) -> Vec<(i32, i32)> {
+        self.positions
+    }
+}
+
+/// Run the whole search at once.
+pub fn find_positions(
+    width: u32,
+    height: u32,
+    mask: &[bool],
+    side: u32,
+    p: PositionParams,
+    seed: u64,
+) -> Result<Vec<(i32, i32)>> {
+    let mut s = PositionSampler::new(width, height, mask, side, p, seed)?;
+    while !s.run(usize::MAX / 2) {}
+    Ok(s.into_positions())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(strategy: PositionStrategy) -> PositionParams {
+        PositionParams {
+            strategy,
+            margins: [0, 0],
+            density: 1.0,
+            partial: false,
+        }
+    }
+
+    /// Lattice points (pitch `p`) through `first` whose cells fit in a `w`×`h` image.
+    fn lattice_count(first: (i32, i32), p: i32, side: i32, w: i32, h: i32) -> usize {
+        let fits = |o: i32, n: i32| {
+            (0..=n - side)
+                .filter(|v| (v - o).rem_euclid(p) == 0)
+                .count()
+        };
+        fits(first.0, w) * fits(first.1, h)
+    }
+
+    #[test]
+    fn packed_fills_the_lattice_of_the_first_position() {
+        // On a full 40×40 mask the leftover strips beside the lattice are
+        // narrower than an element, so every position must lie on the regular
+        // grid through the random first one, and all of that grid must be used.
+        let mask = vec![true; 40 * 40];
+        for seed in 0..10 {
+            let pos =
+                find_positions(40, 40, &mask, 4, params(PositionStrategy::Packed), seed).unwrap();
+            let first = pos[0];
+            for p in &pos {
+                assert_eq!(
+                    ((p.0 - first.0).rem_euclid(4), (p.1 - first.1).rem_euclid(4)),
+                    (0, 0),
+                    "seed {seed}: {p:?}"
+                );
+            }
+            assert_eq!(pos.len(), lattice_count(first, 4, 4, 40, 40), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn margins_space_packed_elements() {
+        let mask = vec![true; 40 * 40];
+        let p = PositionParams {
+            margins: [2, 1],
+            ..params(PositionStrategy::Packed)
+        };
+        let pos = find_positions(40, 40, &mask, 4, p, 3).unwrap();
+        for (i, a) in pos.iter().enumerate() {
+            for b in &pos[i + 1..] {
+                let gap_x = (a.0 - b.0).abs() - 4;
+                let gap_y = (a.1 - b.1).abs() - 4;
+                assert!(gap_x >= 2 || gap_y >= 1, "{a:?} {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn negative_margins_allow_overlap_but_not_duplicates() {
+        let mask = vec![true; 30 * 30];
+        let p = PositionParams {
+            margins: [-1, -1],
+            ..params(PositionStrategy::Random)
+        };
+        let pos = find_positions(30, 30, &mask, 4, p, 9).unwrap();
+        let overlapping = pos.iter().enumerate().any(|(i, a)| {
+            pos[i + 1..]
+                .iter()
+                .any(|b| (a.0 - b.0).abs() < 4 && (a.1 - b.1).abs() < 4)
+        });
+        assert!(overlapping, "margins (-1,-1) should let some cells overlap");
+        for (i, a) in pos.iter().enumerate() {
+            for b in &pos[i + 1..] {
+                // Occupied regions are the inner 2×2 of each cell: they never overlap.
+                assert!(
+                    (a.0 - b.0).abs() >= 2 || (a.1 - b.1).abs() >= 2,
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        let too_neg = PositionParams {
+            margins: [-2, 0],
+            ..p
+        };
+        let e = PositionSampler::new(30, 30, &mask, 4, too_neg, 0)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("mx = -2") && e.contains("at least -1"), "{e}");
+    }
+
+    #[test]
+    fn density_thins_but_keeps_occupancy() {
+        let mask = vec![true; 64 * 64];
+        let full = find_positions(64, 64, &mask, 4, params(PositionStrategy::Packed), 1).unwrap();
+        let half = PositionParams {
+            density: 0.5,
+            ..params(PositionStrategy::Packed)
+        };
+        let some = find_positions(64, 64, &mask, 4, half, 1).unwrap();
+        // Same seed: the same first position, and rejected positions still
+        // occupy their cells, so the kept ones are a subset of the full run's
+        // lattice (about half of it).
+        assert!(full.len() >= 225, "{}", full.len());
+        let n = full.len() as f64;
+        assert!(
+            (some.len() as f64 - n / 2.0).abs() < 4.0 * (n / 4.0).sqrt(),
+            "{} of {n}",
+            some.len()
+        );
+        let first = full[0];
+        assert!(some
+            .iter()
+            .all(|p| (p.0 - first.0) % 4 == 0 && (p.1 - first.1) % 4 == 0));
+    }
+
+    #[test]
+    fn partial_accepts_cells_touching_the_mask() {
+        // One mask pixel: only partial placement can use it, and only cells covering it.
+        let mut mask = vec![false; 10 * 10];
+        mask[5 * 10 + 5] = true;
+        assert!(
+            find_positions(10, 10, &mask, 3, params(PositionStrategy::Random), 0)
+                .unwrap()
+                .is_empty()
+        );
+        let p = PositionParams {
+            partial: true,
+            ..params(PositionStrategy::Random)
+        };
+        let pos = find_positions(10, 10, &mask, 3, p, 0).unwrap();
+        assert_eq!(pos.len(), 1);
+        let (x, y) = pos[0];
+        assert!((3..=5).contains(&x) && (3..=5).contains(&y), "{pos:?}");
+    }
+
+    #[test]
+    fn same_seed_same_positions() {
+        let mask: Vec<bool> = (0..50 * 40)
+            .map(|i| (i % 50) > 3 && (i / 50) < 35)
+            .collect();
+        let p = PositionParams {
+            density: 0.7,
+            ..params(PositionStrategy::Random)
+        };
+        let a = find_positions(50, 40, &mask, 5, p, 42).unwrap();
+        assert_eq!(a, find_positions(50, 40, &mask, 5, p, 42).unwrap());
+        assert_ne!(a, find_positions(50, 40, &mask, 5, p, 43).unwrap());
+    }
+}

@@ -1,0 +1,94 @@
+// Shared set-up for the browser end-to-end tests: our static server on a
+// free port, Debian's Chromium driven by playwright-core, and helpers that
+// act like a person (drop a file on a zone, pick one, wait for text).
+import { chromium } from 'playwright-core';
+import fs from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { start } from '../../scripts/serve.mjs';
+
+export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+export const fixture = (name) => path.join(ROOT, 'tests/fixtures', name);
+
+const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
+const ARGS = [
+  '--headless=new', '--no-sandbox', '--disable-background-networking', '--disable-component-update',
+  '--disable-sync', '--no-first-run', '--disable-quic',
+  '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
+];
+
+/** Start server + browser. Returns {url, browser, server, newPage(), close()}. */
+export async function launch() {
+  const server = await start(0, ROOT);
+  const url = `http://localhost:${server.address().port}/`;
+  const browser = await chromium.launch({ executablePath: CHROMIUM, args: ARGS, headless: true });
+  const contexts = [];
+  const env = {
+    url, browser, server,
+    async newPage({ path: p = '', ...opts } = {}) {
+      const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true, ...opts });
+      contexts.push(context);
+      const page = await context.newPage();
+      page.on('pageerror', (e) => console.error('[page error]', e.message));
+      if (p !== null) {
+        await page.goto(url + p);
+        await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+      }
+      return page;
+    },
+    async close() {
+      for (const c of contexts) await c.close().catch(() => {});
+      await browser.close();
+      await new Promise((r) => server.close(r));
+    },
+  };
+  return env;
+}
+
+/** Drop a file (path or {name, bytes, type}) onto `selector` with real drag events. */
+export async function dropFile(page, selector, file) {
+  const { name, bytes, type } = typeof file === 'string'
+    ? { name: path.basename(file), bytes: fs.readFileSync(file), type: 'image/png' }
+    : file;
+  const dt = await page.evaluateHandle(({ name, b64, type }) => {
+    const bin = atob(b64);
+    const arr = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) arr[i] = bin.charCodeAt(i);
+    const data = new DataTransfer();
+    data.items.add(new File([arr], name, { type }));
+    return data;
+  }, { name, b64: Buffer.from(bytes).toString('base64'), type });
+  await page.dispatchEvent(selector, 'dragenter', { dataTransfer: dt });
+  await page.dispatchEvent(selector, 'dragover', { dataTransfer: dt });
+  await page.dispatchEvent(selector, 'drop', { dataTransfer: dt });
+}
+
+/** A real, valid 1-bit greyscale PNG of the given size (tiny on disk, huge when decoded). */
+export async function bigPng(width, height) {
+  const zlib = await import('node:zlib');
+  const rowBytes = 1 + Math.ceil(width / 8);
+  const raw = Buffer.alloc(rowBytes * height);
+  const crcTable = Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c >>> 0;
+  });
+  const crc = (buf) => {
+    let c = 0xffffffff;
+    for (const b of buf) c = crcTable[(c ^ b) & 0xff] ^ (c >>> 8);
+    return (c ^ 0xffffffff) >>> 0;
+  };
+  const chunk = (type, data) => {
+    const len = Buffer.alloc(4); len.writeUInt32BE(data.length);
+    const td = Buffer.concat([Buffer.from(type), data]);
+    const c = Buffer.alloc(4); c.writeUInt32BE(crc(td));
+    return Buffer.concat([len, td, c]);
+  };
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0); ihdr.writeUInt32BE(height, 4);
+  ihdr[8] = 1; ihdr[9] = 0;
+  return Buffer.concat([
+    Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]),
+    chunk('IHDR', ihdr), chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0)),
+  ]);
+}

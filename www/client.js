@@ -1,0 +1,152 @@
+// Main-thread side of the worker protocol: a pool of module workers, each
+// with its own single-threaded wasm instance (no SharedArrayBuffer, so the
+// app embeds anywhere). Workers start lazily and are replaced when they crash.
+//
+//   const result = await pool.run('inspect', {bytes}, {onProgress, signal});
+import { MSG, JobError, transferables } from './protocol.js';
+
+const WORKER_URL = new URL('./worker.js', import.meta.url);
+// After a cancel, a job has this long to stop at a slice boundary before
+// its worker is terminated (the hard stop).
+const HARD_STOP_MS = 1000;
+
+class Slot {
+  constructor(pool, index) {
+    this.pool = pool;
+    this.index = index;
+    this.worker = null;
+    this.job = null; // {id, resolve, reject, onProgress, hardStop}
+    this.version = null;
+  }
+
+  ensureWorker() {
+    if (this.worker) return;
+    const w = new Worker(WORKER_URL, { type: 'module', name: `filigree-${this.index}` });
+    w.onmessage = (e) => this.onMessage(e.data);
+    w.onerror = (e) => {
+      e.preventDefault?.();
+      this.crash(`the worker stopped: ${e.message || 'failed to load'}`);
+    };
+    w.onmessageerror = () => this.crash('a message from the worker could not be read');
+    this.worker = w;
+  }
+
+  onMessage(msg) {
+    if (msg.type === MSG.READY) {
+      this.version = msg.version;
+      this.pool.onReady?.(msg.version);
+      return;
+    }
+    const job = this.job;
+    if (!job || msg.id !== job.id) return;
+    if (msg.type === MSG.PROGRESS) job.onProgress?.(msg.progress);
+    else if (msg.type === MSG.RESULT) this.finish(() => job.resolve(msg.result));
+    else if (msg.type === MSG.ERROR) this.finish(() => job.reject(new JobError(msg.error.message, msg.error.kind)));
+    else if (msg.type === MSG.PANIC) this.crash(msg.message);
+  }
+
+  finish(settle) {
+    clearTimeout(this.job?.hardStop);
+    this.job?.cleanup?.();
+    this.job = null;
+    settle();
+    this.pool.dispatch();
+  }
+
+  // Terminate and forget the worker; the next job on this slot starts a fresh one.
+  crash(message) {
+    this.worker?.terminate();
+    this.worker = null;
+    const job = this.job;
+    if (job) this.finish(() => job.reject(new JobError(`${message}. The worker was restarted; try again.`, 'crash')));
+    this.pool.onCrash?.(message);
+  }
+
+  start(req) {
+    this.ensureWorker();
+    this.job = req;
+    const { id, kind, payload } = req;
+    this.worker.postMessage({ type: MSG.RUN, id, kind, payload }, req.transfer ?? transferables(payload));
+  }
+
+  cancel() {
+    const job = this.job;
+    if (!job) return;
+    this.worker.postMessage({ type: MSG.CANCEL, id: job.id });
+    job.hardStop = setTimeout(() => {
+      if (this.job !== job) return;
+      this.worker.terminate();
+      this.worker = null;
+      this.finish(() => job.reject(new JobError('cancelled (the worker was stopped)', 'cancelled')));
+    }, HARD_STOP_MS);
+  }
+}
+
+export class WorkerPool {
+  /** `size` workers at most; `onCrash(message)` and `onReady(version)` are optional hooks. */
+  constructor({ size = defaultSize(), onCrash, onReady } = {}) {
+    this.slots = Array.from({ length: size }, (_, i) => new Slot(this, i));
+    this.queue = [];
+    this.nextId = 1;
+    this.onCrash = onCrash;
+    this.onReady = onReady;
+  }
+
+  /** Start the first worker now so the wasm downloads while the user looks around. */
+  warm() {
+    this.slots[0].ensureWorker();
+  }
+
+  /**
+   * Run a job. Resolves with its result or rejects with a JobError
+   * (kind 'cancelled' when `signal` aborts it).
+   * @param {string} kind @param {object} payload
+   * @param {{onProgress?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[]}} [opts]
+   */
+  run(kind, payload, { onProgress, signal, transfer } = {}) {
+    return new Promise((resolve, reject) => {
+      if (signal?.aborted) {
+        reject(new JobError('cancelled', 'cancelled'));
+        return;
+      }
+      const req = { id: this.nextId++, kind, payload, transfer, onProgress, resolve, reject };
+      if (signal) {
+        const onAbort = () => this.abort(req);
+        signal.addEventListener('abort', onAbort, { once: true });
+        req.cleanup = () => signal.removeEventListener('abort', onAbort);
+      }
+      this.queue.push(req);
+      this.dispatch();
+    });
+  }
+
+  abort(req) {
+    const queued = this.queue.indexOf(req);
+    if (queued >= 0) {
+      this.queue.splice(queued, 1);
+      req.cleanup?.();
+      req.reject(new JobError('cancelled', 'cancelled'));
+      return;
+    }
+    this.slots.find((s) => s.job === req)?.cancel();
+  }
+
+  dispatch() {
+    for (const slot of this.slots) {
+      if (!this.queue.length) return;
+      if (!slot.job) slot.start(this.queue.shift());
+    }
+  }
+
+  /** Jobs running or waiting. */
+  get pending() {
+    return this.queue.length + this.slots.filter((s) => s.job).length;
+  }
+}
+
+function defaultSize() {
+  // Each worker holds its own wasm instance; one per core, two at least so a
+  // long job never starves a quick one, four at most to bound memory.
+  const cores = navigator.hardwareConcurrency || 2;
+  return Math.max(2, Math.min(4, cores));
+}
