@@ -188,7 +188,8 @@ enum Phase {
     Finished,
 }
 
-/// A fit, stepped in slices. Progress figure = best loss so far.
+/// A fit, stepped in slices. Progress: `figure` = best loss so far,
+/// `values` = the best float parameters so far (declaration order).
 pub struct FitJob {
     obj: Objective,
     opts: FitOptions,
@@ -339,7 +340,9 @@ impl FitJob {
         };
         let p = Progress::new(self.done as f64 / self.planned as f64, stage);
         if self.best.loss.is_finite() {
+            // The best float parameters so far, so a view can draw them live.
             p.with_figure(self.best.loss)
+                .with_values(self.denormalise(&self.best.u))
         } else {
             p
         }

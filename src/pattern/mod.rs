@@ -1,6 +1,7 @@
 //! Fit: parameters of procedural vector patterns from a target image
 //! (Riso, Sforza & Pellacini, "pOp: Parameter Optimization of
 //! Differentiable Vector Patterns", EGSR 2022).
+pub mod api;
 pub mod field;
 pub mod fit;
 pub mod generators;
