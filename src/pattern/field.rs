@@ -207,29 +207,55 @@ impl Scene {
                 }
             }
             Geom::Path { first, len, closed } => {
-                let mut best = Hit {
-                    d: f64::INFINITY,
-                    prim: *first,
-                    sign: 1.0,
-                };
+                // Squared distances, one square root per path; segments inline.
+                let (mut best_d2, mut best_i) = (f64::INFINITY, *first);
                 let mut w = 0;
                 for i in *first..first + len {
                     let k = self.rec.prims[i as usize].kind;
                     let f = &pv[i as usize];
-                    let d = sdf::value(k, f, p);
-                    if d < best.d {
-                        best.d = d;
-                        best.prim = i;
-                    }
-                    if *closed {
-                        w += sdf::winding(k, f, p);
+                    let d2 = if k == PrimKind::Segment {
+                        let (ex, ey) = (f[2] - f[0], f[3] - f[1]);
+                        let (wx, wy) = (p[0] - f[0], p[1] - f[1]);
+                        let l2 = ex * ex + ey * ey;
+                        let t = if l2 > 0.0 {
+                            ((wx * ex + wy * ey) / l2).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        };
+                        let (bx, by) = (wx - ex * t, wy - ey * t);
+                        if *closed && ((f[1] <= p[1]) != (f[3] <= p[1])) {
+                            let x = f[0] + (p[1] - f[1]) / (f[3] - f[1]) * ex;
+                            if x > p[0] {
+                                w += if f[3] > f[1] { 1 } else { -1 };
+                            }
+                        }
+                        bx * bx + by * by
+                    } else {
+                        if *closed {
+                            w += sdf::winding(k, f, p);
+                        }
+                        let d = sdf::value(k, f, p);
+                        d * d
+                    };
+                    if d2 < best_d2 {
+                        best_d2 = d2;
+                        best_i = i;
                     }
                 }
+                let d = best_d2.sqrt();
                 if w != 0 {
-                    best.d = -best.d;
-                    best.sign = -1.0;
+                    Hit {
+                        d: -d,
+                        prim: best_i,
+                        sign: -1.0,
+                    }
+                } else {
+                    Hit {
+                        d,
+                        prim: best_i,
+                        sign: 1.0,
+                    }
                 }
-                best
             }
             Geom::Bool(op, ch) => {
                 let mut best = self.geom(&ch[0], pv, p);
@@ -262,7 +288,14 @@ impl Scene {
 
     /// Item value and the hit that decided it (before the channel's op sign).
     #[inline(always)]
-    fn item_hit(&self, it: &Item, pv: &[Fields], widths: &[f64], p: [f64; 2]) -> (f64, Hit) {
+    fn item_hit(
+        &self,
+        it: &Item,
+        pv: &[Fields],
+        widths: &[f64],
+        p: [f64; 2],
+        cache: &mut GeomCache,
+    ) -> (f64, Hit) {
         let h = if it.prim != NONE {
             let f = &pv[it.prim as usize];
             let d = match it.kind {
@@ -281,7 +314,15 @@ impl Scene {
                 sign: 1.0,
             }
         } else {
-            self.geom(&self.rec.shapes[it.shape as usize].geom, pv, p)
+            // Fill and stroke of one shape share the geometry: compute it once per point.
+            let slot = &mut cache.slots[it.shape as usize];
+            if slot.0 == cache.stamp {
+                slot.1
+            } else {
+                let h = self.geom(&self.rec.shapes[it.shape as usize].geom, pv, p);
+                cache.slots[it.shape as usize] = (cache.stamp, h);
+                h
+            }
         };
         let w = widths[it.shape as usize];
         let v = match it.part {
@@ -322,7 +363,9 @@ impl Scene {
     /// Item value with its winner record (used by tests).
     #[cfg(test)]
     fn item(&self, it: &Item, pv: &[Fields], widths: &[f64], p: [f64; 2]) -> (f64, Win) {
-        let (v, h) = self.item_hit(it, pv, widths, p);
+        let mut cache = GeomCache::default();
+        cache.start(self.rec.shapes.len());
+        let (v, h) = self.item_hit(it, pv, widths, p, &mut cache);
         (v, self.win_of(it, &h))
     }
 }
@@ -351,6 +394,37 @@ pub struct Evaluator {
     chain2: Vec<(CombineOp, u32)>,
     ranges1: Vec<(usize, usize)>,
     ranges2: Vec<(usize, usize)>,
+    gcache: GeomCache,
+}
+
+/// Per-point memo of shape geometries (fill and stroke items share one).
+#[derive(Debug, Clone, Default)]
+struct GeomCache {
+    stamp: u32,
+    slots: Vec<(u32, Hit)>,
+}
+
+impl GeomCache {
+    fn start(&mut self, shapes: usize) {
+        self.slots.clear();
+        self.slots.resize(
+            shapes,
+            (
+                u32::MAX,
+                Hit {
+                    d: 0.0,
+                    prim: NONE,
+                    sign: 1.0,
+                },
+            ),
+        );
+        self.stamp = 0;
+    }
+    /// A new point: all memos become stale.
+    #[inline]
+    fn next(&mut self) {
+        self.stamp += 1;
+    }
 }
 
 impl Evaluator {
@@ -372,6 +446,7 @@ impl Evaluator {
             chain2: vec![],
             ranges1: vec![],
             ranges2: vec![],
+            gcache: GeomCache::default(),
         }
     }
 
@@ -397,6 +472,7 @@ impl Evaluator {
     /// Evaluate every channel's field from the tape's node values.
     pub fn eval(&mut self, scene: &Scene, nodes: &[f64], winners: bool) {
         self.gather(scene, nodes);
+        self.gcache.start(scene.rec.shapes.len());
         let n = self.n;
         let nc = scene.channels.len();
         self.s.resize(nc * n * n, 0.0);
@@ -418,8 +494,11 @@ impl Evaluator {
             for tx in 0..n.div_ceil(T1) {
                 let (x0, y0) = (tx * T1, ty * T1);
                 let pc = [(x0 + T1 / 2) as f64 * inv, (y0 + T1 / 2) as f64 * inv];
+                self.gcache.next();
                 for (i, it) in scene.items.iter().enumerate() {
-                    self.centre_vals[i] = scene.item_hit(it, &self.prim_vals, &self.widths, pc).0;
+                    self.centre_vals[i] = scene
+                        .item_hit(it, &self.prim_vals, &self.widths, pc, &mut self.gcache)
+                        .0;
                 }
                 work += scene.items.len() as u64;
                 // Level 1: cull each channel's full chain for the big tile.
@@ -449,14 +528,11 @@ impl Evaluator {
                 for sy in (y0..(y0 + T1).min(n)).step_by(T2) {
                     for sx in (x0..(x0 + T1).min(n)).step_by(T2) {
                         let pc = [(sx + T2 / 2) as f64 * inv, (sy + T2 / 2) as f64 * inv];
+                        self.gcache.next();
                         for &it in &used {
+                            let it_ = &scene.items[it as usize];
                             self.centre_vals[it as usize] = scene
-                                .item_hit(
-                                    &scene.items[it as usize],
-                                    &self.prim_vals,
-                                    &self.widths,
-                                    pc,
-                                )
+                                .item_hit(it_, &self.prim_vals, &self.widths, pc, &mut self.gcache)
                                 .0;
                         }
                         work += used.len() as u64;
@@ -478,6 +554,7 @@ impl Evaluator {
                         for y in sy..(sy + T2).min(n) {
                             for x in sx..(sx + T2).min(n) {
                                 let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                                self.gcache.next();
                                 for (c, ch) in scene.channels.iter().enumerate() {
                                     let (a, b) = self.ranges2[c];
                                     let ops = &chain2[a..b];
@@ -527,8 +604,13 @@ impl Evaluator {
             );
             while i < ops.len() && ops[i].0 == op {
                 let it = ops[i].1;
-                let (v, h) =
-                    scene.item_hit(&scene.items[it as usize], &self.prim_vals, &self.widths, p);
+                let (v, h) = scene.item_hit(
+                    &scene.items[it as usize],
+                    &self.prim_vals,
+                    &self.widths,
+                    p,
+                    &mut self.gcache,
+                );
                 if v < best {
                     best = v;
                     bw = (it, h);
