@@ -286,6 +286,20 @@ impl Scene {
         }
     }
 
+    /// Geometry of a compound shape (path, boolean) at `p`, memoised per
+    /// point: a shape's fill and stroke items share it. Out of line so the
+    /// single-primitive fast path stays small.
+    #[inline(never)]
+    fn geom_cached(&self, shape: u32, pv: &[Fields], p: [f64; 2], cache: &mut GeomCache) -> Hit {
+        let slot = &mut cache.slots[shape as usize];
+        if slot.0 == cache.stamp {
+            return slot.1;
+        }
+        let h = self.geom(&self.rec.shapes[shape as usize].geom, pv, p);
+        cache.slots[shape as usize] = (cache.stamp, h);
+        h
+    }
+
     /// Item value and the hit that decided it (before the channel's op sign).
     #[inline(always)]
     fn item_hit(
@@ -314,15 +328,7 @@ impl Scene {
                 sign: 1.0,
             }
         } else {
-            // Fill and stroke of one shape share the geometry: compute it once per point.
-            let slot = &mut cache.slots[it.shape as usize];
-            if slot.0 == cache.stamp {
-                slot.1
-            } else {
-                let h = self.geom(&self.rec.shapes[it.shape as usize].geom, pv, p);
-                cache.slots[it.shape as usize] = (cache.stamp, h);
-                h
-            }
+            self.geom_cached(it.shape, pv, p, cache)
         };
         let w = widths[it.shape as usize];
         let v = match it.part {
