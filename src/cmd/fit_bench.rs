@@ -116,11 +116,18 @@ pub fn run(
                 let ri = run_quietly(FitJob::refine_from(c.scene.clone(), t, io, &r.start_points))
                     .map_err(|e| e.to_string())?;
                 let img_secs = t1.elapsed().as_secs_f64();
+                // Image-space L2 end to end (its own GA too): the paper's Fig. 3 setting.
+                let t2 = Instant::now();
+                let tgt = target(&c, &io.loss)?;
+                let rs = run_quietly(FitJob::from_parts(c.scene.clone(), tgt, io))
+                    .map_err(|e| e.to_string())?;
+                let scratch_secs = t2.elapsed().as_secs_f64();
                 let row = json!({
                     "generator": g.name, "paper_row": g.paper, "seed": seed,
                     "params": c.truth.len(), "shapes": c.scene.shape_count(), "truth": c.truth,
                     "sdf": report(&c, &r, sdf_secs),
                     "image_same_init": report(&c, &ri, img_secs),
+                    "image_from_scratch": report(&c, &rs, scratch_secs),
                 });
                 eprintln!("{row}");
                 fits.push(row);

@@ -65,6 +65,8 @@ struct Item {
     /// The primitive when the geometry is a single one (fast path), else `NONE`.
     prim: u32,
     kind: PrimKind,
+    /// A filled circle without stroke: eligible for the 4-lane kernel.
+    plain_circle: bool,
 }
 
 /// One colour's operation list.
@@ -136,6 +138,7 @@ impl Scene {
                     inset: false,
                     prim,
                     kind,
+                    plain_circle: false,
                 });
             }
             if s.fill.is_some() {
@@ -146,6 +149,7 @@ impl Scene {
                     inset: s.stroke.is_some(),
                     prim,
                     kind,
+                    plain_circle: s.stroke.is_none() && prim != NONE && kind == PrimKind::Circle,
                 });
             }
         }
@@ -401,6 +405,7 @@ pub struct Evaluator {
     ranges1: Vec<(usize, usize)>,
     ranges2: Vec<(usize, usize)>,
     gcache: GeomCache,
+    lane_channels: Vec<bool>,
 }
 
 /// Per-point memo of shape geometries (fill and stroke items share one).
@@ -453,6 +458,7 @@ impl Evaluator {
             ranges1: vec![],
             ranges2: vec![],
             gcache: GeomCache::default(),
+            lane_channels: vec![],
         }
     }
 
@@ -557,11 +563,37 @@ impl Evaluator {
                             );
                             self.ranges2.push((start, chain2.len()));
                         }
-                        for y in sy..(sy + T2).min(n) {
-                            for x in sx..(sx + T2).min(n) {
+                        let (xe, ye) = ((sx + T2).min(n), (sy + T2).min(n));
+                        // Chains of plain filled circles only: a 4-lane kernel.
+                        self.lane_channels.clear();
+                        for (c, ch) in scene.channels.iter().enumerate() {
+                            let (a, b) = self.ranges2[c];
+                            let ops = &chain2[a..b];
+                            let fast = ops
+                                .iter()
+                                .all(|&(_, it)| scene.items[it as usize].plain_circle);
+                            self.lane_channels.push(fast);
+                            if fast {
+                                work += (ops.len() * (xe - sx) * (ye - sy)) as u64;
+                                self.circle_lanes(
+                                    scene,
+                                    ch.init,
+                                    ops,
+                                    c,
+                                    (sx, xe),
+                                    (sy, ye),
+                                    winners,
+                                );
+                            }
+                        }
+                        for y in sy..ye {
+                            for x in sx..xe {
                                 let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
                                 self.gcache.next();
                                 for (c, ch) in scene.channels.iter().enumerate() {
+                                    if self.lane_channels[c] {
+                                        continue;
+                                    }
                                     let (a, b) = self.ranges2[c];
                                     let ops = &chain2[a..b];
                                     work += ops.len() as u64;
@@ -578,6 +610,96 @@ impl Evaluator {
         self.chain2 = chain2;
         self.used = used;
         self.work = work;
+    }
+
+    /// [`Evaluator::pixel`] for a chain of plain filled circles (no stroke,
+    /// no inset) over a block of at most 4 pixels per row: four independent
+    /// lanes, so the square roots overlap (and vectorise).
+    #[allow(clippy::too_many_arguments)]
+    fn circle_lanes(
+        &mut self,
+        scene: &Scene,
+        init: f64,
+        ops: &[(CombineOp, u32)],
+        c: usize,
+        (x0, x1): (usize, usize),
+        (y0, y1): (usize, usize),
+        winners: bool,
+    ) {
+        let n = self.n;
+        let inv = 1.0 / n as f64;
+        let cap = CAP;
+        let mut px = [0.0; 4];
+        for (k, v) in px.iter_mut().enumerate() {
+            *v = ((x0 + k).min(x1 - 1) as f64 + 0.5) * inv;
+        }
+        for y in y0..y1 {
+            let py = (y as f64 + 0.5) * inv;
+            let mut b = [init * cap; 4];
+            let mut wi = [NONE; 4];
+            let mut flip = [false; 4];
+            let mut i = 0;
+            while i < ops.len() {
+                let op = ops[i].0;
+                let mut best = [f64::INFINITY; 4];
+                let mut bi = [NONE; 4];
+                while i < ops.len() && ops[i].0 == op {
+                    let it = ops[i].1;
+                    let f = &self.prim_vals[scene.items[it as usize].prim as usize];
+                    let dy = py - f[1];
+                    for k in 0..4 {
+                        let dx = px[k] - f[0];
+                        let v = (dx * dx + dy * dy).sqrt() - f[2];
+                        if v < best[k] {
+                            best[k] = v;
+                            bi[k] = it;
+                        }
+                    }
+                    i += 1;
+                }
+                for k in 0..4 {
+                    match op {
+                        CombineOp::Union => {
+                            if best[k] < b[k] {
+                                b[k] = best[k];
+                                wi[k] = bi[k];
+                                flip[k] = false;
+                            }
+                        }
+                        CombineOp::Diff => {
+                            if -best[k] > b[k] {
+                                b[k] = -best[k];
+                                wi[k] = bi[k];
+                                flip[k] = true;
+                            }
+                        }
+                    }
+                }
+            }
+            for k in 0..x1 - x0 {
+                let idx = c * n * n + y * n + x0 + k;
+                let mut v = b[k];
+                let mut w = wi[k];
+                if v.abs() >= cap {
+                    v = v.clamp(-cap, cap);
+                    w = NONE;
+                }
+                self.s[idx] = v * self.scale;
+                if winners {
+                    self.win[idx] = if w == NONE {
+                        NO_WIN
+                    } else {
+                        let item = &scene.items[w as usize];
+                        Win {
+                            prim: item.prim,
+                            wnode: scene.rec.shapes[item.shape as usize].width,
+                            psign: if flip[k] { -1.0 } else { 1.0 },
+                            wcoef: 0.0,
+                        }
+                    };
+                }
+            }
+        }
     }
 
     /// Apply a culled chain at one pixel; consecutive same-kind operations
@@ -877,14 +999,23 @@ mod tests {
     /// that applies every operation at every pixel.
     #[test]
     fn culled_fields_equal_brute_force() {
-        let sc = scene(
-            "for i in 0..6 { for j in 0..6 { circle(0.1 + i * 0.16, 0.1 + j * 0.16, 0.05, fill: \"#112233\"); } }\n\
+        // Plain filled circles in two colours drawn over each other: the
+        // 4-lane circle kernel, with unions and differences.
+        check_brute_force(
+            "for i in 0..7 { for j in 0..7 { circle(0.05 + i * 0.15, 0.07 + j * 0.14, 0.06, fill: \"#aa0000\"); } }\n\
+             for k in 0..9 { circle(0.1 + k * 0.1, 0.5 + 0.3 * sin(k), 0.08, fill: \"#0000aa\"); }",
+            61,
+        );
+        check_brute_force(SCENE, 61);
+    }
+
+    const SCENE: &str = "for i in 0..6 { for j in 0..6 { circle(0.1 + i * 0.16, 0.1 + j * 0.16, 0.05, fill: \"#112233\"); } }\n\
              for k in 0..5 { segment(0, k * 0.2 + 0.05, 1, k * 0.2 + 0.1, stroke: \"#aa0000\", width: 0.02); }\n\
              path(fill: \"#00aa00\", stroke: \"#112233\", width: 0.01) { move(0.2, 0.2); quad(0.5, 0.0, 0.8, 0.2); line(0.5, 0.8); close(); }\n\
-             difference(fill: \"#ffffff\") { rect(0.7, 0.7, 0.2, 0.2, radius: 0.03, rotation: 0.3); circle(0.7, 0.7, 0.05); }",
-        );
-        // 61 is not a multiple of either tile size: partial tiles are covered too.
-        let n = 61;
+             difference(fill: \"#ffffff\") { rect(0.7, 0.7, 0.2, 0.2, radius: 0.03, rotation: 0.3); circle(0.7, 0.7, 0.05); }";
+
+    fn check_brute_force(src: &str, n: usize) {
+        let sc = scene(src);
         let e = fields(&sc, n);
         let mut nodes = vec![];
         sc.rec.tape.forward(&sc.rec.float_values(), &mut nodes);
@@ -906,6 +1037,20 @@ mod tests {
                     }
                     let want = b.clamp(-CAP, CAP);
                     let got = e.s[c * n * n + y * n + x];
+                    // The winner record explains the value exactly.
+                    let w = e.win[c * n * n + y * n + x];
+                    if w.prim != NONE {
+                        let prim = &sc.rec.prims[w.prim as usize];
+                        let pv = sdf::value(prim.kind, &g.prim_vals[w.prim as usize], p);
+                        let implied =
+                            w.psign as f64 * pv + w.wcoef as f64 * nodes[w.wnode as usize].max(0.0);
+                        assert!(
+                            (implied - got).abs() < 1e-9,
+                            "winner at ({x},{y}) implies {implied}, value {got}"
+                        );
+                    } else {
+                        assert_eq!(got.abs(), CAP);
+                    }
                     assert!(
                         (got - want).abs() < 1e-12,
                         "channel {c} pixel ({x},{y}): {got} vs {want}"
