@@ -176,11 +176,23 @@ pub fn loss(
     let mut total = 0.0;
     match opts.kind {
         LossKind::Sdf => {
-            for i in 0..s.len() {
-                let e = s[i] - t.sdf[i];
-                total += e * e * norm;
-                if let Some(d) = ds.as_deref_mut() {
-                    d[i] = 2.0 * e * norm;
+            // Four partial sums break the serial add chain (and vectorise).
+            let mut acc = [0.0f64; 4];
+            let (sc, tc) = (s.chunks_exact(4), t.sdf.chunks_exact(4));
+            let (sr, tr) = (sc.remainder(), tc.remainder());
+            for (a, b) in sc.zip(tc) {
+                for k in 0..4 {
+                    let e = a[k] - b[k];
+                    acc[k] += e * e;
+                }
+            }
+            for (a, b) in sr.iter().zip(tr) {
+                acc[0] += (a - b) * (a - b);
+            }
+            total += (acc[0] + acc[1] + acc[2] + acc[3]) * norm;
+            if let Some(d) = ds.as_deref_mut() {
+                for ((d, a), b) in d.iter_mut().zip(s).zip(&t.sdf) {
+                    *d = 2.0 * (a - b) * norm;
                 }
             }
             if opts.normal_weight != 0.0 {
@@ -268,6 +280,8 @@ fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mu
         let f = &s[o..o + nn];
         for (y, &(ym, yp, ihy)) in st.iter().enumerate() {
             let (row, rm, rp) = (y * n, ym * n, yp * n);
+            // A row-local sum keeps the accumulator in a register.
+            let mut row_sum = 0.0;
             for (x, &(xm, xp, ihx)) in st.iter().enumerate() {
                 let t = tn[o + row + x];
                 if t[0] == 0.0 && t[1] == 0.0 {
@@ -282,7 +296,7 @@ fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mu
                 let il = 1.0 / l2.sqrt();
                 let (nx, ny) = (gx * il, gy * il);
                 let dot = nx * t[0] + ny * t[1];
-                sum += 1.0 - dot * dot;
+                row_sum += 1.0 - dot * dot;
                 if let Some(d) = ds.as_deref_mut() {
                     // d(1 − dot²)/dg = −2·dot·(t − dot·n)/|g|
                     let k = -2.0 * dot * il * gscale;
@@ -294,6 +308,7 @@ fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mu
                     d[o + rm + x] -= ggy;
                 }
             }
+            sum += row_sum;
         }
     }
     sum / (channels * nn) as f64
