@@ -65,8 +65,8 @@ struct Item {
     /// The primitive when the geometry is a single one (fast path), else `NONE`.
     prim: u32,
     kind: PrimKind,
-    /// A filled circle without stroke: eligible for the 4-lane kernel.
-    plain_circle: bool,
+    /// A single circle, point or segment: eligible for the 4-lane kernel.
+    lanes: bool,
 }
 
 /// One colour's operation list.
@@ -138,7 +138,7 @@ impl Scene {
                     inset: false,
                     prim,
                     kind,
-                    plain_circle: false,
+                    lanes: prim != NONE && kind != PrimKind::Rect && kind != PrimKind::Quad,
                 });
             }
             if s.fill.is_some() {
@@ -149,7 +149,7 @@ impl Scene {
                     inset: s.stroke.is_some(),
                     prim,
                     kind,
-                    plain_circle: s.stroke.is_none() && prim != NONE && kind == PrimKind::Circle,
+                    lanes: prim != NONE && kind != PrimKind::Rect && kind != PrimKind::Quad,
                 });
             }
         }
@@ -564,26 +564,16 @@ impl Evaluator {
                             self.ranges2.push((start, chain2.len()));
                         }
                         let (xe, ye) = ((sx + T2).min(n), (sy + T2).min(n));
-                        // Chains of plain filled circles only: a 4-lane kernel.
+                        // Chains of single circles, points and segments: a 4-lane kernel.
                         self.lane_channels.clear();
                         for (c, ch) in scene.channels.iter().enumerate() {
                             let (a, b) = self.ranges2[c];
                             let ops = &chain2[a..b];
-                            let fast = ops
-                                .iter()
-                                .all(|&(_, it)| scene.items[it as usize].plain_circle);
+                            let fast = ops.iter().all(|&(_, it)| scene.items[it as usize].lanes);
                             self.lane_channels.push(fast);
                             if fast {
                                 work += (ops.len() * (xe - sx) * (ye - sy)) as u64;
-                                self.circle_lanes(
-                                    scene,
-                                    ch.init,
-                                    ops,
-                                    c,
-                                    (sx, xe),
-                                    (sy, ye),
-                                    winners,
-                                );
+                                self.lanes(scene, ch.init, ops, c, (sx, xe), (sy, ye), winners);
                             }
                         }
                         for y in sy..ye {
@@ -612,11 +602,12 @@ impl Evaluator {
         self.work = work;
     }
 
-    /// [`Evaluator::pixel`] for a chain of plain filled circles (no stroke,
-    /// no inset) over a block of at most 4 pixels per row: four independent
-    /// lanes, so the square roots overlap (and vectorise).
+    /// [`Evaluator::pixel`] for a chain of single-primitive circle, point and
+    /// segment items (fills, inset fills, strokes) over a block of at most 4
+    /// pixels per row: four independent lanes, so the square roots overlap
+    /// (and vectorise).
     #[allow(clippy::too_many_arguments)]
-    fn circle_lanes(
+    fn lanes(
         &mut self,
         scene: &Scene,
         init: f64,
@@ -637,22 +628,49 @@ impl Evaluator {
             let py = (y as f64 + 0.5) * inv;
             let mut b = [init * cap; 4];
             let mut wi = [NONE; 4];
+            let mut wd = [0.0f64; 4];
             let mut flip = [false; 4];
             let mut i = 0;
             while i < ops.len() {
                 let op = ops[i].0;
                 let mut best = [f64::INFINITY; 4];
                 let mut bi = [NONE; 4];
+                let mut bd = [0.0f64; 4];
                 while i < ops.len() && ops[i].0 == op {
                     let it = ops[i].1;
-                    let f = &self.prim_vals[scene.items[it as usize].prim as usize];
-                    let dy = py - f[1];
+                    let item = &scene.items[it as usize];
+                    let f = &self.prim_vals[item.prim as usize];
+                    let mut d = [0.0f64; 4];
+                    match item.kind {
+                        PrimKind::Circle | PrimKind::Point => {
+                            let r = if item.kind == PrimKind::Circle {
+                                f[2]
+                            } else {
+                                0.0
+                            };
+                            let dy = py - f[1];
+                            for k in 0..4 {
+                                let dx = px[k] - f[0];
+                                d[k] = (dx * dx + dy * dy).sqrt() - r;
+                            }
+                        }
+                        _ => {
+                            for k in 0..4 {
+                                d[k] = sdf::segment_distance(f, [px[k], py]);
+                            }
+                        }
+                    }
+                    let hw = 0.5 * self.widths[item.shape as usize];
                     for k in 0..4 {
-                        let dx = px[k] - f[0];
-                        let v = (dx * dx + dy * dy).sqrt() - f[2];
+                        let v = match item.part {
+                            Part::Fill if item.inset => d[k] + hw,
+                            Part::Fill => d[k],
+                            Part::Stroke => d[k].abs() - hw,
+                        };
                         if v < best[k] {
                             best[k] = v;
                             bi[k] = it;
+                            bd[k] = d[k];
                         }
                     }
                     i += 1;
@@ -663,6 +681,7 @@ impl Evaluator {
                             if best[k] < b[k] {
                                 b[k] = best[k];
                                 wi[k] = bi[k];
+                                wd[k] = bd[k];
                                 flip[k] = false;
                             }
                         }
@@ -670,6 +689,7 @@ impl Evaluator {
                             if -best[k] > b[k] {
                                 b[k] = -best[k];
                                 wi[k] = bi[k];
+                                wd[k] = bd[k];
                                 flip[k] = true;
                             }
                         }
@@ -690,12 +710,17 @@ impl Evaluator {
                         NO_WIN
                     } else {
                         let item = &scene.items[w as usize];
-                        Win {
+                        let h = Hit {
+                            d: wd[k],
                             prim: item.prim,
-                            wnode: scene.rec.shapes[item.shape as usize].width,
-                            psign: if flip[k] { -1.0 } else { 1.0 },
-                            wcoef: 0.0,
+                            sign: 1.0,
+                        };
+                        let mut rec = scene.win_of(item, &h);
+                        if flip[k] {
+                            rec.psign = -rec.psign;
+                            rec.wcoef = -rec.wcoef;
                         }
+                        rec
                     };
                 }
             }
@@ -1007,6 +1032,12 @@ mod tests {
             61,
         );
         check_brute_force(SCENE, 61);
+        // Filled and stroked circles over each other (fill inset, stroke, both cases).
+        check_brute_force(
+            "for j in 0..5 { for i in 0..6 { circle(0.05 + i * 0.19 + (j % 2) * 0.09, 0.05 + j * 0.2, 0.11, fill: \"#5dade2\", stroke: \"#1b4f72\", width: 0.015); } }\n\
+             point(0.5, 0.5, stroke: \"#5dade2\", width: 0.05);",
+            61,
+        );
     }
 
     const SCENE: &str = "for i in 0..6 { for j in 0..6 { circle(0.1 + i * 0.16, 0.1 + j * 0.16, 0.05, fill: \"#112233\"); } }\n\
