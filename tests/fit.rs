@@ -348,3 +348,74 @@ fn program_errors_are_clear_and_located() {
     let e = p.record(&[], &tiny).unwrap_err();
     assert!(e.to_string().contains("more than 3 shapes"), "{e}");
 }
+
+/// The CLI: render to PNG and SVG, fit a rendered target, report a bad program.
+#[test]
+fn cli_render_and_fit() {
+    let exe = env!("CARGO_BIN_EXE_filigree");
+    let dir = std::env::temp_dir().join(format!("filigree-fit-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("t.png");
+    let svg = dir.join("t.svg");
+    let run = |args: &[&str]| std::process::Command::new(exe).args(args).output().unwrap();
+    let params = r#"{"dx": 0.2, "r": 0.05}"#;
+    let o = run(&[
+        "render",
+        "--program",
+        "circles-grid",
+        "--params",
+        params,
+        "--out",
+        png.to_str().unwrap(),
+        "--size",
+        "64",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&[
+        "render",
+        "--program",
+        "circles-grid",
+        "--params",
+        params,
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<circle"));
+    let o = run(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target",
+        png.to_str().unwrap(),
+        "--budget",
+        "quick",
+        "--grid",
+        "32",
+        "--json",
+        "--seed",
+        "4",
+        "--threads",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let r = v["params"]["r"].as_f64().unwrap();
+    assert!((r - 0.05).abs() < 0.008, "{v}");
+    let bad = dir.join("bad.flg");
+    std::fs::write(&bad, "param a in [0, 1] = 0.5;\ncircle(a, a a);\n").unwrap();
+    let o = run(&[
+        "fit",
+        "--program",
+        bad.to_str().unwrap(),
+        "--target",
+        png.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.flg: line 2, column 13: expected ','"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
