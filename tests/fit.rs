@@ -340,6 +340,11 @@ fn program_errors_are_clear_and_located() {
         Program::parse("param a in [0, 1] = 0.5;\ncircle(0.5, 0.5, 0.1, fill: \"#000\");").unwrap();
     let e = p.record(&[0.5, 2.0], &RecordLimits::default()).unwrap_err();
     assert!(e.to_string().contains("declares 1 parameters but 2"), "{e}");
+    let p = Program::parse("int param n in [1, 3] = 2;\ncircle(0.5, 0.5, 0.1);").unwrap();
+    let e = FitJob::new(&p, &p.defaults(), &TargetSource::Params(&[]), small_opts(1))
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("no float parameters"), "{e}");
     let tiny = RecordLimits {
         max_shapes: 3,
         ..RecordLimits::default()

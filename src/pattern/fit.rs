@@ -154,6 +154,11 @@ pub fn prepare(
             "the program draws no shapes, so there is nothing to fit",
         ));
     }
+    if scene.rec.float_params.is_empty() {
+        return Err(Error::input(
+            "the program declares no float parameters ('param name in [lo, hi];'), so there is nothing to fit",
+        ));
+    }
     let t = match target {
         TargetSource::Image(img, tol) => {
             Target::from_image(&scene, img, loss.grid, loss.scale(), *tol)?
