@@ -238,6 +238,17 @@ impl Scene {
                         if *closed {
                             w += sdf::winding(k, f, p);
                         }
+                        // The control points' box contains the curve: when it is
+                        // already farther than the best piece, skip the cubic solve.
+                        let bx = (f[0].min(f[2]).min(f[4]) - p[0])
+                            .max(p[0] - f[0].max(f[2]).max(f[4]))
+                            .max(0.0);
+                        let by = (f[1].min(f[3]).min(f[5]) - p[1])
+                            .max(p[1] - f[1].max(f[3]).max(f[5]))
+                            .max(0.0);
+                        if bx * bx + by * by >= best_d2 {
+                            continue;
+                        }
                         let d = sdf::value(k, f, p);
                         d * d
                     };
