@@ -93,7 +93,7 @@ fn gauss(rng: &mut Rng) -> f64 {
     // Box–Muller; one value per call keeps the stream simple.
     let u1 = rng.f64().max(1e-300);
     let u2 = rng.f64();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    (-2.0 * libm::log(u1)).sqrt() * libm::cos(std::f64::consts::TAU * u2)
 }
 
 /// An ask/tell initialiser.
@@ -522,8 +522,8 @@ impl Adam {
         }
         let (b1, b2, eps): (f64, f64, f64) = (0.9, 0.999, 1e-8);
         self.t += 1;
-        let c1 = 1.0 - b1.powi(self.t);
-        let c2 = 1.0 - b2.powi(self.t);
+        let c1 = 1.0 - libm::pow(b1, self.t as f64);
+        let c2 = 1.0 - libm::pow(b2, self.t as f64);
         for (k, &gk) in grad.iter().enumerate().take(self.u.len()) {
             let g = if gk.is_finite() { gk } else { 0.0 };
             self.m[k] = b1 * self.m[k] + (1.0 - b1) * g;

@@ -147,7 +147,7 @@ fn segment_t(f: &Fields, p: V2) -> (f64, f64) {
 /// Rounded rectangle, optionally with field derivatives.
 #[inline(never)]
 fn rect(f: &Fields, p: V2, out: Option<&mut Fields>) -> f64 {
-    let (c, s) = (f[5].cos(), f[5].sin());
+    let (c, s) = (libm::cos(f[5]), libm::sin(f[5]));
     let (vx, vy) = (p[0] - f[0], p[1] - f[1]);
     // Local coordinates: rotate by −angle.
     let lx = c * vx + s * vy;
@@ -279,8 +279,8 @@ pub fn solve_cubic(a: f64, b: f64, c: f64, d: f64, out: &mut [f64; 3]) -> usize 
     let disc = q * q / 4.0 + p * p * p / 27.0;
     if disc > 0.0 {
         let sq = disc.sqrt();
-        let u = (-q / 2.0 + sq).cbrt();
-        let v = (-q / 2.0 - sq).cbrt();
+        let u = libm::cbrt(-q / 2.0 + sq);
+        let v = libm::cbrt(-q / 2.0 - sq);
         out[0] = u + v + shift;
         1
     } else {
@@ -289,9 +289,9 @@ pub fn solve_cubic(a: f64, b: f64, c: f64, d: f64, out: &mut [f64; 3]) -> usize 
             out[0] = shift;
             return 1;
         }
-        let phi = (-q / (2.0 * r * r * r)).clamp(-1.0, 1.0).acos();
+        let phi = libm::acos((-q / (2.0 * r * r * r)).clamp(-1.0, 1.0));
         for (k, o) in out.iter_mut().enumerate() {
-            *o = 2.0 * r * ((phi - 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos() + shift;
+            *o = 2.0 * r * libm::cos((phi - 2.0 * std::f64::consts::PI * k as f64) / 3.0) + shift;
         }
         3
     }

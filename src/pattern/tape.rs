@@ -7,6 +7,10 @@
 //! into constants, so the tape holds only the parameter-dependent arithmetic
 //! plus the constants that shapes read. Replaying it forward gives every
 //! shape field; [`Tape::backward`] is reverse-mode differentiation.
+//!
+//! Transcendental functions come from the `libm` crate, not `f64`'s methods
+//! (which call the platform's C library natively): the same inputs then give
+//! the same bits natively and in wasm, so seeded fits agree everywhere.
 
 /// One tape operation. Operands are indices of earlier nodes.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,16 +96,16 @@ pub fn apply(op: Op, v: &[f64]) -> f64 {
         Op::Mul(a, b) => g(a) * g(b),
         Op::Div(a, b) => g(a) / g(b),
         Op::Neg(a) => -g(a),
-        Op::Sin(a) => g(a).sin(),
-        Op::Cos(a) => g(a).cos(),
-        Op::Tan(a) => g(a).tan(),
-        Op::Atan(a) => g(a).atan(),
-        Op::Atan2(a, b) => g(a).atan2(g(b)),
+        Op::Sin(a) => libm::sin(g(a)),
+        Op::Cos(a) => libm::cos(g(a)),
+        Op::Tan(a) => libm::tan(g(a)),
+        Op::Atan(a) => libm::atan(g(a)),
+        Op::Atan2(a, b) => libm::atan2(g(a), g(b)),
         Op::Sqrt(a) => g(a).max(0.0).sqrt(),
         Op::Abs(a) => g(a).abs(),
-        Op::Exp(a) => g(a).exp(),
-        Op::Ln(a) => g(a).ln(),
-        Op::Pow(a, b) => g(a).powf(g(b)),
+        Op::Exp(a) => libm::exp(g(a)),
+        Op::Ln(a) => libm::log(g(a)),
+        Op::Pow(a, b) => libm::pow(g(a), g(b)),
         Op::Min(a, b) => g(a).min(g(b)),
         Op::Max(a, b) => g(a).max(g(b)),
         Op::Mod(a, b) => {
@@ -210,10 +214,10 @@ impl Tape {
                     add(y, -v(x) / (v(y) * v(y)));
                 }
                 Op::Neg(x) => add(x, -1.0),
-                Op::Sin(x) => add(x, v(x).cos()),
-                Op::Cos(x) => add(x, -v(x).sin()),
+                Op::Sin(x) => add(x, libm::cos(v(x))),
+                Op::Cos(x) => add(x, -libm::sin(v(x))),
                 Op::Tan(x) => {
-                    let c = v(x).cos();
+                    let c = libm::cos(v(x));
                     add(x, 1.0 / (c * c))
                 }
                 Op::Atan(x) => add(x, 1.0 / (1.0 + v(x) * v(x))),
@@ -234,9 +238,9 @@ impl Tape {
                 Op::Ln(x) => add(x, 1.0 / v(x)),
                 Op::Pow(x, y) => {
                     let (b, e) = (v(x), v(y));
-                    add(x, e * b.powf(e - 1.0));
+                    add(x, e * libm::pow(b, e - 1.0));
                     if b > 0.0 {
-                        add(y, vals[i] * b.ln());
+                        add(y, vals[i] * libm::log(b));
                     }
                 }
                 Op::Min(x, y) => {
