@@ -14,6 +14,9 @@ use crate::core::error::{Error, Result};
 use std::collections::HashMap;
 use std::rc::Rc;
 
+/// Largest accepted program text.
+pub const MAX_PROGRAM_BYTES: usize = 256 * 1024;
+
 /// Limits on one recording run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RecordLimits {
@@ -117,8 +120,14 @@ pub struct Program {
 }
 
 impl Program {
-    /// Parse program text; errors carry line and column.
+    /// Parse program text (at most [`MAX_PROGRAM_BYTES`]); errors carry line and column.
     pub fn parse(src: &str) -> Result<Program> {
+        if src.len() > MAX_PROGRAM_BYTES {
+            return Err(Error::limit(format!(
+                "the program is {} bytes; programs may be at most {MAX_PROGRAM_BYTES} bytes",
+                src.len()
+            )));
+        }
         let ast = parse(src)?;
         for f in &ast.fns {
             if builtin_arity(&f.name).is_some() || is_statement_name(&f.name) {
