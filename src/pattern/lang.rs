@@ -262,13 +262,19 @@ pub struct Ast {
 struct Parser {
     toks: Vec<(Tok, Pos)>,
     i: usize,
+    /// Current nesting (blocks, parentheses, unary operators).
+    depth: usize,
 }
+
+/// Deepest nesting the parser accepts (it recurses; this keeps the stack small).
+const MAX_NESTING: usize = 256;
 
 /// Parse program text. Errors carry line and column.
 pub fn parse(src: &str) -> Result<Ast> {
     let mut p = Parser {
         toks: lex(src)?,
         i: 0,
+        depth: 0,
     };
     let mut ast = Ast {
         params: vec![],
@@ -455,7 +461,24 @@ impl Parser {
             .filter(|v| v.is_finite())
             .ok_or_else(|| pos.err("expected a constant number here (literals, PI, + - * /)"))
     }
+    fn enter(&mut self) -> Result<()> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(self
+                .pos()
+                .err(format!("nested more than {MAX_NESTING} levels deep")));
+        }
+        Ok(())
+    }
+
     fn block(&mut self) -> Result<Vec<Stmt>> {
+        self.enter()?;
+        let r = self.block_inner();
+        self.depth -= 1;
+        r
+    }
+
+    fn block_inner(&mut self) -> Result<Vec<Stmt>> {
         self.expect("{")?;
         let mut v = vec![];
         while !self.eat("}") {
@@ -526,6 +549,13 @@ impl Parser {
         )))
     }
     fn if_stmt(&mut self) -> Result<Stmt> {
+        self.enter()?;
+        let r = self.if_inner();
+        self.depth -= 1;
+        r
+    }
+
+    fn if_inner(&mut self) -> Result<Stmt> {
         let pos = self.pos();
         self.next();
         let c = self.expr()?;
@@ -591,20 +621,38 @@ impl Parser {
             return self.unary();
         }
         let mut lhs = self.binary(level + 1)?;
-        'outer: loop {
+        // Each operator of a chain nests the tree one level deeper (`a+b+c`
+        // is `(a+b)+c`), so it counts against the nesting limit.
+        let start = self.depth;
+        let r = 'outer: loop {
             for (s, op) in LEVELS[level] {
                 if self.is_sym(s) {
                     let pos = self.pos();
                     self.next();
-                    let rhs = self.binary(level + 1)?;
+                    if let Err(e) = self.enter() {
+                        break 'outer Err(e);
+                    }
+                    let rhs = match self.binary(level + 1) {
+                        Ok(r) => r,
+                        Err(e) => break 'outer Err(e),
+                    };
                     lhs = Expr::Bin(*op, Box::new(lhs), Box::new(rhs), pos);
                     continue 'outer;
                 }
             }
-            return Ok(lhs);
-        }
+            break Ok(lhs);
+        };
+        self.depth = start;
+        r
     }
     fn unary(&mut self) -> Result<Expr> {
+        self.enter()?;
+        let r = self.unary_inner();
+        self.depth -= 1;
+        r
+    }
+
+    fn unary_inner(&mut self) -> Result<Expr> {
         let pos = self.pos();
         if self.eat("-") {
             return Ok(Expr::Neg(Box::new(self.unary()?), pos));
@@ -667,6 +715,26 @@ mod tests {
         assert_eq!(ast.params[0].default, 0.25);
         assert_eq!(ast.fns[0].params, vec!["x".to_string()]);
         assert_eq!(ast.body.len(), 1);
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_crash() {
+        let src = format!("let a = {}1{};", "(".repeat(100_000), ")".repeat(100_000));
+        let e = parse(&src).unwrap_err();
+        assert!(e.to_string().contains("nested more than"), "{e}");
+        let src = format!("let a = {}1;", "-".repeat(100_000));
+        assert!(parse(&src).is_err());
+        let src = format!("{}{}", "{".repeat(100_000), "}".repeat(100_000));
+        assert!(parse(&src).is_err());
+        let src = format!("let a = 1{};", " + 1".repeat(100_000));
+        assert!(parse(&src)
+            .unwrap_err()
+            .to_string()
+            .contains("nested more than"));
+        let src = format!("if 1 {{ }}{}", " else if 1 { }".repeat(100_000));
+        assert!(parse(&src).is_err());
+        // Ordinary programs are far from the limit.
+        parse(&format!("let a = 1{};", " + 1".repeat(150))).unwrap();
     }
 
     #[test]
