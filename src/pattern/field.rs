@@ -599,7 +599,8 @@ impl Evaluator {
                                 self.lanes(scene, ch.init, ops, c, (sx, xe), (sy, ye), winners);
                             }
                         }
-                        for y in sy..ye {
+                        let scalar = !self.lane_channels.iter().all(|&l| l);
+                        for y in (sy..ye).filter(|_| scalar) {
                             for x in sx..xe {
                                 let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
                                 self.gcache.next();
