@@ -1060,6 +1060,27 @@ mod tests {
         assert!(at(&e, &sc, blue, 0.5, 0.1) > 0.0);
     }
 
+    /// A shape in the background colour: the background becomes a channel
+    /// that starts full and is cut by other shapes, then restored.
+    #[test]
+    fn background_colour_as_a_channel() {
+        let sc = scene(
+            "background \"#ffffff\";\ncircle(0.5, 0.5, 0.3, fill: \"#000000\");\ncircle(0.5, 0.5, 0.1, fill: \"#ffffff\");",
+        );
+        assert_eq!(sc.channels.len(), 2);
+        let bg = sc.channels.iter().find(|c| c.colour == 0).unwrap();
+        assert_eq!(bg.init, -1.0);
+        let e = fields(&sc, 100);
+        let (white, black) = ([255, 255, 255], [0, 0, 0]);
+        assert!(at(&e, &sc, white, 0.05, 0.05) < 0.0); // canvas corner
+        assert!(at(&e, &sc, white, 0.5, 0.5) < 0.0); // the white dot
+        assert!(at(&e, &sc, white, 0.5, 0.3) > 0.0 && at(&e, &sc, black, 0.5, 0.3) < 0.0); // the black ring
+        assert!(at(&e, &sc, black, 0.5, 0.5) > 0.0);
+        let idx = e.colour_indices(&sc);
+        assert_eq!(idx[50 * 100 + 50], 0);
+        assert_eq!(idx[30 * 100 + 50], 1);
+    }
+
     /// Culling never changes a value: compare with a brute-force evaluation
     /// that applies every operation at every pixel.
     #[test]
