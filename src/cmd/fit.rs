@@ -48,6 +48,9 @@ pub struct FitArgs {
     /// RGB distance within which a target pixel matches a palette colour.
     #[arg(long, default_value_t = 60.0)]
     tolerance: f64,
+    /// Adam iterations on the image-space loss after the fit (0 = off, the paper's method).
+    #[arg(long, default_value_t = 0)]
+    polish: usize,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -178,6 +181,7 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let (name, prog) = load_program(&a.program)?;
     let vals = param_values(&prog, a.params.as_deref())?;
     let mut opts = options(&a.budget, &a.loss, &a.init, a.grid, &a.units, a.seed)?;
+    opts.polish = a.polish;
     opts.threads = a.threads.unwrap_or_else(|| {
         std::thread::available_parallelism()
             .map(|n| n.get())
@@ -225,7 +229,7 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
             .zip(&r.params)
             .map(|(n, v)| (n.clone(), json!(v)))
             .collect();
-        let out = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss,
+        let out = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
             "evaluations": r.evaluations, "seconds": secs, "history": r.history});
         println!("{out}");
     } else {

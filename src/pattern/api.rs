@@ -152,6 +152,8 @@ pub struct FitSettings {
     pub generations: Option<usize>,
     pub candidates: Option<usize>,
     pub iterations: Option<usize>,
+    /// Adam iterations on the image-space loss after the fit (default 0 = off).
+    pub polish: Option<usize>,
 }
 
 /// Options from settings, with errors naming the bad value.
@@ -194,6 +196,9 @@ pub fn fit_options(s: &FitSettings) -> Result<FitOptions> {
     }
     if let Some(v) = s.iterations {
         o.iterations = v.min(100_000);
+    }
+    if let Some(v) = s.polish {
+        o.polish = v.min(100_000);
     }
     Ok(o)
 }

@@ -157,6 +157,8 @@ struct FitCommon {
     generations: Option<usize>,
     candidates: Option<usize>,
     iterations: Option<usize>,
+    /// Adam iterations on the image-space loss after the fit (0 = off).
+    polish: Option<usize>,
 }
 
 #[derive(Deserialize)]
@@ -185,6 +187,7 @@ impl FitCommon {
             generations: self.generations,
             candidates: self.candidates,
             iterations: self.iterations,
+            polish: self.polish,
         };
         (self.program, self.params, target, settings)
     }
