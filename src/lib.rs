@@ -14,6 +14,7 @@
 
 pub mod core;
 pub mod inspect;
+pub mod pattern;
 pub mod pixel;
 pub mod raster;
 

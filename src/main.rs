@@ -23,6 +23,10 @@ struct Cli {
 enum Command {
     /// Describe an image: size, palette, colour clusters.
     Inspect(cmd::inspect::Args),
+    /// Fit a pattern program's parameters to a target image.
+    Fit(cmd::fit::FitArgs),
+    /// Draw a pattern program with given parameters to PNG or SVG.
+    Render(cmd::fit::RenderArgs),
     /// Texture pixel art with oriented elements in the image's own palette.
     Pixel(Box<cmd::pixel::Args>),
     /// Benchmarks that print JSON.
@@ -36,6 +40,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
+        Command::Fit(a) => cmd::fit::run_fit(a),
+        Command::Render(a) => cmd::fit::run_render(a),
         Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Bench { which } => cmd::bench::run(which),
     };

@@ -17,6 +17,29 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Fit every shipped generator to targets drawn from random true
+    /// parameters; report parameter MSE, loss and time, the same fits with
+    /// image-space L2 from the same initialisation, and evaluations per second.
+    Fit {
+        /// Accepted for symmetry with other benches; output is always JSON.
+        #[arg(long)]
+        json: bool,
+        /// Quick budget instead of the paper's.
+        #[arg(long)]
+        quick: bool,
+        /// Random targets per generator.
+        #[arg(long, default_value_t = 1)]
+        seeds: u64,
+        /// Comma-separated generator names (default: all).
+        #[arg(long)]
+        only: Option<String>,
+        /// Threads for the GA batches (default: all cores). Throughput figures are always one core.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Skip the fits; only measure evaluations per second.
+        #[arg(long)]
+        speed_only: bool,
+    },
     /// Pixel-art texturing: the fish and trunk cases stage by stage, plus a 512² Laplace solve.
     Pixel {
         #[arg(long, default_value_t = 10)]
@@ -29,6 +52,14 @@ pub enum Which {
 
 pub fn run(w: Which) -> Result<(), String> {
     match w {
+        Which::Fit {
+            quick,
+            seeds,
+            only,
+            threads,
+            speed_only,
+            ..
+        } => super::fit_bench::run(quick, seeds, only.as_deref(), threads, speed_only),
         Which::Inspect { repeats, .. } => {
             let png = TEST_PNG_1024;
             let opts = InspectOptions::default();

@@ -1,4 +1,6 @@
 pub mod bench;
+pub mod fit;
+pub mod fit_bench;
 pub mod inspect;
 pub mod pixel;
 

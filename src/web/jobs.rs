@@ -3,8 +3,10 @@
 use crate::core::error::Error;
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::inspect::{inspect, InspectOptions};
+use crate::pattern::api::{self as pattern_api, FitSettings, TargetSpec};
 use crate::raster::{decode, Limits};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use wasm_bindgen::JsValue;
 
 /// A job with its output already turned into a JS value.
@@ -123,6 +125,95 @@ impl MaskBits {
         crate::raster::Rgba8Image::from_raw(self.width, self.height, data)
             .map_err(|e| e.to_string())
     }
+}
+
+/// Target and settings shared by `"fit"` and `"fit-eval"` requests. Give
+/// one of `target_png` (encoded image bytes), `target_rgba` (raw pixels) or
+/// `target_params` (the program drawn with these values).
+#[derive(Deserialize)]
+struct FitCommon {
+    /// Program text.
+    program: String,
+    /// Values by name for integer (structural) parameters; others default.
+    #[serde(default)]
+    params: BTreeMap<String, f64>,
+    #[serde(default, with = "serde_bytes")]
+    target_png: Option<Vec<u8>>,
+    #[serde(default)]
+    target_rgba: Option<MasklessRgba>,
+    #[serde(default)]
+    target_params: Option<BTreeMap<String, f64>>,
+    /// RGB distance for snapping target colours to the palette (default 60).
+    tolerance: Option<f64>,
+    /// "quick" (default) | "paper"
+    budget: Option<String>,
+    /// "sdf" (default) | "l1" | "pyramid" | "image"
+    loss: Option<String>,
+    /// "genetic" (default) | "random" | "nelder-mead"
+    init: Option<String>,
+    seed: Option<u64>,
+    grid: Option<usize>,
+    population: Option<usize>,
+    generations: Option<usize>,
+    candidates: Option<usize>,
+    iterations: Option<usize>,
+}
+
+#[derive(Deserialize)]
+struct MasklessRgba {
+    width: u32,
+    height: u32,
+    #[serde(with = "serde_bytes")]
+    rgba: Vec<u8>,
+}
+
+impl FitCommon {
+    fn split(self) -> (String, BTreeMap<String, f64>, TargetSpec, FitSettings) {
+        let target = TargetSpec {
+            image: self.target_png,
+            rgba: self.target_rgba.map(|r| (r.width, r.height, r.rgba)),
+            params: self.target_params,
+            tolerance: self.tolerance,
+        };
+        let settings = FitSettings {
+            budget: self.budget,
+            loss: self.loss,
+            init: self.init,
+            seed: self.seed,
+            grid: self.grid,
+            population: self.population,
+            generations: self.generations,
+            candidates: self.candidates,
+            iterations: self.iterations,
+        };
+        (self.program, self.params, target, settings)
+    }
+}
+
+#[derive(Deserialize)]
+struct FitEvalRequest {
+    #[serde(flatten)]
+    common: FitCommon,
+    /// Float parameter vectors (declaration order, raw units).
+    points: Vec<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+struct RenderPatternRequest {
+    program: String,
+    #[serde(default)]
+    params: BTreeMap<String, f64>,
+    /// Side in pixels (default 512).
+    size: Option<usize>,
+    /// Samples per pixel side (default 1 = exact palette colours).
+    supersample: Option<usize>,
+}
+
+#[derive(Deserialize)]
+struct PatternInfoRequest {
+    program: String,
+    #[serde(default)]
+    params: BTreeMap<String, f64>,
 }
 
 /// Payload of a `"pixel"` request. Images are encoded files (PNG, ...); the
@@ -284,6 +375,64 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
                         bits: inside.into_iter().map(u8::from).collect(),
                     })
                 },
+            ))
+        }
+        "fit" => {
+            let (program, params, target, settings) = from_js::<FitCommon>(kind, payload)?.split();
+            let (job, scene) = pattern_api::start_fit(&program, &params, &target, &settings)
+                .map_err(|e| e.to_string())?;
+            Ok(wrap(job, move |r| {
+                let out = pattern_api::fit_output(&scene, r).map_err(|e| e.to_string())?;
+                to_js(&out)
+            }))
+        }
+        "fit-eval" => {
+            let req: FitEvalRequest = from_js(kind, payload)?;
+            let points = req.points;
+            let (program, params, target, settings) = req.common.split();
+            Ok(wrap(
+                OneShot::new(move || {
+                    pattern_api::eval_batch(&program, &params, &target, &settings, &points)
+                }),
+                |losses| {
+                    #[derive(Serialize)]
+                    struct Out {
+                        losses: Vec<f64>,
+                    }
+                    to_js(&Out { losses })
+                },
+            ))
+        }
+        "render-pattern" => {
+            let req: RenderPatternRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || {
+                    pattern_api::render_program(
+                        &req.program,
+                        &req.params,
+                        req.size.unwrap_or(512),
+                        req.supersample.unwrap_or(1),
+                    )
+                }),
+                |r| {
+                    #[derive(Serialize)]
+                    struct Out<'a> {
+                        #[serde(flatten)]
+                        image: RawImage<'a>,
+                        svg: &'a str,
+                    }
+                    to_js(&Out {
+                        image: RawImage::of(&r.image),
+                        svg: &r.svg,
+                    })
+                },
+            ))
+        }
+        "pattern-info" => {
+            let req: PatternInfoRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || pattern_api::program_info(&req.program, &req.params)),
+                |info| to_js(&info),
             ))
         }
         "debug-abort" => {

@@ -1,0 +1,288 @@
+//! Drawing a pattern: a raster from the same colour fields the loss uses
+//! (so targets made from parameters match the fields exactly), and SVG.
+use super::field::Scene;
+use super::record::{BoolOp, Geom, Rgb};
+use super::sdf::PrimKind;
+use crate::core::error::{Error, Result};
+use crate::raster::Rgba8Image;
+use std::fmt::Write;
+
+/// Largest raster side [`render`] accepts (pixels × supersampling).
+pub const MAX_RENDER_SIDE: usize = 4096;
+
+/// Rasterise the scene with `params` (float parameters) at `size × size`,
+/// averaging `supersample²` samples per pixel (1 = crisp palette colours).
+pub fn render(
+    scene: &Scene,
+    params: &[f64],
+    size: usize,
+    supersample: usize,
+) -> Result<Rgba8Image> {
+    let ss = supersample.max(1);
+    if size == 0 || size * ss > MAX_RENDER_SIDE {
+        return Err(Error::limit(format!(
+            "render size {size}×{ss} samples is outside 1..={MAX_RENDER_SIDE}"
+        )));
+    }
+    let idx = super::fit::colour_indices(scene, params, size * ss)?;
+    let n = size * ss;
+    let pal = &scene.rec.colours;
+    let mut img = Rgba8Image::new(size as u32, size as u32);
+    for y in 0..size {
+        for x in 0..size {
+            let mut acc = [0u32; 3];
+            for sy in 0..ss {
+                for sx in 0..ss {
+                    let c = pal[idx[(y * ss + sy) * n + x * ss + sx] as usize];
+                    for k in 0..3 {
+                        acc[k] += c[k] as u32;
+                    }
+                }
+            }
+            let d = (ss * ss) as u32;
+            img.put(
+                x as u32,
+                y as u32,
+                [
+                    ((acc[0] + d / 2) / d) as u8,
+                    ((acc[1] + d / 2) / d) as u8,
+                    ((acc[2] + d / 2) / d) as u8,
+                    255,
+                ],
+            );
+        }
+    }
+    Ok(img)
+}
+
+fn hex(c: Rgb) -> String {
+    format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2])
+}
+
+fn num(v: f64) -> String {
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.to_string()
+    }
+}
+
+struct SvgOut<'a> {
+    scene: &'a Scene,
+    vals: &'a [f64],
+    k: f64,
+    defs: String,
+    masks: usize,
+}
+
+impl SvgOut<'_> {
+    fn f(&self, prim: u32, i: usize) -> f64 {
+        self.vals[self.scene.rec.prims[prim as usize].fields[i] as usize]
+    }
+    fn p(&self, v: f64) -> String {
+        num(v * self.k)
+    }
+
+    /// One element drawing geometry `g` with the given style attributes.
+    fn element(&mut self, g: &Geom, style: &str) -> String {
+        match g {
+            Geom::Prim(i) => {
+                let i = *i;
+                let kind = self.scene.rec.prims[i as usize].kind;
+                let f = |k| self.f(i, k);
+                match kind {
+                    PrimKind::Circle => format!("<circle cx=\"{}\" cy=\"{}\" r=\"{}\" {style}/>", self.p(f(0)), self.p(f(1)), self.p(f(2).max(0.0))),
+                    PrimKind::Point => format!("<line x1=\"{0}\" y1=\"{1}\" x2=\"{0}\" y2=\"{1}\" stroke-linecap=\"round\" {style}/>", self.p(f(0)), self.p(f(1))),
+                    PrimKind::Segment => format!(
+                        "<line x1=\"{}\" y1=\"{}\" x2=\"{}\" y2=\"{}\" stroke-linecap=\"round\" {style}/>",
+                        self.p(f(0)),
+                        self.p(f(1)),
+                        self.p(f(2)),
+                        self.p(f(3))
+                    ),
+                    PrimKind::Rect => {
+                        let (hw, hh) = (f(2).max(0.0), f(3).max(0.0));
+                        let r = f(4).clamp(0.0, hw.min(hh));
+                        format!(
+                            "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" rx=\"{}\" transform=\"rotate({} {} {})\" {style}/>",
+                            self.p(f(0) - hw),
+                            self.p(f(1) - hh),
+                            self.p(2.0 * hw),
+                            self.p(2.0 * hh),
+                            self.p(r),
+                            num(f(5).to_degrees()),
+                            self.p(f(0)),
+                            self.p(f(1))
+                        )
+                    }
+                    PrimKind::Quad => {
+                        let d = self.path_d(i, 1, false);
+                        format!("<path d=\"{d}\" {style}/>")
+                    }
+                }
+            }
+            Geom::Path { first, len, closed } => {
+                let d = self.path_d(*first, *len, *closed);
+                format!("<path d=\"{d}\" fill-rule=\"nonzero\" stroke-linejoin=\"round\" stroke-linecap=\"round\" {style}/>")
+            }
+            Geom::Bool(..) => {
+                let id = self.mask(g);
+                format!(
+                    "<rect width=\"{0}\" height=\"{0}\" mask=\"url(#{id})\" {style}/>",
+                    num(self.k)
+                )
+            }
+        }
+    }
+
+    fn path_d(&self, first: u32, len: u32, closed: bool) -> String {
+        let mut d = String::new();
+        for i in first..first + len {
+            let kind = self.scene.rec.prims[i as usize].kind;
+            let f = |k| self.f(i, k);
+            if i == first {
+                let _ = write!(d, "M{} {}", self.p(f(0)), self.p(f(1)));
+            }
+            match kind {
+                PrimKind::Segment => {
+                    let _ = write!(d, " L{} {}", self.p(f(2)), self.p(f(3)));
+                }
+                _ => {
+                    let _ = write!(
+                        d,
+                        " Q{} {} {} {}",
+                        self.p(f(2)),
+                        self.p(f(3)),
+                        self.p(f(4)),
+                        self.p(f(5))
+                    );
+                }
+            }
+        }
+        if closed {
+            d.push_str(" Z");
+        }
+        d
+    }
+
+    /// A mask (white = inside) for a boolean geometry; returns its id.
+    fn mask(&mut self, g: &Geom) -> String {
+        let Geom::Bool(op, ch) = g else {
+            unreachable!("masks are only made for boolean geometries")
+        };
+        let id = format!("m{}", self.masks);
+        self.masks += 1;
+        let white = "fill=\"#fff\"";
+        let black = "fill=\"#000\"";
+        let mut body = String::new();
+        match op {
+            BoolOp::Union => {
+                for c in ch {
+                    body += &self.element(c, white);
+                }
+            }
+            BoolOp::Difference => {
+                body += &self.element(&ch[0], white);
+                for c in &ch[1..] {
+                    body += &self.element(c, black);
+                }
+            }
+            BoolOp::Intersect => {
+                let mut inner = self.element(&ch[0], white);
+                for c in &ch[1..] {
+                    let sub = Geom::Bool(BoolOp::Union, vec![c.clone()]);
+                    let m = self.mask(&sub);
+                    inner = format!("<g mask=\"url(#{m})\">{inner}</g>");
+                }
+                body += &inner;
+            }
+        }
+        let _ = write!(
+            self.defs,
+            "<mask id=\"{id}\" maskUnits=\"userSpaceOnUse\" x=\"0\" y=\"0\" width=\"{0}\" height=\"{0}\">{body}</mask>",
+            num(self.k)
+        );
+        id
+    }
+}
+
+/// An SVG document of the scene with `params`, `size` pixels wide. Strokes
+/// of boolean shapes are not exported (SVG cannot stroke a mask).
+pub fn svg(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
+    if params.len() != scene.rec.float_params.len() {
+        return Err(Error::input(format!(
+            "the program has {} float parameters but {} values were given",
+            scene.rec.float_params.len(),
+            params.len()
+        )));
+    }
+    let mut vals = vec![];
+    scene.rec.tape.forward(params, &mut vals);
+    let mut out = SvgOut {
+        scene,
+        vals: &vals,
+        k: size,
+        defs: String::new(),
+        masks: 0,
+    };
+    let mut body = String::new();
+    let pal = &scene.rec.colours;
+    for s in &scene.rec.shapes {
+        let w = out.p(vals[s.width as usize].max(0.0));
+        let fill = s
+            .fill
+            .map(|c| format!("fill=\"{}\"", hex(pal[c as usize])))
+            .unwrap_or_else(|| "fill=\"none\"".into());
+        let style = match s.stroke {
+            Some(c) if !matches!(s.geom, Geom::Bool(..)) => format!(
+                "{fill} stroke=\"{}\" stroke-width=\"{w}\"",
+                hex(pal[c as usize])
+            ),
+            _ => fill,
+        };
+        body += &out.element(&s.geom, &style);
+        body.push('\n');
+    }
+    let s = num(size);
+    Ok(format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{s}\" height=\"{s}\" viewBox=\"0 0 {s} {s}\">\n<defs>{}</defs>\n<rect width=\"{s}\" height=\"{s}\" fill=\"{}\"/>\n{body}</svg>\n",
+        out.defs,
+        hex(pal[0])
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pattern::record::{Program, RecordLimits};
+
+    #[test]
+    fn raster_and_svg_of_every_shape_kind() {
+        let p = Program::parse(
+            "background \"#eeeeee\";\nparam r in [0.05, 0.2] = 0.1;\ncircle(0.25, 0.25, r, fill: \"#ff0000\");\n\
+             rect(0.75, 0.25, 0.3, 0.2, radius: 0.03, rotation: 0.2, fill: \"#00ff00\", stroke: \"#0000ff\", width: 0.02);\n\
+             segment(0.1, 0.6, 0.4, 0.9, stroke: \"#0000ff\", width: 0.03);\npoint(0.5, 0.5, width: 0.05);\n\
+             path(fill: \"#ff0000\") { move(0.6, 0.6); quad(0.9, 0.6, 0.9, 0.9); line(0.6, 0.9); }\n\
+             difference(fill: \"#00ff00\") { circle(0.5, 0.8, 0.1); circle(0.5, 0.8, 0.05); }",
+        )
+        .unwrap();
+        let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+        let img = render(&scene, &[0.1], 100, 1).unwrap();
+        assert_eq!(img.get(25, 25), [255, 0, 0, 255]);
+        assert_eq!(img.get(2, 98), [238, 238, 238, 255]);
+        assert_eq!(img.get(75, 25), [0, 255, 0, 255]);
+        assert_eq!(img.get(50, 50), [0, 0, 0, 255]);
+        assert_eq!(img.get(50, 80), [238, 238, 238, 255]); // hole of the difference
+        assert_eq!(img.get(50, 72), [0, 255, 0, 255]);
+        let s = svg(&scene, &[0.1], 100.0).unwrap();
+        assert!(
+            s.contains("<circle cx=\"25\" cy=\"25\" r=\"10\" fill=\"#ff0000\"/>"),
+            "{s}"
+        );
+        assert!(s.contains("mask=\"url(#m0)\""));
+        assert!(s.contains(" Q90 60 90 90 L60 90 L60 60 Z"), "{s}");
+        assert!(render(&scene, &[0.1], 5000, 1).is_err());
+    }
+}
