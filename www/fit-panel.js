@@ -8,6 +8,7 @@ import { Autosave, History, projectText, parseProject, download } from './projec
 import { LossPlot } from './loss-plot.js';
 
 const TARGET_SIZE = 256;
+const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
 const PREVIEW_EVERY_MS = 250;
 
 const html = `
@@ -40,7 +41,7 @@ const html = `
         <canvas class="target" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-target" aria-label="target: draw here"></canvas>
         <canvas class="overlay" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-overlay" aria-hidden="true"></canvas>
       </div>
-      <label class="inline">overlay <input type="range" name="overlay" min="0" max="1" step="0.05" value="0.5"></label>
+      <label class="inline">overlay <input type="range" name="overlay" min="0" max="1" step="0.05" value="0.6"></label>
       <div class="error target-error" role="alert" hidden></div>
     </section>
     <section class="card fit-run" aria-label="Fit">
@@ -92,6 +93,12 @@ export default {
     let lastPreviewAt = 0;
 
     const doc = () => history.present;
+    // Requests name their parameters; the document keeps values in declaration order.
+    const named = (values, { integersOnly = false } = {}) => Object.fromEntries(
+      info.params.map((p, i) => [p.name, values[i]]).filter(([, ], i) => !integersOnly || info.params[i].integer),
+    );
+    // Palette of the program: index 0 is the background.
+    const palette = () => info.colours.map(rgbOf);
     const showError = (sel, message) => { q(sel).hidden = !message; q(sel).textContent = message || ''; };
     const status = (t) => { q('[data-testid=fit-status]').textContent = t; };
 
@@ -107,7 +114,10 @@ export default {
     async function setProgram(program, { values = null, fresh = false, generator = null } = {}) {
       let next;
       try {
-        next = await pool.run('pattern-info', { program });
+        // Integer parameters shape the program (how many shapes it draws):
+        // record it with the user's integers when they belong to this program.
+        const sameProgram = info && values && doc()?.program === program;
+        next = await pool.run('pattern-info', { program, params: sameProgram ? named(values, { integersOnly: true }) : {} });
       } catch (err) {
         // Keep the last good program running; say where this one is wrong.
         showError('.program-error', err.message);
@@ -130,7 +140,7 @@ export default {
       q('[name=program]').value = d.program;
       q('[name=generator]').value = d.generator ?? '';
       q('[data-testid=fit-facts]').textContent =
-        `${info.params.filter((p) => !p.integer).length} parameters to fit, ${info.shapes} shapes, ${info.colours.length} colours on ${hex([...info.background, 255])}`;
+        `${info.params.filter((p) => !p.integer).length} parameters to fit, ${info.shapes} shapes, ${info.colours.length - 1} colour${info.colours.length === 2 ? '' : 's'} on ${info.colours[0]}`;
       // Sliders, one per declared parameter.
       const form = q('form.sliders');
       form.replaceChildren(...info.params.map((p, i) => {
@@ -162,7 +172,7 @@ export default {
       }));
       // Brush colours: the program's colours, then the background (an eraser).
       const sw = q('[data-testid=fit-brush-colours]');
-      const colours = [...info.colours, info.background];
+      const colours = [...palette().slice(1), palette()[0]];
       brush = Math.min(brush, colours.length - 1);
       sw.replaceChildren(...colours.map((c, i) => {
         const b = document.createElement('button');
@@ -175,7 +185,7 @@ export default {
         b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-pressed', String(j === i))); };
         return b;
       }));
-      if (!doc().target) fillTarget(info.background);
+      if (!doc().target) fillTarget(palette()[0]);
       else drawTarget();
       renderResults();
     }
@@ -194,7 +204,13 @@ export default {
         previewWanted = null;
         lastPreviewAt = performance.now();
         try {
-          const r = await pool.run('render-pattern', { program: doc().program, values, size: TARGET_SIZE });
+          const r = await pool.run('render-pattern', { program: doc().program, params: named(values), size: TARGET_SIZE });
+          // Only the shapes: background pixels become transparent, so the
+          // target shows through wherever the pattern has nothing.
+          const [br, bg, bb] = palette()[0];
+          for (let i = 0; i < r.rgba.length; i += 4) {
+            if (r.rgba[i] === br && r.rgba[i + 1] === bg && r.rgba[i + 2] === bb) r.rgba[i + 3] = 0;
+          }
           putRgba(overlay, r.width, r.height, r.rgba);
         } catch (err) {
           showError('.program-error', err.message);
@@ -225,7 +241,7 @@ export default {
 
     // Paint exact palette colours (no anti-aliasing): a disc of `size` pixels.
     function dab(x, y) {
-      const colours = [...info.colours, info.background];
+      const colours = [...palette().slice(1), palette()[0]];
       const [r, g, b] = colours[brush];
       const size = Number(q('[name=brush]').value) || 8;
       const rad = size / 2;
@@ -272,7 +288,7 @@ export default {
 
     async function makeTarget() {
       const d = doc();
-      const r = await pool.run('render-pattern', { program: d.program, values: d.values, size: TARGET_SIZE });
+      const r = await pool.run('render-pattern', { program: d.program, params: named(d.values), size: TARGET_SIZE });
       tctx.putImageData(new ImageData(new Uint8ClampedArray(r.rgba), r.width, r.height), 0, 0);
       storeTarget({ truth: [...d.values] });
       renderResults();
@@ -282,7 +298,7 @@ export default {
       showError('.target-error', '');
       try {
         const bytes = new Uint8Array(await file.arrayBuffer());
-        const r = await pool.run('pattern-snap', { program: doc().program, values: doc().values, bytes, size: TARGET_SIZE });
+        const r = await pool.run('pattern-snap', { program: doc().program, params: named(doc().values), bytes, size: TARGET_SIZE });
         tctx.putImageData(new ImageData(new Uint8ClampedArray(r.rgba), r.width, r.height), 0, 0);
         storeTarget({ truth: null });
         status(`${file.name}: snapped to the program's colours (${Math.round(r.unmatched * 100)}% of pixels were far from all of them)`);
@@ -307,7 +323,8 @@ export default {
       const floatIdx = info.params.map((p, i) => (p.integer ? -1 : i)).filter((i) => i >= 0);
       try {
         const r = await pool.run('fit', {
-          program: d.program, values: d.values, target: { ...d.target, rgba: d.target.rgba.slice() },
+          program: d.program, params: named(d.values, { integersOnly: true }),
+          target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
           budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
         }, {
           signal: ctrl.signal,
@@ -359,11 +376,11 @@ export default {
 
     q('[name=generator]').onchange = (e) => {
       const g = generators.find((x) => x.name === e.target.value);
-      if (g) setProgram(g.source, { generator: g.name }).then(() => fillTarget(info.background));
+      if (g) setProgram(g.source, { generator: g.name }).then((ok) => ok && fillTarget(palette()[0]));
     };
     q('[data-act=apply-program]').onclick = () => setProgram(q('[name=program]').value, { values: doc()?.values, generator: null });
     q('[data-act=make-target]').onclick = () => makeTarget().catch((err) => showError('.target-error', err.message));
-    q('[data-act=clear-target]').onclick = () => info && fillTarget(info.background);
+    q('[data-act=clear-target]').onclick = () => info && fillTarget(palette()[0]);
     q('[data-act=fit]').onclick = fit;
     q('[data-act=cancel]').onclick = () => running?.abort();
     q('[name=overlay]').oninput = (e) => { overlay.style.opacity = e.target.value; };
@@ -407,7 +424,7 @@ export default {
 
     const baseName = () => doc()?.generator || 'pattern';
     q('[data-act=export-svg]').onclick = async () => {
-      const r = await pool.run('render-pattern', { program: doc().program, values: doc().values, size: 512, svg: true });
+      const r = await pool.run('render-pattern', { program: doc().program, params: named(doc().values), size: 512 });
       download(`${baseName()}.svg`, r.svg, 'image/svg+xml');
     };
     q('[data-act=export-json]').onclick = () => {
@@ -447,7 +464,7 @@ export default {
       await restore();
     })().catch((err) => showError('.fit-error', err.message));
 
-    window.filigreeFit = { state: doc, info: () => info };
+    window.filigreeFit = { state: doc, info: () => info, plot };
   },
   unmount() {
     document.removeEventListener('keydown', this.onKey);

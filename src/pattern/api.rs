@@ -351,3 +351,39 @@ mod tests {
             .contains("no parameter 'radius'"));
     }
 }
+
+/// A target image snapped to a program's palette.
+#[derive(Debug, Clone)]
+pub struct Snapped {
+    /// `size × size`, every pixel exactly one of the program's colours.
+    pub image: Rgba8Image,
+    /// Fraction of pixels farther than the tolerance from every colour.
+    pub unmatched: f64,
+}
+
+/// Decode an uploaded target, resample it to `size × size` (nearest) and
+/// snap every pixel to the nearest colour the program draws with (or its
+/// background), so the user sees exactly what the fit will compare against.
+pub fn snap_target(
+    src: &str,
+    named: &BTreeMap<String, f64>,
+    bytes: &[u8],
+    size: usize,
+    tolerance: f64,
+) -> Result<Snapped> {
+    if !(8..=2048).contains(&size) {
+        return Err(Error::limit(format!(
+            "size {size} is outside 8..=2048 pixels"
+        )));
+    }
+    let img = crate::raster::decode(bytes, crate::raster::Limits::default())?;
+    let p = Program::parse(src)?;
+    let rec = p.record(&named_values(&p, named)?, &RecordLimits::default())?;
+    let (idx, unmatched) = super::target::snap_to_palette(&img, &rec.colours, size, tolerance);
+    let mut image = Rgba8Image::new(size as u32, size as u32);
+    for (i, &k) in idx.iter().enumerate() {
+        let [r, g, b] = rec.colours[k as usize];
+        image.data[4 * i..4 * i + 4].copy_from_slice(&[r, g, b, 255]);
+    }
+    Ok(Snapped { image, unmatched })
+}

@@ -210,6 +210,20 @@ struct RenderPatternRequest {
 }
 
 #[derive(Deserialize)]
+struct PatternSnapRequest {
+    program: String,
+    #[serde(default)]
+    params: BTreeMap<String, f64>,
+    /// The uploaded image file.
+    #[serde(with = "serde_bytes")]
+    bytes: Vec<u8>,
+    /// Side of the snapped square (default 256).
+    size: Option<usize>,
+    /// RGB distance counted as "far" (default 60).
+    tolerance: Option<f64>,
+}
+
+#[derive(Deserialize)]
 struct PatternInfoRequest {
     program: String,
     #[serde(default)]
@@ -433,6 +447,52 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
             Ok(wrap(
                 OneShot::new(move || pattern_api::program_info(&req.program, &req.params)),
                 |info| to_js(&info),
+            ))
+        }
+        "pattern-generators" => Ok(wrap(
+            OneShot::new(|| Ok(crate::pattern::generators::GENERATORS)),
+            |gens| {
+                #[derive(Serialize)]
+                struct Gen<'a> {
+                    name: &'a str,
+                    paper: Option<&'a str>,
+                    source: &'a str,
+                }
+                let list: Vec<Gen> = gens
+                    .iter()
+                    .map(|g| Gen {
+                        name: g.name,
+                        paper: g.paper,
+                        source: g.source,
+                    })
+                    .collect();
+                to_js(&list)
+            },
+        )),
+        "pattern-snap" => {
+            let req: PatternSnapRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || {
+                    pattern_api::snap_target(
+                        &req.program,
+                        &req.params,
+                        &req.bytes,
+                        req.size.unwrap_or(256),
+                        req.tolerance.unwrap_or(60.0),
+                    )
+                }),
+                |s| {
+                    #[derive(Serialize)]
+                    struct Out<'a> {
+                        #[serde(flatten)]
+                        image: RawImage<'a>,
+                        unmatched: f64,
+                    }
+                    to_js(&Out {
+                        image: RawImage::of(&s.image),
+                        unmatched: s.unmatched,
+                    })
+                },
             ))
         }
         "debug-abort" => {
