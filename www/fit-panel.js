@@ -321,24 +321,26 @@ export default {
       q('[data-act=fit]').disabled = true;
       const t0 = performance.now();
       const floatIdx = info.params.map((p, i) => (p.integer ? -1 : i)).filter((i) => i >= 0);
+      // A fresh payload per request: its pixel buffer is transferred to a worker.
+      const common = () => ({
+        program: d.program, params: named(d.values, { integersOnly: true }),
+        target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
+        budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
+      });
+      let shownLoss = Infinity;
+      const show = (fraction, stage, loss, best) => {
+        q('progress').value = fraction;
+        status(`${stage} — loss ${Number.isFinite(loss) ? loss.toPrecision(4) : '…'}`);
+        if (Number.isFinite(loss)) plot.push(fraction, loss);
+        if (best && loss <= shownLoss) {
+          shownLoss = loss;
+          const values = [...doc().values];
+          floatIdx.forEach((k, j) => { values[k] = best[j]; });
+          schedulePreview(values);
+        }
+      };
       try {
-        const r = await pool.run('fit', {
-          program: d.program, params: named(d.values, { integersOnly: true }),
-          target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
-          budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
-        }, {
-          signal: ctrl.signal,
-          onProgress: (p) => {
-            q('progress').value = p.fraction;
-            status(`${p.stage} — loss ${p.figure?.toPrecision(4) ?? '…'}`);
-            if (p.figure != null) plot.push(p.fraction, p.figure);
-            if (p.values) {
-              const values = [...doc().values];
-              floatIdx.forEach((k, j) => { values[k] = p.values[j]; });
-              schedulePreview(values);
-            }
-          },
-        });
+        const r = await parallelFit(common, ctrl.signal, show);
         const values = [...doc().values];
         floatIdx.forEach((k, j) => { values[k] = r.params[j]; });
         commit({ ...doc(), values, result: { params: r.params, loss: r.loss, names: r.names, evaluations: r.evaluations } });
@@ -355,6 +357,39 @@ export default {
         q('[data-act=cancel]').disabled = true;
         q('[data-act=fit]').disabled = false;
       }
+    }
+
+    // One fit across the worker pool: the initialisation (GA, or the chosen
+    // method) runs once and returns its best candidates; Adam then refines
+    // them in parallel, a contiguous share per worker. Adam treats each
+    // candidate on its own, so the best over the shares is the best of one
+    // sequential fit (tests/fit.rs checks this natively).
+    async function parallelFit(common, signal, show) {
+      const INIT_SHARE = 0.5;
+      const init = await pool.run('fit', { ...common(), iterations: 0 }, {
+        signal,
+        onProgress: (p) => show(p.fraction * INIT_SHARE, p.stage, p.figure ?? Infinity, p.values),
+      });
+      const starts = init.start_points;
+      const workers = Math.max(1, Math.min(pool.slots.length, starts.length));
+      const size = Math.ceil(starts.length / workers);
+      const shares = Array.from({ length: workers }, (_, w) => starts.slice(w * size, (w + 1) * size)).filter((x) => x.length);
+      const fractions = shares.map(() => 0);
+      const losses = shares.map(() => init.loss);
+      const results = await Promise.all(shares.map((share, w) => pool.run('fit', { ...common(), starts: share }, {
+        signal,
+        onProgress: (p) => {
+          fractions[w] = p.fraction;
+          if (p.figure != null) losses[w] = p.figure;
+          const mean = fractions.reduce((a, b) => a + b, 0) / fractions.length;
+          const best = Math.min(...losses);
+          show(INIT_SHARE + (1 - INIT_SHARE) * mean, `Adam on ${starts.length} candidates in ${shares.length} workers`,
+            best, losses[w] === best ? p.values : null);
+        },
+      })));
+      // Ties go to the earlier share, as the sequential fit keeps the first best.
+      const best = results.reduce((a, b) => (b.loss < a.loss ? b : a));
+      return { ...best, evaluations: init.evaluations + results.reduce((n, r) => n + r.evaluations, 0), init_loss: init.loss };
     }
 
     function renderResults() {

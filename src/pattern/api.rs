@@ -152,6 +152,12 @@ pub struct FitSettings {
     pub generations: Option<usize>,
     pub candidates: Option<usize>,
     pub iterations: Option<usize>,
+    /// Skip initialisation and run Adam from these points (raw float values,
+    /// declaration order). A browser worker pool refines the candidates of one
+    /// initialisation (`iterations: 0` returns them as `start_points`) in
+    /// parallel this way: Adam runs on each candidate independently, so the
+    /// best over the parts equals the best of one sequential fit.
+    pub starts: Option<Vec<Vec<f64>>>,
 }
 
 /// Options from settings, with errors naming the bad value.
@@ -232,7 +238,19 @@ pub fn start_fit(
     let opts = fit_options(settings)?;
     let (mut img, mut fl) = (None, vec![]);
     let t = target_source(&p, target, &mut img, &mut fl)?;
-    let job = FitJob::new(&p, &vals, &t, opts)?;
+    let job = match &settings.starts {
+        Some(starts) => {
+            let dim = p.params().iter().filter(|d| !d.integer).count();
+            if starts.is_empty() || starts.iter().any(|s| s.len() != dim) {
+                return Err(Error::input(format!(
+                    "start points must be a non-empty list of {dim} float parameter values each"
+                )));
+            }
+            let (scene, target) = super::fit::prepare(&p, &vals, &t, &opts.loss)?;
+            FitJob::refine_from(scene, target, opts, starts)
+        }
+        None => FitJob::new(&p, &vals, &t, opts)?,
+    };
     let scene = job.objective().scene.clone();
     Ok((job, scene))
 }

@@ -157,6 +157,8 @@ struct FitCommon {
     generations: Option<usize>,
     candidates: Option<usize>,
     iterations: Option<usize>,
+    /// Refine only, from these start points (see `FitSettings::starts`).
+    starts: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Deserialize)]
@@ -185,6 +187,7 @@ impl FitCommon {
             generations: self.generations,
             candidates: self.candidates,
             iterations: self.iterations,
+            starts: self.starts,
         };
         (self.program, self.params, target, settings)
     }
