@@ -468,3 +468,73 @@ fn cli_render_and_fit() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The browser splits one fit across workers: initialisation once
+/// (`iterations: 0` returns the candidates), then Adam on parts of the
+/// candidates in parallel. The best over the parts must be the best of the
+/// single sequential fit.
+#[test]
+fn refining_candidates_in_parts_equals_one_sequential_fit() {
+    use filigree::pattern::api::{start_fit, FitSettings, TargetSpec};
+    use std::collections::BTreeMap;
+    let src = generator("circles-grid").unwrap().source;
+    let named = BTreeMap::new();
+    let mut truth = BTreeMap::new();
+    truth.insert("r".to_string(), 0.05);
+    truth.insert("dx".to_string(), 0.18);
+    let target = TargetSpec {
+        params: Some(truth),
+        ..Default::default()
+    };
+    let base = FitSettings {
+        grid: Some(40),
+        population: Some(30),
+        generations: Some(4),
+        candidates: Some(4),
+        iterations: Some(40),
+        seed: Some(5),
+        ..Default::default()
+    };
+    let run = |s: &FitSettings| run_quietly(start_fit(src, &named, &target, s).unwrap().0).unwrap();
+    let whole = run(&base);
+    let init = run(&FitSettings {
+        iterations: Some(0),
+        ..base.clone()
+    });
+    assert_eq!(init.start_points.len(), 4);
+    assert_eq!(init.start_points, whole.start_points, "same initialisation");
+    let parts: Vec<_> = init
+        .start_points
+        .chunks(2)
+        .map(|c| {
+            run(&FitSettings {
+                starts: Some(c.to_vec()),
+                ..base.clone()
+            })
+        })
+        .collect();
+    let best = parts
+        .iter()
+        .min_by(|a, b| a.loss.total_cmp(&b.loss))
+        .unwrap();
+    // Start points cross the boundary in raw units and are normalised again,
+    // which can move the last bit of a value (and so of the loss).
+    assert!(
+        (best.loss - whole.loss).abs() <= 1e-12 * whole.loss,
+        "{} vs {}",
+        best.loss,
+        whole.loss
+    );
+    for (a, b) in best.params.iter().zip(&whole.params) {
+        assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} vs {b}");
+    }
+    // Bad start points are refused with a reason.
+    let bad = FitSettings {
+        starts: Some(vec![vec![0.1]]),
+        ..base
+    };
+    let err = start_fit(src, &named, &target, &bad)
+        .err()
+        .expect("refused");
+    assert!(err.to_string().contains("start points"), "{err}");
+}

@@ -4,8 +4,9 @@
 import { WorkerPool } from './client.js';
 import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
+import fitTool from './fit-panel.js';
 
-const TOOLS = [pixelTool, inspectTool];
+const TOOLS = [pixelTool, fitTool, inspectTool];
 
 const $ = (sel) => document.querySelector(sel);
 

@@ -154,6 +154,12 @@ pub struct FitSettings {
     pub iterations: Option<usize>,
     /// Adam iterations on the image-space loss after the fit (default 0 = off).
     pub polish: Option<usize>,
+    /// Skip initialisation and run Adam from these points (raw float values,
+    /// declaration order). A browser worker pool refines the candidates of one
+    /// initialisation (`iterations: 0` returns them as `start_points`) in
+    /// parallel this way: Adam runs on each candidate independently, so the
+    /// best over the parts equals the best of one sequential fit.
+    pub starts: Option<Vec<Vec<f64>>>,
 }
 
 /// Options from settings, with errors naming the bad value.
@@ -237,7 +243,19 @@ pub fn start_fit(
     let opts = fit_options(settings)?;
     let (mut img, mut fl) = (None, vec![]);
     let t = target_source(&p, target, &mut img, &mut fl)?;
-    let job = FitJob::new(&p, &vals, &t, opts)?;
+    let job = match &settings.starts {
+        Some(starts) => {
+            let dim = p.params().iter().filter(|d| !d.integer).count();
+            if starts.is_empty() || starts.iter().any(|s| s.len() != dim) {
+                return Err(Error::input(format!(
+                    "start points must be a non-empty list of {dim} float parameter values each"
+                )));
+            }
+            let (scene, target) = super::fit::prepare(&p, &vals, &t, &opts.loss)?;
+            FitJob::refine_from(scene, target, opts, starts)
+        }
+        None => FitJob::new(&p, &vals, &t, opts)?,
+    };
     let scene = job.objective().scene.clone();
     Ok((job, scene))
 }
@@ -355,4 +373,40 @@ mod tests {
             .to_string()
             .contains("no parameter 'radius'"));
     }
+}
+
+/// A target image snapped to a program's palette.
+#[derive(Debug, Clone)]
+pub struct Snapped {
+    /// `size × size`, every pixel exactly one of the program's colours.
+    pub image: Rgba8Image,
+    /// Fraction of pixels farther than the tolerance from every colour.
+    pub unmatched: f64,
+}
+
+/// Decode an uploaded target, resample it to `size × size` (nearest) and
+/// snap every pixel to the nearest colour the program draws with (or its
+/// background), so the user sees exactly what the fit will compare against.
+pub fn snap_target(
+    src: &str,
+    named: &BTreeMap<String, f64>,
+    bytes: &[u8],
+    size: usize,
+    tolerance: f64,
+) -> Result<Snapped> {
+    if !(8..=2048).contains(&size) {
+        return Err(Error::limit(format!(
+            "size {size} is outside 8..=2048 pixels"
+        )));
+    }
+    let img = crate::raster::decode(bytes, crate::raster::Limits::default())?;
+    let p = Program::parse(src)?;
+    let rec = p.record(&named_values(&p, named)?, &RecordLimits::default())?;
+    let (idx, unmatched) = super::target::snap_to_palette(&img, &rec.colours, size, tolerance);
+    let mut image = Rgba8Image::new(size as u32, size as u32);
+    for (i, &k) in idx.iter().enumerate() {
+        let [r, g, b] = rec.colours[k as usize];
+        image.data[4 * i..4 * i + 4].copy_from_slice(&[r, g, b, 255]);
+    }
+    Ok(Snapped { image, unmatched })
 }

@@ -159,6 +159,8 @@ struct FitCommon {
     iterations: Option<usize>,
     /// Adam iterations on the image-space loss after the fit (0 = off).
     polish: Option<usize>,
+    /// Refine only, from these start points (see `FitSettings::starts`).
+    starts: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Deserialize)]
@@ -188,6 +190,7 @@ impl FitCommon {
             candidates: self.candidates,
             iterations: self.iterations,
             polish: self.polish,
+            starts: self.starts,
         };
         (self.program, self.params, target, settings)
     }
@@ -210,6 +213,20 @@ struct RenderPatternRequest {
     size: Option<usize>,
     /// Samples per pixel side (default 1 = exact palette colours).
     supersample: Option<usize>,
+}
+
+#[derive(Deserialize)]
+struct PatternSnapRequest {
+    program: String,
+    #[serde(default)]
+    params: BTreeMap<String, f64>,
+    /// The uploaded image file.
+    #[serde(with = "serde_bytes")]
+    bytes: Vec<u8>,
+    /// Side of the snapped square (default 256).
+    size: Option<usize>,
+    /// RGB distance counted as "far" (default 60).
+    tolerance: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -436,6 +453,52 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
             Ok(wrap(
                 OneShot::new(move || pattern_api::program_info(&req.program, &req.params)),
                 |info| to_js(&info),
+            ))
+        }
+        "pattern-generators" => Ok(wrap(
+            OneShot::new(|| Ok(crate::pattern::generators::GENERATORS)),
+            |gens| {
+                #[derive(Serialize)]
+                struct Gen<'a> {
+                    name: &'a str,
+                    paper: Option<&'a str>,
+                    source: &'a str,
+                }
+                let list: Vec<Gen> = gens
+                    .iter()
+                    .map(|g| Gen {
+                        name: g.name,
+                        paper: g.paper,
+                        source: g.source,
+                    })
+                    .collect();
+                to_js(&list)
+            },
+        )),
+        "pattern-snap" => {
+            let req: PatternSnapRequest = from_js(kind, payload)?;
+            Ok(wrap(
+                OneShot::new(move || {
+                    pattern_api::snap_target(
+                        &req.program,
+                        &req.params,
+                        &req.bytes,
+                        req.size.unwrap_or(256),
+                        req.tolerance.unwrap_or(60.0),
+                    )
+                }),
+                |s| {
+                    #[derive(Serialize)]
+                    struct Out<'a> {
+                        #[serde(flatten)]
+                        image: RawImage<'a>,
+                        unmatched: f64,
+                    }
+                    to_js(&Out {
+                        image: RawImage::of(&s.image),
+                        unmatched: s.unmatched,
+                    })
+                },
             ))
         }
         "debug-abort" => {

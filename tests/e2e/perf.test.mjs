@@ -65,5 +65,32 @@ test('cold load and worker inspect timings are measured', async () => {
     bench: 'browser', wasm_bytes: wasm, first_contentful_paint_ms: Math.round(paintMs), core_ready_ms: readyMs,
     inspect_1024_worker_ms: { min: +r.min.toFixed(1), median: +r.median.toFixed(1) },
     pixel_fish_worker_ms: { placed: fish.placed, min: +fish.min.toFixed(1), median: +fish.median.toFixed(1) },
+    fit_paper_circles_mix_14_params: await paperFit(env),
   }));
 });
+
+// A paper-budget fit of the 14-parameter circles-mix generator through the
+// Fit panel, as a person runs it: target made from the defaults, Fit clicked.
+async function paperFit(env) {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await page.waitForSelector('[data-testid=fit-sliders] .row');
+  await page.selectOption('[data-testid=fit-generator]', 'circles-mix');
+  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'circles-mix');
+  await page.selectOption('select[name=budget]', 'paper');
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  const t0 = Date.now();
+  await page.click('button[data-act=fit]');
+  await page.waitForFunction(() => /^fitted/.test(document.querySelector('[data-testid=fit-status]').textContent)
+    || !document.querySelector('.fit-error').hidden, null, { timeout: 180000 });
+  const seconds = (Date.now() - t0) / 1000;
+  const r = await page.evaluate(() => {
+    const { values, truth } = window.filigreeFit.state();
+    const params = window.filigreeFit.info().params;
+    let mse = 0;
+    params.forEach((p, i) => { mse += ((values[i] - truth[i]) / (p.hi - p.lo)) ** 2 / params.length; });
+    return { mse, status: document.querySelector('[data-testid=fit-status]').textContent };
+  });
+  assert.match(r.status, /^fitted/);
+  return { seconds: +seconds.toFixed(2), workers: await page.evaluate(() => window.filigree.pool.slots.length), param_mse: +r.mse.toExponential(2) };
+}

@@ -1,0 +1,104 @@
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import { launch } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+const status = (page) => page.textContent('[data-testid=fit-status]');
+
+async function pickGenerator(page, name) {
+  await page.waitForSelector('[data-testid=fit-sliders] .row');
+  await page.selectOption('[data-testid=fit-generator]', name);
+  await page.waitForFunction((n) => window.filigreeFit.state()?.generator === n
+    && document.querySelector('[data-testid=fit-sliders] .row'), name);
+}
+
+async function runFit(page) {
+  await page.click('button[data-act=fit]');
+  await page.waitForFunction(() => /^fitted/.test(document.querySelector('[data-testid=fit-status]').textContent)
+    || !document.querySelector('.fit-error').hidden, null, { timeout: 120000 });
+  assert.equal(await page.isHidden('.fit-error'), true, await page.textContent('.fit-error'));
+}
+
+test('fit a stripes target made from known parameters, cancel a second fit, export SVG', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await pickGenerator(page, 'stripes');
+  // The truth: the program's defaults, drawn as the target.
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  const truth = await page.evaluate(() => window.filigreeFit.state().truth);
+
+  await runFit(page);
+  const points = await page.evaluate(() => window.filigreeFit.plot.points.map((p) => p[1]));
+  assert.ok(points.length >= 5, `the loss plot has ${points.length} points`);
+  assert.ok(points.at(-1) < points[0] * 0.8, `the loss fell from ${points[0]} to ${points.at(-1)}`);
+
+  // Recovered parameters are close to the truth, measured as the paper does:
+  // errors relative to each parameter's range. (The quick budget fits on a
+  // 64² grid, where the 0.008-wide crossing lines are half a pixel, so their
+  // width is the loosest.)
+  const { values, params } = await page.evaluate(() => ({
+    values: window.filigreeFit.state().values,
+    params: window.filigreeFit.info().params,
+  }));
+  let mse = 0;
+  params.forEach((p, i) => {
+    const err = Math.abs(values[i] - truth[i]) / (p.hi - p.lo);
+    mse += err * err / params.length;
+    assert.ok(err < 0.2, `${p.name}: fitted ${values[i]}, truth ${truth[i]} (error ${(err * 100).toFixed(1)}% of its range)`);
+  });
+  assert.ok(mse < 0.005, `normalised parameter MSE ${mse}`);
+  const tableRows = await page.$$eval('[data-testid=fit-results] tbody tr', (rows) => rows.length);
+  assert.equal(tableRows, params.length);
+
+  // A second fit, cancelled mid-way, leaves the fitted values alone.
+  await page.click('button[data-act=fit]');
+  await page.waitForFunction(() => /loss/.test(document.querySelector('[data-testid=fit-status]').textContent)
+    && !document.querySelector('button[data-act=cancel]').disabled);
+  await page.click('button[data-act=cancel]');
+  await page.waitForFunction(() => /^cancelled/.test(document.querySelector('[data-testid=fit-status]').textContent));
+  assert.deepEqual(await page.evaluate(() => window.filigreeFit.state().values), values);
+
+  // Export SVG of the fitted pattern.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-svg]')]);
+  const svg = fs.readFileSync(await download.path(), 'utf8');
+  assert.match(svg, /^<svg[^>]*xmlns="http:\/\/www.w3.org\/2000\/svg"/);
+  assert.ok((svg.match(/<(path|line|circle|rect|polygon)\b/g) || []).length >= 10, 'the SVG has the stripes');
+});
+
+test('draw a target by hand and fit it; a broken program is reported with its line', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await pickGenerator(page, 'circles-grid');
+  await page.click('button[data-act=clear-target]');
+  // Paint a few dots with the pattern's colour, like a person sketching.
+  await page.click('[data-testid=fit-brush-colours] button >> nth=0');
+  const box = await page.locator('[data-testid=fit-target]').boundingBox();
+  const s = box.width / 256;
+  for (const [x, y] of [[40, 40], [120, 40], [200, 40], [40, 120], [120, 120], [200, 120]]) {
+    await page.mouse.move(box.x + x * s, box.y + y * s);
+    await page.mouse.down();
+    await page.mouse.move(box.x + (x + 6) * s, box.y + (y + 6) * s, { steps: 3 });
+    await page.mouse.up();
+  }
+  const painted = await page.evaluate(() => {
+    const t = window.filigreeFit.state().target.rgba;
+    let n = 0;
+    for (let i = 0; i < t.length; i += 4) if (t[i] !== 255) n++;
+    return n;
+  });
+  assert.ok(painted > 300, `painted ${painted} pixels`);
+  await runFit(page);
+  assert.match(await status(page), /^fitted in [\d.]+ s — loss [\d.e-]+/);
+
+  // Break the program: the error names line and column; the sliders stay.
+  const before = await page.$$eval('[data-testid=fit-sliders] .row', (r) => r.length);
+  await page.click('details.program summary');
+  await page.fill('[data-testid=fit-program]', 'param a in [0, 1] = 0.5;\ncircle(0.5, 0.5, a +, fill: "#000000");\n');
+  await page.click('button[data-act=apply-program]');
+  await page.waitForSelector('[data-testid=fit-program-error]:not([hidden])');
+  assert.match(await page.textContent('[data-testid=fit-program-error]'), /line 2, column \d+/);
+  assert.equal(await page.$$eval('[data-testid=fit-sliders] .row', (r) => r.length), before);
+});

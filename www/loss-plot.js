@@ -1,0 +1,54 @@
+// A small live line plot of a loss curve (log-scaled y), drawn on a canvas.
+// Forty lines do what a plotting library would here, with nothing to vendor.
+
+export class LossPlot {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.points = [];
+  }
+
+  clear() {
+    this.points = [];
+    this.draw();
+  }
+
+  /** Add the loss at `x` (e.g. the job's progress fraction). */
+  push(x, loss) {
+    if (!Number.isFinite(loss) || loss <= 0) return;
+    this.points.push([x, loss]);
+    this.draw();
+  }
+
+  draw() {
+    const c = this.canvas;
+    const dpr = window.devicePixelRatio || 1;
+    const w = c.clientWidth || 300, h = c.clientHeight || 140;
+    c.width = w * dpr;
+    c.height = h * dpr;
+    const ctx = c.getContext('2d');
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    ctx.clearRect(0, 0, w, h);
+    const pad = { l: 44, r: 8, t: 8, b: 18 };
+    ctx.strokeStyle = '#363047';
+    ctx.strokeRect(pad.l, pad.t, w - pad.l - pad.r, h - pad.t - pad.b);
+    ctx.fillStyle = '#a49cb8';
+    ctx.font = '11px system-ui, sans-serif';
+    if (this.points.length < 1) {
+      ctx.fillText('loss appears here while fitting', pad.l + 8, h / 2);
+      return;
+    }
+    const ys = this.points.map((p) => Math.log10(p[1]));
+    let lo = Math.min(...ys), hi = Math.max(...ys);
+    if (hi - lo < 1e-6) { lo -= 0.5; hi += 0.5; }
+    const X = (x) => pad.l + x * (w - pad.l - pad.r);
+    const Y = (y) => pad.t + (1 - (y - lo) / (hi - lo)) * (h - pad.t - pad.b);
+    ctx.fillText(`${(10 ** hi).toPrecision(3)}`, 2, pad.t + 9);
+    ctx.fillText(`${(10 ** lo).toPrecision(3)}`, 2, h - pad.b);
+    ctx.fillText('progress →', w - 70, h - 4);
+    ctx.strokeStyle = '#c9a2ff';
+    ctx.lineWidth = 1.6;
+    ctx.beginPath();
+    this.points.forEach(([x], i) => (i ? ctx.lineTo(X(x), Y(ys[i])) : ctx.moveTo(X(x), Y(ys[i]))));
+    ctx.stroke();
+  }
+}
