@@ -19,8 +19,9 @@ self.addEventListener('install', (event) => {
       if (!res.ok) throw new Error(`precache: ${url} answered ${res.status}`);
       await cache.put(scopeUrl(url), res);
     }));
-    // First install: nothing to disrupt, take over at once.
-    if (!(await self.clients.matchAll()).length || !self.registration.active) await self.skipWaiting();
+    // First install: nothing to disrupt, take over at once. A later version
+    // waits until the page accepts it (SKIP_WAITING below).
+    if (!self.registration.active) await self.skipWaiting();
   })());
 });
 

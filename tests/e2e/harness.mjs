@@ -17,9 +17,10 @@ const ARGS = [
   '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
 ];
 
-/** Start server + browser. Returns {url, browser, server, newPage(), close()}. */
-export async function launch() {
-  const server = await start(0, ROOT);
+/** Start server (serving `root`, the repository by default) + browser.
+ * Returns {url, browser, server, newPage(), close()}. */
+export async function launch({ root = ROOT } = {}) {
+  const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
   const browser = await chromium.launch({ executablePath: CHROMIUM, args: ARGS, headless: true });
   const contexts = [];
