@@ -538,3 +538,89 @@ fn refining_candidates_in_parts_equals_one_sequential_fit() {
         .expect("refused");
     assert!(err.to_string().contains("start points"), "{err}");
 }
+
+/// A fit sharded over several jobs (the browser's worker pool) gives the
+/// result of one unsharded fit: the shards evaluate parts of every
+/// initialisation batch, exchange losses, stay identical, then refine
+/// contiguous shares of the candidates.
+#[test]
+fn a_sharded_fit_equals_one_fit() {
+    use filigree::pattern::api::{start_fit, FitSettings, TargetSpec};
+    use std::collections::BTreeMap;
+    let src = generator("stripes-dots").unwrap().source;
+    let named = BTreeMap::new();
+    let mut truth = BTreeMap::new();
+    truth.insert("spacing".to_string(), 0.15);
+    let target = TargetSpec {
+        params: Some(truth),
+        ..Default::default()
+    };
+    let base = FitSettings {
+        grid: Some(40),
+        population: Some(25),
+        generations: Some(3),
+        candidates: Some(3),
+        iterations: Some(30),
+        seed: Some(9),
+        ..Default::default()
+    };
+    let whole = run_quietly(start_fit(src, &named, &target, &base).unwrap().0).unwrap();
+
+    let n = 2;
+    let mut jobs: Vec<_> = (0..n)
+        .map(|k| {
+            let s = FitSettings {
+                shards: Some((k, n)),
+                ..base.clone()
+            };
+            start_fit(src, &named, &target, &s).unwrap().0
+        })
+        .collect();
+    let mut results = vec![None; n];
+    let mut exchanges = 0;
+    while results.iter().any(|r| r.is_none()) {
+        // Step each shard until it finishes or hands out its losses.
+        let mut outs = vec![None; n];
+        for (k, job) in jobs.iter_mut().enumerate() {
+            while results[k].is_none() && outs[k].is_none() {
+                match job.step().unwrap() {
+                    Step::Done(r) => results[k] = Some(r),
+                    Step::Running(_) => outs[k] = job.outbox(),
+                }
+            }
+        }
+        if outs.iter().any(|o| o.is_some()) {
+            assert!(
+                outs.iter().all(|o| o.is_some()),
+                "shards exchange in lockstep"
+            );
+            let parts: Vec<Vec<f64>> = outs.into_iter().map(|o| o.unwrap()).collect();
+            let merged: Vec<f64> = (0..parts[0].len())
+                .map(|i| {
+                    parts
+                        .iter()
+                        .map(|p| p[i])
+                        .find(|v| !v.is_nan())
+                        .expect("someone evaluated it")
+                })
+                .collect();
+            for job in &mut jobs {
+                job.inbox(merged.clone()).unwrap();
+            }
+            exchanges += 1;
+        }
+    }
+    // One exchange per initialisation batch (the first population and each generation).
+    assert!(exchanges >= 3, "{exchanges} exchanges");
+    let results: Vec<_> = results.into_iter().map(|r| r.unwrap()).collect();
+    let best = results
+        .iter()
+        .fold(&results[0], |a, b| if b.loss < a.loss { b } else { a });
+    assert_eq!(best.loss, whole.loss);
+    assert_eq!(best.params, whole.params);
+    let evals: u64 = results.iter().map(|r| r.evaluations).sum();
+    assert_eq!(evals, whole.evaluations, "the work is split, not repeated");
+    // A job refuses input it did not ask for.
+    let mut lone = start_fit(src, &named, &target, &base).unwrap().0;
+    assert!(lone.inbox(vec![1.0]).is_err());
+}

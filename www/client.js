@@ -40,6 +40,7 @@ class Slot {
     const job = this.job;
     if (!job || msg.id !== job.id) return;
     if (msg.type === MSG.PROGRESS) job.onProgress?.(msg.progress);
+    else if (msg.type === MSG.NEED) this.answer(job, msg.need);
     else if (msg.type === MSG.RESULT) this.finish(() => job.resolve(msg.result));
     else if (msg.type === MSG.ERROR) this.finish(() => job.reject(new JobError(msg.error.message, msg.error.kind)));
     else if (msg.type === MSG.PANIC) this.crash(msg.message);
@@ -60,6 +61,19 @@ class Slot {
     const job = this.job;
     if (job) this.finish(() => job.reject(new JobError(`${message}. The worker was restarted; try again.`, 'crash')));
     this.pool.onCrash?.(message);
+  }
+
+  // A job asked for data (see protocol.js 'need'): get it from the caller's onNeed.
+  async answer(job, need) {
+    try {
+      if (!job.onNeed) throw new JobError('the job asked for data but the caller gave no onNeed', 'protocol');
+      const data = await job.onNeed(need);
+      if (this.job === job) this.worker.postMessage({ type: MSG.INPUT, id: job.id, data });
+    } catch (err) {
+      if (this.job !== job) return;
+      this.worker.postMessage({ type: MSG.CANCEL, id: job.id });
+      this.finish(() => job.reject(err));
+    }
   }
 
   start(req) {
@@ -101,15 +115,16 @@ export class WorkerPool {
    * Run a job. Resolves with its result or rejects with a JobError
    * (kind 'cancelled' when `signal` aborts it).
    * @param {string} kind @param {object} payload
-   * @param {{onProgress?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[]}} [opts]
+   * `onNeed(data)` answers a job that must exchange data mid-way (async is fine).
+   * @param {{onProgress?: Function, onNeed?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[]}} [opts]
    */
-  run(kind, payload, { onProgress, signal, transfer } = {}) {
+  run(kind, payload, { onProgress, onNeed, signal, transfer } = {}) {
     return new Promise((resolve, reject) => {
       if (signal?.aborted) {
         reject(new JobError('cancelled', 'cancelled'));
         return;
       }
-      const req = { id: this.nextId++, kind, payload, transfer, onProgress, resolve, reject };
+      const req = { id: this.nextId++, kind, payload, transfer, onProgress, onNeed, resolve, reject };
       if (signal) {
         const onAbort = () => this.abort(req);
         signal.addEventListener('abort', onAbort, { once: true });
@@ -145,8 +160,9 @@ export class WorkerPool {
 }
 
 function defaultSize() {
-  // Each worker holds its own wasm instance; one per core, two at least so a
-  // long job never starves a quick one, four at most to bound memory.
+  // Each worker holds its own wasm instance: one per core for parallel work
+  // (a sharded fit uses all but one), plus one so quick jobs (previews) never
+  // wait behind a long one; four at most to bound memory.
   const cores = navigator.hardwareConcurrency || 2;
-  return Math.max(2, Math.min(4, cores));
+  return Math.max(2, Math.min(4, cores + 1));
 }

@@ -359,37 +359,50 @@ export default {
       }
     }
 
-    // One fit across the worker pool: the initialisation (GA, or the chosen
-    // method) runs once and returns its best candidates; Adam then refines
-    // them in parallel, a contiguous share per worker. Adam treats each
-    // candidate on its own, so the best over the shares is the best of one
-    // sequential fit (tests/fit.rs checks this natively).
+    // One fit sharded across the worker pool (all workers but one, which
+    // stays free for previews): every shard runs the same seeded fit,
+    // evaluates its part of each initialisation batch, and the page merges
+    // the parts and hands the full batch back to all of them, so they stay
+    // identical; then each refines a contiguous share of the candidates with
+    // Adam. The best over the shards is exactly the result of one fit
+    // (tests/fit.rs checks this natively).
     async function parallelFit(common, signal, show) {
-      const INIT_SHARE = 0.5;
-      const init = await pool.run('fit', { ...common(), iterations: 0 }, {
-        signal,
-        onProgress: (p) => show(p.fraction * INIT_SHARE, p.stage, p.figure ?? Infinity, p.values),
+      const n = Math.max(1, pool.slots.length - 1);
+      const inner = new AbortController();
+      const abort = () => inner.abort();
+      signal.addEventListener('abort', abort, { once: true });
+      let parts = [];
+      const exchange = (k, losses) => new Promise((resolve) => {
+        parts.push({ k, losses, resolve });
+        if (parts.length < n) return;
+        const merged = Array.from(parts[0].losses, (_, i) => {
+          const own = parts.find((p) => !Number.isNaN(p.losses[i]));
+          return own ? own.losses[i] : NaN;
+        });
+        const waiting = parts;
+        parts = [];
+        for (const p of waiting) p.resolve(merged);
       });
-      const starts = init.start_points;
-      const workers = Math.max(1, Math.min(pool.slots.length, starts.length));
-      const size = Math.ceil(starts.length / workers);
-      const shares = Array.from({ length: workers }, (_, w) => starts.slice(w * size, (w + 1) * size)).filter((x) => x.length);
-      const fractions = shares.map(() => 0);
-      const losses = shares.map(() => init.loss);
-      const results = await Promise.all(shares.map((share, w) => pool.run('fit', { ...common(), starts: share }, {
-        signal,
-        onProgress: (p) => {
-          fractions[w] = p.fraction;
-          if (p.figure != null) losses[w] = p.figure;
-          const mean = fractions.reduce((a, b) => a + b, 0) / fractions.length;
-          const best = Math.min(...losses);
-          show(INIT_SHARE + (1 - INIT_SHARE) * mean, `Adam on ${starts.length} candidates in ${shares.length} workers`,
-            best, losses[w] === best ? p.values : null);
-        },
-      })));
-      // Ties go to the earlier share, as the sequential fit keeps the first best.
-      const best = results.reduce((a, b) => (b.loss < a.loss ? b : a));
-      return { ...best, evaluations: init.evaluations + results.reduce((n, r) => n + r.evaluations, 0), init_loss: init.loss };
+      const fractions = Array(n).fill(0);
+      const losses = Array(n).fill(Infinity);
+      try {
+        const results = await Promise.all(Array.from({ length: n }, (_, k) => pool.run('fit', { ...common(), shards: [k, n] }, {
+          signal: inner.signal,
+          onNeed: (need) => exchange(k, need),
+          onProgress: (p) => {
+            fractions[k] = p.fraction;
+            if (p.figure != null) losses[k] = p.figure;
+            const best = Math.min(...losses);
+            const stage = n > 1 ? `${p.stage} (${n} workers)` : p.stage;
+            show(fractions.reduce((a, b) => a + b, 0) / n, stage, best, losses[k] === best ? p.values : null);
+          },
+        }).catch((err) => { inner.abort(); throw err; })));
+        // Ties go to the earlier shard, as one fit keeps the first best.
+        const best = results.reduce((a, b) => (b.loss < a.loss ? b : a));
+        return { ...best, evaluations: results.reduce((e, r) => e + r.evaluations, 0) };
+      } finally {
+        signal.removeEventListener('abort', abort);
+      }
     }
 
     function renderResults() {

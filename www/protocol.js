@@ -7,11 +7,15 @@
 //                                      are transferred, not copied.
 //   {type: 'cancel', id}               stop job `id` at its next slice boundary
 //                                      (read within ~15 ms of wall time).
+//   {type: 'input', id, data}          the answer to the job's `need` (below).
 //
 // Worker → page
 //   {type: 'ready', version}           the wasm core is loaded.
 //   {type: 'progress', id, progress: {fraction, stage, figure}}
 //                                      at most every ~15 ms while a job runs.
+//   {type: 'need', id, need}           the job must exchange data with sibling
+//                                      jobs (e.g. one fit sharded over the pool)
+//                                      and pauses until an 'input' arrives.
 //   {type: 'result', id, result}       the job finished; typed arrays in
 //                                      `result` arrive as transferred buffers.
 //   {type: 'error', id, error: {kind, message}}
@@ -22,8 +26,8 @@
 //                                      replaces it. A worker that dies without
 //                                      a word ('error' event) is treated alike.
 export const MSG = Object.freeze({
-  RUN: 'run', CANCEL: 'cancel',
-  READY: 'ready', PROGRESS: 'progress', RESULT: 'result', ERROR: 'error', PANIC: 'panic',
+  RUN: 'run', CANCEL: 'cancel', INPUT: 'input',
+  READY: 'ready', PROGRESS: 'progress', NEED: 'need', RESULT: 'result', ERROR: 'error', PANIC: 'panic',
 });
 
 // Wall-clock budget of one run of slices before the worker yields.

@@ -17,6 +17,7 @@ const ready = init({ module_or_path: new URL('../pkg/filigree_bg.wasm', import.m
 });
 
 const cancelled = new Set();
+const waiting = new Map(); // id → resolve of a job paused on its `need`
 let broken = false;
 
 // A macrotask yield that is not clamped like nested setTimeout(0).
@@ -54,6 +55,14 @@ async function run({ id, kind, payload }) {
         return;
       }
       const r = job.step();
+      if (r.need) {
+        self.postMessage({ type: MSG.PROGRESS, id, progress: r.progress });
+        self.postMessage({ type: MSG.NEED, id, need: r.need });
+        const data = await new Promise((resolve) => waiting.set(id, resolve));
+        if (data) job.provide(data);
+        sliceStart = performance.now();
+        continue;
+      }
       if (r.done) {
         self.postMessage({ type: MSG.RESULT, id, result: r.result }, transferables(r.result));
         return;
@@ -75,12 +84,18 @@ async function run({ id, kind, payload }) {
     self.postMessage({ type: MSG.ERROR, id, error: { kind: errorKind(message), message } });
   } finally {
     cancelled.delete(id);
+    waiting.delete(id);
     if (job && !broken) job.free();
   }
 }
 
 self.onmessage = (e) => {
   const msg = e.data;
-  if (msg.type === MSG.CANCEL) cancelled.add(msg.id);
-  else if (msg.type === MSG.RUN) run(msg);
+  if (msg.type === MSG.CANCEL) {
+    cancelled.add(msg.id);
+    waiting.get(msg.id)?.(null); // a paused job wakes up to see the cancel
+  } else if (msg.type === MSG.INPUT) {
+    waiting.get(msg.id)?.(msg.data);
+    waiting.delete(msg.id);
+  } else if (msg.type === MSG.RUN) run(msg);
 };

@@ -60,6 +60,19 @@ pub trait Job {
     type Output;
     /// Do one slice of work.
     fn step(&mut self) -> Result<Step<Self::Output>>;
+
+    /// Data this job must share with sibling jobs before it can go on
+    /// (e.g. a sharded fit's losses). Checked after every step; when it
+    /// returns `Some`, the driver delivers the merged answer with
+    /// [`Job::inbox`] before stepping again. Most jobs never exchange.
+    fn outbox(&mut self) -> Option<Vec<f64>> {
+        None
+    }
+
+    /// Deliver the answer to the last [`Job::outbox`].
+    fn inbox(&mut self, _data: Vec<f64>) -> Result<()> {
+        Err(Error::input("this job takes no input while it runs"))
+    }
 }
 
 /// A cancel flag shared between whoever drives a job and whoever may stop it.

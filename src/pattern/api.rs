@@ -160,6 +160,8 @@ pub struct FitSettings {
     /// parallel this way: Adam runs on each candidate independently, so the
     /// best over the parts equals the best of one sequential fit.
     pub starts: Option<Vec<Vec<f64>>>,
+    /// `[k, n]`: this job is shard k of n of one fit (see `FitOptions::shards`).
+    pub shards: Option<(usize, usize)>,
 }
 
 /// Options from settings, with errors naming the bad value.
@@ -202,6 +204,14 @@ pub fn fit_options(s: &FitSettings) -> Result<FitOptions> {
     }
     if let Some(v) = s.iterations {
         o.iterations = v.min(100_000);
+    }
+    if let Some((k, n)) = s.shards {
+        if n == 0 || n > 64 || k >= n {
+            return Err(Error::input(format!(
+                "shard {k} of {n}: need 1..=64 shards and an index below their count"
+            )));
+        }
+        o.shards = (k, n);
     }
     if let Some(v) = s.polish {
         o.polish = v.min(100_000);

@@ -66,6 +66,19 @@ pub struct FitOptions {
     /// (`image_same_init`) shows this polish removing most of that bias.
     #[serde(default)]
     pub polish: usize,
+    /// Split one fit over `shards.1` identical jobs (a browser worker pool):
+    /// job `shards.0` evaluates every `shards.1`-th point of each
+    /// initialisation batch, the driver exchanges the losses
+    /// ([`Job::outbox`] / [`Job::inbox`]) so every job tells its initialiser
+    /// the same full batch and stays identical, and then each job refines a
+    /// contiguous share of the candidates with Adam. The best result over
+    /// the shares equals the result of one unsharded fit. `(0, 1)` = alone.
+    #[serde(default = "one_shard")]
+    pub shards: (usize, usize),
+}
+
+fn one_shard() -> (usize, usize) {
+    (0, 1)
 }
 
 impl FitOptions {
@@ -84,6 +97,7 @@ impl FitOptions {
             work_per_step: 300_000,
             threads: 1,
             polish: 0,
+            shards: (0, 1),
         };
         match b {
             Budget::Paper => paper,
@@ -234,6 +248,22 @@ pub struct FitJob {
     workers: Vec<Objective>,
     polish: Option<(Objective, Adam)>,
     polish_loss: Option<f64>,
+    /// Sharded initialisation: this job's losses of the current batch (NaN
+    /// where another shard evaluates), the next index to look at, and
+    /// whether the batch waits for the other shards' losses.
+    shard_losses: Vec<f64>,
+    shard_next: usize,
+    exchange: Exchange,
+}
+
+/// Where a sharded job is in a loss exchange.
+#[derive(Debug, Clone, PartialEq)]
+enum Exchange {
+    None,
+    /// Own losses ready to hand out.
+    Ready(Vec<f64>),
+    /// Handed out; waiting for the full batch.
+    Waiting,
 }
 
 impl FitJob {
@@ -290,6 +320,9 @@ impl FitJob {
             workers: vec![],
             polish: None,
             polish_loss: None,
+            shard_losses: vec![],
+            shard_next: 0,
+            exchange: Exchange::None,
         }
     }
 
@@ -432,6 +465,42 @@ impl FitJob {
 impl Job for FitJob {
     type Output = FitResult;
 
+    fn outbox(&mut self) -> Option<Vec<f64>> {
+        match std::mem::replace(&mut self.exchange, Exchange::Waiting) {
+            Exchange::Ready(v) => Some(v),
+            other => {
+                self.exchange = other;
+                None
+            }
+        }
+    }
+
+    /// The full batch of losses, every shard's part merged.
+    fn inbox(&mut self, losses: Vec<f64>) -> Result<()> {
+        if self.exchange != Exchange::Waiting || losses.len() != self.batch.len() {
+            return Err(Error::input(format!(
+                "unexpected loss exchange: {} losses for a batch of {}",
+                losses.len(),
+                self.batch.len()
+            )));
+        }
+        let (k, n) = self.opts.shards;
+        for (i, &l) in losses.iter().enumerate() {
+            // Our own losses must come back unchanged: the shards agree on the batch.
+            if i % n == k && l.to_bits() != self.shard_losses[i].to_bits() {
+                return Err(Error::input(
+                    "loss exchange: the shards disagree on the batch",
+                ));
+            }
+        }
+        // Record in batch order, exactly as one unsharded job does.
+        for (i, l) in losses.into_iter().enumerate() {
+            self.record_point(i, l);
+        }
+        self.exchange = Exchange::None;
+        Ok(())
+    }
+
     fn step(&mut self) -> Result<Step<FitResult>> {
         let mut work = 0u64;
         let mut evals = 0;
@@ -447,14 +516,45 @@ impl Job for FitJob {
                             self.generation += 1;
                         }
                         self.batch = self.init.ask(&mut self.rng);
+                        self.shard_losses = vec![f64::NAN; self.batch.len()];
+                        self.shard_next = 0;
                         if self.batch.is_empty() {
                             self.candidates =
                                 best_distinct(&self.archive, self.opts.candidates.max(1));
+                            let (k, n) = self.opts.shards;
+                            if n > 1 {
+                                // This shard refines its contiguous share.
+                                let size = self.candidates.len().div_ceil(n);
+                                let end = ((k + 1) * size).min(self.candidates.len());
+                                self.candidates =
+                                    self.candidates[(k * size).min(end)..end].to_vec();
+                            }
                             self.archive = vec![];
                             self.init_loss = self.best.loss;
                             self.done = self.done.max(self.init.budget());
                             self.phase = Phase::Refine;
                         }
+                        continue;
+                    }
+                    if self.opts.shards.1 > 1 {
+                        if self.exchange != Exchange::None {
+                            // Nothing to do until the driver brings the other shards' losses.
+                            return Ok(Step::Running(self.progress()));
+                        }
+                        let (k, n) = self.opts.shards;
+                        while self.shard_next < self.batch.len() && self.shard_next % n != k {
+                            self.shard_next += 1;
+                        }
+                        if self.shard_next == self.batch.len() {
+                            self.exchange = Exchange::Ready(self.shard_losses.clone());
+                            return Ok(Step::Running(self.progress()));
+                        }
+                        let i = self.shard_next;
+                        let x = self.denormalise(&self.batch[i]);
+                        self.shard_losses[i] = self.obj.loss(&x);
+                        self.shard_next += 1;
+                        work += self.obj.last_work;
+                        evals += 1;
                         continue;
                     }
                     work += self.eval_batch_points();

@@ -12,12 +12,17 @@ use wasm_bindgen::JsValue;
 /// A job with its output already turned into a JS value.
 pub trait DynJob {
     fn step(&mut self) -> Result<JsValue, String>;
+    /// Deliver the merged answer to the job's last `need`.
+    fn provide(&mut self, data: Vec<f64>) -> Result<(), String>;
 }
 
 #[derive(Serialize)]
 struct Running<'a> {
     done: bool,
     progress: &'a Progress,
+    /// Data to exchange with sibling jobs before the next step (see `Job::outbox`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    need: Option<Vec<f64>>,
 }
 
 struct Wrapped<J, F> {
@@ -30,11 +35,16 @@ where
     J: Job,
     F: FnMut(J::Output) -> Result<JsValue, String>,
 {
+    fn provide(&mut self, data: Vec<f64>) -> Result<(), String> {
+        self.job.inbox(data).map_err(|e| e.to_string())
+    }
+
     fn step(&mut self) -> Result<JsValue, String> {
         match self.job.step().map_err(|e| e.to_string())? {
             Step::Running(p) => to_js(&Running {
                 done: false,
                 progress: &p,
+                need: self.job.outbox(),
             }),
             Step::Done(out) => {
                 let result = (self.to_js)(out)?;
@@ -161,6 +171,8 @@ struct FitCommon {
     polish: Option<usize>,
     /// Refine only, from these start points (see `FitSettings::starts`).
     starts: Option<Vec<Vec<f64>>>,
+    /// `[k, n]`: shard k of n of one fit across a worker pool.
+    shards: Option<(usize, usize)>,
 }
 
 #[derive(Deserialize)]
@@ -191,6 +203,7 @@ impl FitCommon {
             iterations: self.iterations,
             polish: self.polish,
             starts: self.starts,
+            shards: self.shards,
         };
         (self.program, self.params, target, settings)
     }

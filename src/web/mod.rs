@@ -38,9 +38,15 @@ pub fn start_job(kind: &str, payload: JsValue) -> Result<WebJob, JsError> {
 
 #[wasm_bindgen]
 impl WebJob {
-    /// Do one bounded slice of work. Returns `{done: false, progress: {fraction, stage, figure}}`
-    /// or `{done: true, result: ...}`; throws on error.
+    /// Do one bounded slice of work. Returns `{done: false, progress: {fraction, stage, figure},
+    /// need?: number[]}` or `{done: true, result: ...}`; throws on error. With
+    /// `need`, call [`WebJob::provide`] before stepping again.
     pub fn step(&mut self) -> Result<JsValue, JsError> {
         self.inner.step().map_err(|e| JsError::new(&e))
+    }
+
+    /// Answer the `need` of the last step (merged data from sibling jobs).
+    pub fn provide(&mut self, data: Vec<f64>) -> Result<(), JsError> {
+        self.inner.provide(data).map_err(|e| JsError::new(&e))
     }
 }
