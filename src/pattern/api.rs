@@ -154,12 +154,6 @@ pub struct FitSettings {
     pub iterations: Option<usize>,
     /// Adam iterations on the image-space loss after the fit (default 0 = off).
     pub polish: Option<usize>,
-    /// Skip initialisation and run Adam from these points (raw float values,
-    /// declaration order). A browser worker pool refines the candidates of one
-    /// initialisation (`iterations: 0` returns them as `start_points`) in
-    /// parallel this way: Adam runs on each candidate independently, so the
-    /// best over the parts equals the best of one sequential fit.
-    pub starts: Option<Vec<Vec<f64>>>,
     /// `[k, n]`: this job is shard k of n of one fit (see `FitOptions::shards`).
     pub shards: Option<(usize, usize)>,
 }
@@ -253,19 +247,7 @@ pub fn start_fit(
     let opts = fit_options(settings)?;
     let (mut img, mut fl) = (None, vec![]);
     let t = target_source(&p, target, &mut img, &mut fl)?;
-    let job = match &settings.starts {
-        Some(starts) => {
-            let dim = p.params().iter().filter(|d| !d.integer).count();
-            if starts.is_empty() || starts.iter().any(|s| s.len() != dim) {
-                return Err(Error::input(format!(
-                    "start points must be a non-empty list of {dim} float parameter values each"
-                )));
-            }
-            let (scene, target) = super::fit::prepare(&p, &vals, &t, &opts.loss)?;
-            FitJob::refine_from(scene, target, opts, starts)
-        }
-        None => FitJob::new(&p, &vals, &t, opts)?,
-    };
+    let job = FitJob::new(&p, &vals, &t, opts)?;
     let scene = job.objective().scene.clone();
     Ok((job, scene))
 }

@@ -169,8 +169,6 @@ struct FitCommon {
     iterations: Option<usize>,
     /// Adam iterations on the image-space loss after the fit (0 = off).
     polish: Option<usize>,
-    /// Refine only, from these start points (see `FitSettings::starts`).
-    starts: Option<Vec<Vec<f64>>>,
     /// `[k, n]`: shard k of n of one fit across a worker pool.
     shards: Option<(usize, usize)>,
 }
@@ -202,7 +200,6 @@ impl FitCommon {
             candidates: self.candidates,
             iterations: self.iterations,
             polish: self.polish,
-            starts: self.starts,
             shards: self.shards,
         };
         (self.program, self.params, target, settings)
