@@ -390,6 +390,8 @@ export default {
           signal: inner.signal,
           onNeed: (need) => exchange(k, need),
           onProgress: (p) => {
+            // A shard still reporting after the fit ended must not repaint the status.
+            if (inner.signal.aborted) return;
             fractions[k] = p.fraction;
             if (p.figure != null) losses[k] = p.figure;
             const best = Math.min(...losses);

@@ -236,7 +236,7 @@ export default {
 
     function scheduleRun() {
       clearTimeout(runTimer);
-      runTimer = setTimeout(run, RUN_DELAY_MS);
+      runTimer = setTimeout(() => { runTimer = null; run(); }, RUN_DELAY_MS);
     }
 
     async function run() {
@@ -260,11 +260,16 @@ export default {
         status(`done in ${Math.round(performance.now() - t0)} ms`);
         showStats(r);
         draw();
+        // Counts finished runs, so a test (or a person) can tell two results apart.
+        const el2 = q('[data-testid=pixel-status]');
+        el2.dataset.runs = String(Number(el2.dataset.runs || 0) + 1);
       } catch (err) {
         if (err.kind === 'cancelled') return;
         // Keep the last good result on screen; say what is wrong now.
         setError(err.message);
         status('');
+      } finally {
+        if (running === ctrl) running = null;
       }
     }
 
@@ -614,7 +619,8 @@ export default {
     }).catch((err) => setError(err.message));
 
     // For tests and the console: the current document and result.
-    window.filigreePixel = { state, result: () => result };
+    // For tests and the console: the document, the last result, and whether a run is due or going.
+    window.filigreePixel = { state, result: () => result, pending: () => runTimer !== null || running !== null };
   },
   unmount() {
     this.detach?.();

@@ -54,7 +54,9 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
   const tableRows = await page.$$eval('[data-testid=fit-results] tbody tr', (rows) => rows.length);
   assert.equal(tableRows, params.length);
 
-  // A second fit, cancelled mid-way, leaves the fitted values alone.
+  // A second fit, cancelled mid-way, leaves the fitted values alone. (The
+  // paper budget takes seconds, so the cancel surely lands mid-way.)
+  await page.selectOption('select[name=budget]', 'paper');
   await page.click('button[data-act=fit]');
   await page.waitForFunction(() => /loss/.test(document.querySelector('[data-testid=fit-status]').textContent)
     && !document.querySelector('button[data-act=cancel]').disabled);

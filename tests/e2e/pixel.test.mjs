@@ -9,13 +9,15 @@ let env;
 before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
-// Wait until the panel shows a result for the current state.
-async function waitForResult(page, previousStatus = null) {
+// Wait until the panel has finished one more run than `previous` (its run count).
+async function waitForResult(page, previous = null) {
   await page.waitForFunction((prev) => {
-    const s = document.querySelector('[data-testid=pixel-status]').textContent;
-    return s.startsWith('done') && s !== prev;
-  }, previousStatus, { timeout: 30000 });
-  return page.textContent('[data-testid=pixel-status]');
+    const el = document.querySelector('[data-testid=pixel-status]');
+    const runs = Number(el.dataset.runs || 0);
+    return el.textContent.startsWith('done') && runs > 0 && (prev === null || runs > prev)
+      && !window.filigreePixel.pending();
+  }, previous, { timeout: 30000 });
+  return page.$eval('[data-testid=pixel-status]', (el) => Number(el.dataset.runs));
 }
 
 const stat = (page, name) => page.$eval(`[data-stat="${name}"]`, (e) => Number(e.textContent));
@@ -112,7 +114,10 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
 
 test('a wrong-size mask is refused with a clear error; a saved project reopens', async () => {
   const page = await env.newPage({ path: '#tool=pixel' });
+  // The panel starts with the fish; wait until the trunk is really loaded.
+  await page.waitForFunction(() => window.filigreePixel?.state()?.example === 'fish');
   await page.click('button[data-example=trunk]');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
   await waitForResult(page);
   const before = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
 
@@ -141,6 +146,7 @@ test('a wrong-size mask is refused with a clear error; a saved project reopens',
   const project = fs.readFileSync(await download.path(), 'utf8');
   assert.equal(JSON.parse(project).tool, 'pixel');
   await page.click('button[data-example=fish]');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
   await waitForResult(page);
   const file = path.join(os.tmpdir(), `trunk-${process.pid}.filigree.json`);
   fs.writeFileSync(file, project);
