@@ -2,7 +2,7 @@
 //! text files under `assets/patterns/`, compiled into the crate.
 
 /// One example program.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct Generator {
     /// Short kebab-case name, e.g. `circles-grid`.
     pub name: &'static str,

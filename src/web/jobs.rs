@@ -467,23 +467,7 @@ pub fn start(kind: &str, payload: JsValue) -> Result<Box<dyn DynJob>, String> {
         }
         "pattern-generators" => Ok(wrap(
             OneShot::new(|| Ok(crate::pattern::generators::GENERATORS)),
-            |gens| {
-                #[derive(Serialize)]
-                struct Gen<'a> {
-                    name: &'a str,
-                    paper: Option<&'a str>,
-                    source: &'a str,
-                }
-                let list: Vec<Gen> = gens
-                    .iter()
-                    .map(|g| Gen {
-                        name: g.name,
-                        paper: g.paper,
-                        source: g.source,
-                    })
-                    .collect();
-                to_js(&list)
-            },
+            to_js,
         )),
         "pattern-snap" => {
             let req: PatternSnapRequest = from_js(kind, payload)?;
