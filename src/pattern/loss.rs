@@ -362,6 +362,12 @@ impl Objective {
     /// The loss at `params` (float parameters, declaration order, raw units).
     pub fn loss(&mut self, params: &[f64]) -> f64 {
         self.scene.rec.tape.forward(params, &mut self.nodes);
+        if !self.scene.shapes_finite(&self.nodes) {
+            // The program divides by zero (or worse) at these parameters.
+            self.evaluations += 1;
+            self.last_work = self.scene.rec.prims.len() as u64 + 1;
+            return f64::INFINITY;
+        }
         self.eval.eval(&self.scene, &self.nodes, false);
         self.evaluations += 1;
         self.last_work = self.eval.work;
@@ -382,6 +388,12 @@ impl Objective {
     /// The loss and its exact gradient (written to `grad`, raw units).
     pub fn loss_grad(&mut self, params: &[f64], grad: &mut [f64]) -> f64 {
         self.scene.rec.tape.forward(params, &mut self.nodes);
+        if !self.scene.shapes_finite(&self.nodes) {
+            self.evaluations += 1;
+            self.last_work = self.scene.rec.prims.len() as u64 + 1;
+            grad.iter_mut().for_each(|g| *g = 0.0);
+            return f64::INFINITY;
+        }
         self.eval.eval(&self.scene, &self.nodes, true);
         self.evaluations += 1;
         self.last_work = self.eval.work * 2;

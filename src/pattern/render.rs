@@ -19,13 +19,16 @@ pub fn render(
     supersample: usize,
 ) -> Result<Rgba8Image> {
     let ss = supersample.max(1);
-    if size == 0 || size * ss > MAX_RENDER_SIDE {
-        return Err(Error::limit(format!(
-            "render size {size}×{ss} samples is outside 1..={MAX_RENDER_SIDE}"
-        )));
-    }
-    let idx = super::fit::colour_indices(scene, params, size * ss)?;
-    let n = size * ss;
+    let n = match size.checked_mul(ss) {
+        Some(n) if size > 0 && n <= MAX_RENDER_SIDE => n,
+        _ => {
+            return Err(Error::limit(format!(
+                "render size {size} pixels × {ss} samples per side is outside 1..={MAX_RENDER_SIDE} samples; \
+                 lower the size or the supersampling"
+            )))
+        }
+    };
+    let idx = super::fit::colour_indices(scene, params, n)?;
     let pal = &scene.rec.colours;
     let mut img = Rgba8Image::new(size as u32, size as u32);
     for y in 0..size {
