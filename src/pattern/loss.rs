@@ -494,4 +494,22 @@ mod tests {
         let off = o.loss(&[0.25, 0.06, 0.2, 0.015]);
         assert!(off > at * 5.0 && off > at + 0.3, "{off} vs {at}");
     }
+
+    /// A tape that divides by zero only at some parameter values: those
+    /// points are invalid (infinite loss, zero gradient), never NaN.
+    #[test]
+    fn parameters_that_divide_by_zero_give_an_infinite_loss() {
+        let src = "param a in [0, 1] = 0.25;\ncircle(0.5, 0.5, 0.02 / (a - 0.5) ^ 2 * 0.01, fill: \"#000\");";
+        let mut o = objective(src, &[0.25], LossKind::Sdf, 32);
+        assert!(o.loss(&[0.25]).is_finite());
+        assert_eq!(o.loss(&[0.5]), f64::INFINITY);
+        let mut g = [1.0];
+        assert_eq!(o.loss_grad(&[0.5], &mut g), f64::INFINITY);
+        assert_eq!(g, [0.0]);
+        // 0/0 too.
+        let src = "param a in [0, 1] = 0.25;\ncircle(0.5, 0.5, 0.1 * (a - 0.5) / (a - 0.5), fill: \"#000\");";
+        let mut o = objective(src, &[0.25], LossKind::Sdf, 32);
+        assert!(o.loss(&[0.3]).is_finite());
+        assert_eq!(o.loss(&[0.5]), f64::INFINITY);
+    }
 }
