@@ -147,6 +147,7 @@ fn non_finite_values_are_located_errors() {
 
 #[test]
 fn primitives_inside_paths_and_booleans_count_against_the_limit() {
+    #[allow(clippy::disallowed_methods)] // a native test timing the limit
     let t = std::time::Instant::now();
     let e = rec("union() { for i in 0..100000 { circle(0.5, 0.5, 0.1); } }").unwrap_err();
     assert!(matches!(e, Error::Limit(_)), "{e:?}");
@@ -177,7 +178,9 @@ fn primitives_inside_paths_and_booleans_count_against_the_limit() {
 
 /// Families of programs that nest as deeply as the language allows:
 /// `(name, program for depth k)`.
-pub(crate) fn deep_families() -> Vec<(&'static str, Box<dyn Fn(usize) -> String>)> {
+type Family = (&'static str, Box<dyn Fn(usize) -> String>);
+
+pub(crate) fn deep_families() -> Vec<Family> {
     const C: &str = "circle(0.5, 0.5, 0.1);";
     vec![
         (
