@@ -204,6 +204,11 @@ mod tests {
             );
             init.tell(b, &l);
         }
+        // Finished means the next ask is empty; the best told is the best seen.
+        assert!(init.done());
+        assert!(init.ask(&mut rng).is_empty());
+        let best_seen = all.iter().map(|s| s.loss).fold(f64::INFINITY, f64::min);
+        assert_eq!(init.best().map(|b| b.loss), Some(best_seen));
         assert!(
             all.len() <= init.budget() + 3,
             "{} > {}",

@@ -160,7 +160,7 @@ pub struct FitResult {
 }
 
 /// Build the scene (recorded with `values`) and target for a fit.
-pub fn prepare(
+pub(crate) fn prepare(
     program: &Program,
     values: &[f64],
     target: &TargetSource,

@@ -10,9 +10,9 @@
 //! zero-area set (paths get their sign from the winding number, see
 //! [`winding`]).
 use crate::geom::bezier::{quad_closest, quad_distance_grad, Quad};
+use crate::geom::primitives;
 use crate::geom::primitives::{point_distance_grad, segment_distance_grad, RoundedRect};
 use crate::geom::winding::{quad_winding, segment_winding};
-use crate::geom::{len, primitives};
 
 /// Largest number of fields a primitive has.
 pub const MAX_FIELDS: usize = 6;
@@ -84,8 +84,8 @@ pub fn segment_distance(f: &Fields, p: V2) -> f64 {
 #[inline]
 pub fn value(kind: PrimKind, f: &Fields, p: V2) -> f64 {
     match kind {
-        PrimKind::Point => len(p[0] - f[0], p[1] - f[1]),
-        PrimKind::Circle => len(p[0] - f[0], p[1] - f[1]) - f[2],
+        PrimKind::Point => primitives::point_distance([f[0], f[1]], p),
+        PrimKind::Circle => primitives::circle_distance([f[0], f[1]], f[2], p),
         PrimKind::Segment => segment_distance(f, p),
         PrimKind::Rect => rect(f).distance(p),
         PrimKind::Quad => quad_closest(&quad(f), p).1,
@@ -144,6 +144,7 @@ mod tests {
     use super::*;
     use crate::core::rng::Rng;
     use crate::geom::bezier::cubic_piece_weights;
+    use crate::geom::len;
 
     fn brute(kind: PrimKind, f: &Fields, p: V2) -> f64 {
         // Dense sampling of the curve/segment.

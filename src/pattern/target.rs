@@ -28,7 +28,7 @@ pub struct Target {
 /// Palette index of every grid pixel: nearest palette colour (RGB distance).
 /// Transparent pixels (alpha < 128) count as background. Returns the indices
 /// and the fraction of pixels farther than `tolerance` from their colour.
-pub fn snap_to_palette(
+pub(crate) fn snap_to_palette(
     img: &Rgba8Image,
     palette: &[Rgb],
     n: usize,

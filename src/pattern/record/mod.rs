@@ -224,7 +224,7 @@ fn colour_error(s: &str) -> String {
 }
 
 /// Parse `#rgb`, `#rrggbb` or a few names.
-pub fn parse_colour(s: &str) -> Option<Rgb> {
+pub(crate) fn parse_colour(s: &str) -> Option<Rgb> {
     match s {
         "black" => return Some([0, 0, 0]),
         "white" => return Some([255, 255, 255]),
