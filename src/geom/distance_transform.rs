@@ -195,7 +195,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(256))]
+        #![proptest_config(ProptestConfig::with_cases(1000))]
         /// The transform equals brute force exactly on random masks of any
         /// shape and density (empty and full masks included), and the
         /// signed field is consistent with it.

@@ -44,7 +44,7 @@ pub use scene::{prim_kinds, Channel, Scene};
 pub use tiles::Evaluator;
 
 /// "Farther than anything on the canvas", in canvas units.
-pub const CAP: f64 = 2.0;
+pub(crate) const CAP: f64 = 2.0;
 pub(crate) const NONE: u32 = u32::MAX;
 /// Big and small tile sides in pixels (two-level culling).
 pub(crate) const T1: usize = 16;
@@ -52,7 +52,7 @@ pub(crate) const T2: usize = 4;
 
 /// How an item changes a colour's field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CombineOp {
+pub(crate) enum CombineOp {
     /// `min(B, X)`
     Union,
     /// `max(B, −X)`
@@ -333,7 +333,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(48))]
+        #![proptest_config(ProptestConfig::with_cases(256))]
         /// The culled, tiled, lane-vectorised evaluation equals applying
         /// every operation of every channel at every pixel, and each
         /// pixel's winner record reproduces its value, on random scenes.

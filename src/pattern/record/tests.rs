@@ -359,7 +359,7 @@ fn smooth_expr() -> impl Strategy<Value = String> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(200))]
+    #![proptest_config(ProptestConfig::with_cases(1000))]
     /// On random programs (lets, a loop, a user function, a transform),
     /// the recorded tape (1) replays to exactly what recording at other
     /// parameter values computes and (2) its reverse sweep equals central
