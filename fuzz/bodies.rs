@@ -57,10 +57,7 @@ pub fn lang(data: &[u8]) {
         return;
     }
     let defaults: Vec<f64> = floats.iter().map(|p| p.default).collect();
-    let moved: Vec<f64> = floats
-        .iter()
-        .map(|p| p.lo + 0.37 * (p.hi - p.lo))
-        .collect();
+    let moved: Vec<f64> = floats.iter().map(|p| p.lo + 0.37 * (p.hi - p.lo)).collect();
     let target = TargetSpec {
         params: Some(BTreeMap::new()),
         ..Default::default()
@@ -145,7 +142,10 @@ pub fn strokes(data: &[u8]) {
     use filigree::pixel::orientation::{annotate, check_strokes};
     if let Ok(a) = annotate(128, 128, &f.strokes, 4) {
         assert_eq!(a.fixed.len(), 128 * 128);
-        assert!(a.values.iter().all(|v| v[0].is_finite() && v[1].is_finite()));
+        assert!(a
+            .values
+            .iter()
+            .all(|v| v[0].is_finite() && v[1].is_finite()));
     }
     if check_strokes(32, 32, &f.strokes).is_err() {
         return;
@@ -238,10 +238,7 @@ impl FitCommon {
     fn target(&mut self) -> TargetSpec {
         TargetSpec {
             image: self.target_png.take(),
-            rgba: self
-                .target_rgba
-                .take()
-                .map(|r| (r.width, r.height, r.rgba)),
+            rgba: self.target_rgba.take().map(|r| (r.width, r.height, r.rgba)),
             params: self.target_params.take(),
             tolerance: self.tolerance,
         }

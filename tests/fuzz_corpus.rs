@@ -92,7 +92,10 @@ fn every_fuzz_target_is_replayed() {
         std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/Cargo.toml"))
             .unwrap();
     for line in manifest.lines() {
-        if let Some(name) = line.strip_prefix("name = \"").and_then(|l| l.strip_suffix('"')) {
+        if let Some(name) = line
+            .strip_prefix("name = \"")
+            .and_then(|l| l.strip_suffix('"'))
+        {
             if name == "filigree-fuzz" {
                 continue;
             }
@@ -197,7 +200,10 @@ fn write_seeds() {
     put(
         "image",
         "one-pixel.png",
-        &encode(image::DynamicImage::ImageRgba8(one), image::ImageFormat::Png),
+        &encode(
+            image::DynamicImage::ImageRgba8(one),
+            image::ImageFormat::Png,
+        ),
     );
 
     // strokes: the shipped strokes files and small edge cases on a 32² image.
@@ -233,7 +239,10 @@ fn write_seeds() {
     };
     let bark = file("assets/pixel/bark_scale.png");
     let png = |img: image::RgbaImage| {
-        encode(image::DynamicImage::ImageRgba8(img), image::ImageFormat::Png)
+        encode(
+            image::DynamicImage::ImageRgba8(img),
+            image::ImageFormat::Png,
+        )
     };
     let tiny_source = png(image::RgbaImage::from_fn(8, 8, |x, y| {
         if x == 0 || y == 7 {
@@ -245,9 +254,21 @@ fn write_seeds() {
     let tiny_sprite = png(image::RgbaImage::from_fn(3, 3, |x, y| {
         image::Rgba([255, 255, 255, if x == 1 || y == 1 { 255 } else { 0 }])
     }));
-    req("inspect.json", "inspect", json!({"bytes": bark, "tolerance": 30}));
-    req("decode-image.json", "decode-image", json!({"bytes": tiny_source}));
-    req("pixel-mask.json", "pixel-mask", json!({"bytes": tiny_sprite}));
+    req(
+        "inspect.json",
+        "inspect",
+        json!({"bytes": bark, "tolerance": 30}),
+    );
+    req(
+        "decode-image.json",
+        "decode-image",
+        json!({"bytes": tiny_source}),
+    );
+    req(
+        "pixel-mask.json",
+        "pixel-mask",
+        json!({"bytes": tiny_sprite}),
+    );
     let mask = json!({"width": 8, "height": 8, "bits": vec![1u8; 64]});
     req(
         "pixel-sprite.json",
@@ -262,19 +283,16 @@ fn write_seeds() {
                "params": {"partial": true, "margins": [-1, -1], "colour": "hsv"}}),
     );
     let grid = generator("circles-grid").unwrap().source;
-    let small = json!({"grid": 16, "population": 6, "generations": 1, "candidates": 1, "iterations": 3});
+    let small =
+        json!({"grid": 16, "population": 6, "generations": 1, "candidates": 1, "iterations": 3});
     let mut fit = json!({"program": grid, "target_params": {"r": 0.05}});
     fit.as_object_mut()
         .unwrap()
         .extend(small.as_object().unwrap().clone());
     req("fit-params.json", "fit", fit.clone());
-    let rendered = filigree::pattern::api::render_program(
-        grid,
-        &[("r".to_string(), 0.06)].into(),
-        16,
-        1,
-    )
-    .unwrap();
+    let rendered =
+        filigree::pattern::api::render_program(grid, &[("r".to_string(), 0.06)].into(), 16, 1)
+            .unwrap();
     let mut fit_png = fit.clone();
     fit_png["target_params"] = serde_json::Value::Null;
     fit_png["target_png"] = json!(filigree::raster::encode_png(&rendered.image).unwrap());
@@ -289,7 +307,10 @@ fn write_seeds() {
     fit_rgba["polish"] = json!(2);
     req("fit-rgba.json", "fit", fit_rgba);
     let mut eval = fit.clone();
-    eval["points"] = json!([[0.2, 0.17, 0.12, 0.12, 0.05], [0.13, 0.13, 0.06, 0.06, 0.03]]);
+    eval["points"] = json!([
+        [0.2, 0.17, 0.12, 0.12, 0.05],
+        [0.13, 0.13, 0.06, 0.06, 0.03]
+    ]);
     req("fit-eval.json", "fit-eval", eval);
     req(
         "render-pattern.json",
