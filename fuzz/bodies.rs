@@ -20,8 +20,11 @@ use std::collections::BTreeMap;
 /// Steps a fuzzed stepped job may take before it is dropped.
 pub const MAX_STEPS: usize = 16;
 
+/// A fuzz target's body.
+pub type Body = fn(&[u8]);
+
 /// Every target: name (= `fuzz/corpus/<name>/`) and body.
-pub const TARGETS: &[(&str, fn(&[u8]))] = &[
+pub const TARGETS: &[(&str, Body)] = &[
     ("lang", lang),
     ("image", image),
     ("strokes", strokes),
