@@ -9,9 +9,14 @@ mod bodies;
 use std::path::{Path, PathBuf};
 
 fn corpus(target: &str) -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fuzz/corpus")
-        .join(target);
+    files_in(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("fuzz/corpus")
+            .join(target),
+    )
+}
+
+fn files_in(dir: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
@@ -21,14 +26,29 @@ fn corpus(target: &str) -> Vec<PathBuf> {
     files
 }
 
-/// Run `body` on every corpus file of `target` on a thread with the stack
-/// a fuzzer's main thread has (8 MiB), naming the file that fails.
-fn replay(target: &str) {
-    let body = bodies::TARGETS
+fn body(target: &str) -> bodies::Body {
+    bodies::TARGETS
         .iter()
         .find(|(n, _)| *n == target)
-        .expect("a target")
-        .1;
+        .unwrap_or_else(|| panic!("no fuzz body '{target}'"))
+        .1
+}
+
+/// Run `body` on `file` on a thread with the stack a fuzzer's main thread
+/// has (8 MiB); whether it returned without panicking.
+fn passes(body: bodies::Body, file: &Path) -> bool {
+    let data = std::fs::read(file).unwrap();
+    std::thread::Builder::new()
+        .stack_size(8 << 20)
+        .spawn(move || body(&data))
+        .unwrap()
+        .join()
+        .is_ok()
+}
+
+/// Run every corpus file of `target` through its body, naming the file that fails.
+fn replay(target: &str) {
+    let body = body(target);
     let files = corpus(target);
     assert!(
         files.len() >= 5,
@@ -36,15 +56,34 @@ fn replay(target: &str) {
         files.len()
     );
     for f in files {
-        let data = std::fs::read(&f).unwrap();
-        let name = f.display().to_string();
-        let r = std::thread::Builder::new()
-            .stack_size(8 << 20)
-            .spawn(move || body(&data))
-            .unwrap()
-            .join();
-        assert!(r.is_ok(), "{name} fails the '{target}' fuzz body");
+        assert!(
+            passes(body, &f),
+            "{} fails the '{target}' fuzz body",
+            f.display()
+        );
     }
+}
+
+/// Inputs of fuzz findings whose fix has not landed yet
+/// (`fuzz/pending/<target>/`, listed in the findings report). Run with
+/// `--ignored`: each one that passes now belongs in `fuzz/corpus/<target>/`.
+#[test]
+#[ignore]
+fn pending_findings_now_pass() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/pending");
+    let mut failing = vec![];
+    for (target, body) in bodies::TARGETS {
+        let dir = root.join(target);
+        if !dir.is_dir() {
+            continue;
+        }
+        for f in files_in(&dir) {
+            if !passes(*body, &f) {
+                failing.push(f.display().to_string());
+            }
+        }
+    }
+    assert!(failing.is_empty(), "still failing: {failing:#?}");
 }
 
 #[test]
