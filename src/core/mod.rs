@@ -1,4 +1,5 @@
-//! Pieces every tool shares: errors, long-running jobs, seeded randomness.
+//! Pieces every tool shares: errors, limits, long-running jobs, seeded randomness.
 pub mod error;
 pub mod job;
+pub mod limits;
 pub mod rng;

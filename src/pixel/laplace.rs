@@ -22,7 +22,7 @@
 /// Relative residual `‖b − Ax‖ / ‖b‖` at which a component is solved.
 pub const TOLERANCE: f64 = 1e-8;
 /// Safety cap on CG iterations per component.
-pub const MAX_ITERATIONS: usize = 500;
+pub use crate::core::limits::MAX_SOLVER_ITERATIONS as MAX_ITERATIONS;
 /// Gauss–Seidel sweeps before and after each coarse correction.
 const SMOOTHING: usize = 2;
 /// Over-correction of the piecewise-constant coarse correction: constant

@@ -31,10 +31,7 @@ use crate::core::job::{run_quietly, Job, Progress, Step};
 use crate::raster::{exact_palette, Rgba8Image};
 use serde::{Deserialize, Serialize};
 
-/// Largest palette the colour-difference and shared-border maps accept:
-/// their cost grows with the square of the colour count, and pixel art
-/// palettes are small. (HSV shift has no such limit.)
-pub const MAX_PALETTE: usize = 4096;
+pub use crate::core::limits::MAX_PALETTE;
 
 /// Every setting of the method, as plain data. Missing fields take the
 /// defaults, which follow the thesis (appendix A's most common values and the
@@ -206,6 +203,8 @@ impl PixelJob {
             strokes,
         } = inputs;
         let mask = inputs::check_source_and_mask(&source, &mask)?;
+        let (Elements::Sheet(img) | Elements::Sprite(img)) = &elements;
+        img.validate()?;
         let sheet = match &elements {
             Elements::Sheet(img) => ElementSheet::from_sheet(img)?,
             Elements::Sprite(img) => ElementSheet::from_sprite(img, params.sprite_direction)?,
@@ -213,8 +212,8 @@ impl PixelJob {
         if params.annotation_scale == 0
             || params.annotation_scale > orientation::MAX_ANNOTATION_SCALE
         {
-            return Err(Error::input(format!(
-                "annotation scale {} is outside 1..={}",
+            return Err(Error::limit(format!(
+                "annotation scale {} is outside 1..={} (the annotation scale limit)",
                 params.annotation_scale,
                 orientation::MAX_ANNOTATION_SCALE
             )));
@@ -233,7 +232,7 @@ impl PixelJob {
             let n = exact_palette(&source, 0).len();
             if n > MAX_PALETTE {
                 return Err(Error::limit(format!(
-                    "the source has {n} colours; the palette-based colour maps accept at most {MAX_PALETTE} \
+                    "the source has {n} colours; the palette limit of the palette-based colour maps is {MAX_PALETTE} \
                      (is it pixel art? the HSV shift has no such limit)"
                 )));
             }

@@ -14,10 +14,7 @@ use crate::core::error::{Error, Result};
 /// A stroke: points `[x, y]` in source-pixel coordinates.
 pub type Stroke = Vec<[f32; 2]>;
 
-/// Largest accepted annotation scale K.
-pub const MAX_ANNOTATION_SCALE: u32 = 32;
-/// Largest accepted number of stroke points over all strokes.
-pub const MAX_STROKE_POINTS: usize = 200_000;
+pub use crate::core::limits::{MAX_ANNOTATION_SCALE, MAX_STROKE_POINTS};
 
 /// Annotated pixels and their averaged vectors.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,7 +39,7 @@ pub fn check_strokes(width: u32, height: u32, strokes: &[Stroke]) -> Result<()> 
     let total: usize = strokes.iter().map(Vec::len).sum();
     if total > MAX_STROKE_POINTS {
         return Err(Error::limit(format!(
-            "the strokes have {total} points in all; at most {MAX_STROKE_POINTS} are accepted"
+            "the strokes have {total} points in all; the stroke point limit is {MAX_STROKE_POINTS}"
         )));
     }
     let (w, h) = (width as f32, height as f32);
@@ -73,7 +70,7 @@ pub fn check_strokes(width: u32, height: u32, strokes: &[Stroke]) -> Result<()> 
 pub fn annotate(width: u32, height: u32, strokes: &[Stroke], k: u32) -> Result<Annotations> {
     if k == 0 || k > MAX_ANNOTATION_SCALE {
         return Err(Error::input(format!(
-            "annotation scale {k} is outside 1..={MAX_ANNOTATION_SCALE}"
+            "annotation scale {k} is outside 1..={MAX_ANNOTATION_SCALE} (the annotation scale limit)"
         )));
     }
     check_strokes(width, height, strokes)?;

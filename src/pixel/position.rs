@@ -9,7 +9,9 @@
 //! neighbours overlap). Density is drawn *after* validation: a rejected
 //! position still occupies its region, exactly as the paper describes.
 use crate::core::error::{Error, Result};
+use crate::core::limits;
 use crate::core::rng::Rng;
+use crate::raster::Limits;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -68,10 +70,29 @@ impl PositionSampler {
         p: PositionParams,
         seed: u64,
     ) -> Result<Self> {
+        Limits::default().check(width, height)?;
+        if side == 0 || side > limits::MAX_ELEMENT_SIDE {
+            return Err(Error::limit(format!(
+                "the element side {side} is outside 1..={} (the element side limit)",
+                limits::MAX_ELEMENT_SIDE
+            )));
+        }
+        if mask.len() as u64 != width as u64 * height as u64 {
+            return Err(Error::input(format!(
+                "the mask has {} values but the image is {width}×{height}",
+                mask.len()
+            )));
+        }
         let (w, h, s) = (width as i32, height as i32, side as i32);
-        assert_eq!(mask.len(), (w * h) as usize, "mask size");
-        for (i, m) in p.margins.iter().enumerate() {
-            if s + 2 * m < 1 {
+        for (i, &m) in p.margins.iter().enumerate() {
+            if m.unsigned_abs() > limits::MAX_MARGIN as u32 {
+                return Err(Error::limit(format!(
+                    "margin {} = {m} is beyond the margin limit of ±{} pixels",
+                    ["mx", "my"][i],
+                    limits::MAX_MARGIN
+                )));
+            }
+            if s as i64 + 2 * (m as i64) < 1 {
                 return Err(Error::input(format!(
                     "margin {} = {m} is too negative for {side}-pixel elements: it must be at least {} \
                      so every element still occupies a pixel",
@@ -398,5 +419,45 @@ mod tests {
         let a = find_positions(50, 40, &mask, 5, p, 42).unwrap();
         assert_eq!(a, find_positions(50, 40, &mask, 5, p, 42).unwrap());
         assert_ne!(a, find_positions(50, 40, &mask, 5, p, 43).unwrap());
+    }
+
+    #[test]
+    fn huge_margins_are_refused_not_wrapped() {
+        // 2147483647 once wrapped `side + 2·m` to a small number and placed
+        // elements everywhere; now it is a named limit error, both signs.
+        let mask = vec![true; 20 * 20];
+        for m in [i32::MAX, i32::MIN, limits::MAX_MARGIN + 1, -(limits::MAX_MARGIN + 1)] {
+            for margins in [[m, 0], [0, m]] {
+                let p = PositionParams {
+                    margins,
+                    ..params(PositionStrategy::Packed)
+                };
+                let e = PositionSampler::new(20, 20, &mask, 4, p, 0)
+                    .err()
+                    .expect("refused")
+                    .to_string();
+                assert!(e.contains("margin limit of ±4096"), "{m}: {e}");
+            }
+        }
+        // The largest allowed margin works: one element, nothing else fits.
+        let p = PositionParams {
+            margins: [limits::MAX_MARGIN, limits::MAX_MARGIN],
+            ..params(PositionStrategy::Packed)
+        };
+        assert_eq!(find_positions(20, 20, &mask, 4, p, 0).unwrap().len(), 1);
+    }
+
+    #[test]
+    fn mask_size_and_density_are_checked() {
+        let e = PositionSampler::new(5, 5, &[true; 24], 2, params(PositionStrategy::Random), 0)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("24 values") && e.contains("5×5"), "{e}");
+        let p = PositionParams {
+            density: f64::NAN,
+            ..params(PositionStrategy::Random)
+        };
+        assert!(PositionSampler::new(5, 5, &[true; 25], 2, p, 0).is_err());
     }
 }
