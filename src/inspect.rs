@@ -166,7 +166,11 @@ mod tests {
             },
         )
         .unwrap();
-        assert!(r.cluster_count < 4096 && r.cluster_count > 100, "{}", r.cluster_count);
+        assert!(
+            r.cluster_count < 4096 && r.cluster_count > 100,
+            "{}",
+            r.cluster_count
+        );
         let members: usize = r.clusters.iter().map(|c| c.members).sum();
         if r.cluster_count <= limits::MAX_LISTED_CLUSTERS {
             assert_eq!(members, 4096);

@@ -38,7 +38,12 @@ fn case() -> impl Strategy<Value = Case> {
         let n = (w * h) as usize;
         let cells = if sheet { 9 } else { 1 };
         let bits = (side * side) as usize * cells;
-        let colour = (any::<u8>(), any::<u8>(), any::<u8>(), prop_oneof![Just(255u8), Just(0u8), 1u8..255])
+        let colour = (
+            any::<u8>(),
+            any::<u8>(),
+            any::<u8>(),
+            prop_oneof![Just(255u8), Just(0u8), 1u8..255],
+        )
             .prop_map(|(r, g, b, a)| [r, g, b, a]);
         let palette = prop::collection::vec(colour, 2..6).prop_map(|mut p| {
             // The first two colours are opaque so the source is never empty,
@@ -52,7 +57,10 @@ fn case() -> impl Strategy<Value = Case> {
         let max_neg = -(((side as i32) - 1) / 2);
         let margins = [max_neg..3i32, max_neg..3i32];
         let params = (
-            prop_oneof![Just(PositionStrategy::Random), Just(PositionStrategy::Packed)],
+            prop_oneof![
+                Just(PositionStrategy::Random),
+                Just(PositionStrategy::Packed)
+            ],
             margins,
             prop_oneof![Just(1.0f64), 0.0f64..1.0],
             any::<bool>(),
@@ -91,21 +99,23 @@ fn case() -> impl Strategy<Value = Case> {
             strokes,
             params,
         )
-            .prop_map(|((w, h, side, sheet), palette, colours, mask, bits, strokes, params)| {
-                let colours = colours.into_iter().map(|c| c % palette.len()).collect();
-                Case {
-                    w,
-                    h,
-                    palette,
-                    colours,
-                    mask,
-                    side,
-                    sheet,
-                    bits,
-                    strokes,
-                    params,
-                }
-            })
+            .prop_map(
+                |((w, h, side, sheet), palette, colours, mask, bits, strokes, params)| {
+                    let colours = colours.into_iter().map(|c| c % palette.len()).collect();
+                    Case {
+                        w,
+                        h,
+                        palette,
+                        colours,
+                        mask,
+                        side,
+                        sheet,
+                        bits,
+                        strokes,
+                        params,
+                    }
+                },
+            )
     })
 }
 

@@ -426,7 +426,12 @@ mod tests {
         // 2147483647 once wrapped `side + 2·m` to a small number and placed
         // elements everywhere; now it is a named limit error, both signs.
         let mask = vec![true; 20 * 20];
-        for m in [i32::MAX, i32::MIN, limits::MAX_MARGIN + 1, -(limits::MAX_MARGIN + 1)] {
+        for m in [
+            i32::MAX,
+            i32::MIN,
+            limits::MAX_MARGIN + 1,
+            -(limits::MAX_MARGIN + 1),
+        ] {
             for margins in [[m, 0], [0, m]] {
                 let p = PositionParams {
                     margins,

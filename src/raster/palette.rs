@@ -339,7 +339,10 @@ mod tests {
         let tol2 = tol * tol;
         let mut clusters: Vec<Cluster> = Vec::new();
         for e in exact {
-            match clusters.iter_mut().find(|c| rgb_dist2(c.rgba, e.rgba) <= tol2) {
+            match clusters
+                .iter_mut()
+                .find(|c| rgb_dist2(c.rgba, e.rgba) <= tol2)
+            {
                 Some(c) => {
                     c.count += e.count;
                     c.members += 1;
@@ -370,12 +373,20 @@ mod tests {
             // some sharing RGB with a different alpha.
             let mut img = Rgba8Image::new(n as u32, 1);
             for x in 0..n as u32 {
-                let base = [(rng.below(4) * 80) as u8, (rng.below(3) * 120) as u8, 40, 255];
-                let j = |v: u8, r: &mut crate::core::rng::Rng| {
-                    v.saturating_add(r.below(30) as u8)
-                };
+                let base = [
+                    (rng.below(4) * 80) as u8,
+                    (rng.below(3) * 120) as u8,
+                    40,
+                    255,
+                ];
+                let j = |v: u8, r: &mut crate::core::rng::Rng| v.saturating_add(r.below(30) as u8);
                 let a = if rng.below(10) == 0 { 128 } else { 255 };
-                let c = [j(base[0], &mut rng), j(base[1], &mut rng), j(base[2], &mut rng), a];
+                let c = [
+                    j(base[0], &mut rng),
+                    j(base[1], &mut rng),
+                    j(base[2], &mut rng),
+                    a,
+                ];
                 img.put(x, 0, c);
             }
             let exact = exact_palette(&img, 0);
@@ -383,7 +394,11 @@ mod tests {
             let got = cluster_palette(&exact, tol).unwrap();
             assert_eq!(got, plain(&exact, tol), "tolerance {tol}");
             let counts = colour_counts(&img, 0);
-            assert_eq!(cluster_counts(&counts, tol).unwrap(), got, "tolerance {tol}");
+            assert_eq!(
+                cluster_counts(&counts, tol).unwrap(),
+                got,
+                "tolerance {tol}"
+            );
         }
     }
 
