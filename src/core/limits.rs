@@ -80,6 +80,20 @@ pub const MAX_ANNOTATION_SCALE: u32 = 32;
 /// Largest number of stroke points over all strokes of one request.
 pub const MAX_STROKE_POINTS: usize = 200_000;
 
+/// Largest total length of the strokes rasterised on the K× annotation grid,
+/// in grid pixels (checked from the points before rasterising): about 60
+/// strokes right across a 4096-pixel image at K = 4.
+pub const MAX_ANNOTATION_PATH: u64 = 1 << 20;
+
+/// Largest grid the orientation (Laplace) solve runs on. Bigger sources are
+/// solved on a grid reduced by a whole factor to at most this many pixels
+/// (annotations averaged into it) and the field is interpolated back, with
+/// every annotated pixel keeping its own vector exactly: the solve's cost
+/// stays bounded (a few hundred ms) while an element, which takes the mean
+/// direction over its cell snapped to eight directions, sees the same field.
+/// Sources up to 512² are solved at full resolution.
+pub const MAX_SOLVE_PIXELS: usize = 512 * 512;
+
 /// Safety cap on conjugate-gradient iterations per component of the
 /// orientation (Laplace) solve; the multigrid preconditioner converges in
 /// a few dozen.

@@ -49,11 +49,21 @@ pub struct PositionSampler {
     h: i32,
     side: i32,
     p: PositionParams,
-    /// Summed-area table of the original mask, `(w+1)·(h+1)`.
+    /// Summed-area table of the original mask, `(w+1)·(h+1)`, while the
+    /// candidates are being listed (dropped afterwards).
     sat: Vec<u32>,
+    /// Rows of the table, then rows of candidates, done so far (the set-up
+    /// is sliced like the search, so a 4096² mask never blocks a step).
+    sat_rows: i32,
+    cand_rows: i32,
+    /// Per top-left corner: the cell is inside the image and passes the mask
+    /// test (what `in_mask` asks, precomputed).
+    valid: Vec<bool>,
     occupied: Vec<bool>,
-    /// Top-left corners valid against the original mask and still untried.
-    candidates: Vec<(i32, i32)>,
+    /// Top-left corners (`y·w + x`) valid against the original mask and
+    /// still untried, in row-major order until the draws shuffle them.
+    candidates: Vec<u32>,
+    initial: usize,
     queue: VecDeque<(i32, i32)>,
     rng: Rng,
     positions: Vec<(i32, i32)>,
@@ -107,39 +117,68 @@ impl PositionSampler {
                 p.density
             )));
         }
-        let stride = (w + 1) as usize;
-        let mut sat = vec![0u32; stride * (h + 1) as usize];
-        for y in 0..h as usize {
-            let mut row = 0u32;
-            for x in 0..w as usize {
-                row += mask[y * w as usize + x] as u32;
-                sat[(y + 1) * stride + x + 1] = sat[y * stride + x + 1] + row;
-            }
-        }
-        let mut me = PositionSampler {
+        let n = (w * h) as usize;
+        Ok(PositionSampler {
             w,
             h,
             side: s,
             p,
-            sat,
-            occupied: vec![false; (w * h) as usize],
+            sat: vec![0u32; (w + 1) as usize * (h + 1) as usize],
+            sat_rows: 0,
+            cand_rows: 0,
+            valid: vec![false; n],
+            occupied: vec![false; n],
             candidates: Vec::new(),
+            initial: 0,
             queue: VecDeque::new(),
             rng: Rng::new(seed),
             positions: Vec::new(),
-        };
+        })
+    }
+
+    /// Continue listing candidates: about `budget` pixels of work. Returns
+    /// the work done; the listing is complete when `cand_rows` passes the
+    /// last row a cell can start on.
+    fn set_up(&mut self, mask: &[bool], budget: usize) -> usize {
+        let (w, h) = (self.w as usize, self.h as usize);
+        let stride = w + 1;
+        let mut spent = 0;
+        while (self.sat_rows as usize) < h && spent < budget {
+            let y = self.sat_rows as usize;
+            let mut row = 0u32;
+            for x in 0..w {
+                row += mask[y * w + x] as u32;
+                self.sat[(y + 1) * stride + x + 1] = self.sat[y * stride + x + 1] + row;
+            }
+            self.sat_rows += 1;
+            spent += w + 1;
+        }
         // Candidates are every corner whose cell passes the mask test on its
         // own: the paper's "random position within the original mask",
         // widened so that with `partial` a cell poking into the mask from
         // outside can be drawn too.
-        for y in 0..=(h - s).max(-1) {
-            for x in 0..=(w - s).max(-1) {
-                if me.in_mask(x, y) {
-                    me.candidates.push((x, y));
+        let last = self.h - self.side;
+        while self.sat_rows as usize == h && self.cand_rows <= last && spent < budget {
+            let y = self.cand_rows;
+            for x in 0..=(self.w - self.side) {
+                if self.mask_test(x, y) {
+                    let i = (y * self.w + x) as usize;
+                    self.valid[i] = true;
+                    self.candidates.push(i as u32);
                 }
             }
+            self.cand_rows += 1;
+            spent += w + 1;
         }
-        Ok(me)
+        if self.listed() {
+            self.sat = Vec::new();
+            self.initial = self.candidates.len();
+        }
+        spent.max(1)
+    }
+
+    fn listed(&self) -> bool {
+        self.sat_rows == self.h && self.cand_rows > self.h - self.side
     }
 
     fn mask_count(&self, x: i32, y: i32) -> u32 {
@@ -155,17 +194,22 @@ impl PositionSampler {
             - self.sat[y1 * stride + x0]
     }
 
-    /// Whether the cell at (x, y) is inside the image and passes the mask test.
-    fn in_mask(&self, x: i32, y: i32) -> bool {
-        if x < 0 || y < 0 || x + self.side > self.w || y + self.side > self.h {
-            return false;
-        }
+    /// The mask test of a cell inside the image (needs the summed-area table).
+    fn mask_test(&self, x: i32, y: i32) -> bool {
         let n = self.mask_count(x, y);
         if self.p.partial {
             n > 0
         } else {
             n == (self.side * self.side) as u32
         }
+    }
+
+    /// Whether the cell at (x, y) is inside the image and passes the mask test.
+    fn in_mask(&self, x: i32, y: i32) -> bool {
+        if x < 0 || y < 0 || x + self.side > self.w || y + self.side > self.h {
+            return false;
+        }
+        self.valid[(y * self.w + x) as usize]
     }
 
     fn free(&self, x: i32, y: i32) -> bool {
@@ -180,7 +224,16 @@ impl PositionSampler {
     /// Test one position; on success keep it (with probability ρ), occupy its
     /// region and, when packing, queue its eight neighbours.
     fn try_position(&mut self, x: i32, y: i32) {
-        if !self.in_mask(x, y) || !self.free(x, y) {
+        if !self.in_mask(x, y) {
+            return;
+        }
+        self.try_valid(x, y);
+    }
+
+    /// [`PositionSampler::try_position`] for a corner known to pass the mask
+    /// test (every drawn candidate does).
+    fn try_valid(&mut self, x: i32, y: i32) {
+        if !self.free(x, y) {
             return;
         }
         if self.p.density >= 1.0 || self.rng.f64() < self.p.density {
@@ -213,18 +266,25 @@ impl PositionSampler {
     }
 
     /// Work until about `budget` pixel tests have been made or the search is
-    /// over. Returns `true` when no suitable position is left.
-    pub fn run(&mut self, budget: usize) -> bool {
-        let cost = (self.side * self.side) as usize + 1;
+    /// over. Returns `true` when no suitable position is left. `mask` is the
+    /// one given to [`PositionSampler::new`] (read while listing candidates).
+    pub fn run(&mut self, mask: &[bool], budget: usize) -> bool {
         let mut spent = 0usize;
+        if !self.listed() {
+            spent += self.set_up(mask, budget);
+            if !self.listed() {
+                return false;
+            }
+        }
+        let cost = (self.side * self.side) as usize + 1;
         while spent < budget {
             spent += cost;
             if let Some((x, y)) = self.queue.pop_front() {
                 self.try_position(x, y);
             } else if !self.candidates.is_empty() {
                 let i = self.rng.below(self.candidates.len());
-                let (x, y) = self.candidates.swap_remove(i);
-                self.try_position(x, y);
+                let c = self.candidates.swap_remove(i) as i32;
+                self.try_valid(c % self.w, c / self.w);
             } else {
                 return true;
             }
@@ -233,14 +293,13 @@ impl PositionSampler {
     }
 
     /// Rough fraction of the search done, for progress reports.
-    pub fn fraction(&self, initial_candidates: usize) -> f64 {
-        1.0 - self.candidates.len() as f64 / initial_candidates.max(1) as f64
+    pub fn fraction(&self) -> f64 {
+        if !self.listed() {
+            return 0.05 * (self.sat_rows + self.cand_rows.max(0)) as f64 / (2 * self.h) as f64;
+        }
+        0.05 + 0.95 * (1.0 - self.candidates.len() as f64 / self.initial.max(1) as f64)
     }
 
-    /// Untried candidates left.
-    pub fn remaining(&self) -> usize {
-        self.candidates.len()
-    }
 
     /// The positions chosen so far (top-left corners), in the order chosen.
     pub fn positions(&self) -> &[(i32, i32)] {
@@ -263,7 +322,7 @@ pub fn find_positions(
     seed: u64,
 ) -> Result<Vec<(i32, i32)>> {
     let mut s = PositionSampler::new(width, height, mask, side, p, seed)?;
-    while !s.run(usize::MAX / 2) {}
+    while !s.run(mask, usize::MAX / 2) {}
     Ok(s.into_positions())
 }
 

@@ -70,6 +70,84 @@ fn radix_sort(v: &mut Vec<u32>) {
     }
 }
 
+/// Counts the distinct colours of pixels with alpha > `min_alpha`, a slice
+/// of pixels at a time (so a 16 Mpx image never blocks one job step), and
+/// can stop early once more than a limit are seen.
+#[derive(Default)]
+pub struct ColourCounter {
+    seen: std::collections::HashSet<u32, BuildMix>,
+    next: usize,
+}
+
+impl ColourCounter {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Look at up to `budget` more pixels; `true` when the whole image has
+    /// been seen or more than `limit` colours were found.
+    pub fn run(&mut self, img: &Rgba8Image, min_alpha: u8, budget: usize, limit: usize) -> bool {
+        let n = img.pixel_count();
+        let end = n.min(self.next.saturating_add(budget.max(1)));
+        let mut last = None;
+        for c in img.data[4 * self.next..4 * end].chunks_exact(4) {
+            if c[3] > min_alpha {
+                let v = u32::from_be_bytes([c[0], c[1], c[2], c[3]]);
+                // Pixel art repeats colours along rows: skip the hash then.
+                if last != Some(v) {
+                    self.seen.insert(v);
+                    last = Some(v);
+                }
+            }
+        }
+        self.next = end;
+        self.next == n || self.seen.len() > limit
+    }
+
+    /// Distinct colours seen so far.
+    pub fn count(&self) -> usize {
+        self.seen.len()
+    }
+}
+
+/// The number of distinct colours (alpha > `min_alpha`), or `None` as soon as
+/// there are more than `limit`.
+pub fn count_colours(img: &Rgba8Image, min_alpha: u8, limit: usize) -> Option<usize> {
+    let mut c = ColourCounter::new();
+    while !c.run(img, min_alpha, 1 << 20, limit) {}
+    (c.count() <= limit).then_some(c.count())
+}
+
+/// A fast, fixed (so deterministic) hash for packed colours.
+#[derive(Default, Clone, Copy)]
+pub struct BuildMix;
+
+/// The hasher of [`BuildMix`]: one multiply of the packed colour.
+#[derive(Default)]
+pub struct Mix(u64);
+
+impl std::hash::BuildHasher for BuildMix {
+    type Hasher = Mix;
+    fn build_hasher(&self) -> Mix {
+        Mix(0)
+    }
+}
+
+impl std::hash::Hasher for Mix {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ b as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.0 = (v as u64 ^ 0x5851_F42D_4C95_7F2D).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.0 ^= self.0 >> 29;
+    }
+}
+
 /// Every distinct colour of the opaque-enough pixels (alpha > `min_alpha`),
 /// most frequent first; ties broken by colour so the order is deterministic.
 pub fn exact_palette(img: &Rgba8Image, min_alpha: u8) -> Vec<PaletteEntry> {
@@ -444,5 +522,27 @@ mod tests {
             .collect();
         want.sort_by(|a, b| b.count.cmp(&a.count).then(a.rgba.cmp(&b.rgba)));
         assert_eq!(exact_palette(&img, 10), want);
+    }
+
+    #[test]
+    fn counter_counts_and_stops_at_the_limit() {
+        let mut img = Rgba8Image::new(50, 40);
+        for y in 0..40 {
+            for x in 0..50 {
+                img.put(x, y, [(x / 5) as u8, (y / 4) as u8, 0, if x == 0 { 0 } else { 255 }]);
+            }
+        }
+        let want = exact_palette(&img, 0).len();
+        assert_eq!(want, 100);
+        assert_eq!(count_colours(&img, 0, 1000), Some(want));
+        assert_eq!(count_colours(&img, 0, 100), Some(100));
+        assert_eq!(count_colours(&img, 0, 99), None);
+        let mut c = ColourCounter::new();
+        let mut steps = 0;
+        while !c.run(&img, 0, 7, usize::MAX) {
+            steps += 1;
+        }
+        assert!(steps > 100);
+        assert_eq!(c.count(), want);
     }
 }
