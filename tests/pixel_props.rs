@@ -8,10 +8,11 @@
 //!   draw the same pixel (with negative margins, which the method allows to
 //!   overlap, the occupied cores never overlap);
 //! - the palette-based colour maps add no colour: the result's colours are
-//!   a subset of the source's.
+//!   a subset of the source's (auto only turns to the HSV shift, which adds
+//!   colours by design, when the source has at most one usable colour).
 use filigree::pixel::{
-    self, inputs::ElementSheet, placement::orientation_at, ColourStrategy, Direction8,
-    ElementColour, Elements, PixelInputs, PixelParams, PositionStrategy,
+    self, inputs::ElementSheet, placement::orientation_at, ColourMapKind, ColourStrategy,
+    Direction8, ElementColour, Elements, PixelInputs, PixelParams, PositionStrategy,
 };
 use filigree::raster::Rgba8Image;
 use proptest::prelude::*;
@@ -224,16 +225,26 @@ proptest! {
                 prop_assert!(drawn_by[i].is_some(), "pixel {} {} changed but no element draws it", i as i32 % w, i as i32 / w);
             }
         }
-        // Occupied regions (cells grown or shrunk by the margins) never overlap.
+        // A position is only taken when its cell is clear of every region
+        // occupied before it (earlier cells grown, or shrunk, by the margins).
         let [mx, my] = c.params.margins;
-        let core = |&(x, y): &(i32, i32)| (x - mx, y - my, x + side + mx, y + side + my);
+        let region = |&(x, y): &(i32, i32)| (x - mx, y - my, x + side + mx, y + side + my);
+        let cell = |&(x, y): &(i32, i32)| (x, y, x + side, y + side);
         for (i, a) in out.positions.iter().enumerate() {
-            let a = core(a);
+            let a = region(a);
             for b in &out.positions[i + 1..] {
-                let b = core(b);
+                let b = cell(b);
                 let apart = a.2 <= b.0 || b.2 <= a.0 || a.3 <= b.1 || b.3 <= a.1;
-                prop_assert!(apart, "occupied regions {a:?} and {b:?} overlap");
+                prop_assert!(apart, "cell {b:?} overlaps the earlier occupied region {a:?}");
             }
+        }
+        // Auto falls back to the HSV shift (which adds colours by design)
+        // only when the source has at most one usable colour.
+        if out.stats.colour_map_used == ColourMapKind::Hsv {
+            prop_assert_eq!(c.params.colour, ColourStrategy::Auto);
+            let usable = colours(&source).into_iter().filter(|p| !c.params.exclude.contains(&[p[0], p[1], p[2]])).count();
+            prop_assert!(usable <= 1, "auto chose HSV with {usable} usable colours");
+            return Ok(());
         }
         let (before, after) = (colours(&source), colours(&out.image));
         prop_assert!(after.is_subset(&before), "new colours {:?}", after.difference(&before).collect::<Vec<_>>());

@@ -363,7 +363,10 @@ impl Job for PixelJob {
                 }
             }
             Stage::Placement => {
-                let cm = self.colour_map.as_ref().expect("colour map before placement");
+                let cm = self
+                    .colour_map
+                    .as_ref()
+                    .expect("colour map before placement");
                 if self.placed.is_none() {
                     let placer = self
                         .placer
@@ -380,7 +383,10 @@ impl Job for PixelJob {
                     if placer.run(&inputs, PLACEMENT_BUDGET) {
                         self.placed = self.placer.take().map(placement::Placer::finish);
                     }
-                    let f = self.placer.as_ref().map_or(1.0, |p| p.fraction(self.positions.len()));
+                    let f = self
+                        .placer
+                        .as_ref()
+                        .map_or(1.0, |p| p.fraction(self.positions.len()));
                     return Ok(self.progress(0.9 + 0.08 * f));
                 }
                 // Count colours a slice at a time: the result's, then (with

@@ -136,7 +136,11 @@ impl Placer {
             for sy in 0..side {
                 for sx in 0..side {
                     let (px, py) = (x + sx, y + sy);
-                    if !sprite.on[(sy * side + sx) as usize] || px < 0 || py < 0 || px >= w || py >= h
+                    if !sprite.on[(sy * side + sx) as usize]
+                        || px < 0
+                        || py < 0
+                        || px >= w
+                        || py >= h
                     {
                         continue;
                     }

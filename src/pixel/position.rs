@@ -300,7 +300,6 @@ impl PositionSampler {
         0.05 + 0.95 * (1.0 - self.candidates.len() as f64 / self.initial.max(1) as f64)
     }
 
-
     /// The positions chosen so far (top-left corners), in the order chosen.
     pub fn positions(&self) -> &[(i32, i32)] {
         &self.positions

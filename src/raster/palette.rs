@@ -529,7 +529,16 @@ mod tests {
         let mut img = Rgba8Image::new(50, 40);
         for y in 0..40 {
             for x in 0..50 {
-                img.put(x, y, [(x / 5) as u8, (y / 4) as u8, 0, if x == 0 { 0 } else { 255 }]);
+                img.put(
+                    x,
+                    y,
+                    [
+                        (x / 5) as u8,
+                        (y / 4) as u8,
+                        0,
+                        if x == 0 { 0 } else { 255 },
+                    ],
+                );
             }
         }
         let want = exact_palette(&img, 0).len();
