@@ -55,7 +55,7 @@ fn radix_sort(v: &mut Vec<u32>) {
         for &x in v.iter() {
             count[((x >> shift) & 0xff) as usize + 1] += 1;
         }
-        if count.iter().any(|&c| c == v.len()) {
+        if count.contains(&v.len()) {
             continue; // every key has the same byte here: nothing moves
         }
         for i in 0..256 {
