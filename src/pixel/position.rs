@@ -15,6 +15,9 @@ use crate::raster::Limits;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
+/// Candidates drawn ahead in one batch (density 1 only).
+const DRAW_AHEAD: usize = 64;
+
 /// How subsequent positions are chosen after the first (random) one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
@@ -64,6 +67,8 @@ pub struct PositionSampler {
     /// still untried, in row-major order until the draws shuffle them.
     candidates: Vec<u32>,
     initial: usize,
+    /// Candidates already drawn, not yet tried (see [`DRAW_AHEAD`]).
+    ahead: VecDeque<u32>,
     queue: VecDeque<(i32, i32)>,
     rng: Rng,
     positions: Vec<(i32, i32)>,
@@ -130,6 +135,7 @@ impl PositionSampler {
             occupied: vec![false; n],
             candidates: Vec::new(),
             initial: 0,
+            ahead: VecDeque::new(),
             queue: VecDeque::new(),
             rng: Rng::new(seed),
             positions: Vec::new(),
@@ -281,6 +287,14 @@ impl PositionSampler {
             spent += cost;
             if let Some((x, y)) = self.queue.pop_front() {
                 self.try_position(x, y);
+                continue;
+            }
+            if self.ahead.is_empty() && self.p.density >= 1.0 {
+                self.draw_ahead();
+            }
+            if let Some(c) = self.ahead.pop_front() {
+                let c = c as i32;
+                self.try_valid(c % self.w, c / self.w);
             } else if !self.candidates.is_empty() {
                 let i = self.rng.below(self.candidates.len());
                 let c = self.candidates.swap_remove(i) as i32;
@@ -289,7 +303,26 @@ impl PositionSampler {
                 return true;
             }
         }
-        self.queue.is_empty() && self.candidates.is_empty()
+        self.queue.is_empty() && self.candidates.is_empty() && self.ahead.is_empty()
+    }
+
+    /// Draw the next [`DRAW_AHEAD`] candidates at once. With density 1 the
+    /// draws use the random stream alone (nothing else draws from it and
+    /// every draw removes one candidate whatever its outcome), so drawing
+    /// early gives exactly the same sequence; doing it in a batch lets the
+    /// memory reads of many random candidates overlap instead of waiting
+    /// for each in turn.
+    fn draw_ahead(&mut self) {
+        let mut touch = false;
+        for _ in 0..DRAW_AHEAD.min(self.candidates.len()) {
+            let i = self.rng.below(self.candidates.len());
+            let c = self.candidates.swap_remove(i);
+            // Read the cell's first occupancy byte now, so the test later
+            // finds it in cache.
+            touch ^= self.occupied[c as usize];
+            self.ahead.push_back(c);
+        }
+        std::hint::black_box(touch);
     }
 
     /// Rough fraction of the search done, for progress reports.
@@ -297,7 +330,8 @@ impl PositionSampler {
         if !self.listed() {
             return 0.05 * (self.sat_rows + self.cand_rows.max(0)) as f64 / (2 * self.h) as f64;
         }
-        0.05 + 0.95 * (1.0 - self.candidates.len() as f64 / self.initial.max(1) as f64)
+        let left = self.candidates.len() + self.ahead.len();
+        0.05 + 0.95 * (1.0 - left as f64 / self.initial.max(1) as f64)
     }
 
     /// The positions chosen so far (top-left corners), in the order chosen.
