@@ -27,7 +27,11 @@ fn main() {
             // A scrambled order so neighbouring pixels differ a lot.
             let v = i.wrapping_mul(2_654_435_761) & 0xff_ffff;
             let v = if side == 4096 { v } else { i };
-            img.put(i % side, i / side, [(v >> 16) as u8, (v >> 8) as u8, v as u8, 255]);
+            img.put(
+                i % side,
+                i / side,
+                [(v >> 16) as u8, (v >> 8) as u8, v as u8, 255],
+            );
         }
         std::fs::write(&args[2], encode_png(&img).expect("png")).expect("write");
         return;
