@@ -1,6 +1,7 @@
-//! Pieces every tool shares: errors, long-running jobs and their parallel
-//! driver, seeded randomness.
+//! Pieces every tool shares: errors, limits, long-running jobs and their
+//! parallel driver, seeded randomness.
 pub mod error;
 pub mod job;
+pub mod limits;
 pub mod parallel;
 pub mod rng;

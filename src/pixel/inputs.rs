@@ -7,10 +7,7 @@ use serde::{Deserialize, Serialize};
 /// Sprite pixels with alpha above this are drawn (reference tool convention).
 pub const SPRITE_ALPHA: u8 = 10;
 
-/// Largest accepted element cell side, in pixels. Elements are "very small
-/// pixel art images"; this keeps a mistaken full-size picture from being
-/// placed as one element.
-pub const MAX_ELEMENT_SIDE: u32 = 256;
+pub use crate::core::limits::MAX_ELEMENT_SIDE;
 
 /// One of the eight element orientations, in image coordinates (y down).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Hash, PartialOrd, Ord)]
@@ -238,7 +235,7 @@ fn check_side(side: u32, what: &str) -> Result<()> {
     }
     if side > MAX_ELEMENT_SIDE {
         return Err(Error::limit(format!(
-            "the {what} is {side} pixels wide; elements may be at most {MAX_ELEMENT_SIDE} pixels"
+            "the {what} is {side} pixels wide; the element side limit is {MAX_ELEMENT_SIDE} pixels"
         )));
     }
     Ok(())
@@ -342,6 +339,8 @@ pub fn mask_from_image(img: &Rgba8Image) -> Vec<bool> {
 
 /// Check the source/mask pair and return the mask as booleans.
 pub fn check_source_and_mask(source: &Rgba8Image, mask: &Rgba8Image) -> Result<Vec<bool>> {
+    source.validate()?;
+    mask.validate()?;
     if (source.width, source.height) != (mask.width, mask.height) {
         return Err(Error::input(format!(
             "the mask is {}×{} pixels but the source image is {}×{}; they must be the same size",

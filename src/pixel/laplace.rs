@@ -19,10 +19,13 @@
 //! linear in the pixel count and iteration counts stay small as images grow.
 //! All arithmetic is sequential IEEE f64, so native and wasm agree bit for bit.
 
+use super::orientation::SparseAnnotations;
+use crate::core::limits::MAX_SOLVE_PIXELS;
+
 /// Relative residual `‖b − Ax‖ / ‖b‖` at which a component is solved.
 pub const TOLERANCE: f64 = 1e-8;
 /// Safety cap on CG iterations per component.
-pub const MAX_ITERATIONS: usize = 500;
+pub use crate::core::limits::MAX_SOLVER_ITERATIONS as MAX_ITERATIONS;
 /// Gauss–Seidel sweeps before and after each coarse correction.
 const SMOOTHING: usize = 2;
 /// Over-correction of the piecewise-constant coarse correction: constant
@@ -374,6 +377,9 @@ pub struct SolveStats {
     pub iterations: [usize; 2],
     /// Final relative residual per component.
     pub relative_residual: [f64; 2],
+    /// Width and height of the grid solved on: the source's, or a reduced
+    /// one for sources above [`crate::core::limits::MAX_SOLVE_PIXELS`].
+    pub grid: [usize; 2],
 }
 
 impl LaplaceSolver {
@@ -554,6 +560,7 @@ impl LaplaceSolver {
         SolveStats {
             iterations: self.iterations,
             relative_residual: self.residual,
+            grid: [self.w, self.h],
         }
     }
 }
@@ -568,6 +575,165 @@ pub fn solve(
     let mut s = LaplaceSolver::new(w, h, fixed, values);
     while !s.run(usize::MAX / 2) {}
     (s.field(), s.stats())
+}
+
+/// The smallest whole factor `f` that brings a `w`×`h` grid to at most
+/// `max` cells when each `f`×`f` block becomes one cell.
+pub fn reduction_factor(w: usize, h: usize, max: usize) -> usize {
+    let mut f = 1;
+    while w.div_ceil(f) * h.div_ceil(f) > max.max(1) {
+        f += 1;
+    }
+    f
+}
+
+/// The orientation field of a whole source, as a resumable object.
+///
+/// Sources up to [`MAX_SOLVE_PIXELS`] pixels are solved exactly as
+/// [`LaplaceSolver`] does. Bigger ones are solved on a grid reduced by a
+/// whole factor `f` (each `f`×`f` block one cell; a block is fixed when it
+/// holds annotated pixels, with their mean vector), and the field is
+/// interpolated back bilinearly, each annotated pixel keeping its own
+/// vector. The solve's cost is then bounded whatever the source size, and
+/// the interpolation is done a few rows per step.
+pub struct FieldSolver {
+    w: usize,
+    h: usize,
+    f: usize,
+    annotations: SparseAnnotations,
+    solver: LaplaceSolver,
+    /// The solved (reduced) field, once the solve is done.
+    coarse: Option<Vec<[f64; 2]>>,
+    /// Next row to interpolate, and the next annotation to look at.
+    row: usize,
+    next_fixed: usize,
+    field: Vec<[f32; 2]>,
+}
+
+impl FieldSolver {
+    /// Set up the solve for a `w`×`h` source with these annotated pixels
+    /// (sorted by index, as [`super::orientation::annotate_sparse`] gives).
+    pub fn new(w: usize, h: usize, annotations: SparseAnnotations) -> FieldSolver {
+        let f = reduction_factor(w, h, MAX_SOLVE_PIXELS);
+        let (rw, rh) = (w.div_ceil(f), h.div_ceil(f));
+        let mut fixed = vec![false; rw * rh];
+        let mut values = vec![[0.0; 2]; rw * rh];
+        if f == 1 {
+            for &(i, v) in &annotations {
+                fixed[i as usize] = true;
+                values[i as usize] = v;
+            }
+        } else {
+            let mut count = vec![0u32; rw * rh];
+            for &(i, v) in &annotations {
+                let (x, y) = (i as usize % w, i as usize / w);
+                let b = (y / f) * rw + x / f;
+                fixed[b] = true;
+                values[b][0] += v[0];
+                values[b][1] += v[1];
+                count[b] += 1;
+            }
+            for (v, &c) in values.iter_mut().zip(&count) {
+                if c > 0 {
+                    *v = [v[0] / c as f64, v[1] / c as f64];
+                }
+            }
+        }
+        FieldSolver {
+            w,
+            h,
+            f,
+            annotations,
+            solver: LaplaceSolver::new(rw, rh, fixed, values),
+            coarse: None,
+            row: 0,
+            next_fixed: 0,
+            field: Vec::new(),
+        }
+    }
+
+    /// The factor the grid was reduced by (1: solved at full resolution).
+    pub fn factor(&self) -> usize {
+        self.f
+    }
+
+    /// Do about `budget` pixel visits of work; `true` when the field is ready.
+    pub fn run(&mut self, budget: usize) -> bool {
+        if self.coarse.is_none() {
+            if !self.solver.run(budget) {
+                return false;
+            }
+            self.coarse = Some(self.solver.field());
+            self.field = Vec::with_capacity(self.w * self.h);
+            return false;
+        }
+        self.interpolate(budget)
+    }
+
+    /// Fill about `budget` pixels of the full-resolution field, whole rows.
+    fn interpolate(&mut self, budget: usize) -> bool {
+        let coarse = self.coarse.as_ref().expect("solved");
+        let (w, f) = (self.w, self.f);
+        let (rw, rh) = (w.div_ceil(f), self.h.div_ceil(f));
+        let mut done = 0;
+        while self.row < self.h && (done == 0 || done + w <= budget) {
+            let y = self.row;
+            if f == 1 {
+                let row = &coarse[y * w..(y + 1) * w];
+                self.field
+                    .extend(row.iter().map(|v| [v[0] as f32, v[1] as f32]));
+            } else {
+                // Cell centres of the reduced grid sit at (X + 0.5)·f.
+                let fy = ((y as f64 + 0.5) / f as f64 - 0.5).clamp(0.0, (rh - 1) as f64);
+                let y0 = fy.floor() as usize;
+                let y1 = (y0 + 1).min(rh - 1);
+                let ty = fy - y0 as f64;
+                for x in 0..w {
+                    let i = (y * w + x) as u32;
+                    let a = self.annotations.get(self.next_fixed);
+                    if let Some(&(_, v)) = a.filter(|a| a.0 == i) {
+                        self.next_fixed += 1;
+                        self.field.push([v[0] as f32, v[1] as f32]);
+                        continue;
+                    }
+                    let fx = ((x as f64 + 0.5) / f as f64 - 0.5).clamp(0.0, (rw - 1) as f64);
+                    let x0 = fx.floor() as usize;
+                    let x1 = (x0 + 1).min(rw - 1);
+                    let tx = fx - x0 as f64;
+                    let at = |xx: usize, yy: usize| coarse[yy * rw + xx];
+                    let (a, b, c, d) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
+                    let lerp = |k: usize| {
+                        let top = a[k] + (b[k] - a[k]) * tx;
+                        let bottom = c[k] + (d[k] - c[k]) * tx;
+                        (top + (bottom - top) * ty) as f32
+                    };
+                    self.field.push([lerp(0), lerp(1)]);
+                }
+            }
+            self.row += 1;
+            done += w;
+        }
+        self.row == self.h
+    }
+
+    /// Fraction done, for progress.
+    pub fn fraction(&self) -> f64 {
+        if self.coarse.is_none() {
+            0.9 * self.solver.fraction()
+        } else {
+            0.9 + 0.1 * self.row as f64 / self.h.max(1) as f64
+        }
+    }
+
+    /// Figures of the solve (after [`FieldSolver::run`] returned `true`).
+    pub fn stats(&self) -> SolveStats {
+        self.solver.stats()
+    }
+
+    /// The field, one `[x, y]` per source pixel, row-major.
+    pub fn into_field(self) -> Vec<[f32; 2]> {
+        self.field
+    }
 }
 
 #[cfg(test)]
@@ -667,5 +833,80 @@ mod tests {
         }
         assert!(steps > 5);
         assert_eq!(s.field(), once);
+    }
+
+    #[test]
+    fn reduction_factor_is_the_smallest_that_fits() {
+        assert_eq!(reduction_factor(512, 512, 512 * 512), 1);
+        assert_eq!(reduction_factor(513, 512, 512 * 512), 2);
+        assert_eq!(reduction_factor(4096, 4096, 512 * 512), 8);
+        assert_eq!(reduction_factor(4096, 1, 512 * 512), 1);
+        assert_eq!(reduction_factor(3000, 700, 512 * 512), 3);
+    }
+
+    #[test]
+    fn field_solver_at_full_resolution_equals_the_plain_solve() {
+        let (w, h) = (40, 30);
+        let ann: SparseAnnotations = vec![(65, [1.0, 0.0]), (66, [0.8, 0.6]), (900, [0.0, -1.0])];
+        let mut fixed = vec![false; w * h];
+        let mut values = vec![[0.0; 2]; w * h];
+        for &(i, v) in &ann {
+            fixed[i as usize] = true;
+            values[i as usize] = v;
+        }
+        let (plain, _) = solve(w, h, fixed, values);
+        let mut fs = FieldSolver::new(w, h, ann);
+        assert_eq!(fs.factor(), 1);
+        while !fs.run(5000) {}
+        let want: Vec<[f32; 2]> = plain.iter().map(|v| [v[0] as f32, v[1] as f32]).collect();
+        assert_eq!(fs.into_field(), want);
+    }
+
+    #[test]
+    fn reduced_solve_keeps_annotations_and_follows_the_full_one() {
+        // 1100×300 (> 512²): solved on a 550×150 grid. Annotated pixels keep
+        // their vectors; elsewhere the field stays close to the exact solve,
+        // and its direction (what placement uses) agrees almost everywhere.
+        let (w, h) = (1100usize, 300usize);
+        let mut ann: SparseAnnotations = Vec::new();
+        for x in 100..1000 {
+            ann.push(((60 * w + x) as u32, [1.0, 0.0]));
+        }
+        for y in 100..280 {
+            ann.push(((y * w + 700) as u32, [0.0, 1.0]));
+        }
+        ann.sort_unstable_by_key(|e| e.0);
+        let mut fs = FieldSolver::new(w, h, ann.clone());
+        assert_eq!(fs.factor(), 2);
+        let mut steps = 0;
+        while !fs.run(1_000_000) {
+            steps += 1;
+        }
+        assert!(steps > 3);
+        assert_eq!(fs.stats().grid, [550, 150]);
+        let field = fs.into_field();
+        assert_eq!(field.len(), w * h);
+        for &(i, v) in &ann {
+            assert_eq!(field[i as usize], [v[0] as f32, v[1] as f32]);
+        }
+        let mut fixed = vec![false; w * h];
+        let mut values = vec![[0.0; 2]; w * h];
+        for &(i, v) in &ann {
+            fixed[i as usize] = true;
+            values[i as usize] = v;
+        }
+        let (exact, _) = solve(w, h, fixed, values);
+        let mut worst: f64 = 0.0;
+        let mut disagree = 0;
+        for (a, b) in field.iter().zip(&exact) {
+            let d = ((a[0] as f64 - b[0]).powi(2) + (a[1] as f64 - b[1]).powi(2)).sqrt();
+            worst = worst.max(d);
+            let da = crate::pixel::Direction8::nearest([a[0] as f64, a[1] as f64]);
+            if da != crate::pixel::Direction8::nearest(*b) {
+                disagree += 1;
+            }
+        }
+        assert!(worst < 0.1, "largest difference {worst}");
+        assert!(disagree * 200 < w * h, "{disagree} directions differ");
     }
 }

@@ -28,13 +28,10 @@ pub use position::PositionStrategy;
 
 use crate::core::error::{Error, Result};
 use crate::core::job::{run_quietly, Job, Progress, Step};
-use crate::raster::{exact_palette, Rgba8Image};
+use crate::raster::{count_colours, ColourCounter, Rgba8Image};
 use serde::{Deserialize, Serialize};
 
-/// Largest palette the colour-difference and shared-border maps accept:
-/// their cost grows with the square of the colour count, and pixel art
-/// palettes are small. (HSV shift has no such limit.)
-pub const MAX_PALETTE: usize = 4096;
+pub use crate::core::limits::MAX_PALETTE;
 
 /// Every setting of the method, as plain data. Missing fields take the
 /// defaults, which follow the thesis (appendix A's most common values and the
@@ -175,6 +172,9 @@ impl Stage {
 /// well under 5 ms on a laptop, and in wasm.
 const POSITION_BUDGET: usize = 1_000_000;
 const SOLVER_BUDGET: usize = 1_000_000;
+/// Pixel visits per placement step and pixels per colour-counting step.
+const PLACEMENT_BUDGET: usize = 1_000_000;
+const COUNT_BUDGET: usize = 1 << 20;
 
 /// The whole method as a resumable [`Job`]: positions (several steps on big
 /// masks), colour map (one step), orientation (annotation, then solver
@@ -187,13 +187,19 @@ pub struct PixelJob {
     strokes: Vec<Stroke>,
     stage: Stage,
     sampler: Option<position::PositionSampler>,
-    initial_candidates: usize,
     positions: Vec<(i32, i32)>,
     colour_map: Option<colour::ColourMap>,
     annotated: usize,
-    solver: Option<laplace::LaplaceSolver>,
+    solver: Option<laplace::FieldSolver>,
     field: Vec<[f32; 2]>,
     solve: Option<SolveStats>,
+    placer: Option<placement::Placer>,
+    /// The placed image and element count once placement is done, while
+    /// its colours (and, with HSV, the source's) are counted.
+    placed: Option<(Rgba8Image, usize)>,
+    counter: Option<ColourCounter>,
+    colours_before: Option<usize>,
+    colours_after: Option<usize>,
 }
 
 impl PixelJob {
@@ -206,6 +212,8 @@ impl PixelJob {
             strokes,
         } = inputs;
         let mask = inputs::check_source_and_mask(&source, &mask)?;
+        let (Elements::Sheet(img) | Elements::Sprite(img)) = &elements;
+        img.validate()?;
         let sheet = match &elements {
             Elements::Sheet(img) => ElementSheet::from_sheet(img)?,
             Elements::Sprite(img) => ElementSheet::from_sprite(img, params.sprite_direction)?,
@@ -213,8 +221,8 @@ impl PixelJob {
         if params.annotation_scale == 0
             || params.annotation_scale > orientation::MAX_ANNOTATION_SCALE
         {
-            return Err(Error::input(format!(
-                "annotation scale {} is outside 1..={}",
+            return Err(Error::limit(format!(
+                "annotation scale {} is outside 1..={} (the annotation scale limit)",
                 params.annotation_scale,
                 orientation::MAX_ANNOTATION_SCALE
             )));
@@ -229,13 +237,17 @@ impl PixelJob {
                 params.d_max
             )));
         }
+        let mut colours_before = None;
         if params.colour != ColourStrategy::Hsv {
-            let n = exact_palette(&source, 0).len();
-            if n > MAX_PALETTE {
-                return Err(Error::limit(format!(
-                    "the source has {n} colours; the palette-based colour maps accept at most {MAX_PALETTE} \
-                     (is it pixel art? the HSV shift has no such limit)"
-                )));
+            match count_colours(&source, 0, MAX_PALETTE) {
+                Some(n) => colours_before = Some(n),
+                None => {
+                    return Err(Error::limit(format!(
+                        "the source has more than {MAX_PALETTE} colours; the palette limit of the \
+                         palette-based colour maps is {MAX_PALETTE} \
+                         (is it pixel art? the HSV shift has no such limit)"
+                    )))
+                }
             }
         }
         let pp = position::PositionParams {
@@ -252,7 +264,6 @@ impl PixelJob {
             pp,
             params.seed,
         )?;
-        let initial_candidates = sampler.remaining();
         Ok(PixelJob {
             params,
             source,
@@ -261,13 +272,17 @@ impl PixelJob {
             strokes,
             stage: Stage::Positions,
             sampler: Some(sampler),
-            initial_candidates,
             positions: vec![],
             colour_map: None,
             annotated: 0,
             solver: None,
             field: vec![],
             solve: None,
+            placer: None,
+            placed: None,
+            counter: None,
+            colours_before,
+            colours_after: None,
         })
     }
 
@@ -296,12 +311,12 @@ impl Job for PixelJob {
                     .sampler
                     .as_mut()
                     .expect("sampler until positions are done");
-                if s.run(POSITION_BUDGET) {
+                if s.run(&self.mask, POSITION_BUDGET) {
                     self.positions = self.sampler.take().expect("present").into_positions();
                     self.stage = Stage::ColourMap;
                     return Ok(self.progress(0.25));
                 }
-                let f = s.fraction(self.initial_candidates);
+                let f = s.fraction();
                 Ok(self.progress(0.25 * f))
             }
             Stage::ColourMap => {
@@ -319,33 +334,26 @@ impl Job for PixelJob {
                 let (w, h) = (self.source.width, self.source.height);
                 match self.solver.as_mut() {
                     None => {
-                        let a = orientation::annotate(
+                        let a = orientation::annotate_sparse(
                             w,
                             h,
                             &self.strokes,
                             self.params.annotation_scale,
                         )?;
-                        self.annotated = a.count();
+                        self.annotated = a.len();
                         if self.annotated == 0 {
                             let u = self.params.default_direction.unit();
                             self.field = vec![[u[0] as f32, u[1] as f32]; (w * h) as usize];
                             self.stage = Stage::Placement;
                             return Ok(self.progress(0.9));
                         }
-                        self.solver = Some(laplace::LaplaceSolver::new(
-                            w as usize, h as usize, a.fixed, a.values,
-                        ));
+                        self.solver = Some(laplace::FieldSolver::new(w as usize, h as usize, a));
                         Ok(self.progress(0.36))
                     }
                     Some(solver) => {
                         if solver.run(SOLVER_BUDGET) {
-                            self.field = solver
-                                .field()
-                                .iter()
-                                .map(|v| [v[0] as f32, v[1] as f32])
-                                .collect();
                             self.solve = Some(solver.stats());
-                            self.solver = None;
+                            self.field = self.solver.take().expect("running").into_field();
                             self.stage = Stage::Placement;
                             return Ok(self.progress(0.9));
                         }
@@ -355,23 +363,58 @@ impl Job for PixelJob {
                 }
             }
             Stage::Placement => {
+                let cm = self
+                    .colour_map
+                    .as_ref()
+                    .expect("colour map before placement");
+                if self.placed.is_none() {
+                    let placer = self
+                        .placer
+                        .get_or_insert_with(|| placement::Placer::new(&self.source));
+                    let inputs = placement::PlaceInputs {
+                        mask: &self.mask,
+                        sheet: &self.sheet,
+                        positions: &self.positions,
+                        field: &self.field,
+                        colour_map: &cm.map,
+                        mode: self.params.element_colour,
+                        default: self.params.default_direction,
+                    };
+                    if placer.run(&inputs, PLACEMENT_BUDGET) {
+                        self.placed = self.placer.take().map(placement::Placer::finish);
+                    }
+                    let f = self
+                        .placer
+                        .as_ref()
+                        .map_or(1.0, |p| p.fraction(self.positions.len()));
+                    return Ok(self.progress(0.9 + 0.08 * f));
+                }
+                // Count colours a slice at a time: the result's, then (with
+                // the HSV map, which has no palette limit) the source's.
+                let (image, _) = self.placed.as_ref().expect("placed");
+                let counter = self.counter.get_or_insert_with(ColourCounter::new);
+                if self.colours_after.is_none() {
+                    if counter.run(image, 0, COUNT_BUDGET, usize::MAX) {
+                        self.colours_after = Some(counter.count());
+                        self.counter = None;
+                    }
+                    return Ok(self.progress(0.99));
+                }
+                if self.colours_before.is_none() {
+                    if counter.run(&self.source, 0, COUNT_BUDGET, usize::MAX) {
+                        self.colours_before = Some(counter.count());
+                        self.counter = None;
+                    }
+                    return Ok(self.progress(0.995));
+                }
                 let cm = self.colour_map.take().expect("colour map before placement");
-                let (image, placed) = placement::place(
-                    &self.source,
-                    &self.mask,
-                    &self.sheet,
-                    &self.positions,
-                    &self.field,
-                    &cm.map,
-                    self.params.element_colour,
-                    self.params.default_direction,
-                );
+                let (image, placed) = self.placed.take().expect("placed");
                 self.stage = Stage::Done;
                 let stats = PixelStats {
                     placed,
                     positions: self.positions.len(),
-                    colours_before: exact_palette(&self.source, 0).len(),
-                    colours_after: exact_palette(&image, 0).len(),
+                    colours_before: self.colours_before.unwrap_or(0),
+                    colours_after: self.colours_after.unwrap_or(0),
                     colour_map_used: cm.kind,
                     annotated_pixels: self.annotated,
                     solve: self.solve,

@@ -14,10 +14,7 @@ use crate::core::error::{Error, Result};
 /// A stroke: points `[x, y]` in source-pixel coordinates.
 pub type Stroke = Vec<[f32; 2]>;
 
-/// Largest accepted annotation scale K.
-pub const MAX_ANNOTATION_SCALE: u32 = 32;
-/// Largest accepted number of stroke points over all strokes.
-pub const MAX_STROKE_POINTS: usize = 200_000;
+pub use crate::core::limits::{MAX_ANNOTATION_PATH, MAX_ANNOTATION_SCALE, MAX_STROKE_POINTS};
 
 /// Annotated pixels and their averaged vectors.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,7 +39,7 @@ pub fn check_strokes(width: u32, height: u32, strokes: &[Stroke]) -> Result<()> 
     let total: usize = strokes.iter().map(Vec::len).sum();
     if total > MAX_STROKE_POINTS {
         return Err(Error::limit(format!(
-            "the strokes have {total} points in all; at most {MAX_STROKE_POINTS} are accepted"
+            "the strokes have {total} points in all; the stroke point limit is {MAX_STROKE_POINTS}"
         )));
     }
     let (w, h) = (width as f32, height as f32);
@@ -69,17 +66,78 @@ pub fn check_strokes(width: u32, height: u32, strokes: &[Stroke]) -> Result<()> 
     Ok(())
 }
 
+/// Annotated pixels only: `(row-major index, averaged vector)`, by index.
+pub type SparseAnnotations = Vec<(u32, [f64; 2])>;
+
 /// Rasterise strokes at scale `k` and average down to source pixels.
 pub fn annotate(width: u32, height: u32, strokes: &[Stroke], k: u32) -> Result<Annotations> {
+    let sparse = annotate_sparse(width, height, strokes, k)?;
+    let n = width as usize * height as usize;
+    let mut fixed = vec![false; n];
+    let mut values = vec![[0.0, 0.0]; n];
+    for (i, v) in sparse {
+        fixed[i as usize] = true;
+        values[i as usize] = v;
+    }
+    Ok(Annotations {
+        width,
+        height,
+        fixed,
+        values,
+    })
+}
+
+/// The rasterised path length of `strokes` at scale `k`, in K× grid pixels
+/// (computed from the points alone, before anything is rasterised).
+pub fn path_length(strokes: &[Stroke], k: u32) -> u64 {
+    let kf = k as f64;
+    let g = |p: &[f32; 2]| {
+        (
+            (p[0] as f64 * kf).floor() as i64,
+            (p[1] as f64 * kf).floor() as i64,
+        )
+    };
+    strokes
+        .iter()
+        .map(|s| {
+            1 + s
+                .windows(2)
+                .map(|w| {
+                    let (a, b) = (g(&w[0]), g(&w[1]));
+                    (a.0 - b.0).unsigned_abs().max((a.1 - b.1).unsigned_abs())
+                })
+                .sum::<u64>()
+        })
+        .sum()
+}
+
+/// [`annotate`] without the dense arrays: memory and work grow with the
+/// strokes' length, not with the image. Vectors are summed per pixel in path
+/// order, exactly as the dense version does, so the averages are the same bits.
+pub fn annotate_sparse(
+    width: u32,
+    height: u32,
+    strokes: &[Stroke],
+    k: u32,
+) -> Result<SparseAnnotations> {
     if k == 0 || k > MAX_ANNOTATION_SCALE {
-        return Err(Error::input(format!(
-            "annotation scale {k} is outside 1..={MAX_ANNOTATION_SCALE}"
+        return Err(Error::limit(format!(
+            "annotation scale {k} is outside 1..={MAX_ANNOTATION_SCALE} (the annotation scale limit)"
         )));
     }
     check_strokes(width, height, strokes)?;
+    let len = path_length(strokes, k);
+    if len > MAX_ANNOTATION_PATH {
+        return Err(Error::limit(format!(
+            "the strokes are {len} pixels long on the {k}× annotation grid; \
+             the stroke length limit is {MAX_ANNOTATION_PATH} (draw fewer or shorter strokes, \
+             or lower the annotation scale)"
+        )));
+    }
     let (w, h) = (width as usize, height as usize);
-    let mut sum = vec![[0.0f64; 2]; w * h];
-    let mut count = vec![0u32; w * h];
+    // Per annotated pixel: running sum and count, in first-visit order.
+    let mut slot: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    let mut acc: Vec<(u32, [f64; 2], u32)> = Vec::new();
     let mut path: Vec<(i64, i64)> = Vec::new();
     for stroke in strokes {
         path.clear();
@@ -120,30 +178,23 @@ pub fn annotate(width: u32, height: u32, strokes: &[Stroke], k: u32) -> Result<A
             if sx < 0 || sy < 0 || sx >= w as i64 || sy >= h as i64 {
                 continue;
             }
-            let j = sy as usize * w + sx as usize;
-            sum[j][0] += dx / len;
-            sum[j][1] += dy / len;
-            count[j] += 1;
+            let j = (sy as usize * w + sx as usize) as u32;
+            let e = *slot.entry(j).or_insert_with(|| {
+                acc.push((j, [0.0, 0.0], 0));
+                acc.len() - 1
+            });
+            let a = &mut acc[e];
+            a.1[0] += dx / len;
+            a.1[1] += dy / len;
+            a.2 += 1;
         }
     }
-    let fixed: Vec<bool> = count.iter().map(|&c| c > 0).collect();
-    let values = sum
-        .iter()
-        .zip(&count)
-        .map(|(s, &c)| {
-            if c > 0 {
-                [s[0] / c as f64, s[1] / c as f64]
-            } else {
-                [0.0, 0.0]
-            }
-        })
+    let mut out: SparseAnnotations = acc
+        .into_iter()
+        .map(|(j, s, c)| (j, [s[0] / c as f64, s[1] / c as f64]))
         .collect();
-    Ok(Annotations {
-        width,
-        height,
-        fixed,
-        values,
-    })
+    out.sort_unstable_by_key(|e| e.0);
+    Ok(out)
 }
 
 /// Append the 8-connected line from `a` (exclusive) to `b` (inclusive).
@@ -234,5 +285,33 @@ mod tests {
                 .count(),
             0
         );
+    }
+
+    #[test]
+    fn overlong_strokes_are_refused_before_rasterising() {
+        // 200 back-and-forth segments across a 4096-pixel image at K = 32:
+        // about 26 million grid pixels, far past the limit.
+        let stroke: Stroke = (0..200)
+            .map(|i| [if i % 2 == 0 { 0.0 } else { 4095.0 }, 10.0])
+            .collect();
+        let e = annotate_sparse(4096, 4096, &[stroke], 32)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("stroke length limit"), "{e}");
+    }
+
+    #[test]
+    fn sparse_and_dense_agree() {
+        let strokes = vec![
+            vec![[0.5, 2.5], [9.5, 3.7], [2.0, 8.0]],
+            vec![[2.5, 0.5], [2.5, 9.5]],
+        ];
+        let d = annotate(10, 10, &strokes, 3).unwrap();
+        let s = annotate_sparse(10, 10, &strokes, 3).unwrap();
+        assert_eq!(s.len(), d.count());
+        for (i, v) in s {
+            assert!(d.fixed[i as usize]);
+            assert_eq!(d.values[i as usize], v);
+        }
     }
 }

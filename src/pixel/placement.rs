@@ -56,73 +56,150 @@ pub fn place(
     mode: ElementColour,
     default: Direction8,
 ) -> (Rgba8Image, usize) {
-    let (w, h) = (source.width as i32, source.height as i32);
-    let side = sheet.side as i32;
-    let mut out = source.clone();
-    let mut placed = 0;
-    let mut pixels: Vec<usize> = Vec::with_capacity((side * side) as usize);
-    let mut tally: Vec<([u8; 4], u32)> = Vec::new();
-    for &(x, y) in positions {
-        let dir = orientation_at(
-            field,
-            source.width,
-            source.height,
-            x,
-            y,
-            sheet.side,
-            default,
-        );
-        let sprite = sheet.sprite(dir);
-        pixels.clear();
-        for sy in 0..side {
-            for sx in 0..side {
-                let (px, py) = (x + sx, y + sy);
-                if !sprite.on[(sy * side + sx) as usize] || px < 0 || py < 0 || px >= w || py >= h {
-                    continue;
-                }
-                let i = (py * w + px) as usize;
-                // Pixels outside the mask are never drawn, and transparent
-                // colour-map pixels have no colour to give.
-                if mask[i] && colour_map.data[4 * i + 3] > 0 {
-                    pixels.push(i);
-                }
-            }
-        }
-        if pixels.is_empty() {
-            continue;
-        }
-        placed += 1;
-        let cm = |i: usize| -> [u8; 4] {
-            let d = &colour_map.data[4 * i..4 * i + 4];
-            [d[0], d[1], d[2], d[3]]
-        };
-        match mode {
-            ElementColour::Pixel => {
-                for &i in &pixels {
-                    out.data[4 * i..4 * i + 4].copy_from_slice(&cm(i));
-                }
-            }
-            ElementColour::Region => {
-                tally.clear();
-                for &i in &pixels {
-                    let c = cm(i);
-                    match tally.iter_mut().find(|e| e.0 == c) {
-                        Some(e) => e.1 += 1,
-                        None => tally.push((c, 1)),
-                    }
-                }
-                let c = tally
-                    .iter()
-                    .min_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)))
-                    .expect("non-empty")
-                    .0;
-                for &i in &pixels {
-                    out.data[4 * i..4 * i + 4].copy_from_slice(&c);
-                }
-            }
+    let mut p = Placer::new(source);
+    let inputs = PlaceInputs {
+        mask,
+        sheet,
+        positions,
+        field,
+        colour_map,
+        mode,
+        default,
+    };
+    while !p.run(&inputs, usize::MAX / 2) {}
+    p.finish()
+}
+
+/// What [`Placer::run`] reads.
+pub struct PlaceInputs<'a> {
+    pub mask: &'a [bool],
+    pub sheet: &'a ElementSheet,
+    pub positions: &'a [(i32, i32)],
+    pub field: &'a [[f32; 2]],
+    pub colour_map: &'a Rgba8Image,
+    pub mode: ElementColour,
+    pub default: Direction8,
+}
+
+/// Placement as a resumable object: each [`Placer::run`] draws the next
+/// elements, about `budget` pixel visits' worth, in position order.
+pub struct Placer {
+    out: Rgba8Image,
+    next: usize,
+    placed: usize,
+    pixels: Vec<usize>,
+    tally: Vec<([u8; 4], u32)>,
+}
+
+impl Placer {
+    /// Start from a copy of `source`.
+    pub fn new(source: &Rgba8Image) -> Placer {
+        Placer {
+            out: source.clone(),
+            next: 0,
+            placed: 0,
+            pixels: Vec::new(),
+            tally: Vec::new(),
         }
     }
-    (out, placed)
+
+    /// Fraction of the positions drawn.
+    pub fn fraction(&self, total: usize) -> f64 {
+        self.next as f64 / total.max(1) as f64
+    }
+
+    /// Draw elements until about `budget` pixels were visited; `true` when
+    /// every position is done.
+    pub fn run(&mut self, inp: &PlaceInputs, budget: usize) -> bool {
+        let (w, h) = (self.out.width as i32, self.out.height as i32);
+        let side = inp.sheet.side as i32;
+        // Averaging the field and drawing the sprite visit 2·side² pixels.
+        let cost = 2 * (side * side) as usize + 1;
+        let mut spent = 0;
+        let colour_map = inp.colour_map;
+        while self.next < inp.positions.len() && spent < budget {
+            let (x, y) = inp.positions[self.next];
+            self.next += 1;
+            spent += cost;
+            let dir = orientation_at(
+                inp.field,
+                self.out.width,
+                self.out.height,
+                x,
+                y,
+                inp.sheet.side,
+                inp.default,
+            );
+            let sprite = inp.sheet.sprite(dir);
+            let pixels = &mut self.pixels;
+            pixels.clear();
+            for sy in 0..side {
+                for sx in 0..side {
+                    let (px, py) = (x + sx, y + sy);
+                    if !sprite.on[(sy * side + sx) as usize]
+                        || px < 0
+                        || py < 0
+                        || px >= w
+                        || py >= h
+                    {
+                        continue;
+                    }
+                    let i = (py * w + px) as usize;
+                    // Pixels outside the mask are never drawn, and transparent
+                    // colour-map pixels have no colour to give.
+                    if inp.mask[i] && colour_map.data[4 * i + 3] > 0 {
+                        pixels.push(i);
+                    }
+                }
+            }
+            if pixels.is_empty() {
+                continue;
+            }
+            self.placed += 1;
+            let cm = |i: usize| -> [u8; 4] {
+                let d = &colour_map.data[4 * i..4 * i + 4];
+                [d[0], d[1], d[2], d[3]]
+            };
+            let out = &mut self.out;
+            match inp.mode {
+                ElementColour::Pixel => {
+                    for &i in pixels.iter() {
+                        out.data[4 * i..4 * i + 4].copy_from_slice(&cm(i));
+                    }
+                }
+                ElementColour::Region => {
+                    let tally = &mut self.tally;
+                    tally.clear();
+                    for &i in pixels.iter() {
+                        let c = cm(i);
+                        match tally.iter_mut().find(|e| e.0 == c) {
+                            Some(e) => e.1 += 1,
+                            None => tally.push((c, 1)),
+                        }
+                    }
+                    let c = tally
+                        .iter()
+                        .min_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)))
+                        .expect("non-empty")
+                        .0;
+                    for &i in pixels.iter() {
+                        out.data[4 * i..4 * i + 4].copy_from_slice(&c);
+                    }
+                }
+            }
+        }
+        self.next == inp.positions.len()
+    }
+
+    /// The image and how many elements drew at least one pixel.
+    pub fn finish(self) -> (Rgba8Image, usize) {
+        (self.out, self.placed)
+    }
+
+    /// The image so far.
+    pub fn image(&self) -> &Rgba8Image {
+        &self.out
+    }
 }
 
 #[cfg(test)]

@@ -9,9 +9,14 @@
 //! neighbours overlap). Density is drawn *after* validation: a rejected
 //! position still occupies its region, exactly as the paper describes.
 use crate::core::error::{Error, Result};
+use crate::core::limits;
 use crate::core::rng::Rng;
+use crate::raster::Limits;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
+
+/// Candidates drawn ahead in one batch (density 1 only).
+const DRAW_AHEAD: usize = 64;
 
 /// How subsequent positions are chosen after the first (random) one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -47,11 +52,23 @@ pub struct PositionSampler {
     h: i32,
     side: i32,
     p: PositionParams,
-    /// Summed-area table of the original mask, `(w+1)·(h+1)`.
+    /// Summed-area table of the original mask, `(w+1)·(h+1)`, while the
+    /// candidates are being listed (dropped afterwards).
     sat: Vec<u32>,
+    /// Rows of the table, then rows of candidates, done so far (the set-up
+    /// is sliced like the search, so a 4096² mask never blocks a step).
+    sat_rows: i32,
+    cand_rows: i32,
+    /// Per top-left corner: the cell is inside the image and passes the mask
+    /// test (what `in_mask` asks, precomputed).
+    valid: Vec<bool>,
     occupied: Vec<bool>,
-    /// Top-left corners valid against the original mask and still untried.
-    candidates: Vec<(i32, i32)>,
+    /// Top-left corners (`y·w + x`) valid against the original mask and
+    /// still untried, in row-major order until the draws shuffle them.
+    candidates: Vec<u32>,
+    initial: usize,
+    /// Candidates already drawn, not yet tried (see [`DRAW_AHEAD`]).
+    ahead: VecDeque<u32>,
     queue: VecDeque<(i32, i32)>,
     rng: Rng,
     positions: Vec<(i32, i32)>,
@@ -68,10 +85,29 @@ impl PositionSampler {
         p: PositionParams,
         seed: u64,
     ) -> Result<Self> {
+        Limits::default().check(width, height)?;
+        if side == 0 || side > limits::MAX_ELEMENT_SIDE {
+            return Err(Error::limit(format!(
+                "the element side {side} is outside 1..={} (the element side limit)",
+                limits::MAX_ELEMENT_SIDE
+            )));
+        }
+        if mask.len() as u64 != width as u64 * height as u64 {
+            return Err(Error::input(format!(
+                "the mask has {} values but the image is {width}×{height}",
+                mask.len()
+            )));
+        }
         let (w, h, s) = (width as i32, height as i32, side as i32);
-        assert_eq!(mask.len(), (w * h) as usize, "mask size");
-        for (i, m) in p.margins.iter().enumerate() {
-            if s + 2 * m < 1 {
+        for (i, &m) in p.margins.iter().enumerate() {
+            if m.unsigned_abs() > limits::MAX_MARGIN as u32 {
+                return Err(Error::limit(format!(
+                    "margin {} = {m} is beyond the margin limit of ±{} pixels",
+                    ["mx", "my"][i],
+                    limits::MAX_MARGIN
+                )));
+            }
+            if s as i64 + 2 * (m as i64) < 1 {
                 return Err(Error::input(format!(
                     "margin {} = {m} is too negative for {side}-pixel elements: it must be at least {} \
                      so every element still occupies a pixel",
@@ -86,39 +122,69 @@ impl PositionSampler {
                 p.density
             )));
         }
-        let stride = (w + 1) as usize;
-        let mut sat = vec![0u32; stride * (h + 1) as usize];
-        for y in 0..h as usize {
-            let mut row = 0u32;
-            for x in 0..w as usize {
-                row += mask[y * w as usize + x] as u32;
-                sat[(y + 1) * stride + x + 1] = sat[y * stride + x + 1] + row;
-            }
-        }
-        let mut me = PositionSampler {
+        let n = (w * h) as usize;
+        Ok(PositionSampler {
             w,
             h,
             side: s,
             p,
-            sat,
-            occupied: vec![false; (w * h) as usize],
+            sat: vec![0u32; (w + 1) as usize * (h + 1) as usize],
+            sat_rows: 0,
+            cand_rows: 0,
+            valid: vec![false; n],
+            occupied: vec![false; n],
             candidates: Vec::new(),
+            initial: 0,
+            ahead: VecDeque::new(),
             queue: VecDeque::new(),
             rng: Rng::new(seed),
             positions: Vec::new(),
-        };
+        })
+    }
+
+    /// Continue listing candidates: about `budget` pixels of work. Returns
+    /// the work done; the listing is complete when `cand_rows` passes the
+    /// last row a cell can start on.
+    fn set_up(&mut self, mask: &[bool], budget: usize) -> usize {
+        let (w, h) = (self.w as usize, self.h as usize);
+        let stride = w + 1;
+        let mut spent = 0;
+        while (self.sat_rows as usize) < h && spent < budget {
+            let y = self.sat_rows as usize;
+            let mut row = 0u32;
+            for x in 0..w {
+                row += mask[y * w + x] as u32;
+                self.sat[(y + 1) * stride + x + 1] = self.sat[y * stride + x + 1] + row;
+            }
+            self.sat_rows += 1;
+            spent += w + 1;
+        }
         // Candidates are every corner whose cell passes the mask test on its
         // own: the paper's "random position within the original mask",
         // widened so that with `partial` a cell poking into the mask from
         // outside can be drawn too.
-        for y in 0..=(h - s).max(-1) {
-            for x in 0..=(w - s).max(-1) {
-                if me.in_mask(x, y) {
-                    me.candidates.push((x, y));
+        let last = self.h - self.side;
+        while self.sat_rows as usize == h && self.cand_rows <= last && spent < budget {
+            let y = self.cand_rows;
+            for x in 0..=(self.w - self.side) {
+                if self.mask_test(x, y) {
+                    let i = (y * self.w + x) as usize;
+                    self.valid[i] = true;
+                    self.candidates.push(i as u32);
                 }
             }
+            self.cand_rows += 1;
+            spent += w + 1;
         }
-        Ok(me)
+        if self.listed() {
+            self.sat = Vec::new();
+            self.initial = self.candidates.len();
+        }
+        spent.max(1)
+    }
+
+    fn listed(&self) -> bool {
+        self.sat_rows == self.h && self.cand_rows > self.h - self.side
     }
 
     fn mask_count(&self, x: i32, y: i32) -> u32 {
@@ -134,17 +200,22 @@ impl PositionSampler {
             - self.sat[y1 * stride + x0]
     }
 
-    /// Whether the cell at (x, y) is inside the image and passes the mask test.
-    fn in_mask(&self, x: i32, y: i32) -> bool {
-        if x < 0 || y < 0 || x + self.side > self.w || y + self.side > self.h {
-            return false;
-        }
+    /// The mask test of a cell inside the image (needs the summed-area table).
+    fn mask_test(&self, x: i32, y: i32) -> bool {
         let n = self.mask_count(x, y);
         if self.p.partial {
             n > 0
         } else {
             n == (self.side * self.side) as u32
         }
+    }
+
+    /// Whether the cell at (x, y) is inside the image and passes the mask test.
+    fn in_mask(&self, x: i32, y: i32) -> bool {
+        if x < 0 || y < 0 || x + self.side > self.w || y + self.side > self.h {
+            return false;
+        }
+        self.valid[(y * self.w + x) as usize]
     }
 
     fn free(&self, x: i32, y: i32) -> bool {
@@ -159,7 +230,16 @@ impl PositionSampler {
     /// Test one position; on success keep it (with probability ρ), occupy its
     /// region and, when packing, queue its eight neighbours.
     fn try_position(&mut self, x: i32, y: i32) {
-        if !self.in_mask(x, y) || !self.free(x, y) {
+        if !self.in_mask(x, y) {
+            return;
+        }
+        self.try_valid(x, y);
+    }
+
+    /// [`PositionSampler::try_position`] for a corner known to pass the mask
+    /// test (every drawn candidate does).
+    fn try_valid(&mut self, x: i32, y: i32) {
+        if !self.free(x, y) {
             return;
         }
         if self.p.density >= 1.0 || self.rng.f64() < self.p.density {
@@ -192,33 +272,66 @@ impl PositionSampler {
     }
 
     /// Work until about `budget` pixel tests have been made or the search is
-    /// over. Returns `true` when no suitable position is left.
-    pub fn run(&mut self, budget: usize) -> bool {
-        let cost = (self.side * self.side) as usize + 1;
+    /// over. Returns `true` when no suitable position is left. `mask` is the
+    /// one given to [`PositionSampler::new`] (read while listing candidates).
+    pub fn run(&mut self, mask: &[bool], budget: usize) -> bool {
         let mut spent = 0usize;
+        if !self.listed() {
+            spent += self.set_up(mask, budget);
+            if !self.listed() {
+                return false;
+            }
+        }
+        let cost = (self.side * self.side) as usize + 1;
         while spent < budget {
             spent += cost;
             if let Some((x, y)) = self.queue.pop_front() {
                 self.try_position(x, y);
+                continue;
+            }
+            if self.ahead.is_empty() && self.p.density >= 1.0 {
+                self.draw_ahead();
+            }
+            if let Some(c) = self.ahead.pop_front() {
+                let c = c as i32;
+                self.try_valid(c % self.w, c / self.w);
             } else if !self.candidates.is_empty() {
                 let i = self.rng.below(self.candidates.len());
-                let (x, y) = self.candidates.swap_remove(i);
-                self.try_position(x, y);
+                let c = self.candidates.swap_remove(i) as i32;
+                self.try_valid(c % self.w, c / self.w);
             } else {
                 return true;
             }
         }
-        self.queue.is_empty() && self.candidates.is_empty()
+        self.queue.is_empty() && self.candidates.is_empty() && self.ahead.is_empty()
+    }
+
+    /// Draw the next [`DRAW_AHEAD`] candidates at once. With density 1 the
+    /// draws use the random stream alone (nothing else draws from it and
+    /// every draw removes one candidate whatever its outcome), so drawing
+    /// early gives exactly the same sequence; doing it in a batch lets the
+    /// memory reads of many random candidates overlap instead of waiting
+    /// for each in turn.
+    fn draw_ahead(&mut self) {
+        let mut touch = false;
+        for _ in 0..DRAW_AHEAD.min(self.candidates.len()) {
+            let i = self.rng.below(self.candidates.len());
+            let c = self.candidates.swap_remove(i);
+            // Read the cell's first occupancy byte now, so the test later
+            // finds it in cache.
+            touch ^= self.occupied[c as usize];
+            self.ahead.push_back(c);
+        }
+        std::hint::black_box(touch);
     }
 
     /// Rough fraction of the search done, for progress reports.
-    pub fn fraction(&self, initial_candidates: usize) -> f64 {
-        1.0 - self.candidates.len() as f64 / initial_candidates.max(1) as f64
-    }
-
-    /// Untried candidates left.
-    pub fn remaining(&self) -> usize {
-        self.candidates.len()
+    pub fn fraction(&self) -> f64 {
+        if !self.listed() {
+            return 0.05 * (self.sat_rows + self.cand_rows.max(0)) as f64 / (2 * self.h) as f64;
+        }
+        let left = self.candidates.len() + self.ahead.len();
+        0.05 + 0.95 * (1.0 - left as f64 / self.initial.max(1) as f64)
     }
 
     /// The positions chosen so far (top-left corners), in the order chosen.
@@ -242,7 +355,7 @@ pub fn find_positions(
     seed: u64,
 ) -> Result<Vec<(i32, i32)>> {
     let mut s = PositionSampler::new(width, height, mask, side, p, seed)?;
-    while !s.run(usize::MAX / 2) {}
+    while !s.run(mask, usize::MAX / 2) {}
     Ok(s.into_positions())
 }
 
@@ -398,5 +511,50 @@ mod tests {
         let a = find_positions(50, 40, &mask, 5, p, 42).unwrap();
         assert_eq!(a, find_positions(50, 40, &mask, 5, p, 42).unwrap());
         assert_ne!(a, find_positions(50, 40, &mask, 5, p, 43).unwrap());
+    }
+
+    #[test]
+    fn huge_margins_are_refused_not_wrapped() {
+        // 2147483647 once wrapped `side + 2·m` to a small number and placed
+        // elements everywhere; now it is a named limit error, both signs.
+        let mask = vec![true; 20 * 20];
+        for m in [
+            i32::MAX,
+            i32::MIN,
+            limits::MAX_MARGIN + 1,
+            -(limits::MAX_MARGIN + 1),
+        ] {
+            for margins in [[m, 0], [0, m]] {
+                let p = PositionParams {
+                    margins,
+                    ..params(PositionStrategy::Packed)
+                };
+                let e = PositionSampler::new(20, 20, &mask, 4, p, 0)
+                    .err()
+                    .expect("refused")
+                    .to_string();
+                assert!(e.contains("margin limit of ±4096"), "{m}: {e}");
+            }
+        }
+        // The largest allowed margin works: one element, nothing else fits.
+        let p = PositionParams {
+            margins: [limits::MAX_MARGIN, limits::MAX_MARGIN],
+            ..params(PositionStrategy::Packed)
+        };
+        assert_eq!(find_positions(20, 20, &mask, 4, p, 0).unwrap().len(), 1);
+    }
+
+    #[test]
+    fn mask_size_and_density_are_checked() {
+        let e = PositionSampler::new(5, 5, &[true; 24], 2, params(PositionStrategy::Random), 0)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("24 values") && e.contains("5×5"), "{e}");
+        let p = PositionParams {
+            density: f64::NAN,
+            ..params(PositionStrategy::Random)
+        };
+        assert!(PositionSampler::new(5, 5, &[true; 25], 2, p, 0).is_err());
     }
 }

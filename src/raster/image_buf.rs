@@ -1,8 +1,10 @@
 use crate::core::error::{Error, Result};
+use crate::core::limits::{self, rgba_bytes};
 use image::{ImageDecoder, ImageFormat, ImageReader};
 use std::io::Cursor;
 
-/// Size limits applied before any pixel is decoded.
+/// Size limits applied before any pixel is decoded. The defaults are
+/// [`limits::MAX_IMAGE_SIDE`] and [`limits::MAX_IMAGE_PIXELS`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Limits {
     /// Largest accepted width and height, each.
@@ -16,9 +18,36 @@ impl Default for Limits {
     /// browser tab can hold twice over while a tool works on a copy.
     fn default() -> Self {
         Limits {
-            max_side: 4096,
-            max_pixels: 4096 * 4096,
+            max_side: limits::MAX_IMAGE_SIDE,
+            max_pixels: limits::MAX_IMAGE_PIXELS,
         }
+    }
+}
+
+impl Limits {
+    /// Check a declared size against these limits (before anything is
+    /// allocated); the error names the limit that was exceeded.
+    pub fn check(&self, w: u32, h: u32) -> Result<()> {
+        if w > self.max_side || h > self.max_side {
+            return Err(Error::limit(format!(
+                "{w}×{h} exceeds the {m}×{m} limit",
+                m = self.max_side
+            )));
+        }
+        let n = w as u64 * h as u64;
+        if n > self.max_pixels {
+            return Err(Error::limit(format!(
+                "{w}×{h} has {n} pixels, more than the limit of {} pixels",
+                self.max_pixels
+            )));
+        }
+        if rgba_bytes(w, h).is_none() {
+            return Err(Error::limit(format!(
+                "{w}×{h} RGBA ({} bytes) does not fit in this platform's memory",
+                n * 4
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -39,19 +68,43 @@ impl std::fmt::Debug for Rgba8Image {
 }
 
 impl Rgba8Image {
-    /// A fully transparent image.
+    /// A fully transparent image of a size the caller has already checked
+    /// (it comes from an accepted image or a validated request).
+    ///
+    /// Panics, before allocating, when `width × height × 4` does not fit in
+    /// `usize`; sizes that come from input go through [`Rgba8Image::try_new`].
     pub fn new(width: u32, height: u32) -> Self {
+        let n = rgba_bytes(width, height).unwrap_or_else(|| {
+            panic!("a {width}×{height} RGBA image does not fit in memory (unchecked size)")
+        });
         Rgba8Image {
             width,
             height,
-            data: vec![0; width as usize * height as usize * 4],
+            data: vec![0; n],
         }
     }
 
-    /// Wrap raw RGBA bytes, checking the length.
+    /// A fully transparent image whose size comes from input: checked
+    /// against the default image limits before anything is allocated.
+    pub fn try_new(width: u32, height: u32) -> Result<Self> {
+        Limits::default().check(width, height)?;
+        Ok(Rgba8Image::new(width, height))
+    }
+
+    /// Wrap raw RGBA bytes (e.g. pixels sent by the page), checking the size
+    /// against the default image limits and the length against the size. The
+    /// arithmetic is done in `u64`, so a declared 65536×65536 cannot wrap to
+    /// an empty image on 32-bit targets.
     pub fn from_raw(width: u32, height: u32, data: Vec<u8>) -> Result<Self> {
-        let want = width as usize * height as usize * 4;
-        if data.len() != want {
+        Limits::default().check(width, height)?;
+        Rgba8Image::from_raw_checked(width, height, data)
+    }
+
+    /// The length check of [`Rgba8Image::from_raw`] without the size limits
+    /// (the caller has checked its own limits).
+    fn from_raw_checked(width: u32, height: u32, data: Vec<u8>) -> Result<Self> {
+        let want = width as u64 * height as u64 * 4;
+        if data.len() as u64 != want {
             return Err(Error::input(format!(
                 "{width}×{height} RGBA needs {want} bytes, got {}",
                 data.len()
@@ -62,6 +115,24 @@ impl Rgba8Image {
             height,
             data,
         })
+    }
+
+    /// Check what the public fields promise: a size within the default image
+    /// limits and exactly `width × height × 4` bytes. Tools call this on
+    /// images handed to them, so a hand-built inconsistent image is an error,
+    /// not an out-of-bounds panic later.
+    pub fn validate(&self) -> Result<()> {
+        Limits::default().check(self.width, self.height)?;
+        let want = self.width as u64 * self.height as u64 * 4;
+        if self.data.len() as u64 != want {
+            return Err(Error::input(format!(
+                "the {}×{} image has {} bytes of RGBA; it needs {want}",
+                self.width,
+                self.height,
+                self.data.len()
+            )));
+        }
+        Ok(())
     }
 
     pub fn pixel_count(&self) -> usize {
@@ -102,6 +173,7 @@ impl Rgba8Image {
     /// source box (alpha-weighted so transparent pixels do not darken edges).
     /// Images already small enough are returned unchanged.
     pub fn thumbnail(&self, max_side: u32) -> Rgba8Image {
+        let max_side = max_side.clamp(1, limits::MAX_THUMBNAIL_SIDE);
         let long = self.width.max(self.height);
         if long <= max_side || long == 0 {
             return self.clone();
@@ -155,29 +227,33 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     let decoder = reader
         .into_decoder()
         .map_err(|e| Error::input(format!("the {name} header could not be read: {e}")))?;
+    let mut decoder = decoder;
     let (w, h) = decoder.dimensions();
     if w == 0 || h == 0 {
         return Err(Error::input(format!(
             "the {name} image has no pixels ({w}×{h})"
         )));
     }
-    if w > limits.max_side || h > limits.max_side {
-        return Err(Error::limit(format!(
-            "{w}×{h} exceeds the {m}×{m} limit",
-            m = limits.max_side
-        )));
-    }
-    if w as u64 * h as u64 > limits.max_pixels {
-        return Err(Error::limit(format!(
-            "{w}×{h} has {} pixels, more than the limit of {}",
-            w as u64 * h as u64,
-            limits.max_pixels
-        )));
-    }
-    let img = image::DynamicImage::from_decoder(decoder)
-        .map_err(|e| Error::input(format!("the {name} data is damaged or truncated ({e})")))?;
+    limits.check(w, h)?;
+    let mut dl = image::Limits::default();
+    dl.max_image_width = Some(limits.max_side);
+    dl.max_image_height = Some(limits.max_side);
+    dl.max_alloc = Some(limits::MAX_DECODE_ALLOC);
+    decoder.set_limits(dl).map_err(|e| {
+        Error::limit(format!(
+            "the {name} decoder needs more than the decode memory limit of {} MiB ({e})",
+            limits::MAX_DECODE_ALLOC >> 20
+        ))
+    })?;
+    let img = image::DynamicImage::from_decoder(decoder).map_err(|e| match e {
+        image::ImageError::Limits(e) => Error::limit(format!(
+            "decoding this {name} needs more than the decode memory limit of {} MiB ({e})",
+            limits::MAX_DECODE_ALLOC >> 20
+        )),
+        e => Error::input(format!("the {name} data is damaged or truncated ({e})")),
+    })?;
     let rgba = img.into_rgba8();
-    Rgba8Image::from_raw(w, h, rgba.into_raw())
+    Rgba8Image::from_raw_checked(w, h, rgba.into_raw())
 }
 
 fn format_name(f: ImageFormat) -> &'static str {
@@ -262,6 +338,45 @@ mod tests {
             max_pixels: 1000,
         };
         assert!(matches!(decode(&png, limits), Err(Error::Limit(_))));
+    }
+
+    #[test]
+    fn raw_sizes_that_wrap_on_32_bits_are_refused_before_allocating() {
+        // 65536² × 4 = 2^34 and 32768² × 4 = 2^32 both wrap to 0 in a 32-bit
+        // usize: an empty buffer must never pass as such an image.
+        for (w, h) in [(65536, 65536), (32768, 32768), (u32::MAX, 2), (2, u32::MAX)] {
+            // Computed in u64 (as the check does) the size is far above 32 bits.
+            assert!(w as u64 * h as u64 * 4 > u32::MAX as u64);
+            let e = Rgba8Image::from_raw(w, h, vec![]).unwrap_err();
+            assert!(matches!(e, Error::Limit(_)), "{w}×{h}: {e}");
+            assert!(e.to_string().contains("limit"), "{e}");
+            let e = Rgba8Image::try_new(w, h).unwrap_err();
+            assert!(matches!(e, Error::Limit(_)), "{w}×{h}: {e}");
+        }
+        // Without the size limits the byte count itself is checked in u64.
+        let open = Limits {
+            max_side: u32::MAX,
+            max_pixels: u64::MAX,
+        };
+        let r = open.check(65536, 65536);
+        assert_eq!(r.is_ok(), usize::BITS > 32, "{r:?}");
+        let e = Rgba8Image::from_raw_checked(65536, 65536, vec![]).unwrap_err();
+        assert!(e.to_string().contains("17179869184 bytes"), "{e}");
+    }
+
+    #[test]
+    fn raw_length_and_limits_are_named() {
+        let e = Rgba8Image::from_raw(2, 2, vec![0; 15]).unwrap_err();
+        assert_eq!(e.to_string(), "2×2 RGBA needs 16 bytes, got 15");
+        assert!(Rgba8Image::from_raw(2, 2, vec![0; 16]).is_ok());
+        let e = Rgba8Image::from_raw(5000, 1, vec![0; 20000]).unwrap_err();
+        assert_eq!(e.to_string(), "5000×1 exceeds the 4096×4096 limit");
+        let tight = Limits {
+            max_side: 100,
+            max_pixels: 50,
+        };
+        let e = tight.check(10, 6).unwrap_err().to_string();
+        assert_eq!(e, "10×6 has 60 pixels, more than the limit of 50 pixels");
     }
 
     #[test]

@@ -3,4 +3,7 @@ mod image_buf;
 mod palette;
 
 pub use image_buf::{decode, encode_png, Limits, Rgba8Image};
-pub use palette::{cluster_palette, exact_palette, Cluster, PaletteEntry};
+pub use palette::{
+    check_tolerance, cluster_counts, cluster_palette, colour_counts, count_colours, exact_palette,
+    Cluster, ColourCounter, PaletteEntry,
+};

@@ -1,0 +1,177 @@
+//! Every size and work limit of the core, in one place.
+//!
+//! Each limit exists so that no input — a file, a program, a request from
+//! the page — can make the core allocate without bound, loop for ever or
+//! overflow a stack. The figures are chosen for the weakest target: a
+//! browser tab running the wasm build, where `usize` is 32 bits, memory is
+//! at most 4 GiB and the stack is about 1 MiB.
+//!
+//! Rules for limits:
+//! - a limit is a named constant here, documented with what it bounds and why
+//!   its value;
+//! - a check happens *before* the allocation or the work it bounds, with
+//!   arithmetic in `u64` (or checked), so it cannot wrap on 32 bits;
+//! - the error is [`crate::core::error::Error::Limit`] and its message names
+//!   the limit in words and gives its value (e.g. "exceeds the 4096×4096
+//!   limit", "at most 200000 stroke points").
+//!
+//! Tools do not invent their own magic numbers; they refer to these.
+
+// ---------------------------------------------------------------- images --
+
+/// Largest width and largest height of any image the core decodes or
+/// receives as raw pixels (sources, masks, targets, element sheets).
+pub const MAX_IMAGE_SIDE: u32 = 4096;
+
+/// Largest pixel count (width × height) of any image: 16 Mpx, that is 64 MiB
+/// of RGBA, which a browser tab can hold a few times over while a tool
+/// works on copies.
+pub const MAX_IMAGE_PIXELS: u64 = MAX_IMAGE_SIDE as u64 * MAX_IMAGE_SIDE as u64;
+
+/// Largest single allocation the image decoders may make while decoding
+/// (e.g. a 16-bit 4096² PNG needs 128 MiB before conversion to 8-bit RGBA).
+pub const MAX_DECODE_ALLOC: u64 = 512 * 1024 * 1024;
+
+/// Largest longer side of a thumbnail (the inspect answer's preview).
+pub const MAX_THUMBNAIL_SIDE: u32 = 1024;
+
+/// The number of bytes of an RGBA image of `width` × `height`, or `None`
+/// when that does not fit in `usize` on this platform (on wasm32 a
+/// 65536×65536 image would wrap to 0 bytes).
+pub fn rgba_bytes(width: u32, height: u32) -> Option<usize> {
+    let n = (width as u64).checked_mul(height as u64)?.checked_mul(4)?;
+    usize::try_from(n).ok()
+}
+
+// --------------------------------------------------------------- inspect --
+
+/// Largest clustering tolerance (RGB Euclidean distance). The diagonal of
+/// the RGB cube is √3·255 ≈ 441.7, so 442 already merges every colour.
+pub const MAX_TOLERANCE: f64 = 442.0;
+
+/// At most this many colour clusters are listed in an inspect answer; the
+/// total is always counted exactly (`cluster_count`).
+pub const MAX_LISTED_CLUSTERS: usize = 1024;
+
+/// At most this many exact colours are listed in an inspect answer by
+/// default; the total is always counted exactly (`colour_count`).
+pub const MAX_LISTED_COLOURS: usize = 256;
+
+// ----------------------------------------------------------------- pixel --
+
+/// Largest element cell side, in pixels. Elements are "very small pixel art
+/// images"; this keeps a mistaken full-size picture from being placed as one
+/// element (the placement cost grows with side²).
+pub const MAX_ELEMENT_SIDE: u32 = 256;
+
+/// Largest absolute element margin, in pixels. A margin wider than the
+/// largest image can do nothing more, and keeping margins this small keeps
+/// every position sum far inside `i32`.
+pub const MAX_MARGIN: i32 = MAX_IMAGE_SIDE as i32;
+
+/// Largest source palette the colour-difference and shared-border colour
+/// maps accept: their cost grows with the square of the colour count, and
+/// pixel-art palettes are small. (The HSV shift has no such limit.)
+pub const MAX_PALETTE: usize = 4096;
+
+/// Largest annotation upscale factor K (strokes are rasterised on a K× grid).
+pub const MAX_ANNOTATION_SCALE: u32 = 32;
+
+/// Largest number of stroke points over all strokes of one request.
+pub const MAX_STROKE_POINTS: usize = 200_000;
+
+/// Largest total length of the strokes rasterised on the K× annotation grid,
+/// in grid pixels (checked from the points before rasterising): about 60
+/// strokes right across a 4096-pixel image at K = 4.
+pub const MAX_ANNOTATION_PATH: u64 = 1 << 20;
+
+/// Largest grid the orientation (Laplace) solve runs on. Bigger sources are
+/// solved on a grid reduced by a whole factor to at most this many pixels
+/// (annotations averaged into it) and the field is interpolated back, with
+/// every annotated pixel keeping its own vector exactly: the solve's cost
+/// stays bounded (a few hundred ms) while an element, which takes the mean
+/// direction over its cell snapped to eight directions, sees the same field.
+/// Sources up to 512² are solved at full resolution.
+pub const MAX_SOLVE_PIXELS: usize = 512 * 512;
+
+/// Safety cap on conjugate-gradient iterations per component of the
+/// orientation (Laplace) solve; the multigrid preconditioner converges in
+/// a few dozen.
+pub const MAX_SOLVER_ITERATIONS: usize = 500;
+
+// ------------------------------------------------------ pattern language --
+// (Used by src/pattern/, owned by the geom/optim work; listed here so every
+// limit is in one place. The use sites switch to these constants.)
+
+/// Largest accepted program text, in bytes.
+pub const MAX_PROGRAM_BYTES: usize = 256 * 1024;
+
+/// Interpreter operations per recording (each statement and expression node
+/// counts one): a few milliseconds of work.
+pub const MAX_PROGRAM_OPS: u64 = 1_000_000;
+
+/// Shapes one recording may emit.
+pub const MAX_SHAPES: usize = 5_000;
+
+/// Nesting depth of user function calls while recording.
+pub const MAX_CALL_DEPTH: usize = 64;
+
+/// Syntactic nesting depth (blocks, parentheses) the parser accepts.
+pub const MAX_NESTING: usize = 256;
+
+/// Largest side of a pattern render including supersampling
+/// (size × samples per side).
+pub const MAX_RENDER_SIDE: usize = 4096;
+
+// -------------------------------------------------------------- requests --
+// (Used by the request layer, src/pattern/api.rs, src/web/, src/cmd/.)
+
+/// Largest side of a `render-pattern` request, in pixels.
+pub const MAX_REQUEST_RENDER_SIDE: usize = 2048;
+
+/// Smallest and largest side of a Fit target snapped to the palette.
+pub const MIN_TARGET_SIDE: usize = 8;
+/// See [`MIN_TARGET_SIDE`].
+pub const MAX_TARGET_SIDE: usize = 2048;
+
+/// Largest genetic-algorithm population and generation count of a fit.
+pub const MAX_GA_POPULATION: usize = 10_000;
+/// See [`MAX_GA_POPULATION`].
+pub const MAX_GA_GENERATIONS: usize = 10_000;
+
+/// Largest number of parameter points one `fit-eval` request evaluates.
+pub const MAX_EVAL_POINTS: usize = 10_000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rgba_bytes_never_wraps() {
+        assert_eq!(rgba_bytes(3, 2), Some(24));
+        assert_eq!(rgba_bytes(0, 5), Some(0));
+        // 65536² × 4 = 2^34: more than a 32-bit usize holds. Computed in
+        // u64 it is exact; it must never come back as a wrapped small number.
+        let big = rgba_bytes(65536, 65536);
+        if usize::BITS == 32 {
+            assert_eq!(big, None);
+        } else {
+            assert_eq!(big, Some(1usize << 34));
+        }
+        let huge = rgba_bytes(u32::MAX, u32::MAX);
+        let want = (u32::MAX as u128) * (u32::MAX as u128) * 4;
+        assert!(huge.is_none() || huge.map(|n| n as u128) == Some(want));
+    }
+
+    #[test]
+    fn image_limit_fits_every_platform() {
+        // The largest accepted image must be addressable on wasm32.
+        let bytes = MAX_IMAGE_PIXELS * 4;
+        assert!(bytes <= u32::MAX as u64);
+        assert_eq!(
+            rgba_bytes(MAX_IMAGE_SIDE, MAX_IMAGE_SIDE),
+            Some(bytes as usize)
+        );
+        assert!(MAX_TOLERANCE >= (3.0f64).sqrt() * 255.0);
+    }
+}
