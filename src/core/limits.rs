@@ -100,8 +100,6 @@ pub const MAX_SOLVE_PIXELS: usize = 512 * 512;
 pub const MAX_SOLVER_ITERATIONS: usize = 500;
 
 // ------------------------------------------------------ pattern language --
-// (Used by src/pattern/, owned by the geom/optim work; listed here so every
-// limit is in one place. The use sites switch to these constants.)
 
 /// Largest accepted program text, in bytes.
 pub const MAX_PROGRAM_BYTES: usize = 256 * 1024;
@@ -110,14 +108,16 @@ pub const MAX_PROGRAM_BYTES: usize = 256 * 1024;
 /// counts one): a few milliseconds of work.
 pub const MAX_PROGRAM_OPS: u64 = 1_000_000;
 
-/// Shapes one recording may emit.
+/// Shapes one recording may emit; every primitive counts, inside paths and
+/// boolean blocks too (a cubic is 8 quadratic pieces).
 pub const MAX_SHAPES: usize = 5_000;
 
-/// Nesting depth of user function calls while recording.
-pub const MAX_CALL_DEPTH: usize = 64;
-
-/// Syntactic nesting depth (blocks, parentheses) the parser accepts.
-pub const MAX_NESTING: usize = 256;
+/// One nesting budget for parsing and recording (blocks, parentheses,
+/// operator chains, expression nodes and function calls, added up through
+/// every active call), chosen to fit the wasm stack with a safety factor of
+/// at least 3 for every kind of nesting; the measurements are in
+/// `src/pattern/lang.rs` (`MAX_DEPTH`) and `tests/e2e/pattern-depth.test.mjs`.
+pub const MAX_NESTING: usize = 160;
 
 /// Largest side of a pattern render including supersampling
 /// (size × samples per side).

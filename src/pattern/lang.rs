@@ -296,7 +296,7 @@ struct Parser {
 /// (`tests/e2e/pattern-depth.test.mjs` runs the deepest programs the budget
 /// allows there) while ordinary programs stay far below it: 158 chained
 /// operators, 78 levels of plain recursion.
-pub const MAX_DEPTH: usize = 160;
+pub const MAX_DEPTH: usize = crate::core::limits::MAX_NESTING;
 
 /// Deepest nesting the parser accepts.
 const MAX_NESTING: usize = MAX_DEPTH;

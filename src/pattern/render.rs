@@ -8,7 +8,7 @@ use crate::raster::Rgba8Image;
 use std::fmt::Write;
 
 /// Largest raster side [`render`] accepts (pixels × supersampling).
-pub const MAX_RENDER_SIDE: usize = 4096;
+pub use crate::core::limits::MAX_RENDER_SIDE;
 
 /// Rasterise the scene with `params` (float parameters) at `size × size`,
 /// averaging `supersample²` samples per pixel (1 = crisp palette colours).

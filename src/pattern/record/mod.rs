@@ -29,7 +29,7 @@ mod tests;
 mod transform;
 
 /// Largest accepted program text.
-pub const MAX_PROGRAM_BYTES: usize = 256 * 1024;
+pub use crate::core::limits::MAX_PROGRAM_BYTES;
 
 /// Limits on one recording run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -51,8 +51,8 @@ impl Default for RecordLimits {
     /// nesting depth [`MAX_DEPTH`].
     fn default() -> Self {
         RecordLimits {
-            max_ops: 1_000_000,
-            max_shapes: 5_000,
+            max_ops: crate::core::limits::MAX_PROGRAM_OPS,
+            max_shapes: crate::core::limits::MAX_SHAPES,
             max_depth: MAX_DEPTH,
         }
     }
