@@ -9,9 +9,13 @@
 //!   progress and cancellation, seeded randomness.
 //! - [`raster`]: image decoding with explicit limits, palettes, thumbnails, PNG encoding.
 //! - [`inspect`]: the shared "what is in this image" service (size, palette, thumbnail).
-//! - one folder per tool (`pixel`, ...), plain Rust with no browser types.
+//! - one folder per tool (`pixel`, `pattern`), plain Rust with no browser types;
+//!   each has an `api` module: its typed requests with their defaults.
+//! - [`api`]: the request registry (kind → request → job → response) that the
+//!   wasm boundary, the CLI, tests and fuzzers share.
 #![forbid(unsafe_code)]
 
+pub mod api;
 pub mod core;
 pub mod inspect;
 pub mod pattern;

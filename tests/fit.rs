@@ -475,35 +475,32 @@ fn cli_render_and_fit() {
 /// contiguous shares of the candidates.
 #[test]
 fn a_sharded_fit_equals_one_fit() {
-    use filigree::pattern::api::{start_fit, FitSettings, TargetSpec};
+    use filigree::pattern::api::{start_fit, FitRequest};
     use std::collections::BTreeMap;
     let src = generator("stripes-dots").unwrap().source;
-    let named = BTreeMap::new();
     let mut truth = BTreeMap::new();
     truth.insert("spacing".to_string(), 0.15);
-    let target = TargetSpec {
-        params: Some(truth),
-        ..Default::default()
-    };
-    let base = FitSettings {
+    let base = FitRequest {
+        program: src.into(),
+        target_params: Some(truth),
         grid: Some(40),
         population: Some(25),
         generations: Some(3),
         candidates: Some(3),
         iterations: Some(30),
-        seed: Some(9),
+        seed: 9,
         ..Default::default()
     };
-    let whole = run_quietly(start_fit(src, &named, &target, &base).unwrap().0).unwrap();
+    let whole = run_quietly(start_fit(&base).unwrap()).unwrap().result;
 
     let n = 2;
     let mut jobs: Vec<_> = (0..n)
         .map(|k| {
-            let s = FitSettings {
+            let s = FitRequest {
                 shards: Some((k, n)),
                 ..base.clone()
             };
-            start_fit(src, &named, &target, &s).unwrap().0
+            start_fit(&s).unwrap()
         })
         .collect();
     let mut results = vec![None; n];
@@ -514,7 +511,7 @@ fn a_sharded_fit_equals_one_fit() {
         for (k, job) in jobs.iter_mut().enumerate() {
             while results[k].is_none() && outs[k].is_none() {
                 match job.step().unwrap() {
-                    Step::Done(r) => results[k] = Some(r),
+                    Step::Done(r) => results[k] = Some(r.result),
                     Step::Running(_) => outs[k] = job.outbox(),
                 }
             }
@@ -551,6 +548,6 @@ fn a_sharded_fit_equals_one_fit() {
     let evals: u64 = results.iter().map(|r| r.evaluations).sum();
     assert_eq!(evals, whole.evaluations, "the work is split, not repeated");
     // A job refuses input it did not ask for.
-    let mut lone = start_fit(src, &named, &target, &base).unwrap().0;
+    let mut lone = start_fit(&base).unwrap();
     assert!(lone.inbox(vec![1.0]).is_err());
 }
