@@ -272,7 +272,7 @@ fn bad_numbers_are_rejected_with_the_flag_named() {
                 "--init",
                 "annealing",
             ],
-            "fit: `init` is 'annealing'; expected one of 'genetic'",
+            "--init: fit: `init` is 'annealing'; expected one of",
         ),
         (
             vec![

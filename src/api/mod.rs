@@ -457,7 +457,10 @@ mod tests {
     fn err(kind: &str, json: &str) -> Error {
         match start_json(kind, json) {
             Err(e) => e,
-            Ok(job) => run_quietly(job).err().expect("an error"),
+            Ok(job) => match run_quietly(job) {
+                Err(e) => e,
+                Ok(_) => panic!("{kind} {json}: expected an error"),
+            },
         }
     }
 
