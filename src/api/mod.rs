@@ -307,6 +307,8 @@ fn humanise(kind: &str, field: &str, msg: &str) -> Error {
     } else {
         format!("`{field}`")
     };
+    // serde_wasm_bindgen's errors are JS `Error`s: "Error: invalid type: ...".
+    let msg = msg.strip_prefix("Error: ").unwrap_or(msg);
     let msg = msg
         .split(" at line ")
         .next()
