@@ -248,7 +248,7 @@ fn bad_numbers_are_rejected_with_the_flag_named() {
                 "--threads",
                 "20000",
             ],
-            "--threads: `threads` must be in 1..=256 (got 20000)",
+            "--threads: `threads` must be in 1..=64 (got 20000)",
         ),
         (
             vec![

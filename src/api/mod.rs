@@ -101,8 +101,8 @@ impl<J: Job, F: FnMut(J::Output) -> Response> Job for Mapped<J, F> {
     fn outbox(&mut self) -> Option<Vec<f64>> {
         self.job.outbox()
     }
-    fn inbox(&mut self, data: Vec<f64>) -> Result<()> {
-        self.job.inbox(data)
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        self.job.inbox(parts)
     }
 }
 
@@ -381,8 +381,8 @@ impl<J: Job + ?Sized> Job for Box<J> {
     fn outbox(&mut self) -> Option<Vec<f64>> {
         (**self).outbox()
     }
-    fn inbox(&mut self, data: Vec<f64>) -> Result<()> {
-        (**self).inbox(data)
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        (**self).inbox(parts)
     }
 }
 

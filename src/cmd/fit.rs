@@ -2,7 +2,8 @@
 //! the browser sends (`fit`, `render-pattern`, see `filigree::pattern::api`)
 //! → the same core jobs. Defaults come from the requests, not from here.
 use super::{drive, explain, print_request, put, request, Origins};
-use filigree::core::request_limits as lim;
+use filigree::core::job::Cancel;
+use filigree::core::parallel::run_sharded_threads;
 use filigree::pattern::api::{start_fit, start_render, FitRequest, RenderPatternRequest};
 use filigree::pattern::generators::{generator, GENERATORS};
 use serde_json::{json, Map, Value};
@@ -42,7 +43,7 @@ pub struct FitArgs {
     /// Seed of every random choice (default 1).
     #[arg(long)]
     seed: Option<u64>,
-    /// Threads for the initialisation, 1..=256 (default: all cores).
+    /// Threads, one shard of the fit each, 1..=64 (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
     /// RGB distance within which a target pixel matches a palette colour, 0..=442 (default 60).
@@ -154,18 +155,30 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     if a.print_request {
         return print_request(&req);
     }
-    req.threads = match a.threads {
-        Some(t) => {
-            lim::int_in("threads", t, lim::THREADS).map_err(|e| format!("--threads: {e}"))?
-        }
-        None => std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .min(lim::THREADS.1),
-    };
+    let threads = super::threads(a.threads)?;
     let t0 = Instant::now();
-    let job = start_fit(&req).map_err(|e| explain(e, &origins))?;
-    let out = drive(job, a.json, &origins)?;
+    // One shard per thread, exchanged by the same driver contract as the
+    // browser's worker pool; the result equals a one-thread fit.
+    let jobs = (0..threads)
+        .map(|k| {
+            req.shards = Some((k, threads));
+            start_fit(&req).map_err(|e| explain(e, &origins))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut last = -1.0;
+    let quiet = a.json;
+    let out = run_sharded_threads(jobs, &Cancel::new(), |k, p| {
+        if !quiet && k == 0 && p.fraction - last >= 0.05 {
+            last = p.fraction;
+            eprintln!(
+                "{:>3.0}%  {}  best loss {:.5}",
+                p.fraction * 100.0,
+                p.stage,
+                p.figure.unwrap_or(f64::NAN)
+            );
+        }
+    })
+    .map_err(|e| explain(e, &origins))?;
     let secs = t0.elapsed().as_secs_f64();
     let r = &out.result;
     if let Some(path) = &a.svg {

@@ -103,3 +103,19 @@ pub fn put<T: Serialize>(
     }
     Ok(())
 }
+
+/// Threads for a parallel run: all cores by default, at most the shards a
+/// fit can be split into.
+pub fn threads(asked: Option<usize>) -> Result<usize, String> {
+    let (lo, hi) = filigree::core::request_limits::THREADS;
+    match asked {
+        Some(n) if (lo..=hi).contains(&n) => Ok(n),
+        Some(n) => Err(format!(
+            "--threads: `threads` must be in {lo}..={hi} (got {n})"
+        )),
+        None => Ok(std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .min(hi)),
+    }
+}

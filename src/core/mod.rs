@@ -1,5 +1,7 @@
-//! Pieces every tool shares: errors, long-running jobs, seeded randomness.
+//! Pieces every tool shares: errors, long-running jobs and their parallel
+//! driver, seeded randomness.
 pub mod error;
 pub mod job;
+pub mod parallel;
 pub mod request_limits;
 pub mod rng;

@@ -30,8 +30,8 @@ pub const SHARDS: usize = 64;
 pub const EVAL_POINTS: usize = 10_000;
 /// Largest magnitude of a named parameter value.
 pub const PARAM_MAGNITUDE: f64 = 1e9;
-/// Native threads of a CLI fit (each holds a copy of the objective).
-pub const THREADS: (usize, usize) = (1, 256);
+/// Native threads of a CLI fit: one shard each, so at most [`SHARDS`].
+pub const THREADS: (usize, usize) = (1, SHARDS);
 /// Pixel: annotation scale K, margins (pixels, either sign), HSV shift,
 /// CIELAB distance d_max.
 pub const ANNOTATION_SCALE: (u32, u32) = (1, 32);

@@ -390,9 +390,6 @@ pub struct FitRequestOf<X> {
     pub polish: usize,
     /// `[k, n]`: this job is shard k of n of one fit (see `FitOptions::shards`).
     pub shards: Option<(usize, usize)>,
-    /// Native threads (CLI only; not part of the worker protocol).
-    #[serde(skip)]
-    pub threads: usize,
     #[serde(flatten)]
     pub extra: X,
 }
@@ -423,7 +420,6 @@ impl<X: Default> Default for FitRequestOf<X> {
             iterations: None,
             polish: 0,
             shards: None,
-            threads: 1,
             extra: X::default(),
         }
     }
@@ -491,7 +487,6 @@ impl<X> FitRequestOf<X> {
             }
             o.shards = (k, n);
         }
-        o.threads = lim::int_in("threads", self.threads.max(1), lim::THREADS)?;
         Ok(o)
     }
 
@@ -560,6 +555,10 @@ impl FitRequestJob {
     pub fn fit(&self) -> &FitJob {
         &self.job
     }
+    /// The core fit job alone (its output without the SVG).
+    pub fn into_fit(self) -> FitJob {
+        self.job
+    }
 }
 
 impl Job for FitRequestJob {
@@ -573,8 +572,8 @@ impl Job for FitRequestJob {
     fn outbox(&mut self) -> Option<Vec<f64>> {
         self.job.outbox()
     }
-    fn inbox(&mut self, data: Vec<f64>) -> Result<()> {
-        self.job.inbox(data)
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        self.job.inbox(parts)
     }
 }
 
@@ -826,13 +825,6 @@ mod tests {
                     ..base.clone()
                 },
                 "shards",
-            ),
-            (
-                FitRequest {
-                    threads: 20_000,
-                    ..base.clone()
-                },
-                "threads",
             ),
             (
                 FitRequest {

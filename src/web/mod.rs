@@ -88,8 +88,12 @@ impl WebJob {
         }
     }
 
-    /// Answer the `need` of the last step (merged data from sibling jobs).
-    pub fn provide(&mut self, data: Vec<f64>) -> Result<(), JsValue> {
-        self.inner.inbox(data).map_err(error)
+    /// Answer the `need` of the last step: every sibling shard's `need`,
+    /// in shard order (an array of number arrays; the page only relays).
+    pub fn provide(&mut self, parts: JsValue) -> Result<(), JsValue> {
+        let parts: Vec<Vec<f64>> =
+            crate::api::request("exchange", serde_wasm_bindgen::Deserializer::from(parts))
+                .map_err(error)?;
+        self.inner.inbox(parts).map_err(error)
     }
 }
