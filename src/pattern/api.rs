@@ -659,7 +659,7 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
     let t = req.target(&p, &mut img, &mut fl)?;
     let (scene, target) =
         super::fit::prepare(&p, &vals, &t, &opts.loss).map_err(|e| e.at("program"))?;
-    let work = opts.loss.grid * opts.loss.grid * scene.shape_count().max(1);
+    let work = (opts.loss.grid * opts.loss.grid).saturating_mul(scene.shape_count().max(1));
     let chunk = (EVAL_WORK_PER_STEP / work.max(1)).max(1);
     Ok(EvalJob {
         obj: Objective::new(scene, target, opts.loss),
