@@ -272,7 +272,7 @@ fn bad_numbers_are_rejected_with_the_flag_named() {
                 "--init",
                 "annealing",
             ],
-            "--init: fit: `init` is 'annealing'; expected one of",
+            "--init: `init` is 'annealing'; expected one of",
         ),
         (
             vec![

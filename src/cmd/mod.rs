@@ -62,7 +62,9 @@ pub fn request<T: DeserializeOwned>(
     flags: Value,
     origins: &Origins,
 ) -> Result<T, String> {
-    filigree::api::request(kind, flags).map_err(|e| explain(e, origins))
+    // The flag already says where; the request kind would only repeat it.
+    filigree::api::request(kind, flags)
+        .map_err(|e| explain(e, origins).replacen(&format!("{kind}: "), "", 1))
 }
 
 /// `--print-request`: the request as JSON on stdout (what the browser would send).
