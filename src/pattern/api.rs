@@ -595,24 +595,24 @@ pub struct EvalResponse {
     pub losses: Vec<f64>,
 }
 
-/// Loss evaluations (grid cells × shapes) per `fit-eval` step: a few ms.
-const EVAL_WORK_PER_STEP: usize = 1 << 20;
-
-/// `fit-eval` as a job: a bounded chunk of points per step (one point at
-/// least: a single loss at grid 1024 is the smallest unit of work).
+/// `fit-eval` as a job: as many points per step as a fit step evaluates
+/// (the objective's deterministic work count against the budget's
+/// `work_per_step`), one point at least: a single loss at grid 1024 is the
+/// smallest unit of work.
 pub struct EvalJob {
     obj: Objective,
     points: Vec<Vec<f64>>,
     losses: Vec<f64>,
-    chunk: usize,
+    work_per_step: u64,
 }
 
 impl Job for EvalJob {
     type Output = EvalResponse;
     fn step(&mut self) -> Result<Step<EvalResponse>> {
         let dim = self.obj.scene.rec.float_params.len();
-        let end = (self.losses.len() + self.chunk).min(self.points.len());
-        for i in self.losses.len()..end {
+        let mut work = 0u64;
+        while self.losses.len() < self.points.len() && (work < self.work_per_step || work == 0) {
+            let i = self.losses.len();
             let x = &self.points[i];
             if x.len() != dim {
                 return Err(Error::input(format!(
@@ -629,6 +629,7 @@ impl Job for EvalJob {
             }
             let l = self.obj.loss(x);
             self.losses.push(l);
+            work += self.obj.last_work.max(1);
         }
         if self.losses.len() == self.points.len() {
             Ok(Step::Done(EvalResponse {
@@ -659,13 +660,11 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
     let t = req.target(&p, &mut img, &mut fl)?;
     let (scene, target) =
         super::fit::prepare(&p, &vals, &t, &opts.loss).map_err(|e| e.at("program"))?;
-    let work = (opts.loss.grid * opts.loss.grid).saturating_mul(scene.shape_count().max(1));
-    let chunk = (EVAL_WORK_PER_STEP / work.max(1)).max(1);
     Ok(EvalJob {
         obj: Objective::new(scene, target, opts.loss),
         points: req.extra.points,
         losses: Vec::with_capacity(n),
-        chunk,
+        work_per_step: opts.work_per_step,
     })
 }
 
