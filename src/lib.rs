@@ -9,6 +9,9 @@
 //!   progress and cancellation, seeded randomness.
 //! - [`raster`]: image decoding with explicit limits, palettes, thumbnails, PNG encoding.
 //! - [`inspect`]: the shared "what is in this image" service (size, palette, thumbnail).
+//! - shared building blocks, public so every tool (and its benches) can use
+//!   them: [`geom`] (2-D primitives, their distance functions, the distance
+//!   transform) and [`optim`] (ask/tell optimisers, Adam).
 //! - one folder per tool (`pixel`, `pattern`), plain Rust with no browser types;
 //!   each has an `api` module: its typed requests with their defaults.
 //! - [`api`]: the request registry (kind → request → job → response) that the
@@ -17,7 +20,9 @@
 
 pub mod api;
 pub mod core;
+pub mod geom;
 pub mod inspect;
+pub mod optim;
 pub mod pattern;
 pub mod pixel;
 pub mod raster;
