@@ -90,7 +90,6 @@ pub fn lang(data: &[u8]) {
     }
 }
 
-
 /// Image decoding under the default limits, then what the app does with a
 /// decoded image: `inspect` (palette, clusters, thumbnail), reading it as a
 /// Pixel mask, and as an element sheet or sprite.

@@ -367,8 +367,7 @@ fn pipeline_gradients_match_central_differences() {
 /// its fill colour, then a stroked shape within half its width of the
 /// shape's outline paints its stroke colour; the last paint wins.
 mod painter {
-    use filigree::pattern::record::{BoolOp, Geom, Recording};
-    use filigree::pattern::sdf::PrimKind;
+    use filigree::pattern::record::{BoolOp, Geom, PrimKind, Recording};
 
     type P = [f64; 2];
 
@@ -880,13 +879,29 @@ fn a_sharded_fit_equals_one_fit() {
 /// the new PNGs before committing them.
 #[test]
 fn generators_match_their_golden_renders() {
-    use std::collections::BTreeMap;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/fit");
     let replace = std::env::var_os("REPLACE").is_some();
     let mut failures = vec![];
     for g in GENERATORS {
-        let r = filigree::pattern::api::render_program(g.source, &BTreeMap::new(), 256, 2)
+        let req = filigree::pattern::api::RenderPatternRequest {
+            program: g.source.into(),
+            size: 256,
+            supersample: 2,
+            ..Default::default()
+        };
+        let r = filigree::pattern::api::start_render(req)
+            .and_then(run_quietly)
             .unwrap_or_else(|e| panic!("{}: {e}", g.name));
+        let (svg, image) = (r.svg, r.image);
+        struct Drawn {
+            image: filigree::raster::Rgba8Image,
+            svg: String,
+        }
+        let r = Drawn {
+            image: filigree::raster::Rgba8Image::from_raw(image.width, image.height, image.rgba)
+                .unwrap(),
+            svg,
+        };
         let (png_path, svg_path) = (
             dir.join(format!("{}.png", g.name)),
             dir.join(format!("{}.svg", g.name)),
