@@ -11,8 +11,11 @@
 //! (each step is meant to be a bounded slice; the rest is more of the same).
 #![allow(dead_code)]
 
-use filigree::core::job::{Job, Step};
-use filigree::pattern::api::{self as pattern_api, FitSettings, TargetSpec};
+use filigree::api::Response;
+use filigree::core::job::{run_quietly, Job, Step};
+use filigree::pattern::api::{
+    self as pattern_api, EvalPoints, FitEvalRequest, PatternInfoRequest, RenderPatternRequest,
+};
 use filigree::raster::{decode, Limits, Rgba8Image};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -46,14 +49,22 @@ pub fn lang(data: &[u8]) {
     let Ok(src) = std::str::from_utf8(data) else {
         return;
     };
-    let none = BTreeMap::new();
-    let Ok(info) = pattern_api::program_info(src, &none) else {
+    let Ok(info) = pattern_api::program_info(&PatternInfoRequest {
+        program: src.into(),
+        params: BTreeMap::new(),
+    }) else {
         return;
     };
-    if let Ok(r) = pattern_api::render_program(src, &none, 12, 2) {
+    let render = RenderPatternRequest {
+        program: src.into(),
+        size: 12,
+        supersample: 2,
+        ..Default::default()
+    };
+    if let Ok(r) = pattern_api::start_render(render).and_then(run_quietly) {
         assert_eq!((r.image.width, r.image.height), (12, 12));
-        assert_eq!(r.image.data.len(), 12 * 12 * 4);
-        finite_svg(&r.svg, "render_program");
+        assert_eq!(r.image.rgba.len(), 12 * 12 * 4);
+        finite_svg(&r.svg, "render-pattern");
     }
     let floats: Vec<_> = info.params.iter().filter(|p| !p.integer).collect();
     if floats.is_empty() || info.shapes == 0 {
@@ -61,16 +72,17 @@ pub fn lang(data: &[u8]) {
     }
     let defaults: Vec<f64> = floats.iter().map(|p| p.default).collect();
     let moved: Vec<f64> = floats.iter().map(|p| p.lo + 0.37 * (p.hi - p.lo)).collect();
-    let target = TargetSpec {
-        params: Some(BTreeMap::new()),
-        ..Default::default()
-    };
-    let settings = FitSettings {
+    let eval = FitEvalRequest {
+        program: src.into(),
+        target_params: Some(BTreeMap::new()),
         grid: Some(8),
+        extra: EvalPoints {
+            points: vec![defaults, moved],
+        },
         ..Default::default()
     };
-    if let Ok(losses) = pattern_api::eval_batch(src, &none, &target, &settings, &[defaults, moved])
-    {
+    if let Ok(r) = pattern_api::start_eval(eval).and_then(run_quietly) {
+        let losses = r.losses;
         assert!(
             losses.iter().all(|l| l.is_finite() && *l >= 0.0),
             "losses {losses:?} are not finite and non-negative"
@@ -184,104 +196,6 @@ pub const REQUEST_KINDS: &[&str] = &[
     "pattern-snap",
 ];
 
-// Payloads as the worker receives them (mirrors of `src/web/jobs.rs`, whose
-// structs are private and tied to wasm-bindgen; byte fields are JSON arrays
-// of numbers here, `Uint8Array`s there).
-
-#[derive(Deserialize)]
-struct BytesRequest {
-    bytes: Vec<u8>,
-    tolerance: Option<f64>,
-}
-
-#[derive(Deserialize)]
-struct MaskBits {
-    width: u32,
-    height: u32,
-    bits: Vec<u8>,
-}
-
-#[derive(Deserialize)]
-struct PixelRequest {
-    source: Vec<u8>,
-    mask: MaskBits,
-    #[serde(default)]
-    sheet: Option<Vec<u8>>,
-    #[serde(default)]
-    sprite: Option<Vec<u8>>,
-    #[serde(default)]
-    strokes: Vec<filigree::pixel::Stroke>,
-    #[serde(default)]
-    params: filigree::pixel::PixelParams,
-}
-
-#[derive(Deserialize)]
-struct RawRgba {
-    width: u32,
-    height: u32,
-    rgba: Vec<u8>,
-}
-
-#[derive(Deserialize)]
-struct FitCommon {
-    program: String,
-    #[serde(default)]
-    params: BTreeMap<String, f64>,
-    #[serde(default)]
-    target_png: Option<Vec<u8>>,
-    #[serde(default)]
-    target_rgba: Option<RawRgba>,
-    #[serde(default)]
-    target_params: Option<BTreeMap<String, f64>>,
-    tolerance: Option<f64>,
-    #[serde(flatten)]
-    settings: FitSettings,
-}
-
-impl FitCommon {
-    fn target(&mut self) -> TargetSpec {
-        TargetSpec {
-            image: self.target_png.take(),
-            rgba: self.target_rgba.take().map(|r| (r.width, r.height, r.rgba)),
-            params: self.target_params.take(),
-            tolerance: self.tolerance,
-        }
-    }
-}
-
-#[derive(Deserialize)]
-struct FitEvalRequest {
-    #[serde(flatten)]
-    common: FitCommon,
-    points: Vec<Vec<f64>>,
-}
-
-#[derive(Deserialize)]
-struct RenderPatternRequest {
-    program: String,
-    #[serde(default)]
-    params: BTreeMap<String, f64>,
-    size: Option<usize>,
-    supersample: Option<usize>,
-}
-
-#[derive(Deserialize)]
-struct PatternInfoRequest {
-    program: String,
-    #[serde(default)]
-    params: BTreeMap<String, f64>,
-}
-
-#[derive(Deserialize)]
-struct PatternSnapRequest {
-    program: String,
-    #[serde(default)]
-    params: BTreeMap<String, f64>,
-    bytes: Vec<u8>,
-    size: Option<usize>,
-    tolerance: Option<f64>,
-}
-
 /// Step a job at most [`MAX_STEPS`] times; `Some(output)` if it finished.
 fn step_some<J: Job>(mut job: J) -> Option<J::Output> {
     for _ in 0..MAX_STEPS {
@@ -300,22 +214,6 @@ fn step_some<J: Job>(mut job: J) -> Option<J::Output> {
     None
 }
 
-fn decode_default(bytes: &[u8]) -> Option<Rgba8Image> {
-    decode(bytes, Limits::default()).ok()
-}
-
-fn mask_image(m: &MaskBits) -> Option<Rgba8Image> {
-    if m.bits.len() as u64 != m.width as u64 * m.height as u64 {
-        return None;
-    }
-    let data = m
-        .bits
-        .iter()
-        .flat_map(|&b| if b != 0 { [255; 4] } else { [0; 4] })
-        .collect();
-    Rgba8Image::from_raw(m.width, m.height, data).ok()
-}
-
 /// One request as the worker receives it: the first byte picks the kind
 /// ([`REQUEST_KINDS`], modulo their count), the rest is the JSON payload.
 pub fn requests(data: &[u8]) {
@@ -325,133 +223,33 @@ pub fn requests(data: &[u8]) {
     run_request(REQUEST_KINDS[k as usize % REQUEST_KINDS.len()], json);
 }
 
-/// Run one request of `kind` with a JSON `payload` the way `src/web/jobs.rs` does.
+/// Run one request of `kind` with a JSON `payload` through the registry the
+/// worker uses (`filigree::api`), and check what it answers.
 pub fn run_request(kind: &str, payload: &[u8]) {
-    fn parse<T: for<'de> Deserialize<'de>>(p: &[u8]) -> Option<T> {
-        serde_json::from_slice(p).ok()
-    }
-    match kind {
-        "inspect" => {
-            let Some(req) = parse::<BytesRequest>(payload) else {
-                return;
-            };
-            let mut opts = filigree::inspect::InspectOptions::default();
-            if let Some(t) = req.tolerance {
-                opts.tolerance = t;
-            }
-            let _ = filigree::inspect::inspect(&req.bytes, &opts);
+    let mut de = serde_json::Deserializer::from_slice(payload);
+    let Ok(job) = filigree::api::start(kind, &mut de) else {
+        return;
+    };
+    let Some(out) = step_some(job) else {
+        return;
+    };
+    match out {
+        Response::Fit(r) => {
+            assert!(r.result.loss.is_finite(), "fit loss {}", r.result.loss);
+            finite_svg(&r.svg, "fit");
         }
-        "decode-image" => {
-            let Some(req) = parse::<BytesRequest>(payload) else {
-                return;
-            };
-            let _ = decode_default(&req.bytes);
+        Response::Render(r) => {
+            let (w, h) = (r.image.width as usize, r.image.height as usize);
+            assert_eq!(r.image.rgba.len(), w * h * 4);
+            finite_svg(&r.svg, "render-pattern");
         }
-        "pixel-mask" => {
-            let Some(req) = parse::<BytesRequest>(payload) else {
-                return;
-            };
-            if let Some(img) = decode_default(&req.bytes) {
-                let m = filigree::pixel::inputs::mask_from_image(&img);
-                assert_eq!(m.len(), (img.width * img.height) as usize);
-            }
+        Response::Snap(s) => {
+            assert!((0.0..=1.0).contains(&s.unmatched), "{}", s.unmatched);
         }
-        "pixel" => {
-            let Some(req) = parse::<PixelRequest>(payload) else {
-                return;
-            };
-            use filigree::pixel::{Elements, PixelInputs, PixelJob};
-            let elements = match (&req.sheet, &req.sprite) {
-                (Some(b), None) => match decode_default(b) {
-                    Some(i) => Elements::Sheet(i),
-                    None => return,
-                },
-                (None, Some(b)) => match decode_default(b) {
-                    Some(i) => Elements::Sprite(i),
-                    None => return,
-                },
-                _ => return,
-            };
-            let (Some(source), Some(mask)) = (decode_default(&req.source), mask_image(&req.mask))
-            else {
-                return;
-            };
-            let inputs = PixelInputs {
-                source,
-                mask,
-                elements,
-                strokes: req.strokes,
-            };
-            if let Ok(job) = PixelJob::new(inputs, req.params) {
-                step_some(job);
-            }
+        Response::Mask(m) => {
+            assert_eq!(m.bits.len() as u64, m.width as u64 * m.height as u64);
         }
-        "fit" => {
-            let Some(mut req) = parse::<FitCommon>(payload) else {
-                return;
-            };
-            let target = req.target();
-            if let Ok((job, scene)) =
-                pattern_api::start_fit(&req.program, &req.params, &target, &req.settings)
-            {
-                if let Some(r) = step_some(job) {
-                    assert!(r.loss.is_finite(), "fit loss {}", r.loss);
-                    if let Ok(out) = pattern_api::fit_output(&scene, r) {
-                        finite_svg(&out.svg, "fit");
-                    }
-                }
-            }
-        }
-        "fit-eval" => {
-            let Some(mut req) = parse::<FitEvalRequest>(payload) else {
-                return;
-            };
-            let target = req.common.target();
-            let c = &req.common;
-            if let Ok(l) =
-                pattern_api::eval_batch(&c.program, &c.params, &target, &c.settings, &req.points)
-            {
-                assert_eq!(l.len(), req.points.len());
-            }
-        }
-        "render-pattern" => {
-            let Some(req) = parse::<RenderPatternRequest>(payload) else {
-                return;
-            };
-            let size = req.size.unwrap_or(512);
-            if let Ok(r) = pattern_api::render_program(
-                &req.program,
-                &req.params,
-                size,
-                req.supersample.unwrap_or(1),
-            ) {
-                assert_eq!(r.image.data.len(), size * size * 4);
-                finite_svg(&r.svg, "render-pattern");
-            }
-        }
-        "pattern-info" => {
-            let Some(req) = parse::<PatternInfoRequest>(payload) else {
-                return;
-            };
-            let _ = pattern_api::program_info(&req.program, &req.params);
-        }
-        "pattern-generators" => {
-            assert!(!filigree::pattern::generators::GENERATORS.is_empty());
-        }
-        "pattern-snap" => {
-            let Some(req) = parse::<PatternSnapRequest>(payload) else {
-                return;
-            };
-            if let Ok(s) = pattern_api::snap_target(
-                &req.program,
-                &req.params,
-                &req.bytes,
-                req.size.unwrap_or(256),
-                req.tolerance.unwrap_or(60.0),
-            ) {
-                assert!((0.0..=1.0).contains(&s.unmatched), "{}", s.unmatched);
-            }
-        }
-        other => panic!("no request kind '{other}' in the fuzz bodies"),
+        Response::Generators(g) => assert!(!g.is_empty()),
+        _ => {}
     }
 }

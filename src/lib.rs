@@ -12,9 +12,13 @@
 //! - shared building blocks, public so every tool (and its benches) can use
 //!   them: [`geom`] (2-D primitives, their distance functions, the distance
 //!   transform) and [`optim`] (ask/tell optimisers, Adam).
-//! - one folder per tool (`pixel`, ...), plain Rust with no browser types.
+//! - one folder per tool (`pixel`, `pattern`), plain Rust with no browser types;
+//!   each has an `api` module: its typed requests with their defaults.
+//! - [`api`]: the request registry (kind → request → job → response) that the
+//!   wasm boundary, the CLI, tests and fuzzers share.
 #![forbid(unsafe_code)]
 
+pub mod api;
 pub mod core;
 pub mod geom;
 pub mod inspect;

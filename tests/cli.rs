@@ -51,3 +51,287 @@ fn inspect_errors_name_the_file_and_the_problem() {
     let out = filigree(&["inspect", "does/not/exist.png"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("does/not/exist.png"));
 }
+
+// ------------------------------------------------------------------
+// One request layer: the CLI builds the browser's request structs.
+
+fn print_request(args: &[&str]) -> serde_json::Value {
+    let mut a = args.to_vec();
+    a.push("--print-request");
+    let out = filigree(&a);
+    assert!(
+        out.status.success(),
+        "{:?}: {}",
+        args,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// The request a browser gets from `payload` (deserialised like the worker does).
+fn browser<T: serde::de::DeserializeOwned>(kind: &str, payload: serde_json::Value) -> T {
+    filigree::api::request(kind, payload).unwrap()
+}
+
+fn cli<T: serde::de::DeserializeOwned>(kind: &str, args: &[&str]) -> T {
+    filigree::api::request(kind, print_request(args)).unwrap()
+}
+
+fn bytes(path: &str) -> serde_json::Value {
+    serde_json::to_value(std::fs::read(path).unwrap()).unwrap()
+}
+
+/// For every tool the CLI serves, the request it builds from minimal
+/// arguments equals the request a browser gets from a minimal payload: the
+/// defaults are the same (they are defined once, in the request types).
+#[test]
+fn cli_and_browser_default_requests_are_identical() {
+    use filigree::api::inspect::InspectRequest;
+    use filigree::pattern::api::{FitRequest, RenderPatternRequest};
+    use filigree::pixel::api::{mask_bits, PixelMaskRequest, PixelRequest};
+    use serde_json::json;
+
+    let fish = "tests/fixtures/fish.png";
+    let a: InspectRequest = cli("inspect", &["inspect", fish]);
+    let b: InspectRequest = browser("inspect", json!({ "bytes": bytes(fish) }));
+    assert_eq!(a, b);
+    assert_eq!(a.tolerance, 24.0);
+
+    let src = filigree::pattern::generators::generator("circles-grid")
+        .unwrap()
+        .source;
+    let a: FitRequest = cli(
+        "fit",
+        &["fit", "--program", "circles-grid", "--target", fish],
+    );
+    let b: FitRequest = browser("fit", json!({ "program": src, "target_png": bytes(fish) }));
+    assert_eq!(a, b);
+    assert_eq!(a.budget, filigree::pattern::fit::Budget::Quick);
+
+    let a: RenderPatternRequest = cli(
+        "render-pattern",
+        &["render", "--program", "circles-grid", "--out", "x.png"],
+    );
+    let b: RenderPatternRequest = browser("render-pattern", json!({ "program": src }));
+    assert_eq!(a, b);
+    assert_eq!((a.size, a.supersample), (512, 1));
+
+    let dir = "assets/pixel";
+    let p = |f: &str| format!("{dir}/{f}");
+    let (source, mask, sheet, strokes) = (
+        p("fish.png"),
+        p("fish_body_boundary.png"),
+        p("fish_scale.png"),
+        p("fish_strokes.json"),
+    );
+    let a: PixelRequest = cli(
+        "pixel",
+        &[
+            "pixel",
+            "--source",
+            &source,
+            "--mask",
+            &mask,
+            "--sheet",
+            &sheet,
+            "--strokes",
+            &strokes,
+            "--out",
+            "x.png",
+        ],
+    );
+    // The browser turns a mask file into bits with `pixel-mask` first.
+    let bits = mask_bits(&PixelMaskRequest {
+        bytes: std::fs::read(&mask).unwrap(),
+    })
+    .unwrap();
+    let strokes: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&strokes).unwrap()).unwrap();
+    let b: PixelRequest = browser(
+        "pixel",
+        json!({
+            "source": bytes(&source),
+            "mask": bits,
+            "sheet": bytes(&sheet),
+            "strokes": strokes["strokes"],
+        }),
+    );
+    assert_eq!(a, b);
+    assert_eq!(a.params, filigree::pixel::PixelParams::default());
+}
+
+/// Flags go through the same request fields: aliases, units and values.
+#[test]
+fn cli_flags_map_onto_request_fields() {
+    let v = print_request(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target-params",
+        "{}",
+        "--init",
+        "nm",
+        "--units",
+        "canvas",
+        "--budget",
+        "paper",
+        "--tolerance",
+        "12",
+    ]);
+    assert_eq!(v["init"], "nelder-mead");
+    assert_eq!(v["units"], "canvas");
+    assert_eq!(v["budget"], "paper");
+    assert_eq!(v["tolerance"], 12.0);
+    let v = print_request(&[
+        "pixel",
+        "--source",
+        "assets/pixel/fish.png",
+        "--mask",
+        "assets/pixel/fish_body_boundary.png",
+        "--sheet",
+        "assets/pixel/fish_scale.png",
+        "--strokes",
+        "assets/pixel/fish_strokes.json",
+        "--out",
+        "x.png",
+        "--dmax",
+        "7",
+        "--margins",
+        "-1,-1",
+        "--density",
+        "80%",
+        "--exclude",
+        "none",
+    ]);
+    assert_eq!(v["params"]["d_max"], 7.0);
+    assert_eq!(v["params"]["margins"], serde_json::json!([-1, -1]));
+    assert_eq!(v["params"]["density"], 0.8);
+    assert_eq!(v["params"]["exclude"], serde_json::json!([]));
+}
+
+/// Every numeric flag is checked where it enters, and the message names it.
+#[test]
+fn bad_numbers_are_rejected_with_the_flag_named() {
+    let fish = "tests/fixtures/fish.png";
+    for (args, want) in [
+        (
+            vec![
+                "fit",
+                "--program",
+                "circles-grid",
+                "--target",
+                fish,
+                "--tolerance",
+                "NaN",
+            ],
+            "--tolerance",
+        ),
+        (
+            vec![
+                "fit",
+                "--program",
+                "circles-grid",
+                "--target",
+                fish,
+                "--tolerance",
+                "-5",
+            ],
+            "`tolerance` must be a finite number in 0..=442 (got -5)",
+        ),
+        (
+            vec![
+                "fit",
+                "--program",
+                "circles-grid",
+                "--target",
+                fish,
+                "--threads",
+                "20000",
+            ],
+            "--threads: `threads` must be in 1..=64 (got 20000)",
+        ),
+        (
+            vec![
+                "fit",
+                "--program",
+                "circles-grid",
+                "--target",
+                fish,
+                "--grid",
+                "2",
+            ],
+            "--grid: `grid` must be in 8..=1024 (got 2)",
+        ),
+        (
+            vec![
+                "fit",
+                "--program",
+                "circles-grid",
+                "--target",
+                fish,
+                "--init",
+                "annealing",
+            ],
+            "--init: `init` is 'annealing'; expected one of",
+        ),
+        (
+            vec![
+                "render",
+                "--program",
+                "circles-grid",
+                "--out",
+                "/tmp/x.png",
+                "--size",
+                "2",
+                "--supersample",
+                "9223372036854775808",
+            ],
+            "--supersample: `supersample` must be in 1..=4 (got 9223372036854775808)",
+        ),
+        (
+            vec!["inspect", fish, "--tolerance", "inf"],
+            "--tolerance: must be a finite number",
+        ),
+        (
+            vec![
+                "pixel",
+                "--source",
+                "assets/pixel/fish.png",
+                "--mask",
+                "assets/pixel/fish_body_boundary.png",
+                "--sheet",
+                "assets/pixel/fish_scale.png",
+                "--strokes",
+                "assets/pixel/fish_strokes.json",
+                "--out",
+                "/tmp/x.png",
+                "--margins",
+                "2147483647,0",
+            ],
+            "--margins: `params.margins.0` must be in -4096..=4096 (got 2147483647)",
+        ),
+        (
+            vec![
+                "pixel",
+                "--source",
+                "assets/pixel/fish.png",
+                "--mask",
+                "assets/pixel/fish_body_boundary.png",
+                "--sheet",
+                "assets/pixel/fish_scale.png",
+                "--strokes",
+                "assets/pixel/fish_strokes.json",
+                "--out",
+                "/tmp/x.png",
+                "--dmax",
+                "-3",
+            ],
+            "--dmax: `params.d_max` must be a finite number in 0..=1000 (got -3)",
+        ),
+    ] {
+        let out = filigree(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+}

@@ -775,35 +775,32 @@ fn cli_render_and_fit() {
 #[test]
 fn a_sharded_fit_equals_one_fit() {
     use filigree::core::parallel::{run_sharded, run_sharded_threads};
-    use filigree::pattern::api::{start_fit, FitSettings, TargetSpec};
+    use filigree::pattern::api::{start_fit, FitRequest};
     use std::collections::BTreeMap;
     let src = generator("stripes-dots").unwrap().source;
-    let named = BTreeMap::new();
     let mut truth = BTreeMap::new();
     truth.insert("spacing".to_string(), 0.15);
-    let target = TargetSpec {
-        params: Some(truth),
-        ..Default::default()
-    };
-    let base = FitSettings {
+    let base = FitRequest {
+        program: src.into(),
+        target_params: Some(truth),
         grid: Some(40),
         population: Some(25),
         generations: Some(3),
         candidates: Some(3),
         iterations: Some(30),
-        polish: Some(5),
-        seed: Some(9),
+        polish: 5,
+        seed: 9,
         ..Default::default()
     };
-    let whole = run_quietly(start_fit(src, &named, &target, &base).unwrap().0).unwrap();
+    let whole = run_quietly(start_fit(&base).unwrap().into_fit()).unwrap();
     let shards = |n: usize| -> Vec<_> {
         (0..n)
             .map(|k| {
-                let s = FitSettings {
+                let s = FitRequest {
                     shards: Some((k, n)),
                     ..base.clone()
                 };
-                start_fit(src, &named, &target, &s).unwrap().0
+                start_fit(&s).unwrap().into_fit()
             })
             .collect()
     };
@@ -868,7 +865,7 @@ fn a_sharded_fit_equals_one_fit() {
         "a population of 25, split"
     );
     // A job refuses input it did not ask for, and a shard cannot run alone.
-    let mut lone = start_fit(src, &named, &target, &base).unwrap().0;
+    let mut lone = start_fit(&base).unwrap();
     assert!(lone.inbox(vec![vec![1.0]]).is_err());
     let e = run_quietly(shards(2).remove(0)).unwrap_err();
     assert!(e.to_string().contains("run_sharded"), "{e}");
@@ -882,13 +879,29 @@ fn a_sharded_fit_equals_one_fit() {
 /// the new PNGs before committing them.
 #[test]
 fn generators_match_their_golden_renders() {
-    use std::collections::BTreeMap;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/fit");
     let replace = std::env::var_os("REPLACE").is_some();
     let mut failures = vec![];
     for g in GENERATORS {
-        let r = filigree::pattern::api::render_program(g.source, &BTreeMap::new(), 256, 2)
+        let req = filigree::pattern::api::RenderPatternRequest {
+            program: g.source.into(),
+            size: 256,
+            supersample: 2,
+            ..Default::default()
+        };
+        let r = filigree::pattern::api::start_render(req)
+            .and_then(run_quietly)
             .unwrap_or_else(|e| panic!("{}: {e}", g.name));
+        let (svg, image) = (r.svg, r.image);
+        struct Drawn {
+            image: filigree::raster::Rgba8Image,
+            svg: String,
+        }
+        let r = Drawn {
+            image: filigree::raster::Rgba8Image::from_raw(image.width, image.height, image.rgba)
+                .unwrap(),
+            svg,
+        };
         let (png_path, svg_path) = (
             dir.join(format!("{}.png", g.name)),
             dir.join(format!("{}.svg", g.name)),

@@ -330,18 +330,26 @@ fn write_seeds() {
         .extend(small.as_object().unwrap().clone());
     req("fit-params.json", "fit", fit.clone());
     let rendered =
-        filigree::pattern::api::render_program(grid, &[("r".to_string(), 0.06)].into(), 16, 1)
-            .unwrap();
+        filigree::pattern::api::start_render(filigree::pattern::api::RenderPatternRequest {
+            program: grid.into(),
+            params: [("r".to_string(), 0.06)].into(),
+            size: 16,
+            supersample: 1,
+        })
+        .and_then(filigree::core::job::run_quietly)
+        .unwrap();
+    let rendered_image =
+        filigree::raster::Rgba8Image::from_raw(16, 16, rendered.image.rgba.clone()).unwrap();
     let mut fit_png = fit.clone();
     fit_png["target_params"] = serde_json::Value::Null;
-    fit_png["target_png"] = json!(filigree::raster::encode_png(&rendered.image).unwrap());
+    fit_png["target_png"] = json!(filigree::raster::encode_png(&rendered_image).unwrap());
     fit_png["loss"] = json!("l1");
     fit_png["init"] = json!("nelder-mead");
     req("fit-png.json", "fit", fit_png);
     let mut fit_rgba = fit.clone();
     fit_rgba["target_params"] = serde_json::Value::Null;
     fit_rgba["target_rgba"] =
-        json!({"width": 16, "height": 16, "rgba": rendered.image.data.clone()});
+        json!({"width": 16, "height": 16, "rgba": rendered.image.rgba.clone()});
     fit_rgba["shards"] = json!([1, 2]);
     fit_rgba["polish"] = json!(2);
     req("fit-rgba.json", "fit", fit_rgba);
@@ -365,7 +373,7 @@ fn write_seeds() {
     req(
         "pattern-snap.json",
         "pattern-snap",
-        json!({"program": grid, "bytes": filigree::raster::encode_png(&rendered.image).unwrap(),
+        json!({"program": grid, "bytes": filigree::raster::encode_png(&rendered_image).unwrap(),
                "size": 8, "tolerance": 40}),
     );
 }

@@ -42,7 +42,7 @@ class Slot {
     if (msg.type === MSG.PROGRESS) job.onProgress?.(msg.progress);
     else if (msg.type === MSG.NEED) this.answer(job, msg.need);
     else if (msg.type === MSG.RESULT) this.finish(() => job.resolve(msg.result));
-    else if (msg.type === MSG.ERROR) this.finish(() => job.reject(new JobError(msg.error.message, msg.error.kind)));
+    else if (msg.type === MSG.ERROR) this.finish(() => job.reject(new JobError(msg.error.message, msg.error.kind, msg.error)));
     else if (msg.type === MSG.PANIC) this.crash(msg.message);
   }
 

@@ -29,14 +29,14 @@ function yieldToEventLoop() {
   });
 }
 
-function errorKind(message) {
-  if (/exceeds|limit/i.test(message)) return 'limit';
-  if (/line \d+, column \d+/.test(message)) return 'syntax';
-  return 'invalid-input';
-}
-
-function isTrap(err) {
-  return err instanceof WebAssembly.RuntimeError;
+// The core throws its errors as plain objects {kind, message, line?, column?,
+// field?} (protocol.js); they are passed on untouched. Anything else thrown
+// while the instance runs (a WebAssembly.RuntimeError trap, a RangeError
+// "Maximum call stack size exceeded", a TypeError in the glue) may have left
+// the instance half-way through a call: it is never used again.
+function isCoreError(err) {
+  return err !== null && typeof err === 'object' && !(err instanceof Error)
+    && typeof err.kind === 'string' && typeof err.message === 'string';
 }
 
 async function run({ id, kind, payload }) {
@@ -76,14 +76,14 @@ async function run({ id, kind, payload }) {
       }
     }
   } catch (err) {
-    if (isTrap(err)) {
-      broken = true;
-      const why = lastConsoleError || String(err);
-      self.postMessage({ type: MSG.PANIC, id, message: `the core crashed: ${why}` });
+    if (isCoreError(err)) {
+      self.postMessage({ type: MSG.ERROR, id, error: err });
       return;
     }
-    const message = err && err.message ? err.message : String(err);
-    self.postMessage({ type: MSG.ERROR, id, error: { kind: errorKind(message), message } });
+    broken = true;
+    // A panic writes its message to the console just before the trap.
+    const why = (err instanceof WebAssembly.RuntimeError && lastConsoleError) || String(err);
+    self.postMessage({ type: MSG.PANIC, id, message: `the core crashed: ${why}` });
   } finally {
     cancelled.delete(id);
     waiting.delete(id);

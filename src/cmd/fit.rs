@@ -1,14 +1,13 @@
-//! `filigree fit` and `filigree render`: fit a pattern program to an image,
-//! draw a program with given parameters.
+//! `filigree fit` and `filigree render`: flags → the same request structs
+//! the browser sends (`fit`, `render-pattern`, see `filigree::pattern::api`)
+//! → the same core jobs. Defaults come from the requests, not from here.
+use super::{drive, explain, print_request, put, request, Origins};
 use filigree::core::job::Cancel;
 use filigree::core::parallel::run_sharded_threads;
-use filigree::pattern::fit::{Budget, FitJob, FitOptions, TargetSource};
+use filigree::pattern::api::{start_fit, start_render, FitRequest, RenderPatternRequest};
 use filigree::pattern::generators::{generator, GENERATORS};
-use filigree::pattern::loss::{LossKind, SdfUnits};
-use filigree::pattern::optim::InitMethod;
-use filigree::pattern::record::Program;
-use filigree::pattern::{field::Scene, record::RecordLimits, render};
 use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -26,38 +25,42 @@ pub struct FitArgs {
     /// Values for the integer (structural) parameters: JSON object or file; others default.
     #[arg(long)]
     params: Option<String>,
-    /// quick | paper
-    #[arg(long, default_value = "paper")]
-    budget: String,
-    /// sdf | l1 | pyramid | image
-    #[arg(long, default_value = "sdf")]
-    loss: String,
-    /// genetic | random | nelder-mead
-    #[arg(long, default_value = "genetic")]
-    init: String,
-    /// Loss grid side in pixels (default: 128 for paper, 64 for quick).
+    /// quick (default) | paper
+    #[arg(long)]
+    budget: Option<String>,
+    /// sdf (default) | l1 | pyramid | image
+    #[arg(long)]
+    loss: Option<String>,
+    /// genetic (default, ga) | random | nelder-mead (nm)
+    #[arg(long)]
+    init: Option<String>,
+    /// Loss grid side in pixels, 8..=1024 (default: 64 for quick, 128 for paper).
     #[arg(long)]
     grid: Option<usize>,
-    /// Field units in the loss: pixels | canvas.
-    #[arg(long, default_value = "pixels")]
-    units: String,
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Threads for the initialisation (default: all cores).
+    /// Field units in the loss: pixels (default) | canvas.
+    #[arg(long)]
+    units: Option<String>,
+    /// Seed of every random choice (default 1).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Threads, one shard of the fit each, 1..=64 (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// RGB distance within which a target pixel matches a palette colour.
-    #[arg(long, default_value_t = 60.0)]
-    tolerance: f64,
-    /// Adam iterations on the image-space loss after the fit (0 = off, the paper's method).
-    #[arg(long, default_value_t = 0)]
-    polish: usize,
+    /// RGB distance within which a target pixel matches a palette colour, 0..=442 (default 60).
+    #[arg(long, allow_hyphen_values = true)]
+    tolerance: Option<f64>,
+    /// Adam iterations on the image-space loss after the fit (default 0 = off, the paper's method).
+    #[arg(long)]
+    polish: Option<usize>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
     /// Write the fitted pattern as SVG.
     #[arg(long)]
     svg: Option<PathBuf>,
+    /// Print the request (as the browser would send it) and exit.
+    #[arg(long, hide = true)]
+    print_request: bool,
 }
 
 #[derive(clap::Args)]
@@ -71,147 +74,101 @@ pub struct RenderArgs {
     /// Output file; .png or .svg.
     #[arg(long)]
     out: PathBuf,
-    /// Side in pixels.
-    #[arg(long, default_value_t = 512)]
-    size: usize,
-    /// Samples per pixel side for PNG anti-aliasing (1 = exact palette colours).
-    #[arg(long, default_value_t = 1)]
-    supersample: usize,
+    /// Side in pixels, 1..=2048 (default 512).
+    #[arg(long)]
+    size: Option<usize>,
+    /// Samples per pixel side for PNG anti-aliasing, 1..=4 (default 1 = exact palette colours).
+    #[arg(long)]
+    supersample: Option<usize>,
+    /// Print the request (as the browser would send it) and exit.
+    #[arg(long, hide = true)]
+    print_request: bool,
 }
 
-/// Load a program from a file or by generator name.
-pub fn load_program(spec: &str) -> Result<(String, Program), String> {
+/// Load a program's text from a file or by generator name; also its display name.
+pub fn load_program(spec: &str) -> Result<(String, String), String> {
     let p = Path::new(spec);
-    let (name, src) = if p.exists() {
+    if p.exists() {
         let bytes = super::read_file(p)?;
-        (
-            spec.to_string(),
-            String::from_utf8(bytes).map_err(|_| format!("{spec}: not UTF-8 text"))?,
-        )
+        let text = String::from_utf8(bytes).map_err(|_| format!("{spec}: not UTF-8 text"))?;
+        Ok((spec.to_string(), text))
     } else if let Some(g) = generator(spec) {
-        (g.name.to_string(), g.source.to_string())
+        Ok((g.name.to_string(), g.source.to_string()))
     } else {
         let names: Vec<&str> = GENERATORS.iter().map(|g| g.name).collect();
-        return Err(format!(
+        Err(format!(
             "'{spec}' is neither a file nor a generator ({})",
             names.join(", ")
-        ));
-    };
-    let prog = Program::parse(&src).map_err(|e| format!("{name}: {e}"))?;
-    Ok((name, prog))
+        ))
+    }
 }
 
-/// Parameter values from a JSON object (inline or file), defaults elsewhere.
-pub fn param_values(prog: &Program, spec: Option<&str>) -> Result<Vec<f64>, String> {
-    let mut vals = prog.defaults();
-    let Some(spec) = spec else { return Ok(vals) };
+/// Parameter values from a JSON object given inline or as a file.
+pub fn param_map(spec: &str, flag: &str) -> Result<BTreeMap<String, f64>, String> {
     let text = if spec.trim_start().starts_with('{') {
         spec.to_string()
     } else {
         String::from_utf8(super::read_file(Path::new(spec))?)
             .map_err(|_| format!("{spec}: not UTF-8"))?
     };
-    let v: Value = serde_json::from_str(&text).map_err(|e| format!("parameters: {e}"))?;
-    let obj = v
-        .as_object()
-        .ok_or("parameters must be a JSON object {\"name\": number}")?;
-    for (k, x) in obj {
-        let i = prog
-            .params()
-            .iter()
-            .position(|p| &p.name == k)
-            .ok_or_else(|| {
-                let names: Vec<&str> = prog.params().iter().map(|p| p.name.as_str()).collect();
-                format!(
-                    "the program has no parameter '{k}' (it has {})",
-                    names.join(", ")
-                )
-            })?;
-        vals[i] = x
-            .as_f64()
-            .ok_or_else(|| format!("parameter '{k}' must be a number"))?;
-    }
-    Ok(vals)
+    serde_json::from_str(&text)
+        .map_err(|e| format!("{flag}: {e} (expected a JSON object {{\"name\": number}})"))
 }
 
-fn float_of(prog: &Program, vals: &[f64]) -> Vec<f64> {
-    prog.params()
-        .iter()
-        .zip(vals)
-        .filter(|(p, _)| !p.integer)
-        .map(|(_, v)| *v)
-        .collect()
-}
-
-pub fn options(
-    budget: &str,
-    loss: &str,
-    init: &str,
-    grid: Option<usize>,
-    units: &str,
-    seed: u64,
-) -> Result<FitOptions, String> {
-    let b =
-        Budget::parse(budget).ok_or_else(|| format!("unknown budget '{budget}' (quick, paper)"))?;
-    let mut o = FitOptions::budget(b);
-    o.loss.kind = LossKind::parse(loss)
-        .ok_or_else(|| format!("unknown loss '{loss}' (sdf, l1, pyramid, image)"))?;
-    o.init = match init {
-        "genetic" | "ga" => InitMethod::Genetic,
-        "random" => InitMethod::Random,
-        "nelder-mead" | "nm" => InitMethod::NelderMead,
-        _ => {
-            return Err(format!(
-                "unknown init '{init}' (genetic, random, nelder-mead)"
-            ))
+impl FitArgs {
+    /// The `fit` request these flags describe, and the program's display name.
+    fn request(&self) -> Result<(FitRequest, String, Origins), String> {
+        let (name, program) = load_program(&self.program)?;
+        let mut origins: Origins = vec![
+            ("program", name.clone()),
+            ("params", "--params".into()),
+            ("target_params", "--target-params".into()),
+        ];
+        if let Some(t) = &self.target {
+            origins.push(("target_png", t.display().to_string()));
         }
-    };
-    if let Some(g) = grid {
-        o.loss.grid = g;
+        let mut o = Map::new();
+        put(&mut o, "budget", "--budget", self.budget.as_ref())?;
+        put(&mut o, "loss", "--loss", self.loss.as_ref())?;
+        put(&mut o, "init", "--init", self.init.as_ref())?;
+        put(&mut o, "grid", "--grid", self.grid)?;
+        put(&mut o, "units", "--units", self.units.as_ref())?;
+        put(&mut o, "seed", "--seed", self.seed)?;
+        put(&mut o, "tolerance", "--tolerance", self.tolerance)?;
+        put(&mut o, "polish", "--polish", self.polish)?;
+        let mut req: FitRequest = request("fit", Value::Object(o), &origins)?;
+        req.program = program;
+        if let Some(p) = &self.params {
+            req.params = param_map(p, "--params")?;
+        }
+        match (&self.target, &self.target_params) {
+            (Some(path), _) => req.target_png = Some(super::read_file(path)?),
+            (None, Some(spec)) => req.target_params = Some(param_map(spec, "--target-params")?),
+            (None, None) => return Err("give --target IMAGE or --target-params JSON".into()),
+        }
+        Ok((req, name, origins))
     }
-    o.loss.units = match units {
-        "pixels" => SdfUnits::Pixels,
-        "canvas" => SdfUnits::Canvas,
-        _ => return Err(format!("unknown units '{units}' (pixels, canvas)")),
-    };
-    o.seed = seed;
-    Ok(o)
 }
 
 pub fn run_fit(a: FitArgs) -> Result<(), String> {
-    let (name, prog) = load_program(&a.program)?;
-    let vals = param_values(&prog, a.params.as_deref())?;
-    let mut opts = options(&a.budget, &a.loss, &a.init, a.grid, &a.units, a.seed)?;
-    opts.polish = a.polish;
+    let (mut req, name, origins) = a.request()?;
+    if a.print_request {
+        return print_request(&req);
+    }
     let threads = super::threads(a.threads)?;
-    let target_img;
-    let target_vals;
-    let target = match (&a.target, &a.target_params) {
-        (Some(path), _) => {
-            target_img = super::read_image(path)?;
-            TargetSource::Image(&target_img, a.tolerance)
-        }
-        (None, Some(spec)) => {
-            target_vals = float_of(&prog, &param_values(&prog, Some(spec))?);
-            TargetSource::Params(&target_vals)
-        }
-        (None, None) => return Err("give --target IMAGE or --target-params JSON".into()),
-    };
     let t0 = Instant::now();
     // One shard per thread, exchanged by the same driver contract as the
     // browser's worker pool; the result equals a one-thread fit.
     let jobs = (0..threads)
         .map(|k| {
-            let mut o = opts;
-            o.shards = (k, threads);
-            FitJob::new(&prog, &vals, &target, o).map_err(|e| format!("{name}: {e}"))
+            req.shards = Some((k, threads));
+            start_fit(&req).map_err(|e| explain(e, &origins))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let scene = jobs[0].objective().scene.clone();
-    let mut last = 0.0;
+    let mut last = -1.0;
     let quiet = a.json;
-    let r = run_sharded_threads(jobs, &Cancel::new(), |k, p| {
-        if !quiet && k == 0 && (p.fraction - last >= 0.05) {
+    let out = run_sharded_threads(jobs, &Cancel::new(), |k, p| {
+        if !quiet && k == 0 && p.fraction - last >= 0.05 {
             last = p.fraction;
             eprintln!(
                 "{:>3.0}%  {}  best loss {:.5}",
@@ -221,11 +178,11 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
             );
         }
     })
-    .map_err(|e| e.to_string())?;
+    .map_err(|e| explain(e, &origins))?;
     let secs = t0.elapsed().as_secs_f64();
-    if let Some(out) = &a.svg {
-        let s = render::svg(&scene, &r.params, 512.0).map_err(|e| e.to_string())?;
-        std::fs::write(out, s).map_err(|e| format!("{}: {e}", out.display()))?;
+    let r = &out.result;
+    if let Some(path) = &a.svg {
+        std::fs::write(path, &out.svg).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     if a.json {
         let params: Map<String, Value> = r
@@ -234,9 +191,9 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
             .zip(&r.params)
             .map(|(n, v)| (n.clone(), json!(v)))
             .collect();
-        let out = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
+        let j = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
             "evaluations": r.evaluations, "seconds": secs, "history": r.history});
-        println!("{out}");
+        println!("{j}");
     } else {
         for (n, v) in r.names.iter().zip(&r.params) {
             println!("{n:>14} = {v:.5}");
@@ -250,34 +207,40 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
 }
 
 pub fn run_render(a: RenderArgs) -> Result<(), String> {
-    let (name, prog) = load_program(&a.program)?;
-    let vals = param_values(&prog, a.params.as_deref())?;
-    let rec = prog
-        .record(&vals, &RecordLimits::default())
-        .map_err(|e| format!("{name}: {e}"))?;
-    let fl = rec.float_values();
-    let scene = Scene::new(rec);
+    let (name, program) = load_program(&a.program)?;
+    let origins: Origins = vec![("program", name), ("params", "--params".into())];
+    let mut o = Map::new();
+    put(&mut o, "size", "--size", a.size)?;
+    put(&mut o, "supersample", "--supersample", a.supersample)?;
+    let mut req: RenderPatternRequest = request("render-pattern", Value::Object(o), &origins)?;
+    req.program = program;
+    if let Some(p) = &a.params {
+        req.params = param_map(p, "--params")?;
+    }
+    if a.print_request {
+        return print_request(&req);
+    }
     let ext = a
         .out
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let bytes = match ext.as_str() {
-        "svg" => render::svg(&scene, &fl, a.size as f64)
-            .map_err(|e| e.to_string())?
-            .into_bytes(),
-        "png" => {
-            let img =
-                render::render(&scene, &fl, a.size, a.supersample).map_err(|e| e.to_string())?;
-            filigree::raster::encode_png(&img).map_err(|e| e.to_string())?
-        }
-        _ => {
-            return Err(format!(
-                "{}: the output must end in .png or .svg",
-                a.out.display()
-            ))
-        }
+    if ext != "png" && ext != "svg" {
+        return Err(format!(
+            "{}: the output must end in .png or .svg",
+            a.out.display()
+        ));
+    }
+    let job = start_render(req).map_err(|e| explain(e, &origins))?;
+    let r = drive(job, true, &origins)?;
+    let bytes = if ext == "svg" {
+        r.svg.into_bytes()
+    } else {
+        let img =
+            filigree::raster::Rgba8Image::from_raw(r.image.width, r.image.height, r.image.rgba)
+                .map_err(|e| e.to_string())?;
+        filigree::raster::encode_png(&img).map_err(|e| e.to_string())?
     };
     std::fs::write(&a.out, bytes).map_err(|e| format!("{}: {e}", a.out.display()))
 }

@@ -1,4 +1,7 @@
-use filigree::inspect::{inspect, InspectOptions};
+//! `filigree inspect`: flags → the browser's `inspect` request → the same core job.
+use super::{drive, explain, print_request, put, request, Origins};
+use filigree::api::inspect::{start_inspect, InspectRequest};
+use serde_json::{Map, Value};
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -8,18 +11,26 @@ pub struct Args {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
-    /// RGB distance under which colours are merged into one cluster.
-    #[arg(long, default_value_t = 24.0)]
-    tolerance: f64,
+    /// RGB distance under which colours are merged into one cluster, 0..=442 (default 24).
+    #[arg(long, allow_hyphen_values = true)]
+    tolerance: Option<f64>,
+    /// Print the request (as the browser would send it) and exit.
+    #[arg(long, hide = true)]
+    print_request: bool,
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let bytes = super::read_file(&a.image)?;
-    let opts = InspectOptions {
-        tolerance: a.tolerance,
-        ..Default::default()
-    };
-    let r = inspect(&bytes, &opts).map_err(|e| format!("{}: {e}", a.image.display()))?;
+    let origins: Origins = vec![("bytes", a.image.display().to_string())];
+    let mut o = Map::new();
+    put(&mut o, "tolerance", "--tolerance", a.tolerance)?;
+    let mut req: InspectRequest = request("inspect", Value::Object(o), &origins)?;
+    req.bytes = super::read_file(&a.image)?;
+    if a.print_request {
+        return print_request(&req);
+    }
+    let tolerance = req.tolerance;
+    let job = start_inspect(req).map_err(|e| explain(e, &origins))?;
+    let r = drive(job, true, &origins)?.info;
     if a.json {
         println!(
             "{}",
@@ -35,7 +46,7 @@ pub fn run(a: Args) -> Result<(), String> {
         r.colour_count,
         r.translucent_pixels
     );
-    println!("clusters (tolerance {}):", a.tolerance);
+    println!("clusters (tolerance {tolerance}):");
     for c in r.clusters.iter().take(32) {
         let [red, g, b, al] = c.rgba;
         println!(

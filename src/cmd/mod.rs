@@ -4,6 +4,10 @@ pub mod fit_bench;
 pub mod inspect;
 pub mod pixel;
 
+use filigree::core::job::{run_to_end, Cancel, Job};
+use filigree::Error;
+use serde::{de::DeserializeOwned, Serialize};
+use serde_json::Value;
 use std::path::Path;
 
 /// Read a file, naming it in the error.
@@ -25,16 +29,95 @@ pub fn min_median(mut v: Vec<f64>) -> (f64, f64) {
     (v[0], v[v.len() / 2])
 }
 
-/// Threads for a parallel run: all cores by default, at most the 64 shards
-/// a fit can be split into.
+/// Where a request field came from on the command line: `(field, what)`,
+/// e.g. `("params.d_max", "--dmax")` or `("source", "fish.png")`. The
+/// longest matching prefix of an error's field wins; a field with no entry
+/// is named as the flag `--<first segment>`.
+pub type Origins = Vec<(&'static str, String)>;
+
+/// A core error as a CLI message: what (flag or file) it is about, then the message.
+pub fn explain(e: Error, origins: &Origins) -> String {
+    let Some(field) = e.field() else {
+        return e.to_string();
+    };
+    let segs: Vec<&str> = field.split('.').collect();
+    let which = (1..=segs.len())
+        .rev()
+        .find_map(|n| {
+            let prefix = segs[..n].join(".");
+            origins
+                .iter()
+                .find(|(k, _)| *k == prefix)
+                .map(|(_, v)| v.clone())
+        })
+        .unwrap_or_else(|| format!("--{}", segs[0].replace('_', "-")));
+    format!("{which}: {e}")
+}
+
+/// Build a request from the flags that were given (a JSON object with the
+/// request's field names): missing fields take the request's defaults,
+/// exactly as a browser payload does.
+pub fn request<T: DeserializeOwned>(
+    kind: &str,
+    flags: Value,
+    origins: &Origins,
+) -> Result<T, String> {
+    // The flag already says where; the request kind would only repeat it.
+    filigree::api::request(kind, flags)
+        .map_err(|e| explain(e, origins).replacen(&format!("{kind}: "), "", 1))
+}
+
+/// `--print-request`: the request as JSON on stdout (what the browser would send).
+pub fn print_request<T: Serialize>(req: &T) -> Result<(), String> {
+    println!("{}", serde_json::to_string(req).map_err(|e| e.to_string())?);
+    Ok(())
+}
+
+/// Drive a core job to its end, printing progress to stderr unless `quiet`.
+pub fn drive<J: Job>(job: J, quiet: bool, origins: &Origins) -> Result<J::Output, String> {
+    let mut last = -1.0;
+    run_to_end(job, &Cancel::new(), |p| {
+        if !quiet && p.fraction - last >= 0.05 {
+            last = p.fraction;
+            match p.figure {
+                Some(f) => eprintln!("{:>3.0}%  {}  best {f:.5}", p.fraction * 100.0, p.stage),
+                None => eprintln!("{:>3.0}%  {}", p.fraction * 100.0, p.stage),
+            }
+        }
+    })
+    .map_err(|e| explain(e, origins))
+}
+
+/// Insert `key: value` into a JSON object when the flag was given
+/// (`flag` names it in errors: JSON has no NaN or infinity).
+pub fn put<T: Serialize>(
+    obj: &mut serde_json::Map<String, Value>,
+    key: &str,
+    flag: &str,
+    v: Option<T>,
+) -> Result<(), String> {
+    if let Some(v) = v {
+        let j = serde_json::to_value(v).map_err(|e| format!("{flag}: {e}"))?;
+        if j.is_null() {
+            return Err(format!("{flag}: must be a finite number"));
+        }
+        obj.insert(key.to_string(), j);
+    }
+    Ok(())
+}
+
+/// Threads for a parallel run: all cores by default, at most the shards a
+/// fit can be split into.
 pub fn threads(asked: Option<usize>) -> Result<usize, String> {
-    const MAX: usize = 64;
+    let (lo, hi) = filigree::core::request_limits::THREADS;
     match asked {
-        Some(n @ 1..=MAX) => Ok(n),
-        Some(n) => Err(format!("--threads {n}: give 1 to {MAX}")),
+        Some(n) if (lo..=hi).contains(&n) => Ok(n),
+        Some(n) => Err(format!(
+            "--threads: `threads` must be in {lo}..={hi} (got {n})"
+        )),
         None => Ok(std::thread::available_parallelism()
             .map(|n| n.get())
             .unwrap_or(1)
-            .min(MAX)),
+            .min(hi)),
     }
 }

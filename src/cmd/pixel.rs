@@ -1,7 +1,12 @@
-//! `filigree pixel`: texture pixel art with oriented elements (see `filigree::pixel`).
-use filigree::pixel::{self, inputs, orientation, Elements, PixelInputs, PixelParams, Stroke};
+//! `filigree pixel`: flags → the browser's `pixel` request (see
+//! `filigree::pixel::api`) → the same core job. Defaults come from the
+//! request ([`filigree::pixel::PixelParams`]'s `Default`), not from here.
+use super::{drive, explain, print_request, put, request, Origins};
+use filigree::pixel::api::{mask_bits, start_pixel, PixelMaskRequest, PixelRequest};
+use filigree::pixel::{PixelParams, Stroke};
 use filigree::raster::encode_png;
 use serde::Deserialize;
+use serde_json::{Map, Value};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args)]
@@ -22,48 +27,51 @@ pub struct Args {
     /// Strokes JSON: {"strokes": [[[x, y], [x, y], ...], ...]} in source pixels; may be empty.
     #[arg(long)]
     strokes: PathBuf,
-    /// Upscale factor K of the annotation grid (1..=32).
-    #[arg(long, default_value_t = 4)]
-    annotation_scale: u32,
-    /// Position strategy.
-    #[arg(long, default_value = "random", value_parser = ["random", "packed"])]
-    positions: String,
-    /// Density ρ: 0..1, or a percentage such as 80%.
-    #[arg(long, default_value = "1")]
-    density: String,
-    /// Margins MX,MY in pixels (may be negative, e.g. -1,-1).
-    #[arg(long, default_value = "0,0", allow_hyphen_values = true)]
-    margins: String,
+    /// Upscale factor K of the annotation grid, 1..=32 (default 4).
+    #[arg(long)]
+    annotation_scale: Option<u32>,
+    /// Position strategy: random (default) | packed.
+    #[arg(long)]
+    positions: Option<String>,
+    /// Density ρ: 0..1, or a percentage such as 80% (default 1).
+    #[arg(long)]
+    density: Option<String>,
+    /// Margins MX,MY in pixels, may be negative, e.g. -1,-1 (default 0,0).
+    #[arg(long, allow_hyphen_values = true)]
+    margins: Option<String>,
     /// Allow elements only partly inside the mask.
     #[arg(long)]
     partial: bool,
-    /// Colour map strategy.
-    #[arg(long, default_value = "auto", value_parser = ["auto", "hsv", "difference", "border"])]
-    colour: String,
-    /// HSV shift DH,DS,DV: hue in degrees, saturation and value in percentage points.
-    #[arg(long, default_value = "0,0,-30", allow_hyphen_values = true)]
-    hsv: String,
-    /// Colours never used for elements, e.g. '#000000,#ffffff'; 'none' for no exclusion.
-    #[arg(long, default_value = "#000000")]
-    exclude: String,
-    /// Maximum CIELAB distance for the automatic colour choice.
-    #[arg(long, default_value_t = 50.0)]
-    dmax: f64,
-    /// Element colouring.
-    #[arg(long, default_value = "region", value_parser = ["region", "pixel"])]
-    element_colour: String,
-    /// Orientation used without strokes (right, down-right, down, ..., up-right).
-    #[arg(long, default_value = "down")]
-    default_direction: String,
-    /// Which way a --sprite points as drawn.
-    #[arg(long, default_value = "up")]
-    sprite_direction: String,
-    /// Seed of every random choice.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    /// Colour map strategy: auto (default) | hsv | difference | border.
+    #[arg(long)]
+    colour: Option<String>,
+    /// HSV shift DH,DS,DV: hue in degrees, saturation and value in percentage points (default 0,0,-30).
+    #[arg(long, allow_hyphen_values = true)]
+    hsv: Option<String>,
+    /// Colours never used for elements, e.g. '#000000,#ffffff'; 'none' for no exclusion (default #000000).
+    #[arg(long)]
+    exclude: Option<String>,
+    /// Maximum CIELAB distance for the automatic colour choice (default 50).
+    #[arg(long, allow_hyphen_values = true)]
+    dmax: Option<f64>,
+    /// Element colouring: region (default) | pixel.
+    #[arg(long)]
+    element_colour: Option<String>,
+    /// Orientation used without strokes: right, down-right, down (default), ..., up-right.
+    #[arg(long)]
+    default_direction: Option<String>,
+    /// Which way a --sprite points as drawn (default up).
+    #[arg(long)]
+    sprite_direction: Option<String>,
+    /// Seed of every random choice (default 0).
+    #[arg(long)]
+    seed: Option<u64>,
     /// Output PNG.
     #[arg(long)]
     out: PathBuf,
+    /// Print the request (as the browser would send it) and exit.
+    #[arg(long, hide = true)]
+    print_request: bool,
 }
 
 #[derive(Deserialize)]
@@ -126,71 +134,122 @@ fn parse_colours(s: &str) -> Result<Vec<[u8; 3]>, String> {
         .collect()
 }
 
-fn enum_from<T: for<'de> Deserialize<'de>>(value: &str, flag: &str) -> Result<T, String> {
-    serde_json::from_value(serde_json::Value::String(value.to_string()))
-        .map_err(|e| format!("--{flag} '{value}': {e}"))
+/// Where each request field came from.
+fn origins(a: &Args) -> Origins {
+    let mut o: Origins = vec![
+        ("source", a.source.display().to_string()),
+        ("mask", a.mask.display().to_string()),
+        ("strokes", a.strokes.display().to_string()),
+        ("params.d_max", "--dmax".into()),
+        ("params", "--params".into()),
+    ];
+    if let Some(p) = &a.sheet {
+        o.push(("sheet", p.display().to_string()));
+    }
+    if let Some(p) = &a.sprite {
+        o.push(("sprite", p.display().to_string()));
+    }
+    for (field, flag) in [
+        ("params.annotation_scale", "--annotation-scale"),
+        ("params.positions", "--positions"),
+        ("params.density", "--density"),
+        ("params.margins", "--margins"),
+        ("params.colour", "--colour"),
+        ("params.hsv", "--hsv"),
+        ("params.exclude", "--exclude"),
+        ("params.element_colour", "--element-colour"),
+        ("params.default_direction", "--default-direction"),
+        ("params.sprite_direction", "--sprite-direction"),
+        ("params.seed", "--seed"),
+    ] {
+        o.push((field, flag.into()));
+    }
+    o
 }
 
-/// Turn the flags into [`PixelParams`].
-fn params(a: &Args) -> Result<PixelParams, String> {
-    let m = numbers::<2>(&a.margins, "margins")?;
-    if m.iter().any(|v| v.fract() != 0.0) {
-        return Err(format!(
-            "--margins '{}': margins are whole pixels",
-            a.margins
-        ));
+/// The given flags as [`PixelParams`] (missing ones at their defaults).
+fn params(a: &Args, origins: &Origins) -> Result<PixelParams, String> {
+    let mut p = Map::new();
+    put(
+        &mut p,
+        "annotation_scale",
+        "--annotation-scale",
+        a.annotation_scale,
+    )?;
+    put(&mut p, "positions", "--positions", a.positions.as_ref())?;
+    if let Some(d) = &a.density {
+        put(&mut p, "density", "--density", Some(parse_density(d)?))?;
     }
-    Ok(PixelParams {
-        annotation_scale: a.annotation_scale,
-        positions: enum_from(&a.positions, "positions")?,
-        density: parse_density(&a.density)?,
-        margins: [m[0] as i32, m[1] as i32],
-        partial: a.partial,
-        colour: enum_from(&a.colour, "colour")?,
-        hsv: numbers::<3>(&a.hsv, "hsv")?,
-        exclude: parse_colours(&a.exclude)?,
-        d_max: a.dmax,
-        element_colour: enum_from(&a.element_colour, "element-colour")?,
-        default_direction: enum_from(&a.default_direction, "default-direction")?,
-        sprite_direction: enum_from(&a.sprite_direction, "sprite-direction")?,
-        seed: a.seed,
-    })
+    if let Some(m) = &a.margins {
+        let m = numbers::<2>(m, "margins")?;
+        if m.iter().any(|v| v.fract() != 0.0) {
+            return Err(format!("--margins '{m:?}': margins are whole pixels"));
+        }
+        // Whole numbers as JSON integers; out-of-range ones are rejected by the request.
+        put(
+            &mut p,
+            "margins",
+            "--margins",
+            Some([m[0] as i64, m[1] as i64]),
+        )?;
+    }
+    if a.partial {
+        put(&mut p, "partial", "--partial", Some(true))?;
+    }
+    put(&mut p, "colour", "--colour", a.colour.as_ref())?;
+    if let Some(h) = &a.hsv {
+        put(&mut p, "hsv", "--hsv", Some(numbers::<3>(h, "hsv")?))?;
+    }
+    if let Some(e) = &a.exclude {
+        put(&mut p, "exclude", "--exclude", Some(parse_colours(e)?))?;
+    }
+    put(&mut p, "d_max", "--dmax", a.dmax)?;
+    put(
+        &mut p,
+        "element_colour",
+        "--element-colour",
+        a.element_colour.as_ref(),
+    )?;
+    put(
+        &mut p,
+        "default_direction",
+        "--default-direction",
+        a.default_direction.as_ref(),
+    )?;
+    put(
+        &mut p,
+        "sprite_direction",
+        "--sprite-direction",
+        a.sprite_direction.as_ref(),
+    )?;
+    put(&mut p, "seed", "--seed", a.seed)?;
+    let mut o = Map::new();
+    o.insert("params".into(), Value::Object(p));
+    let req: PixelRequest = request("pixel", Value::Object(o), origins)?;
+    Ok(req.params)
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let params = params(&a)?;
-    let source = super::read_image(&a.source)?;
-    let mask = super::read_image(&a.mask)?;
-    // Check here too, so each error can name the file it is about.
-    inputs::check_source_and_mask(&source, &mask)
-        .map_err(|e| format!("{} / {}: {e}", a.source.display(), a.mask.display()))?;
-    let elements = match (&a.sheet, &a.sprite) {
-        (Some(p), _) => {
-            let img = super::read_image(p)?;
-            pixel::ElementSheet::from_sheet(&img).map_err(|e| format!("{}: {e}", p.display()))?;
-            Elements::Sheet(img)
-        }
-        (None, Some(p)) => {
-            let img = super::read_image(p)?;
-            pixel::ElementSheet::from_sprite(&img, params.sprite_direction)
-                .map_err(|e| format!("{}: {e}", p.display()))?;
-            Elements::Sprite(img)
-        }
-        (None, None) => return Err("give the element as --sheet FILE or --sprite FILE".into()),
-    };
-    let strokes = read_strokes(&a.strokes)?;
-    orientation::check_strokes(source.width, source.height, &strokes)
-        .map_err(|e| format!("{}: {e}", a.strokes.display()))?;
-    let out = pixel::texture(
-        PixelInputs {
-            source,
-            mask,
-            elements,
-            strokes,
-        },
+    let origins = origins(&a);
+    let params = params(&a, &origins)?;
+    let mask_origin: Origins = vec![("bytes", a.mask.display().to_string())];
+    let mask = mask_bits(&PixelMaskRequest {
+        bytes: super::read_file(&a.mask)?,
+    })
+    .map_err(|e| explain(e, &mask_origin))?;
+    let req = PixelRequest {
+        source: super::read_file(&a.source)?,
+        mask,
+        sheet: a.sheet.as_deref().map(super::read_file).transpose()?,
+        sprite: a.sprite.as_deref().map(super::read_file).transpose()?,
+        strokes: read_strokes(&a.strokes)?,
         params,
-    )
-    .map_err(|e| e.to_string())?;
+    };
+    if a.print_request {
+        return print_request(&req);
+    }
+    let job = start_pixel(req).map_err(|e| explain(e, &origins))?;
+    let out = drive(job, true, &origins)?;
     let png = encode_png(&out.image).map_err(|e| e.to_string())?;
     std::fs::write(&a.out, png).map_err(|e| format!("{}: {e}", a.out.display()))?;
     let s = &out.stats;

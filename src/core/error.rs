@@ -1,6 +1,10 @@
 //! One error type for the whole core. Every message is meant to be shown to a
 //! person as is: it names the problem and, where there is one, the place
-//! (file, pixel size, line and column, limit).
+//! (file, pixel size, line and column, limit, request field).
+//!
+//! Errors cross the wasm boundary as [`ErrorInfo`], a plain object
+//! `{kind, message, line?, column?, field?}` (see `www/protocol.js`).
+use serde::Serialize;
 use std::fmt;
 
 /// Result alias used throughout the crate.
@@ -21,6 +25,24 @@ pub enum Error {
     },
     /// The job was cancelled through its cancel flag.
     Cancelled,
+    /// `error` is about one field of a request: `field` is its dotted path
+    /// (e.g. `tolerance`, `params.d_max`, `program`). Built with [`Error::at`].
+    Field { field: String, error: Box<Error> },
+}
+
+/// An [`Error`] as plain data: what the worker posts and the page's
+/// `JobError` carries. `message` is the whole human-readable text (for a
+/// syntax error it includes "line L, column C").
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ErrorInfo {
+    pub kind: &'static str,
+    pub message: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub column: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub field: Option<String>,
 }
 
 impl Error {
@@ -32,13 +54,58 @@ impl Error {
     pub fn limit(msg: impl Into<String>) -> Self {
         Error::Limit(msg.into())
     }
-    /// A short machine-readable category, used by the worker protocol.
-    pub fn kind(&self) -> &'static str {
+    /// This error is about request field `field` (a dotted path). An error
+    /// already tied to a field keeps the innermost (most precise) one.
+    pub fn at(self, field: impl Into<String>) -> Self {
         match self {
+            Error::Field { .. } | Error::Cancelled => self,
+            e => Error::Field {
+                field: field.into(),
+                error: Box::new(e),
+            },
+        }
+    }
+    /// The error without its field, if any.
+    pub fn inner(&self) -> &Error {
+        match self {
+            Error::Field { error, .. } => error.inner(),
+            e => e,
+        }
+    }
+    /// A short machine-readable category, used by the worker protocol:
+    /// `invalid-input`, `limit`, `syntax` or `cancelled`.
+    pub fn kind(&self) -> &'static str {
+        match self.inner() {
             Error::InvalidInput(_) => "invalid-input",
             Error::Limit(_) => "limit",
             Error::Syntax { .. } => "syntax",
             Error::Cancelled => "cancelled",
+            Error::Field { .. } => unreachable!("inner() unwraps fields"),
+        }
+    }
+    /// The dotted request field at fault, if known.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            Error::Field { field, .. } => Some(field),
+            _ => None,
+        }
+    }
+    /// Line and column (1-based) of a syntax error.
+    pub fn position(&self) -> Option<(usize, usize)> {
+        match self.inner() {
+            Error::Syntax { line, column, .. } => Some((*line, *column)),
+            _ => None,
+        }
+    }
+    /// The error as plain data for the worker protocol.
+    pub fn info(&self) -> ErrorInfo {
+        let pos = self.position();
+        ErrorInfo {
+            kind: self.kind(),
+            message: self.to_string(),
+            line: pos.map(|p| p.0),
+            column: pos.map(|p| p.1),
+            field: self.field().map(str::to_string),
         }
     }
 }
@@ -55,8 +122,38 @@ impl fmt::Display for Error {
                 write!(f, "line {line}, column {column}: {message}")
             }
             Error::Cancelled => f.write_str("cancelled"),
+            Error::Field { error, .. } => error.fmt(f),
         }
     }
 }
 
 impl std::error::Error for Error {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_field_keeps_kind_position_and_message() {
+        let e = Error::Syntax {
+            line: 3,
+            column: 7,
+            message: "expected ')'".into(),
+        }
+        .at("program")
+        .at("outer");
+        assert_eq!(
+            e.info(),
+            ErrorInfo {
+                kind: "syntax",
+                message: "line 3, column 7: expected ')'".into(),
+                line: Some(3),
+                column: Some(7),
+                field: Some("program".into()),
+            }
+        );
+        let l = Error::limit("too big").at("size");
+        assert_eq!((l.kind(), l.field()), ("limit", Some("size")));
+        assert_eq!(Error::Cancelled.at("x").field(), None);
+    }
+}

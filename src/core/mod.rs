@@ -4,4 +4,5 @@ pub mod error;
 pub mod job;
 pub mod limits;
 pub mod parallel;
+pub mod request_limits;
 pub mod rng;

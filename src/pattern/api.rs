@@ -1,22 +1,51 @@
-//! Plain-data entry points used by the wasm boundary and the CLI: programs
-//! as text, parameters by name, images as encoded bytes.
+//! Fit's requests as typed data, shared by the CLI and the browser worker.
+//!
+//! Each request kind (`fit`, `fit-eval`, `render-pattern`, `pattern-info`,
+//! `pattern-generators`, `pattern-snap`) has one serde struct whose defaults
+//! are defined once, by its `Default` impl (`#[serde(default)]` makes a
+//! missing field take it), and one `start_*` function that checks the
+//! request and returns a stepped [`Job`]. The registry (`crate::api`)
+//! deserialises payloads into these structs; `filigree fit`/`render` build
+//! the same structs from their flags. Field names are the worker's JSON
+//! names; every error names the field at fault ([`Error::at`]).
 use super::field::Scene;
 use super::fit::{Budget, FitJob, FitOptions, FitResult, TargetSource};
-use super::loss::{LossKind, LossOptions, Objective};
+use super::loss::{LossKind, Objective, SdfUnits};
 use super::optim::InitMethod;
 use super::record::{Program, RecordLimits};
 use super::render;
-use super::target::Target;
+use crate::api::RawImage;
 use crate::core::error::{Error, Result};
+use crate::core::job::{Job, OneShot, Progress, Step};
+use crate::core::request_limits as lim;
 use crate::raster::{decode, Limits, Rgba8Image};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// Parse a program; errors are about the `program` field.
+fn parse(src: &str) -> Result<Program> {
+    if src.trim().is_empty() {
+        return Err(
+            Error::input("`program` is empty: give the pattern program's text").at("program"),
+        );
+    }
+    Program::parse(src).map_err(|e| e.at("program"))
+}
+
 /// Values of all declared parameters from a name → value map; missing
-/// names take their defaults, unknown names are an error.
+/// names take their defaults, unknown names are an error about `field`.
 pub fn named_values(program: &Program, named: &BTreeMap<String, f64>) -> Result<Vec<f64>> {
+    named_values_at(program, named, "params")
+}
+
+fn named_values_at(
+    program: &Program,
+    named: &BTreeMap<String, f64>,
+    field: &str,
+) -> Result<Vec<f64>> {
     let mut vals = program.defaults();
     for (k, v) in named {
+        let at = format!("{field}.{k}");
         let i = program
             .params()
             .iter()
@@ -27,8 +56,9 @@ pub fn named_values(program: &Program, named: &BTreeMap<String, f64>) -> Result<
                     "the program has no parameter '{k}' (it has {})",
                     names.join(", ")
                 ))
+                .at(&at)
             })?;
-        vals[i] = *v;
+        vals[i] = lim::finite_in(&at, *v, (-lim::PARAM_MAGNITUDE, lim::PARAM_MAGNITUDE))?;
     }
     Ok(vals)
 }
@@ -42,6 +72,29 @@ fn float_values(program: &Program, all: &[f64]) -> Vec<f64> {
         .filter(|(p, _)| !p.integer)
         .map(|(_, v)| *v)
         .collect()
+}
+
+/// Record a program with named values: the scene and its float values.
+fn scene_of(src: &str, named: &BTreeMap<String, f64>) -> Result<(Program, Scene, Vec<f64>)> {
+    let p = parse(src)?;
+    let vals = named_values(&p, named)?;
+    let rec = p
+        .record(&vals, &RecordLimits::default())
+        .map_err(|e| e.at("program"))?;
+    let fl = rec.float_values();
+    Ok((p, Scene::new(rec), fl))
+}
+
+// ---------------------------------------------------------------- pattern-info
+
+/// `pattern-info`: what a program declares and draws.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PatternInfoRequest {
+    /// Program text.
+    pub program: String,
+    /// Values by name; missing ones take their defaults.
+    pub params: BTreeMap<String, f64>,
 }
 
 /// One declared parameter, for building sliders.
@@ -69,10 +122,8 @@ fn hex(c: [u8; 3]) -> String {
 }
 
 /// Parse and record a program; report its parameters and palette.
-pub fn program_info(src: &str, named: &BTreeMap<String, f64>) -> Result<ProgramInfo> {
-    let p = Program::parse(src)?;
-    let vals = named_values(&p, named)?;
-    let rec = p.record(&vals, &RecordLimits::default())?;
+pub fn program_info(req: &PatternInfoRequest) -> Result<ProgramInfo> {
+    let (p, scene, _) = scene_of(&req.program, &req.params)?;
     Ok(ProgramInfo {
         params: p
             .params()
@@ -85,171 +136,385 @@ pub fn program_info(src: &str, named: &BTreeMap<String, f64>) -> Result<ProgramI
                 integer: d.integer,
             })
             .collect(),
-        colours: rec.colours.iter().map(|c| hex(*c)).collect(),
-        shapes: rec.shapes.len(),
+        colours: scene.rec.colours.iter().map(|c| hex(*c)).collect(),
+        shapes: scene.rec.shapes.len(),
     })
 }
 
-/// A drawn pattern.
-#[derive(Debug, Clone)]
-pub struct Rendered {
-    pub image: Rgba8Image,
+/// Start a `pattern-info` request (one short step).
+pub fn start_info(req: PatternInfoRequest) -> Result<impl Job<Output = ProgramInfo>> {
+    Ok(OneShot::new(move || program_info(&req)))
+}
+
+/// Start a `pattern-generators` request: the shipped generators.
+pub fn start_generators() -> impl Job<Output = &'static [super::generators::Generator]> {
+    OneShot::new(|| Ok(super::generators::GENERATORS))
+}
+
+// -------------------------------------------------------------- render-pattern
+
+/// `render-pattern` / `filigree render`: draw a program.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RenderPatternRequest {
+    /// Program text.
+    pub program: String,
+    /// Values by name; missing ones take their defaults.
+    pub params: BTreeMap<String, f64>,
+    /// Side in pixels, 1..=2048 (512).
+    pub size: usize,
+    /// Samples per pixel side, 1..=4 (1 = exact palette colours).
+    pub supersample: usize,
+}
+
+impl Default for RenderPatternRequest {
+    fn default() -> Self {
+        RenderPatternRequest {
+            program: String::new(),
+            params: BTreeMap::new(),
+            size: 512,
+            supersample: 1,
+        }
+    }
+}
+
+/// A drawn pattern: `size × size` RGBA and the SVG (`size` px wide).
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderResponse {
+    #[serde(flatten)]
+    pub image: RawImage,
     pub svg: String,
 }
 
-/// Draw a program with named values at `size × size` (1..=2048) with
-/// `supersample²` samples per pixel, plus its SVG.
-pub fn render_program(
-    src: &str,
-    named: &BTreeMap<String, f64>,
-    size: usize,
-    supersample: usize,
-) -> Result<Rendered> {
-    if !(1..=2048).contains(&size) {
-        return Err(Error::limit(format!(
-            "size {size} is outside 1..=2048 pixels"
-        )));
+enum RenderPhase {
+    Record(RenderPatternRequest),
+    Raster(Scene, Vec<f64>, usize, usize),
+    Svg(Scene, Vec<f64>, usize, Rgba8Image),
+    Finished,
+}
+
+/// `render-pattern` as a job: record, rasterise, write SVG (one phase per step).
+pub struct RenderJob(RenderPhase);
+
+impl Job for RenderJob {
+    type Output = RenderResponse;
+    fn step(&mut self) -> Result<Step<RenderResponse>> {
+        match std::mem::replace(&mut self.0, RenderPhase::Finished) {
+            RenderPhase::Record(req) => {
+                let (_, scene, fl) = scene_of(&req.program, &req.params)?;
+                self.0 = RenderPhase::Raster(scene, fl, req.size, req.supersample);
+                Ok(Step::Running(Progress::new(0.2, "drawing")))
+            }
+            RenderPhase::Raster(scene, fl, size, ss) => {
+                let img = render::render(&scene, &fl, size, ss)?;
+                self.0 = RenderPhase::Svg(scene, fl, size, img);
+                Ok(Step::Running(Progress::new(0.9, "writing SVG")))
+            }
+            RenderPhase::Svg(scene, fl, size, img) => Ok(Step::Done(RenderResponse {
+                svg: render::svg(&scene, &fl, size as f64)?,
+                image: RawImage::from(img),
+            })),
+            RenderPhase::Finished => Err(Error::input("this job has already finished")),
+        }
     }
-    let p = Program::parse(src)?;
-    let vals = named_values(&p, named)?;
-    let rec = p.record(&vals, &RecordLimits::default())?;
-    let fl = rec.float_values();
-    let scene = Scene::new(rec);
-    Ok(Rendered {
-        image: render::render(&scene, &fl, size, supersample.clamp(1, 4))?,
-        svg: render::svg(&scene, &fl, size as f64)?,
+}
+
+/// Check a `render-pattern` request and start it.
+pub fn start_render(req: RenderPatternRequest) -> Result<RenderJob> {
+    lim::int_in("size", req.size, lim::RENDER_SIZE)?;
+    lim::int_in("supersample", req.supersample, lim::SUPERSAMPLE)?;
+    for (k, v) in &req.params {
+        lim::finite_in(
+            &format!("params.{k}"),
+            *v,
+            (-lim::PARAM_MAGNITUDE, lim::PARAM_MAGNITUDE),
+        )?;
+    }
+    Ok(RenderJob(RenderPhase::Record(req)))
+}
+
+// ---------------------------------------------------------------- pattern-snap
+
+/// `pattern-snap`: an uploaded target snapped to a program's palette.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PatternSnapRequest {
+    /// Program text.
+    pub program: String,
+    pub params: BTreeMap<String, f64>,
+    /// The uploaded image file.
+    #[serde(with = "serde_bytes")]
+    pub bytes: Vec<u8>,
+    /// Side of the snapped square, 8..=2048 (256).
+    pub size: usize,
+    /// RGB distance counted as "far", 0..=442 (60).
+    pub tolerance: f64,
+}
+
+impl Default for PatternSnapRequest {
+    fn default() -> Self {
+        PatternSnapRequest {
+            program: String::new(),
+            params: BTreeMap::new(),
+            bytes: vec![],
+            size: 256,
+            tolerance: 60.0,
+        }
+    }
+}
+
+/// A target image snapped to a program's palette.
+#[derive(Debug, Clone, Serialize)]
+pub struct SnapResponse {
+    /// `size × size`, every pixel exactly one of the program's colours.
+    #[serde(flatten)]
+    pub image: RawImage,
+    /// Fraction of pixels farther than the tolerance from every colour.
+    pub unmatched: f64,
+}
+
+/// Decode an uploaded target, resample it to `size × size` (nearest) and
+/// snap every pixel to the nearest colour the program draws with (or its
+/// background), so the user sees exactly what the fit will compare against.
+pub fn snap_target(req: &PatternSnapRequest) -> Result<SnapResponse> {
+    let size = lim::int_in("size", req.size, lim::SNAP_SIZE)?;
+    let tolerance = lim::finite_in("tolerance", req.tolerance, lim::TOLERANCE)?;
+    let img = decode(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
+    let (_, scene, _) = scene_of(&req.program, &req.params)?;
+    let colours = &scene.rec.colours;
+    let (idx, unmatched) = super::target::snap_to_palette(&img, colours, size, tolerance);
+    let mut image = Rgba8Image::new(size as u32, size as u32);
+    for (i, &k) in idx.iter().enumerate() {
+        let [r, g, b] = colours[k as usize];
+        image.data[4 * i..4 * i + 4].copy_from_slice(&[r, g, b, 255]);
+    }
+    Ok(SnapResponse {
+        image: RawImage::from(image),
+        unmatched,
     })
 }
 
-/// Where a fit's target comes from, as plain data.
-#[derive(Debug, Clone, Default)]
-pub struct TargetSpec {
-    /// An encoded image (PNG, JPEG, ...).
-    pub image: Option<Vec<u8>>,
-    /// Or raw RGBA: (width, height, bytes).
-    pub rgba: Option<(u32, u32, Vec<u8>)>,
-    /// Or the program drawn with these values ("make target").
-    pub params: Option<BTreeMap<String, f64>>,
-    /// RGB distance within which a pixel matches a palette colour (default 60).
-    pub tolerance: Option<f64>,
+/// Start a `pattern-snap` request (one step: a decode and a resample).
+pub fn start_snap(req: PatternSnapRequest) -> Result<impl Job<Output = SnapResponse>> {
+    Ok(OneShot::new(move || snap_target(&req)))
 }
 
-/// Settings of a fit request; every field is optional.
-#[derive(Debug, Clone, Default, Deserialize)]
+// ------------------------------------------------------------------------ fit
+
+/// How a fit picks its starting points (`genetic`, also `ga`; `random`;
+/// `nelder-mead`, also `nm`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Init {
+    #[default]
+    #[serde(alias = "ga")]
+    Genetic,
+    Random,
+    #[serde(alias = "nm")]
+    NelderMead,
+}
+
+impl From<Init> for InitMethod {
+    fn from(i: Init) -> InitMethod {
+        match i {
+            Init::Genetic => InitMethod::Genetic,
+            Init::Random => InitMethod::Random,
+            Init::NelderMead => InitMethod::NelderMead,
+        }
+    }
+}
+
+/// Raw RGBA pixels of a target (`target_rgba`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct FitSettings {
+pub struct RawRgba {
+    pub width: u32,
+    pub height: u32,
+    #[serde(with = "serde_bytes")]
+    pub rgba: Vec<u8>,
+}
+
+/// Nothing more: the `fit` request itself.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct NoExtra {}
+
+/// What `fit-eval` adds to a fit request.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EvalPoints {
+    /// Float parameter vectors (declaration order, raw units), at most 10,000.
+    pub points: Vec<Vec<f64>>,
+}
+
+/// A fit: program, target and settings (`fit`; with `points`, `fit-eval`).
+/// Give one of `target_png` (encoded image bytes), `target_rgba` (raw
+/// pixels) or `target_params` (the program drawn with these values).
+///
+/// The default budget is `quick`, for both the browser and `filigree fit`:
+/// it is what the interactive panel runs (seconds, not minutes), and one
+/// default for both keeps a fit made in one place reproducible in the
+/// other. The paper's settings are `budget: "paper"` / `--budget paper`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, bound(deserialize = "X: Deserialize<'de> + Default"))]
+pub struct FitRequestOf<X> {
+    /// Program text.
+    pub program: String,
+    /// Values by name for integer (structural) parameters; others default.
+    pub params: BTreeMap<String, f64>,
+    #[serde(with = "serde_bytes", skip_serializing_if = "Option::is_none")]
+    pub target_png: Option<Vec<u8>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_rgba: Option<RawRgba>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_params: Option<BTreeMap<String, f64>>,
+    /// RGB distance within which a target pixel matches a palette colour, 0..=442 (60).
+    pub tolerance: f64,
     /// `quick` (default) or `paper`.
-    pub budget: Option<String>,
+    pub budget: Budget,
     /// `sdf` (default), `l1`, `pyramid`, `image`.
-    pub loss: Option<String>,
-    /// `genetic` (default), `random`, `nelder-mead`.
-    pub init: Option<String>,
-    pub seed: Option<u64>,
-    /// Loss grid side (8..=1024).
+    pub loss: LossKind,
+    /// `genetic` (default, `ga`), `random`, `nelder-mead` (`nm`).
+    pub init: Init,
+    /// Field units in the loss: `pixels` (default) or `canvas`.
+    pub units: SdfUnits,
+    /// Seed of every random choice (1).
+    pub seed: u64,
+    /// Loss grid side, 8..=1024 (the budget's: 64 quick, 128 paper).
     pub grid: Option<usize>,
-    /// Overrides of the budget: population, generations, candidates, iterations.
+    /// Overrides of the budget.
     pub population: Option<usize>,
     pub generations: Option<usize>,
     pub candidates: Option<usize>,
     pub iterations: Option<usize>,
-    /// Adam iterations on the image-space loss after the fit (default 0 = off).
-    pub polish: Option<usize>,
+    /// Adam iterations on the image-space loss after the fit (0 = off, the paper's method).
+    pub polish: usize,
     /// `[k, n]`: this job is shard k of n of one fit (see `FitOptions::shards`).
     pub shards: Option<(usize, usize)>,
+    #[serde(flatten)]
+    pub extra: X,
 }
 
-/// Options from settings, with errors naming the bad value.
-pub fn fit_options(s: &FitSettings) -> Result<FitOptions> {
-    let b = s.budget.as_deref().unwrap_or("quick");
-    let mut o = FitOptions::budget(
-        Budget::parse(b)
-            .ok_or_else(|| Error::input(format!("unknown budget '{b}' (quick, paper)")))?,
-    );
-    if let Some(l) = &s.loss {
-        o.loss.kind = LossKind::parse(l)
-            .ok_or_else(|| Error::input(format!("unknown loss '{l}' (sdf, l1, pyramid, image)")))?;
-    }
-    if let Some(i) = &s.init {
-        o.init = match i.as_str() {
-            "genetic" => InitMethod::Genetic,
-            "random" => InitMethod::Random,
-            "nelder-mead" => InitMethod::NelderMead,
-            _ => {
-                return Err(Error::input(format!(
-                    "unknown init '{i}' (genetic, random, nelder-mead)"
-                )))
-            }
-        };
-    }
-    if let Some(v) = s.seed {
-        o.seed = v;
-    }
-    if let Some(v) = s.grid {
-        o.loss.grid = v;
-    }
-    if let Some(v) = s.population {
-        o.ga.population = v.clamp(2, 10_000);
-    }
-    if let Some(v) = s.generations {
-        o.ga.generations = v.min(10_000);
-    }
-    if let Some(v) = s.candidates {
-        o.candidates = v.clamp(1, 100);
-    }
-    if let Some(v) = s.iterations {
-        o.iterations = v.min(100_000);
-    }
-    if let Some((k, n)) = s.shards {
-        if n == 0 || n > 64 || k >= n {
-            return Err(Error::input(format!(
-                "shard {k} of {n}: need 1..=64 shards and an index below their count"
-            )));
+/// `fit`.
+pub type FitRequest = FitRequestOf<NoExtra>;
+/// `fit-eval`: a fit request plus `points`.
+pub type FitEvalRequest = FitRequestOf<EvalPoints>;
+
+impl<X: Default> Default for FitRequestOf<X> {
+    fn default() -> Self {
+        FitRequestOf {
+            program: String::new(),
+            params: BTreeMap::new(),
+            target_png: None,
+            target_rgba: None,
+            target_params: None,
+            tolerance: 60.0,
+            budget: Budget::Quick,
+            loss: LossKind::Sdf,
+            init: Init::Genetic,
+            units: SdfUnits::Pixels,
+            seed: 1,
+            grid: None,
+            population: None,
+            generations: None,
+            candidates: None,
+            iterations: None,
+            polish: 0,
+            shards: None,
+            extra: X::default(),
         }
-        o.shards = (k, n);
     }
-    if let Some(v) = s.polish {
-        o.polish = v.min(100_000);
-    }
-    Ok(o)
 }
 
-fn target_source<'a>(
-    p: &Program,
-    t: &'a TargetSpec,
-    img: &'a mut Option<Rgba8Image>,
-    fl: &'a mut Vec<f64>,
-) -> Result<TargetSource<'a>> {
-    let tol = t.tolerance.unwrap_or(60.0);
-    if let Some(bytes) = &t.image {
-        *img = Some(decode(bytes, Limits::default())?);
-    } else if let Some((w, h, data)) = &t.rgba {
-        *img = Some(Rgba8Image::from_raw(*w, *h, data.clone())?);
-    } else if let Some(named) = &t.params {
-        *fl = float_values(p, &named_values(p, named)?);
-        return Ok(TargetSource::Params(fl));
-    } else {
-        return Err(Error::input(
-            "the fit needs a target: an image, RGBA pixels or target parameters",
-        ));
-    }
-    Ok(TargetSource::Image(img.as_ref().expect("just set"), tol))
+/// What a budget preset amounts to (for showing defaults next to overrides).
+#[derive(Debug, Clone, Serialize)]
+pub struct BudgetInfo {
+    pub population: usize,
+    pub generations: usize,
+    pub candidates: usize,
+    pub iterations: usize,
+    pub grid: usize,
 }
 
-/// Start a fit; also returns the scene (for drawing results).
-pub fn start_fit(
-    src: &str,
-    named: &BTreeMap<String, f64>,
-    target: &TargetSpec,
-    settings: &FitSettings,
-) -> Result<(FitJob, Scene)> {
-    let p = Program::parse(src)?;
-    let vals = named_values(&p, named)?;
-    let opts = fit_options(settings)?;
-    let (mut img, mut fl) = (None, vec![]);
-    let t = target_source(&p, target, &mut img, &mut fl)?;
-    let job = FitJob::new(&p, &vals, &t, opts)?;
-    let scene = job.objective().scene.clone();
-    Ok((job, scene))
+/// The presets by name.
+pub fn budgets() -> BTreeMap<&'static str, BudgetInfo> {
+    [("quick", Budget::Quick), ("paper", Budget::Paper)]
+        .into_iter()
+        .map(|(n, b)| {
+            let o = FitOptions::budget(b);
+            let info = BudgetInfo {
+                population: o.ga.population,
+                generations: o.ga.generations,
+                candidates: o.candidates,
+                iterations: o.iterations,
+                grid: o.loss.grid,
+            };
+            (n, info)
+        })
+        .collect()
+}
+
+impl<X> FitRequestOf<X> {
+    /// Options from the settings; errors name the field.
+    pub fn options(&self) -> Result<FitOptions> {
+        let mut o = FitOptions::budget(self.budget);
+        o.loss.kind = self.loss;
+        o.loss.units = self.units;
+        o.init = self.init.into();
+        o.seed = self.seed;
+        if let Some(v) = self.grid {
+            o.loss.grid = lim::int_in("grid", v, lim::GRID)?;
+        }
+        if let Some(v) = self.population {
+            o.ga.population = lim::int_in("population", v, lim::POPULATION)?;
+        }
+        if let Some(v) = self.generations {
+            o.ga.generations = lim::int_in("generations", v, lim::GENERATIONS)?;
+        }
+        if let Some(v) = self.candidates {
+            o.candidates = lim::int_in("candidates", v, lim::CANDIDATES)?;
+        }
+        if let Some(v) = self.iterations {
+            o.iterations = lim::int_in("iterations", v, lim::ITERATIONS)?;
+        }
+        o.polish = lim::int_in("polish", self.polish, lim::ITERATIONS)?;
+        if let Some((k, n)) = self.shards {
+            if n == 0 || n > lim::SHARDS || k >= n {
+                return Err(Error::input(format!(
+                    "`shards` [{k}, {n}]: need 1..={} shards and an index below their count",
+                    lim::SHARDS
+                ))
+                .at("shards"));
+            }
+            o.shards = (k, n);
+        }
+        Ok(o)
+    }
+
+    /// The target as the fit sees it; `img`/`fl` hold what it borrows.
+    fn target<'a>(
+        &self,
+        p: &Program,
+        img: &'a mut Option<Rgba8Image>,
+        fl: &'a mut Vec<f64>,
+    ) -> Result<TargetSource<'a>> {
+        let tol = lim::finite_in("tolerance", self.tolerance, lim::TOLERANCE)?;
+        if let Some(bytes) = &self.target_png {
+            *img = Some(decode(bytes, Limits::default()).map_err(|e| e.at("target_png"))?);
+        } else if let Some(r) = &self.target_rgba {
+            *img = Some(
+                Rgba8Image::from_raw(r.width, r.height, r.rgba.clone())
+                    .map_err(|e| e.at("target_rgba"))?,
+            );
+        } else if let Some(named) = &self.target_params {
+            *fl = float_values(p, &named_values_at(p, named, "target_params")?);
+            return Ok(TargetSource::Params(fl));
+        } else {
+            return Err(Error::input(
+                "the fit needs a target: `target_png` (an image), `target_rgba` (pixels) or `target_params`",
+            ));
+        }
+        Ok(TargetSource::Image(img.as_ref().expect("just set"), tol))
+    }
 }
 
 /// A finished fit as plain data.
@@ -279,44 +544,128 @@ pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
     })
 }
 
-/// Loss of many float-parameter vectors against one target (for a worker
-/// pool evaluating a GA population): `points[i]` has one value per float
-/// parameter in declaration order, raw units. At most 10,000 points.
-pub fn eval_batch(
-    src: &str,
-    named: &BTreeMap<String, f64>,
-    target: &TargetSpec,
-    settings: &FitSettings,
-    points: &[Vec<f64>],
-) -> Result<Vec<f64>> {
-    if points.len() > 10_000 {
-        return Err(Error::limit(format!(
-            "{} points in one batch; send at most 10,000",
-            points.len()
-        )));
+/// A running `fit`: the core [`FitJob`] whose result comes with its SVG.
+pub struct FitRequestJob {
+    job: FitJob,
+    scene: Scene,
+}
+
+impl FitRequestJob {
+    /// The fit itself (e.g. to read its objective).
+    pub fn fit(&self) -> &FitJob {
+        &self.job
     }
-    let p = Program::parse(src)?;
-    let vals = named_values(&p, named)?;
-    let opts = fit_options(settings)?;
+    /// The core fit job alone (its output without the SVG).
+    pub fn into_fit(self) -> FitJob {
+        self.job
+    }
+}
+
+impl Job for FitRequestJob {
+    type Output = FitOutput;
+    fn step(&mut self) -> Result<Step<FitOutput>> {
+        Ok(match self.job.step()? {
+            Step::Running(p) => Step::Running(p),
+            Step::Done(r) => Step::Done(fit_output(&self.scene, r)?),
+        })
+    }
+    fn outbox(&mut self) -> Option<Vec<f64>> {
+        self.job.outbox()
+    }
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        self.job.inbox(parts)
+    }
+}
+
+/// Check a `fit` request and start it.
+pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
+    let p = parse(&req.program)?;
+    let vals = named_values(&p, &req.params)?;
+    let opts = req.options()?;
     let (mut img, mut fl) = (None, vec![]);
-    let t = target_source(&p, target, &mut img, &mut fl)?;
-    let (scene, target): (Scene, Target) = super::fit::prepare(&p, &vals, &t, &opts.loss)?;
-    let dim = scene.rec.float_params.len();
-    let lo: LossOptions = opts.loss;
-    let mut obj = Objective::new(scene, target, lo);
-    points
-        .iter()
-        .enumerate()
-        .map(|(i, x)| {
+    let t = req.target(&p, &mut img, &mut fl)?;
+    let job = FitJob::new(&p, &vals, &t, opts).map_err(|e| e.at("program"))?;
+    let scene = job.objective().scene.clone();
+    Ok(FitRequestJob { job, scene })
+}
+
+/// Losses of a `fit-eval` request, in the order of its points.
+#[derive(Debug, Clone, Serialize)]
+pub struct EvalResponse {
+    pub losses: Vec<f64>,
+}
+
+/// `fit-eval` as a job: as many points per step as a fit step evaluates
+/// (the objective's deterministic work count against the budget's
+/// `work_per_step`), one point at least: a single loss at grid 1024 is the
+/// smallest unit of work.
+pub struct EvalJob {
+    obj: Objective,
+    points: Vec<Vec<f64>>,
+    losses: Vec<f64>,
+    work_per_step: u64,
+}
+
+impl Job for EvalJob {
+    type Output = EvalResponse;
+    fn step(&mut self) -> Result<Step<EvalResponse>> {
+        let dim = self.obj.scene.rec.float_params.len();
+        let mut work = 0u64;
+        while self.losses.len() < self.points.len() && (work < self.work_per_step || work == 0) {
+            let i = self.losses.len();
+            let x = &self.points[i];
             if x.len() != dim {
                 return Err(Error::input(format!(
                     "point {i} has {} values; the program has {dim} float parameters",
                     x.len()
-                )));
+                ))
+                .at(format!("points.{i}")));
             }
-            Ok(obj.loss(x))
-        })
-        .collect()
+            if let Some(j) = x.iter().position(|v| !v.is_finite()) {
+                return Err(
+                    Error::input(format!("point {i}: value {j} is not a finite number"))
+                        .at(format!("points.{i}")),
+                );
+            }
+            let l = self.obj.loss(x);
+            self.losses.push(l);
+            work += self.obj.last_work.max(1);
+        }
+        if self.losses.len() == self.points.len() {
+            Ok(Step::Done(EvalResponse {
+                losses: std::mem::take(&mut self.losses),
+            }))
+        } else {
+            let f = self.losses.len() as f64 / self.points.len() as f64;
+            Ok(Step::Running(Progress::new(f, "evaluating")))
+        }
+    }
+}
+
+/// Check a `fit-eval` request and start it: losses of many float-parameter
+/// vectors against one target (for a worker pool evaluating a population).
+pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
+    let n = req.extra.points.len();
+    if n > lim::EVAL_POINTS {
+        return Err(Error::limit(format!(
+            "{n} points in one batch; send at most {}",
+            lim::EVAL_POINTS
+        ))
+        .at("points"));
+    }
+    let p = parse(&req.program)?;
+    let vals = named_values(&p, &req.params)?;
+    let opts = req.options()?;
+    let (mut img, mut fl) = (None, vec![]);
+    let t = req.target(&p, &mut img, &mut fl)?;
+    let (scene, target) =
+        super::fit::prepare(&p, &vals, &t, &opts.loss).map_err(|e| e.at("program"))?;
+    Ok(EvalJob {
+        obj: Objective::new(scene, target, opts.loss),
+        points: req.extra.points,
+        losses: Vec::with_capacity(n),
+        work_per_step: opts.work_per_step,
+    })
 }
 
 #[cfg(test)]
@@ -325,80 +674,198 @@ mod tests {
     use crate::core::job::run_quietly;
     use crate::pattern::generators::generator;
 
+    fn named(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
+        pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    }
+
     #[test]
     fn request_level_fit_render_and_batch() {
         let src = generator("circles-grid").unwrap().source;
-        let none = BTreeMap::new();
-        let info = program_info(src, &none).unwrap();
+        let info = program_info(&PatternInfoRequest {
+            program: src.into(),
+            ..Default::default()
+        })
+        .unwrap();
         assert_eq!(info.params.len(), 5);
         assert_eq!(info.colours, vec!["#ffffff", "#1f4e79"]);
-        let truth: BTreeMap<String, f64> =
-            [("dx".to_string(), 0.2), ("r".to_string(), 0.05)].into();
-        let r = render_program(src, &truth, 64, 1).unwrap();
-        assert_eq!((r.image.width, r.image.height), (64, 64));
-        let png = crate::raster::encode_png(&r.image).unwrap();
-        let target = TargetSpec {
-            image: Some(png),
+        let truth = named(&[("dx", 0.2), ("r", 0.05)]);
+        let render = RenderPatternRequest {
+            program: src.into(),
+            params: truth.clone(),
+            size: 64,
             ..Default::default()
         };
-        let settings = FitSettings {
+        let mut job = start_render(render).unwrap();
+        let mut steps = 0;
+        let r = loop {
+            steps += 1;
+            match job.step().unwrap() {
+                Step::Running(_) => continue,
+                Step::Done(r) => break r,
+            }
+        };
+        assert_eq!(steps, 3, "record, raster, SVG");
+        assert_eq!((r.image.width, r.image.height), (64, 64));
+        let img = Rgba8Image::from_raw(64, 64, r.image.rgba).unwrap();
+        let png = crate::raster::encode_png(&img).unwrap();
+        let fit = FitRequest {
+            program: src.into(),
+            target_png: Some(png),
             iterations: Some(30),
             generations: Some(3),
             population: Some(30),
             ..Default::default()
         };
-        let (job, scene) = start_fit(src, &none, &target, &settings).unwrap();
-        let out = fit_output(&scene, run_quietly(job).unwrap()).unwrap();
+        let out = run_quietly(start_fit(&fit).unwrap()).unwrap();
         assert!(out.svg.contains("<circle"));
         assert!((out.named["r"] - 0.05).abs() < 0.01, "{:?}", out.named);
-        let pts = vec![
-            vec![0.2, 0.17, 0.12, 0.12, 0.05],
-            vec![0.13, 0.13, 0.06, 0.06, 0.03],
-        ];
-        let l = eval_batch(src, &none, &target, &settings, &pts).unwrap();
+
+        let good = vec![0.2, 0.17, 0.12, 0.12, 0.05];
+        let bad = vec![0.13, 0.13, 0.06, 0.06, 0.03];
+        let points: Vec<Vec<f64>> = (0..40)
+            .map(|i| {
+                if i % 2 == 0 {
+                    good.clone()
+                } else {
+                    bad.clone()
+                }
+            })
+            .collect();
+        let eval = FitEvalRequest {
+            program: fit.program.clone(),
+            target_png: fit.target_png.clone(),
+            extra: EvalPoints { points },
+            ..Default::default()
+        };
+        let mut job = start_eval(eval.clone()).unwrap();
+        let mut running = 0;
+        let l = loop {
+            match job.step().unwrap() {
+                Step::Running(p) => {
+                    running += 1;
+                    assert!(p.fraction < 1.0);
+                }
+                Step::Done(r) => break r.losses,
+            }
+        };
+        assert!(running >= 1, "40 points at grid 64 take more than one step");
+        assert_eq!(l.len(), 40);
         assert!(l[0] < l[1]);
-        let e = eval_batch(src, &none, &target, &settings, &[vec![0.1]]).unwrap_err();
+        assert!(
+            l.iter().step_by(2).all(|v| *v == l[0]),
+            "same point, same loss"
+        );
+        let short = FitEvalRequest {
+            extra: EvalPoints {
+                points: vec![vec![0.1]],
+            },
+            ..eval
+        };
+        let e = run_quietly(start_eval(short).unwrap()).unwrap_err();
         assert!(e.to_string().contains("point 0 has 1 values"), "{e}");
-        let bad: BTreeMap<String, f64> = [("radius".to_string(), 0.1)].into();
-        assert!(render_program(src, &bad, 64, 1)
-            .unwrap_err()
-            .to_string()
-            .contains("no parameter 'radius'"));
+        assert_eq!(e.field(), Some("points.0"));
+        let e = start_render(RenderPatternRequest {
+            program: src.into(),
+            params: named(&[("radius", 0.1)]),
+            ..Default::default()
+        })
+        .and_then(run_quietly)
+        .unwrap_err();
+        assert!(e.to_string().contains("no parameter 'radius'"), "{e}");
+        assert_eq!(e.field(), Some("params.radius"));
     }
-}
 
-/// A target image snapped to a program's palette.
-#[derive(Debug, Clone)]
-pub struct Snapped {
-    /// `size × size`, every pixel exactly one of the program's colours.
-    pub image: Rgba8Image,
-    /// Fraction of pixels farther than the tolerance from every colour.
-    pub unmatched: f64,
-}
-
-/// Decode an uploaded target, resample it to `size × size` (nearest) and
-/// snap every pixel to the nearest colour the program draws with (or its
-/// background), so the user sees exactly what the fit will compare against.
-pub fn snap_target(
-    src: &str,
-    named: &BTreeMap<String, f64>,
-    bytes: &[u8],
-    size: usize,
-    tolerance: f64,
-) -> Result<Snapped> {
-    if !(8..=2048).contains(&size) {
-        return Err(Error::limit(format!(
-            "size {size} is outside 8..=2048 pixels"
-        )));
+    #[test]
+    fn numeric_fields_are_checked_where_they_enter() {
+        let src = generator("circles-grid").unwrap().source;
+        let base = FitRequest {
+            program: src.into(),
+            target_params: Some(BTreeMap::new()),
+            ..Default::default()
+        };
+        let field_of =
+            |r: &FitRequest| start_fit(r).err().and_then(|e| e.field().map(String::from));
+        for (req, field) in [
+            (
+                FitRequest {
+                    tolerance: f64::NAN,
+                    target_params: None,
+                    target_png: Some(vec![1]),
+                    ..base.clone()
+                },
+                "tolerance",
+            ),
+            (
+                FitRequest {
+                    tolerance: -5.0,
+                    target_params: None,
+                    target_png: Some(vec![1]),
+                    ..base.clone()
+                },
+                "tolerance",
+            ),
+            (
+                FitRequest {
+                    grid: Some(4),
+                    ..base.clone()
+                },
+                "grid",
+            ),
+            (
+                FitRequest {
+                    population: Some(1_000_000),
+                    ..base.clone()
+                },
+                "population",
+            ),
+            (
+                FitRequest {
+                    shards: Some((2, 2)),
+                    ..base.clone()
+                },
+                "shards",
+            ),
+            (
+                FitRequest {
+                    params: named(&[("dx", f64::INFINITY)]),
+                    ..base.clone()
+                },
+                "params.dx",
+            ),
+            (
+                FitRequest {
+                    program: "circle(0.5 0.5, 0.1);".into(),
+                    ..base.clone()
+                },
+                "program",
+            ),
+            (
+                FitRequest {
+                    program: " ".into(),
+                    ..base.clone()
+                },
+                "program",
+            ),
+        ] {
+            assert_eq!(field_of(&req).as_deref(), Some(field), "{req:?}");
+        }
+        let e = start_render(RenderPatternRequest {
+            program: src.into(),
+            supersample: usize::MAX,
+            ..Default::default()
+        })
+        .err()
+        .unwrap();
+        assert_eq!(e.field(), Some("supersample"));
+        let e = start_fit(&FitRequest {
+            program: "param a in [0, 1] = 0.5;\ncircle(a, a a);\n".into(),
+            ..base
+        })
+        .err()
+        .unwrap();
+        assert_eq!(
+            (e.kind(), e.field(), e.position()),
+            ("syntax", Some("program"), Some((2, 13)))
+        );
     }
-    let img = crate::raster::decode(bytes, crate::raster::Limits::default())?;
-    let p = Program::parse(src)?;
-    let rec = p.record(&named_values(&p, named)?, &RecordLimits::default())?;
-    let (idx, unmatched) = super::target::snap_to_palette(&img, &rec.colours, size, tolerance);
-    let mut image = Rgba8Image::new(size as u32, size as u32);
-    for (i, &k) in idx.iter().enumerate() {
-        let [r, g, b] = rec.colours[k as usize];
-        image.data[4 * i..4 * i + 4].copy_from_slice(&[r, g, b, 255]);
-    }
-    Ok(Snapped { image, unmatched })
 }

@@ -12,6 +12,7 @@
 //! stages) or [`texture`] to run it at once. Everything random draws from one
 //! seeded [`crate::core::rng::Rng`], so the same inputs and seed give the same
 //! bytes natively and in wasm.
+pub mod api;
 pub mod colour;
 pub mod inputs;
 pub mod laplace;

@@ -1,13 +1,17 @@
 //! The wasm boundary (feature `web`): the only module that touches
-//! wasm-bindgen. It turns typed requests into core calls and nothing else.
+//! wasm-bindgen. JsValue → [`crate::api`] registry → JsValue; no logic.
 //!
 //! The worker (`www/worker.js`) calls [`start_job`] with a request kind and
 //! its payload (a plain JS object; byte fields are `Uint8Array`s), then calls
 //! [`WebJob::step`] in a loop, yielding to its event loop every ~15 ms so a
-//! cancel message can be read. Adding a tool = one arm in `jobs::start`.
+//! cancel message can be read. Errors are thrown as plain objects
+//! `{kind, message, line?, column?, field?}` ([`crate::core::error::ErrorInfo`]);
+//! anything else thrown (a trap, a `RangeError`) means the instance is broken.
+use crate::api::{RequestJob, Response};
+use crate::core::error::Error;
+use crate::core::job::{Progress, Step};
+use serde::Serialize;
 use wasm_bindgen::prelude::*;
-
-mod jobs;
 
 /// Install the panic hook once; a panic then reaches the console with its
 /// message before the trap, and the worker reports it as a `panic` message.
@@ -25,31 +29,71 @@ pub fn version() -> String {
 /// One running job, stepped by the worker. An opaque handle for JS.
 #[wasm_bindgen]
 pub struct WebJob {
-    inner: Box<dyn jobs::DynJob>,
+    inner: Box<RequestJob>,
 }
 
-/// Start a job of `kind` with `payload`. Errors (unknown kind, bad payload,
-/// bad input) come back as a JS `Error` whose message is shown to the user.
+/// Serialise to plain JS objects: structs and maps become objects,
+/// `serde_bytes` fields become `Uint8Array`s (transferred, not copied, to the page).
+fn to_js<T: Serialize + ?Sized>(v: &T) -> Result<JsValue, JsValue> {
+    v.serialize(&serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true))
+        .map_err(|e| error(Error::input(format!("the result could not be sent: {e}"))))
+}
+
+/// A core error as the plain object the worker passes on untouched.
+fn error(e: Error) -> JsValue {
+    let info = e.info();
+    info.serialize(&serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true))
+        .unwrap_or_else(|_| JsValue::from_str(&info.message))
+}
+
+/// Start a job of `kind` with `payload`; throws a typed error object.
 #[wasm_bindgen]
-pub fn start_job(kind: &str, payload: JsValue) -> Result<WebJob, JsError> {
-    let inner = jobs::start(kind, payload).map_err(|e| JsError::new(&e))?;
+pub fn start_job(kind: &str, payload: JsValue) -> Result<WebJob, JsValue> {
+    let inner =
+        crate::api::start(kind, serde_wasm_bindgen::Deserializer::from(payload)).map_err(error)?;
     Ok(WebJob { inner })
+}
+
+#[derive(Serialize)]
+struct Running<'a> {
+    done: bool,
+    progress: &'a Progress,
+    /// Data to exchange with sibling jobs before the next step (see `Job::outbox`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    need: Option<Vec<f64>>,
+}
+
+#[derive(Serialize)]
+struct Done<'a> {
+    done: bool,
+    result: &'a Response,
 }
 
 #[wasm_bindgen]
 impl WebJob {
     /// Do one bounded slice of work. Returns `{done: false, progress: {fraction, stage, figure},
-    /// need?: number[]}` or `{done: true, result: ...}`; throws on error. With
+    /// need?: number[]}` or `{done: true, result: ...}`; throws a typed error object. With
     /// `need`, call [`WebJob::provide`] before stepping again.
-    pub fn step(&mut self) -> Result<JsValue, JsError> {
-        self.inner.step().map_err(|e| JsError::new(&e))
+    pub fn step(&mut self) -> Result<JsValue, JsValue> {
+        match self.inner.step().map_err(error)? {
+            Step::Running(p) => to_js(&Running {
+                done: false,
+                progress: &p,
+                need: self.inner.outbox(),
+            }),
+            Step::Done(r) => to_js(&Done {
+                done: true,
+                result: &r,
+            }),
+        }
     }
 
     /// Answer the `need` of the last step: every sibling shard's `need`,
     /// in shard order (an array of number arrays; the page only relays).
-    pub fn provide(&mut self, parts: JsValue) -> Result<(), JsError> {
-        let parts: Vec<Vec<f64>> = serde_wasm_bindgen::from_value(parts)
-            .map_err(|e| JsError::new(&format!("bad exchange data: {e}")))?;
-        self.inner.provide(parts).map_err(|e| JsError::new(&e))
+    pub fn provide(&mut self, parts: JsValue) -> Result<(), JsValue> {
+        let parts: Vec<Vec<f64>> =
+            crate::api::request("exchange", serde_wasm_bindgen::Deserializer::from(parts))
+                .map_err(error)?;
+        self.inner.inbox(parts).map_err(error)
     }
 }

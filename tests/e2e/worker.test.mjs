@@ -1,13 +1,37 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { launch, dropFile, fixture } from './harness.mjs';
+import fs from 'node:fs';
+import path from 'node:path';
+import { launch, dropFile, fixture, ROOT } from './harness.mjs';
+
+// The deliberate-crash request ('debug-abort', cargo feature test-hooks) is
+// not in the shipped core (pkg/). `FILIGREE_TEST_HOOKS=1 bash scripts/build.sh`
+// also builds a core with it into pkg-test/; these tests serve that core in
+// place of pkg/ (service worker blocked, so the page fetches it).
+const TEST_PKG = path.join(ROOT, 'pkg-test');
+
+async function testCorePage(env) {
+  for (const f of ['filigree_bg.wasm', 'filigree.js']) {
+    if (!fs.existsSync(path.join(TEST_PKG, f))) {
+      throw new Error(`pkg-test/${f} is missing: run FILIGREE_TEST_HOOKS=1 bash scripts/build.sh`);
+    }
+  }
+  const page = await env.newPage({ path: null, serviceWorkers: 'block' });
+  await page.context().route(/\/pkg\/filigree(_bg\.wasm|\.js)$/, (route) => {
+    const name = new URL(route.request().url()).pathname.split('/').pop();
+    route.fulfill({ path: path.join(TEST_PKG, name) });
+  });
+  await page.goto(env.url + '#tool=inspect');
+  await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+  return page;
+}
 
 let env;
 before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 test('a worker that crashes mid-job is reported and replaced; the next job succeeds', async () => {
-  const page = await env.newPage({ path: '#tool=inspect' });
+  const page = await testCorePage(env);
   const outcome = await page.evaluate(async () => {
     const progress = [];
     try {
@@ -30,8 +54,33 @@ test('a worker that crashes mid-job is reported and replaced; the next job succe
   assert.equal(await page.textContent('[data-field=size]'), '128 × 128 px');
 });
 
+test('a RangeError (stack overflow) from the core is fatal: the worker is replaced, not reused', async () => {
+  const page = await testCorePage(env);
+  const r = await page.evaluate(async () => {
+    const pool = window.filigree.pool;
+    const out = {};
+    try {
+      await pool.run('debug-abort', { steps: 1, overflow: true });
+      out.ok = true;
+    } catch (e) {
+      out.kind = e.kind;
+      out.message = e.message;
+    }
+    // Every worker of the pool still answers (none kept a corrupted instance).
+    const n = pool.slots.length;
+    const infos = await Promise.all(Array.from({ length: 2 * n }, () =>
+      pool.run('pattern-info', { program: 'circle(0.5, 0.5, 0.25);' }).then((i) => i.shapes, (e) => `${e.kind}: ${e.message}`)));
+    out.infos = infos;
+    return out;
+  });
+  assert.equal(r.ok, undefined, 'the overflow did not return');
+  assert.equal(r.kind, 'crash', r.message);
+  assert.match(r.message, /Maximum call stack size exceeded|RangeError|crashed/);
+  assert.ok(r.infos.every((s) => s === 1), JSON.stringify(r.infos));
+});
+
 test('cancelling a running job stops it quickly without killing the worker', async () => {
-  const page = await env.newPage({ path: '#tool=inspect' });
+  const page = await testCorePage(env);
   const r = await page.evaluate(async () => {
     const ctrl = new AbortController();
     let t0 = 0;
@@ -48,4 +97,44 @@ test('cancelling a running job stops it quickly without killing the worker', asy
   assert.ok(r.ms < 500, `cancel took ${r.ms} ms`);
   const again = await page.evaluate(() => window.filigree.pool.run('debug-abort', { steps: 1 }).catch((e) => e.kind));
   assert.equal(again, 'crash', 'the same pool still runs jobs after a cancel');
+});
+
+test('the shipped core has no test hooks', async () => {
+  const page = await env.newPage({ path: '#tool=inspect' });
+  const e = await page.evaluate(() => window.filigree.pool.run('debug-abort', { steps: 1 })
+    .then(() => null, (e) => ({ kind: e.kind, message: e.message })));
+  assert.equal(e?.kind, 'invalid-input');
+  assert.match(e.message, /unknown request kind 'debug-abort'/);
+  const wasm = fs.readFileSync(path.join(ROOT, 'pkg/filigree_bg.wasm'));
+  assert.equal(wasm.includes('deliberate crash'), false, 'pkg/ carries the debug-abort job');
+});
+
+test('errors arrive typed: a syntax error has kind, line, column and field; a bad field is named', async () => {
+  const page = await env.newPage({ path: '#tool=inspect' });
+  const r = await page.evaluate(async () => {
+    const pool = window.filigree.pool;
+    const grab = (p) => p.then(() => null, (e) => ({
+      name: e.name, kind: e.kind, message: e.message, line: e.line, column: e.column, field: e.field,
+    }));
+    return {
+      syntax: await grab(pool.run('pattern-info', { program: 'param a in [0, 1] = 0.5;\ncircle(a, a a);\n' })),
+      nullProgram: await grab(pool.run('pattern-info', { program: null })),
+      tolerance: await grab(pool.run('inspect', { bytes: new Uint8Array(8), tolerance: -5 })),
+      supersample: await grab(pool.run('render-pattern', { program: 'circle(0.5, 0.5, 0.2);', supersample: 1e12 })),
+      unknownParam: await grab(pool.run('render-pattern', { program: 'param r in [0, 1] = 0.2;\ncircle(0.5, 0.5, r);', params: { radius: 1 } })),
+    };
+  });
+  assert.deepEqual(r.syntax, {
+    name: 'JobError', kind: 'syntax', message: r.syntax.message, line: 2, column: 13, field: 'program',
+  });
+  assert.match(r.syntax.message, /line 2, column 13/);
+  assert.equal(r.nullProgram.kind, 'invalid-input');
+  assert.equal(r.nullProgram.field, 'program');
+  assert.equal(r.nullProgram.message, 'pattern-info: `program` must be text (got null)');
+  assert.equal(r.nullProgram.line, undefined);
+  assert.equal(r.tolerance.field, 'tolerance');
+  assert.match(r.tolerance.message, /`tolerance` must be a finite number in 0\.\.=442/);
+  assert.equal(r.supersample.field, 'supersample');
+  assert.equal(r.unknownParam.field, 'params.radius');
+  assert.match(r.unknownParam.message, /no parameter 'radius'/);
 });

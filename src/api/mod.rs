@@ -1,0 +1,586 @@
+//! The request registry: request kind → typed request → stepped job →
+//! serialisable response. The one entry point of every tool's requests.
+//!
+//! [`start`] deserialises a payload with ANY serde `Deserializer` (the wasm
+//! boundary uses `serde_wasm_bindgen`, native tests and fuzzers use
+//! `serde_json`, see [`run_json`]) into the kind's request struct, whose
+//! defaults are defined once in its tool's `api` module
+//! ([`crate::pattern::api`], [`crate::pixel::api`], [`inspect`]), checks it
+//! and returns a boxed [`Job`] whose output is a [`Response`]. The CLI
+//! builds the same request structs from its flags and calls the same
+//! `start_*` functions.
+//!
+//! Adding a tool: its `src/<tool>/api.rs` (request/response structs with
+//! `Default`, `start_*` functions), one arm per kind in [`start`], one
+//! variant in [`Response`] and in [`DefaultRequest`].
+//!
+//! Errors: a payload that does not deserialise becomes an
+//! [`Error::InvalidInput`] naming the kind and the field, e.g.
+//! "pattern-info: `program` must be text (got null)", with
+//! [`Error::field`] = `program`.
+pub mod inspect;
+
+use crate::core::error::{Error, Result};
+use crate::core::job::{Job, Step};
+use crate::pattern::api as pattern;
+use crate::pixel::api as pixel;
+use crate::raster::Rgba8Image;
+use serde::{Deserialize, Deserializer, Serialize};
+
+/// An image as it crosses the boundary undecoded: straight RGBA bytes
+/// (a `Uint8Array` in the browser).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RawImage {
+    pub width: u32,
+    pub height: u32,
+    #[serde(with = "serde_bytes")]
+    pub rgba: Vec<u8>,
+}
+
+impl From<Rgba8Image> for RawImage {
+    fn from(img: Rgba8Image) -> Self {
+        RawImage {
+            width: img.width,
+            height: img.height,
+            rgba: img.data,
+        }
+    }
+}
+
+/// Every request kind the registry serves.
+pub const KINDS: &[&str] = &[
+    "inspect",
+    "decode-image",
+    "pixel",
+    "pixel-mask",
+    "fit",
+    "fit-eval",
+    "render-pattern",
+    "pattern-info",
+    "pattern-generators",
+    "pattern-snap",
+    "defaults",
+];
+
+/// The answer of any request (serialised as the inner value alone).
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum Response {
+    Inspect(Box<inspect::InspectResponse>),
+    Image(RawImage),
+    Pixel(Box<pixel::PixelResponse>),
+    Mask(pixel::MaskBits),
+    Fit(Box<pattern::FitOutput>),
+    Eval(pattern::EvalResponse),
+    Render(pattern::RenderResponse),
+    Info(pattern::ProgramInfo),
+    Generators(&'static [crate::pattern::generators::Generator]),
+    Snap(pattern::SnapResponse),
+    Defaults(Box<Defaults>),
+    /// `null`.
+    Nothing,
+}
+
+/// A running request, as the worker and native drivers step it.
+pub type RequestJob = dyn Job<Output = Response>;
+
+/// A job whose output is turned into a [`Response`]; exchanges pass through.
+struct Mapped<J, F> {
+    job: J,
+    into: F,
+}
+
+impl<J: Job, F: FnMut(J::Output) -> Response> Job for Mapped<J, F> {
+    type Output = Response;
+    fn step(&mut self) -> Result<Step<Response>> {
+        Ok(match self.job.step()? {
+            Step::Running(p) => Step::Running(p),
+            Step::Done(out) => Step::Done((self.into)(out)),
+        })
+    }
+    fn outbox(&mut self) -> Option<Vec<f64>> {
+        self.job.outbox()
+    }
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        self.job.inbox(parts)
+    }
+}
+
+fn boxed<J, F>(job: J, into: F) -> Box<RequestJob>
+where
+    J: Job + 'static,
+    F: FnMut(J::Output) -> Response + 'static,
+{
+    Box::new(Mapped { job, into })
+}
+
+/// `defaults`: which tool's default request to describe.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DefaultsRequest {
+    /// A request kind (`pixel`, `fit`, `inspect`, `render-pattern`, ...).
+    pub tool: String,
+}
+
+/// A default request, serialised from the request struct's `Default`.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum DefaultRequest {
+    Inspect(inspect::InspectRequest),
+    DecodeImage(inspect::DecodeImageRequest),
+    Pixel(pixel::PixelRequest),
+    PixelMask(pixel::PixelMaskRequest),
+    Fit(pattern::FitRequest),
+    FitEval(pattern::FitEvalRequest),
+    Render(pattern::RenderPatternRequest),
+    Info(pattern::PatternInfoRequest),
+    Snap(pattern::PatternSnapRequest),
+    Defaults(DefaultsRequest),
+    Nothing,
+}
+
+/// The answer of `defaults`: the tool's default request (every field at its
+/// default; required inputs such as `program` or `bytes` empty) and, for
+/// the fit kinds, what each budget preset amounts to.
+#[derive(Debug, Clone, Serialize)]
+pub struct Defaults {
+    pub tool: String,
+    pub request: DefaultRequest,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub budgets: Option<std::collections::BTreeMap<&'static str, pattern::BudgetInfo>>,
+}
+
+/// The default request of `tool`.
+pub fn defaults(tool: &str) -> Result<Defaults> {
+    use DefaultRequest as D;
+    let request = match tool {
+        "inspect" => D::Inspect(Default::default()),
+        "decode-image" => D::DecodeImage(Default::default()),
+        "pixel" => D::Pixel(Default::default()),
+        "pixel-mask" => D::PixelMask(Default::default()),
+        "fit" => D::Fit(Default::default()),
+        "fit-eval" => D::FitEval(Default::default()),
+        "render-pattern" => D::Render(Default::default()),
+        "pattern-info" => D::Info(Default::default()),
+        "pattern-snap" => D::Snap(Default::default()),
+        "defaults" => D::Defaults(Default::default()),
+        "pattern-generators" => D::Nothing,
+        other => return Err(unknown_kind(other).at("tool")),
+    };
+    let budgets = matches!(tool, "fit" | "fit-eval").then(pattern::budgets);
+    Ok(Defaults {
+        tool: tool.to_string(),
+        request,
+        budgets,
+    })
+}
+
+fn unknown_kind(kind: &str) -> Error {
+    Error::input(format!(
+        "unknown request kind '{kind}' (known: {})",
+        KINDS.join(", ")
+    ))
+}
+
+/// Start a request of `kind` whose payload `payload` deserialises into the
+/// kind's request struct. Errors are typed ([`Error::kind`]) and name the
+/// request field at fault ([`Error::field`]).
+pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    Ok(match kind {
+        "inspect" => boxed(inspect::start_inspect(request(kind, payload)?)?, |r| {
+            Response::Inspect(Box::new(r))
+        }),
+        "decode-image" => boxed(
+            inspect::start_decode(request(kind, payload)?),
+            Response::Image,
+        ),
+        "pixel" => boxed(pixel::start_pixel(request(kind, payload)?)?, |r| {
+            Response::Pixel(Box::new(r.into()))
+        }),
+        "pixel-mask" => boxed(pixel::start_mask(request(kind, payload)?), Response::Mask),
+        "fit" => boxed(pattern::start_fit(&request(kind, payload)?)?, |r| {
+            Response::Fit(Box::new(r))
+        }),
+        "fit-eval" => boxed(
+            pattern::start_eval(request(kind, payload)?)?,
+            Response::Eval,
+        ),
+        "render-pattern" => boxed(
+            pattern::start_render(request(kind, payload)?)?,
+            Response::Render,
+        ),
+        "pattern-info" => boxed(
+            pattern::start_info(request(kind, payload)?)?,
+            Response::Info,
+        ),
+        "pattern-generators" => {
+            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+            boxed(pattern::start_generators(), Response::Generators)
+        }
+        "pattern-snap" => boxed(
+            pattern::start_snap(request(kind, payload)?)?,
+            Response::Snap,
+        ),
+        "defaults" => {
+            let req: DefaultsRequest = request(kind, payload)?;
+            let d = defaults(&req.tool)?;
+            boxed(crate::core::job::OneShot::new(move || Ok(d)), |d| {
+                Response::Defaults(Box::new(d))
+            })
+        }
+        #[cfg(feature = "test-hooks")]
+        "debug-abort" => boxed(DebugAbort::new(request(kind, payload)?), |()| {
+            Response::Nothing
+        }),
+        other => return Err(unknown_kind(other)),
+    })
+}
+
+/// Deserialise a request, turning serde's error into a typed one that
+/// names the kind and the field.
+pub fn request<'de, T: Deserialize<'de>, D: Deserializer<'de>>(
+    kind: &str,
+    payload: D,
+) -> Result<T> {
+    serde_path_to_error::deserialize(payload).map_err(|e| {
+        let field = dotted(e.path());
+        let mut err = humanise(kind, &field, &e.inner().to_string());
+        if !field.is_empty() {
+            err = err.at(field);
+        }
+        err
+    })
+}
+
+fn serde_error(kind: &str, e: impl std::fmt::Display) -> Error {
+    humanise(kind, "", &e.to_string())
+}
+
+/// `params.d_max`, `points.3` (no leading dot; empty at the root).
+fn dotted(path: &serde_path_to_error::Path) -> String {
+    use serde_path_to_error::Segment;
+    path.iter()
+        .filter_map(|s| match s {
+            Segment::Seq { index } => Some(index.to_string()),
+            Segment::Map { key } | Segment::Enum { variant: key } => Some(key.clone()),
+            Segment::Unknown => None,
+        })
+        .collect::<Vec<_>>()
+        .join(".")
+}
+
+/// What a serde "expected" clause asks for, in words.
+fn wanted(expected: &str) -> String {
+    let e = expected.trim();
+    let words = match e {
+        "a string" | "a borrowed string" | "a character" => "text",
+        "f64" | "f32" => "a number",
+        "u8" | "u16" | "u32" | "u64" | "usize" => "a whole number ≥ 0",
+        "i8" | "i16" | "i32" | "i64" | "isize" => "a whole number",
+        "a boolean" => "true or false",
+        "a sequence" => "a list",
+        "a map" => "an object",
+        "byte array" | "a byte array" | "a byte buf" | "bytes" => "bytes (a Uint8Array)",
+        _ if e.starts_with("struct ") => "an object",
+        _ if e.starts_with("a tuple of size ") || e.starts_with("an array of length ") => {
+            return format!("a list of {}", e.rsplit(' ').next().unwrap_or("?"));
+        }
+        _ => return e.to_string(),
+    };
+    words.to_string()
+}
+
+/// What serde says it got, in words.
+fn got(what: &str) -> String {
+    match what.trim() {
+        "unit value" | "null" => "null".into(),
+        "floating point `NaN`" => "NaN".into(),
+        w => w.replace('`', "'"),
+    }
+}
+
+/// Rewrite serde's message ("invalid type: unit value, expected a
+/// string") as "pattern-info: `program` must be text (got null)".
+fn humanise(kind: &str, field: &str, msg: &str) -> Error {
+    let name = if field.is_empty() {
+        "the request".to_string()
+    } else {
+        format!("`{field}`")
+    };
+    // serde_wasm_bindgen's errors are JS `Error`s: "Error: invalid type: ...".
+    let msg = msg.strip_prefix("Error: ").unwrap_or(msg);
+    let msg = msg
+        .split(" at line ")
+        .next()
+        .unwrap_or(msg)
+        .trim()
+        .to_string();
+    let text = if let Some(rest) = msg
+        .strip_prefix("invalid type: ")
+        .or_else(|| msg.strip_prefix("invalid value: "))
+    {
+        match rest.split_once(", expected ") {
+            Some((g, e)) => format!("{name} must be {} (got {})", wanted(e), got(g)),
+            None => format!("{name}: {msg}"),
+        }
+    } else if let Some(rest) = msg.strip_prefix("missing field ") {
+        let f = rest.trim_matches('`');
+        let full = if field.is_empty() {
+            f.to_string()
+        } else {
+            format!("{field}.{f}")
+        };
+        format!("`{full}` is missing")
+    } else if let Some(rest) = msg.strip_prefix("unknown variant ") {
+        match rest.split_once(", expected ") {
+            Some((v, e)) => format!(
+                "{name} is {}; expected {}",
+                v.replace('`', "'"),
+                e.replace('`', "'")
+            ),
+            None => format!("{name}: {msg}"),
+        }
+    } else if let Some(rest) = msg.strip_prefix("unknown field ") {
+        match rest.split_once(", expected ") {
+            Some((f, e)) => format!(
+                "{name} has no field {}; expected {}",
+                f.replace('`', "'"),
+                e.replace('`', "'")
+            ),
+            None => format!("{name} has no field {rest}"),
+        }
+    } else if let Some(rest) = msg.strip_prefix("invalid length ") {
+        match rest.split_once(", expected ") {
+            Some((n, e)) => format!("{name} must be {} (got {n} items)", wanted(e)),
+            None => format!("{name}: {msg}"),
+        }
+    } else {
+        format!("{name}: {msg}")
+    };
+    Error::input(format!("{kind}: {text}"))
+}
+
+/// Run a request natively from its JSON payload, as the worker would
+/// receive it, and return the response as JSON (byte fields become arrays
+/// of numbers). For tests and fuzzers.
+#[cfg(feature = "json")]
+pub fn run_json(kind: &str, payload: &str) -> Result<serde_json::Value> {
+    let mut de = serde_json::Deserializer::from_str(payload);
+    let job = start(kind, &mut de)?;
+    de.end()
+        .map_err(|e| Error::input(format!("{kind}: the payload has trailing text ({e})")))?;
+    let out = crate::core::job::run_quietly(job)?;
+    serde_json::to_value(&out).map_err(|e| Error::input(format!("{kind}: {e}")))
+}
+
+impl<J: Job + ?Sized> Job for Box<J> {
+    type Output = J::Output;
+    fn step(&mut self) -> Result<Step<J::Output>> {
+        (**self).step()
+    }
+    fn outbox(&mut self) -> Option<Vec<f64>> {
+        (**self).outbox()
+    }
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        (**self).inbox(parts)
+    }
+}
+
+/// `debug-abort` (feature `test-hooks` only, never in the shipped wasm):
+/// runs a few busy slices and then panics, as a wasm trap would, so the
+/// e2e tests can check that the worker reports it and the pool replaces it.
+#[cfg(feature = "test-hooks")]
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(default)]
+pub struct DebugAbort {
+    /// Steps to run before aborting, so the page sees a job "mid-way".
+    steps: u32,
+    /// Abort by unbounded recursion instead of a panic: in wasm the engine
+    /// throws `RangeError: Maximum call stack size exceeded`.
+    overflow: bool,
+    #[serde(skip)]
+    left: u32,
+}
+
+#[cfg(feature = "test-hooks")]
+impl DebugAbort {
+    fn new(req: DebugAbort) -> Self {
+        DebugAbort {
+            steps: req.steps.max(1),
+            left: req.steps,
+            overflow: req.overflow,
+        }
+    }
+}
+
+#[cfg(feature = "test-hooks")]
+impl Job for DebugAbort {
+    type Output = ();
+    fn step(&mut self) -> Result<Step<()>> {
+        if self.left == 0 {
+            if self.overflow {
+                std::hint::black_box(recurse(std::hint::black_box(u64::MAX)));
+            }
+            panic!("debug-abort: deliberate crash requested by a test");
+        }
+        self.left -= 1;
+        // Stay busy for a moment so the job is observably "running".
+        let mut x = 0u64;
+        for i in 0..2_000_000u64 {
+            x = x.wrapping_mul(31).wrapping_add(i);
+        }
+        std::hint::black_box(x);
+        Ok(Step::Running(crate::core::job::Progress::new(
+            1.0 - self.left as f64 / self.steps as f64,
+            "about to crash",
+        )))
+    }
+}
+
+/// Recursion that never ends in practice (test hook only).
+#[cfg(feature = "test-hooks")]
+#[allow(unconditional_recursion)]
+fn recurse(n: u64) -> u64 {
+    if n == 0 {
+        return 0;
+    }
+    std::hint::black_box(recurse(std::hint::black_box(n - 1))).wrapping_add(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::job::run_quietly;
+
+    fn start_json(kind: &str, json: &str) -> Result<Box<RequestJob>> {
+        start(kind, &mut serde_json::Deserializer::from_str(json))
+    }
+
+    fn err(kind: &str, json: &str) -> Error {
+        match start_json(kind, json) {
+            Err(e) => e,
+            Ok(job) => match run_quietly(job) {
+                Err(e) => e,
+                Ok(_) => panic!("{kind} {json}: expected an error"),
+            },
+        }
+    }
+
+    #[test]
+    fn serde_errors_become_typed_errors_naming_the_field() {
+        let e = err("pattern-info", r#"{"program": null}"#);
+        assert_eq!(e.kind(), "invalid-input");
+        assert_eq!(e.field(), Some("program"));
+        assert_eq!(
+            e.to_string(),
+            "pattern-info: `program` must be text (got null)"
+        );
+        let e = err("fit", r#"{"program": "x", "loss": "l3"}"#);
+        assert_eq!(e.field(), Some("loss"));
+        assert!(
+            e.to_string()
+                .starts_with("fit: `loss` is 'l3'; expected one of 'sdf'"),
+            "{e}"
+        );
+        let e = err("pixel", r#"{"params": {"d_max": "far"}}"#);
+        assert_eq!(e.field(), Some("params.d_max"));
+        assert!(e.to_string().contains("must be a number"), "{e}");
+        let e = err("pixel", r#"{"params": {"dmax": 3}}"#);
+        assert_eq!(e.field(), Some("params.dmax"));
+        let e = err("fit-eval", r#"{"program": "x", "seed": -1}"#);
+        assert_eq!(e.field(), Some("seed"));
+        assert!(e.to_string().contains("whole number ≥ 0"), "{e}");
+        let e = err("render-pattern", "42");
+        assert_eq!(e.field(), None);
+        assert!(
+            e.to_string()
+                .starts_with("render-pattern: the request must be an object"),
+            "{e}"
+        );
+        let e = err("no-such-kind", "{}");
+        assert!(
+            e.to_string()
+                .contains("unknown request kind 'no-such-kind'"),
+            "{e}"
+        );
+        #[cfg(not(feature = "test-hooks"))]
+        assert!(err("debug-abort", r#"{"steps": 1}"#)
+            .to_string()
+            .contains("unknown request kind"));
+    }
+
+    #[test]
+    fn aliases_and_units_are_part_of_the_request() {
+        let r: pattern::FitRequest = request(
+            "fit",
+            &mut serde_json::Deserializer::from_str(r#"{"init": "ga", "units": "canvas"}"#),
+        )
+        .unwrap();
+        assert_eq!(
+            (r.init, r.units),
+            (
+                pattern::Init::Genetic,
+                crate::pattern::loss::SdfUnits::Canvas
+            )
+        );
+        let r: pattern::FitRequest = request(
+            "fit",
+            &mut serde_json::Deserializer::from_str(r#"{"init": "nm", "budget": "paper"}"#),
+        )
+        .unwrap();
+        assert_eq!(r.init, pattern::Init::NelderMead);
+        assert_eq!(r.options().unwrap().ga.population, 250);
+    }
+
+    #[test]
+    fn every_kind_has_defaults_and_the_defaults_are_the_request_defaults() {
+        for kind in KINDS {
+            let d = defaults(kind).unwrap();
+            serde_json::to_value(&d).unwrap();
+        }
+        let v = serde_json::to_value(defaults("fit").unwrap()).unwrap();
+        assert_eq!(v["request"]["budget"], "quick");
+        assert_eq!(v["request"]["seed"], 1);
+        assert_eq!(v["request"]["tolerance"], 60.0);
+        assert_eq!(v["request"]["init"], "genetic");
+        assert_eq!(v["budgets"]["paper"]["population"], 250);
+        assert_eq!(v["budgets"]["quick"]["grid"], 64);
+        let v = serde_json::to_value(defaults("pixel").unwrap()).unwrap();
+        assert_eq!(
+            v["request"]["params"],
+            serde_json::to_value(crate::pixel::PixelParams::default()).unwrap()
+        );
+        assert_eq!(v["request"]["params"]["annotation_scale"], 4);
+        assert_eq!(v["request"]["params"]["seed"], 0);
+        let v = serde_json::to_value(defaults("inspect").unwrap()).unwrap();
+        assert_eq!(v["request"]["tolerance"], 24.0);
+        assert_eq!(err("defaults", r#"{"tool": "nope"}"#).field(), Some("tool"));
+    }
+
+    #[cfg(feature = "json")]
+    #[test]
+    fn run_json_serves_every_kind_natively() {
+        let gens = run_json("pattern-generators", "null").unwrap();
+        assert!(gens.as_array().unwrap().len() >= 3);
+        let src = crate::pattern::generators::generator("circles-grid")
+            .unwrap()
+            .source;
+        let program = serde_json::to_string(src).unwrap();
+        let info = run_json("pattern-info", &format!(r#"{{"program": {program}}}"#)).unwrap();
+        assert_eq!(info["params"].as_array().unwrap().len(), 5);
+        let r = run_json(
+            "render-pattern",
+            &format!(r#"{{"program": {program}, "size": 16}}"#),
+        )
+        .unwrap();
+        assert_eq!(r["width"], 16);
+        assert_eq!(r["rgba"].as_array().unwrap().len(), 16 * 16 * 4);
+        assert!(r["svg"].as_str().unwrap().contains("<svg"));
+        let d = run_json("defaults", r#"{"tool": "render-pattern"}"#).unwrap();
+        assert_eq!(d["request"]["size"], 512);
+        let e = run_json("inspect", r#"{"bytes": [1, 2, 3]}"#).unwrap_err();
+        assert_eq!(e.field(), Some("bytes"));
+        let e = run_json("inspect", r#"{} x"#).unwrap_err();
+        assert!(e.to_string().contains("trailing"), "{e}");
+    }
+}
