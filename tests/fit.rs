@@ -367,8 +367,7 @@ fn pipeline_gradients_match_central_differences() {
 /// its fill colour, then a stroked shape within half its width of the
 /// shape's outline paints its stroke colour; the last paint wins.
 mod painter {
-    use filigree::pattern::record::{BoolOp, Geom, Recording};
-    use filigree::pattern::sdf::PrimKind;
+    use filigree::pattern::record::{BoolOp, Geom, PrimKind, Recording};
 
     type P = [f64; 2];
 
