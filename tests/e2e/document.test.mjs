@@ -366,24 +366,31 @@ test('when storage hangs the panels still work and say plainly that they cannot 
 });
 
 test('the app in an about:blank host loads and works', async () => {
-  const page = await env.newPage({ path: null });
-  await page.goto('about:blank');
-  await page.setContent(`<iframe src="${env.url}#tool=fit" style="width:1260px;height:780px;border:0"></iframe>`);
-  const frame = await (await page.waitForSelector('iframe')).contentFrame();
-  await frame.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 20000 });
-  await frame.click('button[data-act=make-target]');
-  await frame.waitForFunction(() => window.filigreeFit.state().truth !== null);
-  // Whether this host lets the frame store or not, the page says the truth.
-  const canStore = await frame.evaluate(async () => {
-    try {
-      await new Promise((resolve, reject) => {
-        const r = indexedDB.open('probe');
-        r.onsuccess = resolve; r.onerror = reject;
-        setTimeout(() => reject(new Error('timeout')), 1500);
-      });
-      return true;
-    } catch { return false; }
-  });
-  await frame.waitForTimeout(2000);
-  assert.equal(await frame.isHidden('[data-testid=doc-note]'), canStore, `storage ${canStore ? 'works' : 'is blocked'} here`);
+  // An opaque about:blank page framing the app (Chromium's local-network
+  // checks would refuse a localhost frame in it; a deployed app is not local).
+  const blankEnv = await launch({ args: ['--disable-features=LocalNetworkAccessChecks'] });
+  try {
+    const page = await blankEnv.newPage({ path: null });
+    await page.goto('about:blank');
+    await page.setContent(`<iframe src="${blankEnv.url}#tool=fit" style="width:1260px;height:780px;border:0"></iframe>`);
+    const frame = await (await page.waitForSelector('iframe')).contentFrame();
+    await frame.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 20000 });
+    await frame.click('button[data-act=make-target]');
+    await frame.waitForFunction(() => window.filigreeFit.state().truth !== null);
+    // Whether this host lets the frame store or not, the page says the truth.
+    const canStore = await frame.evaluate(async () => {
+      try {
+        await new Promise((resolve, reject) => {
+          const r = indexedDB.open('probe');
+          r.onsuccess = resolve; r.onerror = reject;
+          setTimeout(() => reject(new Error('timeout')), 1500);
+        });
+        return true;
+      } catch { return false; }
+    });
+    await frame.waitForTimeout(2000);
+    assert.equal(await frame.isHidden('[data-testid=doc-note]'), canStore, `storage ${canStore ? 'works' : 'is blocked'} here`);
+  } finally {
+    await blankEnv.close();
+  }
 });
