@@ -14,6 +14,7 @@ import path from 'node:path';
 
 const root = process.argv[2];
 const env = await launch(root ? { root } : {});
+env.browser.on('disconnected', () => console.log('browser disconnected'));
 const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
 const p90 = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length * 0.9)]; };
 
@@ -22,6 +23,9 @@ try {
     const file = path.join(os.tmpdir(), `latency-${side}.png`);
     fs.writeFileSync(file, await bigPng(side, side));
     const page = await env.newPage({ path: '#tool=pixel' });
+    page.on('crash', () => console.log('page crashed', side));
+    page.on('close', () => console.log('page closed', side));
+    page.on('console', (m) => m.type() === 'error' && console.log('[console]', m.text()));
     await page.waitForFunction(() => window.filigreePixel?.state()?.example === 'fish', null, { timeout: 30000 });
     await page.setInputFiles('input[data-input=source]', file);
     await page.waitForFunction((n) => window.filigreePixel.state()?.mask.width === n
