@@ -94,7 +94,8 @@ const defaultsCache = new Map();
 /** The tool's default request(s), from the core (`defaults` request kind). */
 export function coreDefaults(pool, tool) {
   if (!defaultsCache.has(tool)) {
-    const p = pool.run('defaults', { tool }).catch((err) => {
+    // The core answers {tool, request, budgets?}: the tool's default request.
+    const p = pool.run('defaults', { tool }).then((d) => d?.request ?? d).catch((err) => {
       if (err.kind === 'crash' || err.kind === 'cancelled') { defaultsCache.delete(tool); throw err; }
       return structuredClone(TEMPORARY_DEFAULTS[tool] ?? {});
     });
