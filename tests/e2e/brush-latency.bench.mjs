@@ -19,7 +19,7 @@ const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.
 const p90 = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length * 0.9)]; };
 
 try {
-  for (const side of [1024, 4096]) {
+  for (const side of (process.env.SIDES || "1024,4096").split(",").map(Number)) {
     const file = path.join(os.tmpdir(), `latency-${side}.png`);
     fs.writeFileSync(file, await bigPng(side, side));
     const page = await env.newPage({ path: '#tool=pixel' });
