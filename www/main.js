@@ -5,6 +5,7 @@ import { WorkerPool } from './client.js';
 import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
+import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 
 const TOOLS = [pixelTool, fitTool, inspectTool];
 
@@ -81,11 +82,13 @@ for (const tool of TOOLS) {
   b.onclick = () => selectTool(tool.id);
   $('#tools').append(b);
 }
-selectTool(new URLSearchParams(location.hash.slice(1)).get('tool'));
+const embed = embedOptions(); // ?embed=1: one tool, no chrome, no storage (embed-mode.js)
+if (embed) enterEmbed(app, embed, selectTool);
+else selectTool(new URLSearchParams(location.hash.slice(1)).get('tool'));
 addEventListener('hashchange', () => selectTool(new URLSearchParams(location.hash.slice(1)).get('tool')));
 
 // Service worker: offline after the first visit; updates are offered, never forced.
-if ('serviceWorker' in navigator) {
+if (serviceWorkerAllowed(embed)) {
   const offerUpdate = (reg) => {
     if (!reg.waiting || !navigator.serviceWorker.controller) return;
     toast('A new version of Filigree is ready.', {

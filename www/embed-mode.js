@@ -1,0 +1,211 @@
+// Embed mode (MISSION S7): `index.html?embed=1#<share fragment>` shows ONE
+// tool without the app chrome, for tutorial pages (see www/embed.js, the
+// <filigree-embed> element that frames it).
+//
+//   ?embed=1                     read-only: the result is shown, controls are inert
+//   ?embed=1&mode=interactive    controls live
+//
+// Either way an embedded instance never touches the user's storage: the
+// autosave database is refused before any tool mounts (the tool works from
+// the link's state and says nothing is saved), `navigator.storage.persist()`
+// is not asked, and the service worker is not registered (from a third-party
+// frame it would control the user's full-app scope). "Open in Filigree"
+// opens the full app with the same state (the current one, when interactive).
+//
+// main.js calls embedOptions() once, enterEmbed() instead of its first
+// selectTool(), and serviceWorkerAllowed() before registering the worker.
+
+// ---- STAND-IN until H5's www/share.js and app.openState land on main; delete then.
+// Same fragment format as share.js: tool=<id>&share=<base64url(deflate-raw(
+// [u32 LE json length][json {format, tool, version, state, blobs}][blobs…]))>.
+function hasShare(fragment) {
+  return new URLSearchParams(String(fragment ?? '').replace(/^#/, '')).has('share');
+}
+async function decodeShare(fragment) {
+  const bad = (why) => new Error(`This link is damaged or not a Filigree link: ${why}.`);
+  const data = new URLSearchParams(String(fragment).replace(/^#/, '')).get('share') || '';
+  if (!/^[A-Za-z0-9_-]+$/.test(data)) throw bad('it carries no shared state');
+  const bin = atob(data.replace(/-/g, '+').replace(/_/g, '/') + '==='.slice((data.length + 3) % 4));
+  const packed = Uint8Array.from(bin, (c) => c.charCodeAt(0));
+  let raw;
+  try {
+    const stream = new Blob([packed]).stream().pipeThrough(new DecompressionStream('deflate-raw'));
+    raw = new Uint8Array(await new Response(stream).arrayBuffer());
+  } catch {
+    throw bad('its compressed data is corrupt');
+  }
+  const len = new DataView(raw.buffer).getUint32(0, true);
+  const doc = JSON.parse(new TextDecoder().decode(raw.subarray(4, 4 + len)));
+  let at = 4 + len;
+  const blobs = (doc.blobs || []).map((n) => raw.slice(at, (at += n)));
+  const unpack = (v) => (Array.isArray(v) ? v.map(unpack)
+    : v && typeof v === 'object' ? (typeof v.$blob === 'number' ? blobs[v.$blob]
+      : Object.fromEntries(Object.entries(v).map(([k, x]) => [k, unpack(x)]))) : v);
+  return { tool: doc.tool, version: doc.version, state: unpack(doc.state) };
+}
+/** Stand-in for app.openState: switch tool, then hand the panel the state as a project file. */
+function openStateStandIn(selectTool) {
+  return async (tool, state) => {
+    selectTool(tool);
+    const input = document.querySelector('#panel [data-input=project]');
+    if (!input) return;
+    const text = JSON.stringify({ format: 'filigree-project', version: 1, tool, state });
+    const dt = new DataTransfer();
+    dt.items.add(new File([text], 'embed.filigree.json', { type: 'application/json' }));
+    input.files = dt.files;
+    input.dispatchEvent(new Event('change', { bubbles: true }));
+  };
+}
+// ---- end of stand-in
+
+/** The embed settings in `loc`'s query, or null when the page is the full app. */
+export function embedOptions(loc = location) {
+  const query = new URLSearchParams(loc.search);
+  if (query.get('embed') !== '1') return null;
+  const mode = query.get('mode') === 'interactive' ? 'interactive' : 'readonly';
+  return { mode, readOnly: mode === 'readonly', fragment: loc.hash.replace(/^#/, '') };
+}
+
+/**
+ * Whether to register the service worker: never when embedded, and not where
+ * the browser refuses it outright (sandboxed or opaque-origin documents throw
+ * on merely reading `navigator.serviceWorker`).
+ */
+export function serviceWorkerAllowed(embed) {
+  if (embed) return false;
+  try {
+    return Boolean(navigator.serviceWorker);
+  } catch {
+    return false;
+  }
+}
+
+/** True when this document runs inside a frame (any origin). */
+export function isFramed() {
+  try {
+    return window.top !== window.self;
+  } catch {
+    return true;
+  }
+}
+
+/** The full app's URL (no embed parameters) carrying `fragment`. */
+export function fullAppUrl(fragment, loc = location) {
+  const url = new URL(loc.href);
+  url.searchParams.delete('embed');
+  url.searchParams.delete('mode');
+  url.hash = fragment || '';
+  return url.href;
+}
+
+/**
+ * Refuse the app's storage for this document: IndexedDB opens throw a
+ * SecurityError (what a sandboxed frame does; the autosave treats it as
+ * "cannot save here") and persist() is not asked (it may prompt). The
+ * user's own autosave, on the same origin, stays exactly as it was.
+ */
+export function gateStorage() {
+  if (typeof IDBFactory !== 'undefined') {
+    IDBFactory.prototype.open = function open() {
+      throw new DOMException('an embedded Filigree does not use storage', 'SecurityError');
+    };
+  }
+  if (navigator.storage) {
+    try {
+      Object.defineProperty(navigator.storage, 'persist', { value: async () => false, configurable: true });
+    } catch { /* not configurable: nothing calls it without a change anyway */ }
+  }
+}
+
+const LOGO = '<svg viewBox="0 0 32 32" width="20" height="20" aria-hidden="true"><g fill="none" stroke="currentColor" stroke-width="2.2" stroke-linecap="round"><path d="M16 3c6 5 6 21 0 26M16 3c-6 5-6 21 0 26M3 16c5-6 21-6 26 0M3 16c5 6 21 6 26 0"/><circle cx="16" cy="16" r="3"/></g></svg>';
+
+// Embed-only styles live here, not in styles.css: they apply only under
+// html[data-embed] and ship with the code that sets it.
+const EMBED_CSS = `
+html[data-embed] .app-header, html[data-embed] #tools { display: none !important; }
+html[data-embed] main { max-width: none; padding: .6rem; }
+html[data-embed] [data-act=save-project], html[data-embed] [data-act=open-project],
+html[data-embed] label:has(> [data-input=project]), html[data-embed] [data-act=copy-link],
+html[data-embed] [data-role=storage-note] { display: none !important; }
+.embed-bar { display: flex; align-items: center; gap: .6rem; padding: .4rem .8rem; min-height: 2.6rem;
+  background: var(--panel, #1f1c29); border-bottom: 1px solid var(--line, #363047); position: sticky; top: 0; z-index: 5; }
+.embed-bar .logo { color: var(--accent, #c9a2ff); display: inline-flex; }
+.embed-bar .name { font-weight: 600; }
+.embed-bar .mode { font-size: .78rem; color: var(--muted, #a49cb8); border: 1px solid var(--line, #363047);
+  border-radius: 99px; padding: .05rem .55rem; }
+.embed-bar .open { margin-left: auto; color: var(--accent, #c9a2ff); font-weight: 600; text-decoration: none;
+  border: 1px solid var(--accent, #c9a2ff); border-radius: 7px; padding: .25rem .7rem; white-space: nowrap; }
+.embed-bar .open:hover, .embed-bar .open:focus-visible { background: var(--accent, #c9a2ff); color: #1b1526; }
+.embed-note { margin: .6rem; }
+html[data-embed=readonly] #panel :is(input, select, textarea, button, .button-like, [role=toolbar]) { opacity: .55; }
+html[data-embed=readonly] #panel canvas { cursor: default !important; }
+`;
+
+/**
+ * Turn the page into an embed: chrome, storage gate, the link's state.
+ * `selectTool(id)` is the shell's tool switcher (used when the link carries
+ * no state, and by the stand-in below).
+ */
+export async function enterEmbed(app, embed, selectTool) {
+  gateStorage();
+  app.embed = embed;
+  app.openState ??= openStateStandIn(selectTool); // STAND-IN: delete with the block above
+  const root = document.documentElement;
+  root.dataset.embed = embed.mode;
+  const style = document.createElement('style');
+  style.textContent = EMBED_CSS;
+  document.head.append(style);
+
+  const params = new URLSearchParams(embed.fragment);
+  const bar = document.createElement('div');
+  bar.className = 'embed-bar';
+  bar.setAttribute('role', 'banner');
+  const open = document.createElement('a');
+  open.className = 'open';
+  open.target = '_blank';
+  open.rel = 'noopener';
+  open.textContent = 'Open in Filigree ↗';
+  open.href = fullAppUrl(embed.fragment);
+  bar.innerHTML = `<span class="logo">${LOGO}</span><span class="name"></span><span class="mode"></span>`;
+  bar.querySelector('.mode').textContent = embed.readOnly ? 'view only' : 'interactive — not saved';
+  bar.querySelector('.mode').title = embed.readOnly
+    ? 'This embed shows a result; open it in Filigree to change it.'
+    : 'Changes here are not saved; open in Filigree to keep working.';
+  bar.append(open);
+  document.body.prepend(bar);
+  const panel = document.querySelector('#panel');
+  // Read-only: everything in the tool is shown but cannot be focused or changed.
+  if (embed.readOnly && panel) panel.inert = true;
+
+  // Interactive: the link carries what the reader made, fetched as they reach for it.
+  if (!embed.readOnly) {
+    const refresh = async () => {
+      try {
+        const share = await app.currentShare?.();
+        if (share?.fragment) open.href = fullAppUrl(share.fragment);
+      } catch { /* too big for a link or not ready: keep the embed's own state */ }
+    };
+    for (const type of ['pointerenter', 'focus', 'pointerdown']) open.addEventListener(type, refresh);
+  }
+
+  const label = (tool) => document.querySelector(`#tools [data-tool="${CSS.escape(tool || '')}"]`)?.textContent || tool;
+  let tool = params.get('tool');
+  try {
+    if (!hasShare(embed.fragment)) {
+      selectTool(tool);
+    } else {
+      const shared = await decodeShare(embed.fragment);
+      tool = shared.tool;
+      await app.openState(shared.tool, shared.state, { readOnly: embed.readOnly, source: 'embed', version: shared.version });
+    }
+  } catch (err) {
+    selectTool(tool);
+    const note = document.createElement('div');
+    note.className = 'error embed-note';
+    note.setAttribute('role', 'alert');
+    note.textContent = `${err.message} The tool opens with its defaults.`;
+    panel?.before(note);
+  }
+  bar.querySelector('.name').textContent = label(tool) || 'Filigree';
+  root.dataset.embedReady = '1';
+}
