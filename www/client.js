@@ -10,6 +10,13 @@ const WORKER_URL = new URL('./worker.js', import.meta.url);
 // its worker is terminated (the hard stop).
 const HARD_STOP_MS = 1000;
 
+/** A JobError from the worker's `{kind, message, line?, column?, field?}`. */
+function jobError(e) {
+  const err = new JobError(String(e?.message ?? 'the job failed'), e?.kind || 'invalid-input');
+  for (const k of ['line', 'column', 'field']) if (e?.[k] != null) err[k] = e[k];
+  return err;
+}
+
 class Slot {
   constructor(pool, index) {
     this.pool = pool;
@@ -42,7 +49,7 @@ class Slot {
     if (msg.type === MSG.PROGRESS) job.onProgress?.(msg.progress);
     else if (msg.type === MSG.NEED) this.answer(job, msg.need);
     else if (msg.type === MSG.RESULT) this.finish(() => job.resolve(msg.result));
-    else if (msg.type === MSG.ERROR) this.finish(() => job.reject(new JobError(msg.error.message, msg.error.kind)));
+    else if (msg.type === MSG.ERROR) this.finish(() => job.reject(jobError(msg.error)));
     else if (msg.type === MSG.PANIC) this.crash(msg.message);
   }
 

@@ -5,58 +5,17 @@
 //   ?embed=1                     read-only: the result is shown, controls are inert
 //   ?embed=1&mode=interactive    controls live
 //
-// Either way an embedded instance never touches the user's storage: the
-// autosave database is refused before any tool mounts (the tool works from
-// the link's state and says nothing is saved), `navigator.storage.persist()`
-// is not asked, and the service worker is not registered (from a third-party
-// frame it would control the user's full-app scope). "Open in Filigree"
-// opens the full app with the same state (the current one, when interactive).
+// Either way an embedded instance never touches the user's storage: main.js
+// makes the document controller with `persist: false` (no autosave is read
+// or written, no `navigator.storage.persist()`), and the service worker is
+// not registered (from a third-party frame it would control the user's
+// full-app scope). "Open in Filigree" opens the full app with the same state
+// (the current one, when interactive).
 //
-// main.js calls embedOptions() once, enterEmbed() instead of its first
-// selectTool(), and serviceWorkerAllowed() before registering the worker.
+// main.js calls embedOptions() once, enterEmbed() instead of its routing,
+// and serviceWorkerAllowed() before registering the worker.
 
-// ---- STAND-IN until H5's www/share.js and app.openState land on main; delete then.
-// Same fragment format as share.js: tool=<id>&share=<base64url(deflate-raw(
-// [u32 LE json length][json {format, tool, version, state, blobs}][blobs…]))>.
-function hasShare(fragment) {
-  return new URLSearchParams(String(fragment ?? '').replace(/^#/, '')).has('share');
-}
-async function decodeShare(fragment) {
-  const bad = (why) => new Error(`This link is damaged or not a Filigree link: ${why}.`);
-  const data = new URLSearchParams(String(fragment).replace(/^#/, '')).get('share') || '';
-  if (!/^[A-Za-z0-9_-]+$/.test(data)) throw bad('it carries no shared state');
-  const bin = atob(data.replace(/-/g, '+').replace(/_/g, '/') + '==='.slice((data.length + 3) % 4));
-  const packed = Uint8Array.from(bin, (c) => c.charCodeAt(0));
-  let raw;
-  try {
-    const stream = new Blob([packed]).stream().pipeThrough(new DecompressionStream('deflate-raw'));
-    raw = new Uint8Array(await new Response(stream).arrayBuffer());
-  } catch {
-    throw bad('its compressed data is corrupt');
-  }
-  const len = new DataView(raw.buffer).getUint32(0, true);
-  const doc = JSON.parse(new TextDecoder().decode(raw.subarray(4, 4 + len)));
-  let at = 4 + len;
-  const blobs = (doc.blobs || []).map((n) => raw.slice(at, (at += n)));
-  const unpack = (v) => (Array.isArray(v) ? v.map(unpack)
-    : v && typeof v === 'object' ? (typeof v.$blob === 'number' ? blobs[v.$blob]
-      : Object.fromEntries(Object.entries(v).map(([k, x]) => [k, unpack(x)]))) : v);
-  return { tool: doc.tool, version: doc.version, state: unpack(doc.state) };
-}
-/** Stand-in for app.openState: switch tool, then hand the panel the state as a project file. */
-function openStateStandIn(selectTool) {
-  return async (tool, state) => {
-    selectTool(tool);
-    const input = document.querySelector('#panel [data-input=project]');
-    if (!input) return;
-    const text = JSON.stringify({ format: 'filigree-project', version: 1, tool, state });
-    const dt = new DataTransfer();
-    dt.items.add(new File([text], 'embed.filigree.json', { type: 'application/json' }));
-    input.files = dt.files;
-    input.dispatchEvent(new Event('change', { bubbles: true }));
-  };
-}
-// ---- end of stand-in
+import { decodeShare, hasShare } from './share.js';
 
 /** The embed settings in `loc`'s query, or null when the page is the full app. */
 export function embedOptions(loc = location) {
@@ -67,12 +26,15 @@ export function embedOptions(loc = location) {
 }
 
 /**
- * Whether to register the service worker: never when embedded, and not where
- * the browser refuses it outright (sandboxed or opaque-origin documents throw
- * on merely reading `navigator.serviceWorker`).
+ * Whether to register the service worker. Not when embedded, not in a frame
+ * of another origin (the browser refuses or partitions it there, and it
+ * would claim the full app's scope from a third-party context), and not
+ * where merely reading `navigator.serviceWorker` throws or gives nothing
+ * (sandboxed and storage-blocked documents). Skipping is silent: the app
+ * works the same, only without offline.
  */
 export function serviceWorkerAllowed(embed) {
-  if (embed) return false;
+  if (embed || inCrossOriginFrame()) return false;
   try {
     return Boolean(navigator.serviceWorker);
   } catch {
@@ -80,10 +42,11 @@ export function serviceWorkerAllowed(embed) {
   }
 }
 
-/** True when this document runs inside a frame (any origin). */
-export function isFramed() {
+/** True inside a frame whose top page is another origin (or an opaque one). */
+export function inCrossOriginFrame() {
+  if (window.top === window.self) return false;
   try {
-    return window.top !== window.self;
+    return window.top.location.origin !== location.origin;
   } catch {
     return true;
   }
@@ -96,25 +59,6 @@ export function fullAppUrl(fragment, loc = location) {
   url.searchParams.delete('mode');
   url.hash = fragment || '';
   return url.href;
-}
-
-/**
- * Refuse the app's storage for this document: IndexedDB opens throw a
- * SecurityError (what a sandboxed frame does; the autosave treats it as
- * "cannot save here") and persist() is not asked (it may prompt). The
- * user's own autosave, on the same origin, stays exactly as it was.
- */
-export function gateStorage() {
-  if (typeof IDBFactory !== 'undefined') {
-    IDBFactory.prototype.open = function open() {
-      throw new DOMException('an embedded Filigree does not use storage', 'SecurityError');
-    };
-  }
-  if (navigator.storage) {
-    try {
-      Object.defineProperty(navigator.storage, 'persist', { value: async () => false, configurable: true });
-    } catch { /* not configurable: nothing calls it without a change anyway */ }
-  }
 }
 
 const LOGO = '<svg viewBox="0 0 32 32" width="20" height="20" aria-hidden="true"><g fill="none" stroke="currentColor" stroke-width="2.2" stroke-linecap="round"><path d="M16 3c6 5 6 21 0 26M16 3c-6 5-6 21 0 26M3 16c5-6 21-6 26 0M3 16c5 6 21 6 26 0"/><circle cx="16" cy="16" r="3"/></g></svg>';
@@ -142,14 +86,12 @@ html[data-embed=readonly] #panel canvas { cursor: default !important; }
 `;
 
 /**
- * Turn the page into an embed: chrome, storage gate, the link's state.
- * `selectTool(id)` is the shell's tool switcher (used when the link carries
- * no state, and by the stand-in below).
+ * Turn the page into an embed: chrome, then the link's state through
+ * `app.openState` (read-only or not). The document controller was made with
+ * `persist: false`, so nothing here is ever autosaved.
  */
-export async function enterEmbed(app, embed, selectTool) {
-  gateStorage();
+export async function enterEmbed(app, embed) {
   app.embed = embed;
-  app.openState ??= openStateStandIn(selectTool); // STAND-IN: delete with the block above
   const root = document.documentElement;
   root.dataset.embed = embed.mode;
   const style = document.createElement('style');
@@ -192,20 +134,22 @@ export async function enterEmbed(app, embed, selectTool) {
   let tool = params.get('tool');
   try {
     if (!hasShare(embed.fragment)) {
-      selectTool(tool);
+      await app.selectTool(tool);
     } else {
       const shared = await decodeShare(embed.fragment);
       tool = shared.tool;
       await app.openState(shared.tool, shared.state, { readOnly: embed.readOnly, source: 'embed', version: shared.version });
     }
   } catch (err) {
-    selectTool(tool);
+    await app.selectTool(tool);
     const note = document.createElement('div');
     note.className = 'error embed-note';
     note.setAttribute('role', 'alert');
     note.textContent = `${err.message} The tool opens with its defaults.`;
     panel?.before(note);
   }
+  // The shell rewrites the fragment to #tool=…; keep the state so a reload shows it again.
+  history.replaceState(null, '', `#${embed.fragment}`);
   bar.querySelector('.name').textContent = label(tool) || 'Filigree';
   root.dataset.embedReady = '1';
 }

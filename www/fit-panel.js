@@ -1,26 +1,28 @@
 // "Fit": find the parameters of a pattern program that best match a target
 // (MISSION F10). Pick or edit a program, draw the target with a brush in the
-// program's colours, upload an image, or make a target from chosen values;
-// the fit runs in workers with a live loss plot and the best pattern so far
-// drawn over the target.
-import { putRgba, hex } from './file-input.js';
-import { Autosave, History, projectText, parseProject, download } from './project.js';
+// program's colours, upload (or drop, or paste) an image, or make a target
+// from chosen values; the fit runs in workers with a live loss plot and the
+// best pattern so far drawn over the target. History, autosave, project
+// files and links come from the document controller (document.js).
+import { acceptFiles, putRgba, hex } from './file-input.js';
+import { download } from './project.js';
 import { LossPlot } from './loss-plot.js';
 
 const TARGET_SIZE = 256;
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
 const PREVIEW_EVERY_MS = 250;
+const BUDGETS = ['quick', 'paper'];
+const LOSSES = ['sdf', 'l1', 'pyramid', 'image'];
 
 const html = `
   <div class="fit-layout">
     <section class="card fit-program" aria-label="Pattern program">
-      <label class="inline">Generator <select name="generator" data-testid="fit-generator"></select></label>
+      <label class="inline">Generator <select name="generator" data-testid="fit-generator" data-field="generator"></select></label>
       <details class="program">
         <summary>Program</summary>
-        <textarea name="program" spellcheck="false" rows="16" data-testid="fit-program" aria-label="pattern program"></textarea>
+        <textarea name="program" spellcheck="false" rows="16" data-testid="fit-program" data-field="program" aria-label="pattern program"></textarea>
         <div class="row-buttons"><button type="button" data-act="apply-program">Apply program</button></div>
       </details>
-      <div class="error program-error" role="alert" data-testid="fit-program-error" hidden></div>
       <div class="muted program-facts" data-testid="fit-facts"></div>
       <h3>Parameters</h3>
       <form class="sliders" data-testid="fit-sliders"></form>
@@ -32,493 +34,670 @@ const html = `
       <div class="toolbar">
         <span class="swatches-inline" role="radiogroup" aria-label="Brush colour" data-testid="fit-brush-colours"></span>
         <label class="inline">size <input type="number" name="brush" min="1" max="64" value="12"></label>
-        <button type="button" data-act="undo" title="Undo (Ctrl+Z)">↶</button>
-        <button type="button" data-act="redo" title="Redo (Ctrl+Shift+Z)">↷</button>
         <button type="button" data-act="clear-target">Clear</button>
-        <label class="button-like">Upload target <input type="file" accept="image/*" data-input="target" hidden></label>
       </div>
       <div class="stack checker">
-        <canvas class="target" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-target" aria-label="target: draw here"></canvas>
+        <canvas class="target" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-target" aria-label="target: draw here, or drop an image"></canvas>
         <canvas class="overlay" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-overlay" aria-hidden="true"></canvas>
       </div>
       <label class="inline">overlay <input type="range" name="overlay" min="0" max="1" step="0.05" value="0.6"></label>
-      <div class="error target-error" role="alert" hidden></div>
     </section>
     <section class="card fit-run" aria-label="Fit">
       <div class="fit-settings">
-        <label class="inline">Budget <select name="budget"><option value="quick">quick</option><option value="paper">paper</option></select></label>
-        <label class="inline">Loss <select name="loss">
+        <label class="inline">Budget <select name="budget" data-field="settings.budget"><option value="quick">quick</option><option value="paper">paper</option></select></label>
+        <label class="inline">Loss <select name="loss" data-field="settings.loss">
           <option value="sdf">SDF (paper)</option><option value="l1">L1</option>
           <option value="pyramid">Gaussian pyramid</option><option value="image">image L2</option></select></label>
-        <label class="inline">Seed <input type="number" name="seed" min="0" value="1"></label>
+        <label class="inline">Seed <input type="number" name="seed" min="0" value="1" data-field="settings.seed"></label>
       </div>
       <div class="row-buttons">
-        <button type="button" class="primary" data-act="fit">Fit</button>
+        <button type="button" class="primary" data-act="fit">Run fit</button>
         <button type="button" data-act="cancel" disabled>Cancel</button>
       </div>
       <progress max="1" value="0"></progress>
       <div class="status muted" data-testid="fit-status" aria-live="polite"></div>
-      <div class="error fit-error" role="alert" hidden></div>
       <canvas class="plot" data-testid="fit-plot" aria-label="loss plot"></canvas>
       <table class="results" data-testid="fit-results"><thead><tr><th>parameter</th><th>fitted</th><th>truth</th></tr></thead><tbody></tbody></table>
       <div class="row-buttons">
         <button type="button" data-act="export-svg">Export SVG</button>
         <button type="button" data-act="export-json">Export JSON</button>
-        <button type="button" data-act="save-project">Save project</button>
-        <label class="button-like">Open project <input type="file" accept=".json,application/json" data-input="project" hidden></label>
       </div>
     </section>
   </div>`;
 
-export default {
-  id: 'fit',
-  title: 'Fit',
-  mount(el, { pool }) {
-    el.innerHTML = html;
-    const q = (s) => el.querySelector(s);
-    const targetCanvas = q('canvas.target');
-    const tctx = targetCanvas.getContext('2d', { willReadFrequently: true });
-    const overlay = q('canvas.overlay');
-    const plot = new LossPlot(q('canvas.plot'));
-    const autosave = new Autosave('fit');
+// ---- program facts, shared by the view and the state's conversions ------------------
 
-    // The document (saved, undoable): program, values, target pixels, settings, result.
-    let history = new History(null);
-    let info = null; // pattern-info of the current program
-    let generators = [];
-    let brush = 0; // index into info.colours (last = background)
-    let running = null;
-    let previewBusy = false;
-    let previewWanted = null;
-    let lastPreviewAt = 0;
+/** The integer values of `values` by name, as pattern-info and fit want them. */
+function named(info, values, { integersOnly = false } = {}) {
+  return Object.fromEntries(info.params
+    .map((p, i) => [p.name, values[i], p.integer])
+    .filter(([, , integer]) => !integersOnly || integer)
+    .map(([n, v]) => [n, v]));
+}
 
-    const doc = () => history.present;
-    // Requests name their parameters; the document keeps values in declaration order.
-    const named = (values, { integersOnly = false } = {}) => Object.fromEntries(
-      info.params.map((p, i) => [p.name, values[i]]).filter(([, ], i) => !integersOnly || info.params[i].integer),
-    );
-    // Palette of the program: index 0 is the background.
-    const palette = () => info.colours.map(rgbOf);
-    const showError = (sel, message) => { q(sel).hidden = !message; q(sel).textContent = message || ''; };
-    const status = (t) => { q('[data-testid=fit-status]').textContent = t; };
+/** pattern-info of `program` with the integer parameters among `values` (when they belong to it). */
+function programInfo(run, program, ints = {}) {
+  return run('pattern-info', { program, params: ints });
+}
 
-    function commit(next, opts) {
-      history.push(next, opts);
-      autosave.save(doc());
-      q('[data-act=undo]').disabled = !history.canUndo;
-      q('[data-act=redo]').disabled = !history.canRedo;
+function backgroundTarget(info) {
+  const [r, g, b] = rgbOf(info.colours[0]);
+  const rgba = new Uint8Array(TARGET_SIZE * TARGET_SIZE * 4);
+  for (let i = 0; i < rgba.length; i += 4) { rgba[i] = r; rgba[i + 1] = g; rgba[i + 2] = b; rgba[i + 3] = 255; }
+  return { width: TARGET_SIZE, height: TARGET_SIZE, rgba };
+}
+
+/** A fresh document for generator `g` (values at its defaults, an empty target). */
+async function generatorDoc(run, g, base) {
+  const info = await programInfo(run, g.source);
+  return {
+    ...base, generator: g.name, program: g.source, values: info.params.map((p) => p.default),
+    target: backgroundTarget(info), truth: null, result: null,
+  };
+}
+
+// ---- the state's schema ----------------------------------------------------------
+
+function invalid(field, why) {
+  const e = new Error(`${field} ${why}`);
+  e.field = field;
+  return e;
+}
+
+const finiteList = (v, field, max = 1000) => {
+  if (!Array.isArray(v) || v.length > max || !v.every(Number.isFinite)) throw invalid(field, `must be a list of at most ${max} finite numbers`);
+  return [...v];
+};
+
+/** A fit-state `raw` checked field by field; throws an Error naming the field at fault. */
+export function validateFit(raw) {
+  if (!raw || typeof raw !== 'object' || Array.isArray(raw)) throw invalid('state', 'is not a Fit document');
+  const generator = raw.generator ?? null;
+  if (generator !== null && (typeof generator !== 'string' || generator.length > 100)) throw invalid('generator', 'must be a generator name');
+  if (typeof raw.program !== 'string' || !raw.program.trim() || raw.program.length > 200000) throw invalid('program', 'must be the text of a program (at most 200000 characters)');
+  const values = finiteList(raw.values, 'values');
+  let target = null;
+  if (raw.target != null) {
+    const t = raw.target;
+    if (t.width !== TARGET_SIZE || t.height !== TARGET_SIZE) throw invalid('target', `must be ${TARGET_SIZE}×${TARGET_SIZE} pixels`);
+    if (!(t.rgba instanceof Uint8Array) || t.rgba.length !== TARGET_SIZE * TARGET_SIZE * 4) throw invalid('target.rgba', `must hold ${TARGET_SIZE * TARGET_SIZE * 4} bytes`);
+    target = { width: TARGET_SIZE, height: TARGET_SIZE, rgba: t.rgba };
+  }
+  const truth = raw.truth == null ? null : finiteList(raw.truth, 'truth');
+  if (truth && truth.length !== values.length) throw invalid('truth', `must have one value per parameter (${values.length})`);
+  let result = null;
+  if (raw.result != null) {
+    const r = raw.result;
+    if (typeof r !== 'object') throw invalid('result', 'is not a fit result');
+    const params = finiteList(r.params, 'result.params');
+    if (!Number.isFinite(r.loss) || r.loss < 0) throw invalid('result.loss', 'must be a finite number ≥ 0');
+    if (!Number.isInteger(r.evaluations ?? 0) || (r.evaluations ?? 0) < 0) throw invalid('result.evaluations', 'must be a whole number ≥ 0');
+    const names = r.names == null ? undefined : r.names.map((n) => String(n));
+    result = { params, loss: r.loss, names, evaluations: r.evaluations ?? 0 };
+  }
+  const s = raw.settings;
+  if (!s || typeof s !== 'object') throw invalid('settings', 'are missing');
+  if (!BUDGETS.includes(s.budget)) throw invalid('settings.budget', `must be one of ${BUDGETS.join(', ')}`);
+  if (!LOSSES.includes(s.loss)) throw invalid('settings.loss', `must be one of ${LOSSES.join(', ')}`);
+  if (!Number.isInteger(s.seed) || s.seed < 0 || s.seed > 2 ** 53) throw invalid('settings.seed', 'must be a whole number ≥ 0');
+  return { generator, program: raw.program, values, target, truth, result, settings: { budget: s.budget, loss: s.loss, seed: s.seed } };
+}
+
+/** A target as palette indices (a hand-drawn one has a few colours, so a link stays small). */
+function indexTarget(t) {
+  const px = new Uint32Array(t.rgba.buffer, t.rgba.byteOffset, t.rgba.length / 4);
+  const palette = [];
+  const index = new Map();
+  const out = new Uint8Array(px.length);
+  for (let i = 0; i < px.length; i++) {
+    let k = index.get(px[i]);
+    if (k === undefined) {
+      if (palette.length === 256) return null;
+      k = palette.length;
+      index.set(px[i], k);
+      palette.push(px[i]);
     }
+    out[i] = k;
+  }
+  return { palette: new Uint8Array(new Uint32Array(palette).buffer), indices: out };
+}
 
-    // ---- program ----------------------------------------------------------------
+function unindexTarget(x) {
+  if (!(x?.palette instanceof Uint8Array) || x.palette.length % 4 || !(x.indices instanceof Uint8Array) || x.indices.length !== TARGET_SIZE * TARGET_SIZE) {
+    throw invalid('target', 'is damaged');
+  }
+  const rgba = new Uint8Array(TARGET_SIZE * TARGET_SIZE * 4);
+  const n = x.palette.length / 4;
+  for (let i = 0; i < x.indices.length; i++) {
+    const k = x.indices[i];
+    if (k >= n) throw invalid('target', 'is damaged');
+    rgba.set(x.palette.subarray(4 * k, 4 * k + 4), 4 * i);
+  }
+  return { width: TARGET_SIZE, height: TARGET_SIZE, rgba };
+}
 
-    async function setProgram(program, { values = null, fresh = false, generator = null } = {}) {
-      let next;
-      try {
-        // Integer parameters shape the program (how many shapes it draws):
-        // record it with the user's integers when they belong to this program.
-        const sameProgram = info && values && doc()?.program === program;
-        next = await pool.run('pattern-info', { program, params: sameProgram ? named(values, { integersOnly: true }) : {} });
-      } catch (err) {
-        // Keep the last good program running; say where this one is wrong.
-        showError('.program-error', err.message);
-        return false;
-      }
-      showError('.program-error', '');
-      info = next;
-      const vals = values && values.length === info.params.length ? values : info.params.map((p) => p.default);
-      const base = doc() || { target: null, truth: null, result: null, settings: { budget: 'quick', loss: 'sdf', seed: 1 } };
-      const d = { ...base, generator: generator ?? base.generator ?? null, program, values: vals, result: null };
-      if (fresh) history = new History(d); else commit(d);
-      autosave.save(doc());
-      renderProgramUi();
-      schedulePreview(vals);
-      return true;
-    }
-
-    function renderProgramUi() {
-      const d = doc();
-      q('[name=program]').value = d.program;
-      q('[name=generator]').value = d.generator ?? '';
-      q('[data-testid=fit-facts]').textContent =
-        `${info.params.filter((p) => !p.integer).length} parameters to fit, ${info.shapes} shapes, ${info.colours.length - 1} colour${info.colours.length === 2 ? '' : 's'} on ${info.colours[0]}`;
-      // Sliders, one per declared parameter.
-      const form = q('form.sliders');
-      form.replaceChildren(...info.params.map((p, i) => {
-        const row = document.createElement('div');
-        row.className = 'row';
-        row.dataset.param = p.name;
-        const label = document.createElement('label');
-        label.textContent = p.integer ? `${p.name} (int)` : p.name;
-        const input = document.createElement('input');
-        Object.assign(input, { type: 'range', min: p.lo, max: p.hi, step: p.integer ? 1 : (p.hi - p.lo) / 1000 });
-        input.value = d.values[i];
-        input.setAttribute('aria-label', p.name);
-        const out = document.createElement('output');
-        out.textContent = fmt(d.values[i]);
-        input.oninput = () => {
-          const values = [...doc().values];
-          values[i] = Number(input.value);
-          out.textContent = fmt(values[i]);
-          commit({ ...doc(), values }, { coalesce: `param-${p.name}` });
-          schedulePreview(values);
-        };
-        input.onchange = async () => {
-          history.seal();
-          // An integer parameter changes the program's structure: re-read it.
-          if (p.integer) await setProgram(doc().program, { values: doc().values, generator: doc().generator });
-        };
-        row.append(label, input, out);
-        return row;
-      }));
-      // Brush colours: the program's colours, then the background (an eraser).
-      const sw = q('[data-testid=fit-brush-colours]');
-      const colours = [...palette().slice(1), palette()[0]];
-      brush = Math.min(brush, colours.length - 1);
-      sw.replaceChildren(...colours.map((c, i) => {
-        const b = document.createElement('button');
-        b.type = 'button';
-        b.className = 'swatch-button';
-        b.style.background = hex([...c, 255]);
-        b.title = i === colours.length - 1 ? `background ${hex([...c, 255])} (erase)` : hex([...c, 255]);
-        b.setAttribute('aria-label', b.title);
-        b.setAttribute('aria-pressed', String(i === brush));
-        b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-pressed', String(j === i))); };
-        return b;
-      }));
-      if (!doc().target) fillTarget(palette()[0]);
-      else drawTarget();
-      renderResults();
-    }
-
-    const fmt = (v) => (Math.abs(v) >= 100 ? v.toFixed(1) : v.toFixed(3));
-
-    // ---- preview: the pattern for the current values, over the target ----------
-
-    function schedulePreview(values) {
-      previewWanted = values;
-      if (previewBusy) return;
-      const wait = Math.max(0, PREVIEW_EVERY_MS - (performance.now() - lastPreviewAt));
-      previewBusy = true;
-      setTimeout(async () => {
-        const values = previewWanted;
-        previewWanted = null;
-        lastPreviewAt = performance.now();
-        try {
-          const r = await pool.run('render-pattern', { program: doc().program, params: named(values), size: TARGET_SIZE });
-          // Only the shapes: background pixels become transparent, so the
-          // target shows through wherever the pattern has nothing.
-          const [br, bg, bb] = palette()[0];
-          for (let i = 0; i < r.rgba.length; i += 4) {
-            if (r.rgba[i] === br && r.rgba[i + 1] === bg && r.rgba[i + 2] === bb) r.rgba[i + 3] = 0;
-          }
-          putRgba(overlay, r.width, r.height, r.rgba);
-        } catch (err) {
-          showError('.program-error', err.message);
-        } finally {
-          previewBusy = false;
-          if (previewWanted) schedulePreview(previewWanted);
-        }
-      }, wait);
-    }
-
-    // ---- target: drawing, upload, make from values ------------------------------
-
-    function fillTarget([r, g, b]) {
-      tctx.fillStyle = `rgb(${r},${g},${b})`;
-      tctx.fillRect(0, 0, TARGET_SIZE, TARGET_SIZE);
-      storeTarget({ truth: null });
-    }
-
-    function storeTarget(extra = {}, opts) {
-      const rgba = new Uint8Array(tctx.getImageData(0, 0, TARGET_SIZE, TARGET_SIZE).data.buffer);
-      commit({ ...doc(), ...extra, target: { width: TARGET_SIZE, height: TARGET_SIZE, rgba } }, opts);
-    }
-
-    function drawTarget() {
-      const t = doc().target;
-      if (t) tctx.putImageData(new ImageData(new Uint8ClampedArray(t.rgba), t.width, t.height), 0, 0);
-    }
-
-    // Paint exact palette colours (no anti-aliasing): a disc of `size` pixels.
-    function dab(x, y) {
-      const colours = [...palette().slice(1), palette()[0]];
-      const [r, g, b] = colours[brush];
-      const size = Number(q('[name=brush]').value) || 8;
-      const rad = size / 2;
-      const x0 = Math.max(0, Math.floor(x - rad)), y0 = Math.max(0, Math.floor(y - rad));
-      const x1 = Math.min(TARGET_SIZE, Math.ceil(x + rad)), y1 = Math.min(TARGET_SIZE, Math.ceil(y + rad));
-      if (x1 <= x0 || y1 <= y0) return;
-      const img = tctx.getImageData(x0, y0, x1 - x0, y1 - y0);
-      for (let j = 0; j < y1 - y0; j++) {
-        for (let i = 0; i < x1 - x0; i++) {
-          if (Math.hypot(x0 + i + 0.5 - x, y0 + j + 0.5 - y) > rad) continue;
-          const k = 4 * (j * (x1 - x0) + i);
-          img.data[k] = r; img.data[k + 1] = g; img.data[k + 2] = b; img.data[k + 3] = 255;
-        }
-      }
-      tctx.putImageData(img, x0, y0);
-    }
-
-    let painting = null;
-    const toTarget = (e) => {
-      const r = targetCanvas.getBoundingClientRect();
-      return [(e.clientX - r.left) / r.width * TARGET_SIZE, (e.clientY - r.top) / r.height * TARGET_SIZE];
+const fitState = {
+  version: 1,
+  async defaults(ctx) {
+    const [generators, d] = await Promise.all([ctx.run('pattern-generators', {}), ctx.coreDefaults()]);
+    const g = generators.find((x) => x.name === 'circles-grid') || generators[0];
+    const settings = {
+      budget: BUDGETS.includes(d.budget) ? d.budget : 'quick',
+      loss: LOSSES.includes(d.loss) ? d.loss : 'sdf',
+      seed: Number.isInteger(d.seed) ? d.seed : 1,
     };
-    const stack = q('.stack');
-    stack.addEventListener('pointerdown', (e) => {
-      if (!info || e.button > 0) return;
-      stack.setPointerCapture(e.pointerId);
-      painting = toTarget(e);
-      dab(...painting);
-    });
-    stack.addEventListener('pointermove', (e) => {
-      if (!painting) return;
-      const p = toTarget(e);
-      const steps = Math.ceil(Math.hypot(p[0] - painting[0], p[1] - painting[1]) / 2);
-      for (let s = 1; s <= steps; s++) dab(painting[0] + (p[0] - painting[0]) * s / steps, painting[1] + (p[1] - painting[1]) * s / steps);
-      painting = p;
-    });
-    const endPaint = () => {
-      if (!painting) return;
-      painting = null;
-      storeTarget({ truth: null });
-    };
-    stack.addEventListener('pointerup', endPaint);
-    stack.addEventListener('pointercancel', endPaint);
-
-    async function makeTarget() {
-      const d = doc();
-      const r = await pool.run('render-pattern', { program: d.program, params: named(d.values), size: TARGET_SIZE });
-      tctx.putImageData(new ImageData(new Uint8ClampedArray(r.rgba), r.width, r.height), 0, 0);
-      storeTarget({ truth: [...d.values] });
-      renderResults();
-    }
-
-    async function uploadTarget(file) {
-      showError('.target-error', '');
-      try {
-        const bytes = new Uint8Array(await file.arrayBuffer());
-        const r = await pool.run('pattern-snap', { program: doc().program, params: named(doc().values), bytes, size: TARGET_SIZE });
-        tctx.putImageData(new ImageData(new Uint8ClampedArray(r.rgba), r.width, r.height), 0, 0);
-        storeTarget({ truth: null });
-        status(`${file.name}: snapped to the program's colours (${Math.round(r.unmatched * 100)}% of pixels were far from all of them)`);
-      } catch (err) {
-        showError('.target-error', `${file.name}: ${err.message}`);
-      }
-    }
-
-    // ---- fitting ----------------------------------------------------------------
-
-    async function fit() {
-      const d = doc();
-      if (!d?.target) return;
-      running?.abort();
-      const ctrl = new AbortController();
-      running = ctrl;
-      showError('.fit-error', '');
-      plot.clear();
-      q('[data-act=cancel]').disabled = false;
-      q('[data-act=fit]').disabled = true;
-      const t0 = performance.now();
-      const floatIdx = info.params.map((p, i) => (p.integer ? -1 : i)).filter((i) => i >= 0);
-      // A fresh payload per request: its pixel buffer is transferred to a worker.
-      const common = () => ({
-        program: d.program, params: named(d.values, { integersOnly: true }),
-        target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
-        budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
-      });
-      let shownLoss = Infinity;
-      const show = (fraction, stage, loss, best) => {
-        q('progress').value = fraction;
-        status(`${stage} — loss ${Number.isFinite(loss) ? loss.toPrecision(4) : '…'}`);
-        if (Number.isFinite(loss)) plot.push(fraction, loss);
-        if (best && loss <= shownLoss) {
-          shownLoss = loss;
-          const values = [...doc().values];
-          floatIdx.forEach((k, j) => { values[k] = best[j]; });
-          schedulePreview(values);
-        }
-      };
-      try {
-        const r = await parallelFit(common, ctrl.signal, show);
-        const values = [...doc().values];
-        floatIdx.forEach((k, j) => { values[k] = r.params[j]; });
-        commit({ ...doc(), values, result: { params: r.params, loss: r.loss, names: r.names, evaluations: r.evaluations } });
-        plot.push(1, r.loss);
-        q('progress').value = 1;
-        status(`fitted in ${((performance.now() - t0) / 1000).toFixed(1)} s — loss ${r.loss.toPrecision(4)} after ${r.evaluations} evaluations`);
-        renderProgramUi();
-        schedulePreview(values);
-      } catch (err) {
-        if (err.kind === 'cancelled') status('cancelled — the values from before the fit are kept');
-        else showError('.fit-error', err.message);
-      } finally {
-        if (running === ctrl) running = null;
-        q('[data-act=cancel]').disabled = true;
-        q('[data-act=fit]').disabled = false;
-      }
-    }
-
-    // One fit sharded across the worker pool (all workers but one, which
-    // stays free for previews): every shard runs the same seeded fit,
-    // evaluates its part of each initialisation batch, and the page merges
-    // the parts and hands the full batch back to all of them, so they stay
-    // identical; then each refines a contiguous share of the candidates with
-    // Adam. The best over the shards is exactly the result of one fit
-    // (tests/fit.rs checks this natively).
-    async function parallelFit(common, signal, show) {
-      const n = Math.max(1, pool.slots.length - 1);
-      const inner = new AbortController();
-      const abort = () => inner.abort();
-      signal.addEventListener('abort', abort, { once: true });
-      let parts = [];
-      const exchange = (k, losses) => new Promise((resolve) => {
-        parts.push({ k, losses, resolve });
-        if (parts.length < n) return;
-        const merged = Array.from(parts[0].losses, (_, i) => {
-          const own = parts.find((p) => !Number.isNaN(p.losses[i]));
-          return own ? own.losses[i] : NaN;
-        });
-        const waiting = parts;
-        parts = [];
-        for (const p of waiting) p.resolve(merged);
-      });
-      const fractions = Array(n).fill(0);
-      const losses = Array(n).fill(Infinity);
-      try {
-        const results = await Promise.all(Array.from({ length: n }, (_, k) => pool.run('fit', { ...common(), shards: [k, n] }, {
-          signal: inner.signal,
-          onNeed: (need) => exchange(k, need),
-          onProgress: (p) => {
-            // A shard still reporting after the fit ended must not repaint the status.
-            if (inner.signal.aborted) return;
-            fractions[k] = p.fraction;
-            if (p.figure != null) losses[k] = p.figure;
-            const best = Math.min(...losses);
-            const stage = n > 1 ? `${p.stage} (${n} workers)` : p.stage;
-            show(fractions.reduce((a, b) => a + b, 0) / n, stage, best, losses[k] === best ? p.values : null);
-          },
-        }).catch((err) => { inner.abort(); throw err; })));
-        // Ties go to the earlier shard, as one fit keeps the first best.
-        const best = results.reduce((a, b) => (b.loss < a.loss ? b : a));
-        return { ...best, evaluations: results.reduce((e, r) => e + r.evaluations, 0) };
-      } finally {
-        signal.removeEventListener('abort', abort);
-      }
-    }
-
-    function renderResults() {
-      const d = doc();
-      const tbody = q('.results tbody');
-      if (!info) return;
-      tbody.replaceChildren(...info.params.filter((p) => !p.integer).map((p) => {
-        const i = info.params.indexOf(p);
-        const tr = document.createElement('tr');
-        tr.dataset.param = p.name;
-        const fitted = d.result ? fmt(d.values[i]) : '—';
-        const truth = d.truth ? fmt(d.truth[i]) : '—';
-        tr.innerHTML = `<td>${p.name}</td><td data-col="fitted">${fitted}</td><td data-col="truth">${truth}</td>`;
-        return tr;
-      }));
-    }
-
-    // ---- controls -----------------------------------------------------------------
-
-    q('[name=generator]').onchange = (e) => {
-      const g = generators.find((x) => x.name === e.target.value);
-      if (g) setProgram(g.source, { generator: g.name }).then((ok) => ok && fillTarget(palette()[0]));
-    };
-    q('[data-act=apply-program]').onclick = () => setProgram(q('[name=program]').value, { values: doc()?.values, generator: null });
-    q('[data-act=make-target]').onclick = () => makeTarget().catch((err) => showError('.target-error', err.message));
-    q('[data-act=clear-target]').onclick = () => info && fillTarget(palette()[0]);
-    q('[data-act=fit]').onclick = fit;
-    q('[data-act=cancel]').onclick = () => running?.abort();
-    q('[name=overlay]').oninput = (e) => { overlay.style.opacity = e.target.value; };
-    overlay.style.opacity = q('[name=overlay]').value;
-    for (const name of ['budget', 'loss', 'seed']) {
-      q(`[name=${name}]`).onchange = (e) => {
-        const v = name === 'seed' ? Math.max(0, Math.round(Number(e.target.value) || 0)) : e.target.value;
-        commit({ ...doc(), settings: { ...doc().settings, [name]: v } });
-      };
-    }
-    const undo = () => { history.undo(); restore(); };
-    const redo = () => { history.redo(); restore(); };
-    q('[data-act=undo]').onclick = undo;
-    q('[data-act=redo]').onclick = redo;
-    this.onKey = (e) => {
-      if (e.target.closest?.('input, select, textarea')) return;
-      if ((e.ctrlKey || e.metaKey) && e.key.toLowerCase() === 'z') {
-        e.preventDefault();
-        if (e.shiftKey) redo(); else undo();
-      }
-    };
-    document.addEventListener('keydown', this.onKey);
-
-    el.querySelectorAll('input[data-input]').forEach((input) => {
-      input.onchange = async () => {
-        const file = input.files[0];
-        input.value = '';
-        if (!file) return;
-        if (input.dataset.input === 'target') return uploadTarget(file);
-        try {
-          const loaded = parseProject(await file.text(), 'fit');
-          if (await setProgram(loaded.program, { values: loaded.values, generator: loaded.generator })) {
-            commit(loaded);
-            restore();
-          }
-        } catch (err) {
-          showError('.fit-error', `${file.name}: ${err.message}`);
-        }
-      };
-    });
-
-    const baseName = () => doc()?.generator || 'pattern';
-    q('[data-act=export-svg]').onclick = async () => {
-      const r = await pool.run('render-pattern', { program: doc().program, params: named(doc().values), size: 512 });
-      download(`${baseName()}.svg`, r.svg, 'image/svg+xml');
-    };
-    q('[data-act=export-json]').onclick = () => {
-      const d = doc();
-      const params = Object.fromEntries(info.params.map((p, i) => [p.name, d.values[i]]));
-      download(`${baseName()}-params.json`, JSON.stringify({ generator: d.generator, params, loss: d.result?.loss ?? null }, null, 2), 'application/json');
-    };
-    q('[data-act=save-project]').onclick = () => download(`${baseName()}.filigree.json`, projectText('fit', doc()), 'application/json');
-
-    // Bring the view in line with the document after undo/redo or a load.
-    async function restore() {
-      const d = doc();
-      for (const name of ['budget', 'loss', 'seed']) q(`[name=${name}]`).value = d.settings[name];
-      drawTarget();
-      renderProgramUi();
-      schedulePreview(d.values);
-      autosave.save(d);
-    }
-
-    this.onHide = () => autosave.flush();
-    addEventListener('pagehide', this.onHide);
-
-    (async () => {
-      generators = await pool.run('pattern-generators', {});
-      q('[name=generator]').replaceChildren(
-        new Option('(custom program)', ''),
-        ...generators.map((g) => new Option(g.paper ? `${g.name} — ${g.paper}` : g.name, g.name)),
-      );
-      const saved = await autosave.load();
-      if (saved?.program && await setProgram(saved.program, { values: saved.values, fresh: true, generator: saved.generator })) {
-        history = new History(saved);
-        await restore();
-        return;
-      }
-      const first = generators.find((g) => g.name === 'circles-grid') || generators[0];
-      await setProgram(first.source, { fresh: true, generator: first.name });
-      await restore();
-    })().catch((err) => showError('.fit-error', err.message));
-
-    window.filigreeFit = { state: doc, info: () => info, plot };
+    return generatorDoc(ctx.run, g, { settings });
   },
-  unmount() {
-    document.removeEventListener('keydown', this.onKey);
-    removeEventListener('pagehide', this.onHide);
-    this.onHide?.();
+  validate: validateFit,
+  migrate: (raw) => raw,
+  fileName: (s) => s.generator || 'pattern',
+  // A target made from known values travels as those values (re-rendered on
+  // arrival, pixel for pixel); a drawn one as palette indices.
+  toShare(s) {
+    const { target, ...rest } = s;
+    if (!target) return { ...rest, target: null };
+    if (s.truth) return { ...rest, target: 'truth' };
+    const indexed = indexTarget(target);
+    return { ...rest, target: indexed ? { indexed } : target };
+  },
+  async fromShare(x, ctx) {
+    if (!x || typeof x !== 'object' || Array.isArray(x)) throw invalid('state', 'is not a Fit document');
+    let target = x.target ?? null;
+    if (target === 'truth') {
+      const truth = finiteList(x.truth, 'truth');
+      if (typeof x.program !== 'string') throw invalid('program', 'is missing');
+      const info = await programInfo(ctx.run, x.program);
+      const full = await programInfo(ctx.run, x.program, named(info, truth, { integersOnly: true }));
+      const r = await ctx.run('render-pattern', { program: x.program, params: named(full, truth), size: TARGET_SIZE });
+      target = { width: r.width, height: r.height, rgba: r.rgba };
+    } else if (target?.indexed) target = unindexTarget(target.indexed);
+    return { ...x, target };
   },
 };
+
+// ---- the view -------------------------------------------------------------------------
+
+function mount(el, ctx) {
+  el.innerHTML = html;
+  const q = (s) => el.querySelector(s);
+  const targetCanvas = q('canvas.target');
+  const tctx = targetCanvas.getContext('2d', { willReadFrequently: true });
+  const overlay = q('canvas.overlay');
+  const plot = new LossPlot(q('canvas.plot'));
+  const statusEl = q('[data-testid=fit-status]');
+
+  let info = null; // pattern-info of the rendered document's program
+  let infoKey = null;
+  let infoJob = 0;
+  let generators = [];
+  let brush = 0; // index into the brush colours (last = background)
+  let running = null; // AbortController of the fit in flight
+  let previewBusy = false;
+  let previewWanted = null;
+  let lastPreviewAt = 0;
+  const infoCache = new Map();
+
+  const doc = () => ctx.state();
+  const palette = () => info.colours.map(rgbOf);
+  const status = (t) => { statusEl.textContent = t; };
+  const fmt = (v) => (Math.abs(v) >= 100 ? v.toFixed(1) : v.toFixed(3));
+
+  // The key of a document's program facts: the program and its integer values.
+  const keyOf = (d, i) => `${d.program}\u0000${i ? JSON.stringify(named(i, d.values, { integersOnly: true })) : ''}`;
+
+  async function infoFor(program, ints) {
+    const key = `${program}\u0000${JSON.stringify(ints)}`;
+    if (!infoCache.has(key)) {
+      const p = programInfo(ctx.run, program, ints);
+      infoCache.set(key, p);
+      p.catch(() => infoCache.delete(key));
+    }
+    return infoCache.get(key);
+  }
+
+  // ---- program ------------------------------------------------------------------------
+
+  /** Bring program facts, sliders and brush colours in line with document `d`. */
+  async function syncProgram(d) {
+    const job = ++infoJob;
+    let next;
+    try {
+      // Integer parameters shape the program (how many shapes it draws).
+      const base = await infoFor(d.program, {});
+      next = base.params.some((p) => p.integer) ? await infoFor(d.program, named(base, d.values, { integersOnly: true })) : base;
+    } catch (err) {
+      if (job === infoJob) ctx.error(err);
+      return;
+    }
+    if (job !== infoJob || !ctx.alive()) return;
+    info = next;
+    infoKey = keyOf(doc(), info);
+    renderProgramUi(doc());
+    schedulePreview(doc().values);
+  }
+
+  function renderProgramUi(d) {
+    if (q('[name=program]').value !== d.program) q('[name=program]').value = d.program;
+    q('[name=generator]').value = generators.some((g) => g.name === d.generator) ? d.generator : '';
+    q('[data-testid=fit-facts]').textContent =
+      `${info.params.filter((p) => !p.integer).length} parameters to fit, ${info.shapes} shapes, ${info.colours.length - 1} colour${info.colours.length === 2 ? '' : 's'} on ${info.colours[0]}`;
+    const form = q('form.sliders');
+    const values = d.values.length === info.params.length ? d.values : info.params.map((p) => p.default);
+    form.replaceChildren(...info.params.map((p, i) => {
+      const row = document.createElement('div');
+      row.className = 'row';
+      row.dataset.param = p.name;
+      const label = document.createElement('label');
+      label.textContent = p.integer ? `${p.name} (int)` : p.name;
+      const input = document.createElement('input');
+      Object.assign(input, { type: 'range', min: p.lo, max: p.hi, step: p.integer ? 1 : (p.hi - p.lo) / 1000 });
+      input.value = values[i];
+      input.setAttribute('aria-label', p.name);
+      input.dataset.field = `params.${p.name}`;
+      const out = document.createElement('output');
+      out.textContent = fmt(values[i]);
+      const set = (opts) => {
+        const vals = [...currentValues()];
+        vals[i] = Number(input.value);
+        ctx.commit({ ...doc(), values: vals }, opts);
+      };
+      // An integer shapes the program (re-read on release); a float previews as it moves.
+      input.oninput = () => {
+        out.textContent = fmt(Number(input.value));
+        if (!p.integer) set({ coalesce: `param-${p.name}` });
+      };
+      input.onchange = () => {
+        if (p.integer) set();
+        ctx.seal();
+      };
+      row.append(label, input, out);
+      return row;
+    }));
+    // Brush colours: the program's colours, then the background (an eraser).
+    const sw = q('[data-testid=fit-brush-colours]');
+    const colours = [...palette().slice(1), palette()[0]];
+    brush = Math.min(brush, colours.length - 1);
+    sw.replaceChildren(...colours.map((c, i) => {
+      const b = document.createElement('button');
+      b.type = 'button';
+      b.className = 'swatch-button';
+      b.style.background = hex([...c, 255]);
+      b.title = i === colours.length - 1 ? `background ${hex([...c, 255])} (erase)` : hex([...c, 255]);
+      b.setAttribute('aria-label', b.title);
+      b.setAttribute('aria-pressed', String(i === brush));
+      b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-pressed', String(j === i))); };
+      return b;
+    }));
+    renderResults(d);
+  }
+
+  const currentValues = () => {
+    const d = doc();
+    return info && d.values.length === info.params.length ? d.values : info.params.map((p) => p.default);
+  };
+
+  function syncSliders(d) {
+    for (const [i, p] of info.params.entries()) {
+      const row = q(`form.sliders [data-param="${CSS.escape(p.name)}"]`);
+      if (!row || d.values[i] === undefined) continue;
+      const input = row.querySelector('input');
+      if (Number(input.value) !== d.values[i]) input.value = d.values[i];
+      row.querySelector('output').textContent = fmt(d.values[i]);
+    }
+  }
+
+  // ---- preview: the pattern for the current values, over the target --------------------
+
+  function schedulePreview(values) {
+    previewWanted = values;
+    if (previewBusy || !info) return;
+    const wait = Math.max(0, PREVIEW_EVERY_MS - (performance.now() - lastPreviewAt));
+    previewBusy = true;
+    ctx.setTimeout(async () => {
+      const vals = previewWanted;
+      previewWanted = null;
+      lastPreviewAt = performance.now();
+      try {
+        if (vals.length !== info.params.length) return;
+        const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, vals), size: TARGET_SIZE });
+        // Only the shapes: background pixels become transparent, so the
+        // target shows through wherever the pattern has nothing.
+        const [br, bg, bb] = palette()[0];
+        for (let i = 0; i < r.rgba.length; i += 4) {
+          if (r.rgba[i] === br && r.rgba[i + 1] === bg && r.rgba[i + 2] === bb) r.rgba[i + 3] = 0;
+        }
+        putRgba(overlay, r.width, r.height, r.rgba);
+      } catch (err) {
+        ctx.error(err);
+      } finally {
+        previewBusy = false;
+        if (previewWanted) schedulePreview(previewWanted);
+      }
+    }, wait);
+  }
+
+  // ---- target: drawing, upload, make from values ----------------------------------------
+
+  function storeTarget(extra = {}) {
+    const rgba = new Uint8Array(tctx.getImageData(0, 0, TARGET_SIZE, TARGET_SIZE).data.buffer);
+    ctx.commit({ ...doc(), ...extra, target: { width: TARGET_SIZE, height: TARGET_SIZE, rgba } });
+  }
+
+  function drawTarget(t) {
+    if (t) tctx.putImageData(new ImageData(new Uint8ClampedArray(t.rgba), t.width, t.height), 0, 0);
+  }
+
+  // Paint exact palette colours (no anti-aliasing): a disc of `size` pixels.
+  function dab(x, y) {
+    const colours = [...palette().slice(1), palette()[0]];
+    const [r, g, b] = colours[brush];
+    const size = Number(q('[name=brush]').value) || 8;
+    const rad = size / 2;
+    const x0 = Math.max(0, Math.floor(x - rad)), y0 = Math.max(0, Math.floor(y - rad));
+    const x1 = Math.min(TARGET_SIZE, Math.ceil(x + rad)), y1 = Math.min(TARGET_SIZE, Math.ceil(y + rad));
+    if (x1 <= x0 || y1 <= y0) return;
+    const img = tctx.getImageData(x0, y0, x1 - x0, y1 - y0);
+    for (let j = 0; j < y1 - y0; j++) {
+      for (let i = 0; i < x1 - x0; i++) {
+        if (Math.hypot(x0 + i + 0.5 - x, y0 + j + 0.5 - y) > rad) continue;
+        const k = 4 * (j * (x1 - x0) + i);
+        img.data[k] = r; img.data[k + 1] = g; img.data[k + 2] = b; img.data[k + 3] = 255;
+      }
+    }
+    tctx.putImageData(img, x0, y0);
+  }
+
+  let painting = null;
+  let box = null;
+  const toTarget = (e) => [(e.clientX - box.left) / box.width * TARGET_SIZE, (e.clientY - box.top) / box.height * TARGET_SIZE];
+  const stack = q('.stack');
+  stack.addEventListener('pointerdown', (e) => {
+    if (!info || e.button > 0 || ctx.readOnly) return;
+    stack.setPointerCapture(e.pointerId);
+    box = targetCanvas.getBoundingClientRect();
+    painting = toTarget(e);
+    dab(...painting);
+  });
+  stack.addEventListener('pointermove', (e) => {
+    if (!painting) return;
+    const p = toTarget(e);
+    const steps = Math.ceil(Math.hypot(p[0] - painting[0], p[1] - painting[1]) / 2);
+    for (let s = 1; s <= steps; s++) dab(painting[0] + (p[0] - painting[0]) * s / steps, painting[1] + (p[1] - painting[1]) * s / steps);
+    painting = p;
+  });
+  const endPaint = () => {
+    if (!painting) return;
+    painting = null;
+    storeTarget({ truth: null });
+  };
+  stack.addEventListener('pointerup', endPaint);
+  stack.addEventListener('pointercancel', endPaint);
+
+  async function makeTarget() {
+    const d = doc();
+    try {
+      const r = await ctx.run('render-pattern', { program: d.program, params: named(info, d.values), size: TARGET_SIZE });
+      ctx.commit({ ...doc(), target: { width: r.width, height: r.height, rgba: r.rgba }, truth: [...d.values] });
+    } catch (err) {
+      ctx.error(err);
+    }
+  }
+
+  async function uploadTarget(file) {
+    ctx.clearError();
+    try {
+      const bytes = new Uint8Array(await file.arrayBuffer());
+      const r = await ctx.run('pattern-snap', { program: doc().program, params: named(info, doc().values), bytes, size: TARGET_SIZE });
+      ctx.commit({ ...doc(), target: { width: r.width, height: r.height, rgba: r.rgba }, truth: null });
+      status(`${file.name}: snapped to the program's colours (${Math.round(r.unmatched * 100)}% of pixels were far from all of them)`);
+    } catch (err) {
+      ctx.error(err, { prefix: file.name });
+    }
+  }
+
+  // ---- fitting ----------------------------------------------------------------------------
+
+  function setRunning(on) {
+    q('[data-act=cancel]').disabled = !on;
+    q('[data-act=fit]').disabled = on;
+  }
+
+  function stopFit() {
+    running?.abort();
+    running = null;
+    setRunning(false);
+  }
+
+  async function fit() {
+    const d = doc();
+    if (!d?.target || !info) return;
+    running?.abort();
+    const ctrl = new AbortController();
+    running = ctrl;
+    ctx.clearError();
+    plot.clear();
+    q('progress').value = 0;
+    // The figures of the last fit are stale from here on.
+    q('.results tbody').querySelectorAll('[data-col=fitted]').forEach((td) => { td.textContent = '…'; });
+    status('starting…');
+    setRunning(true);
+    const t0 = performance.now();
+    const fitInfo = info;
+    const floatIdx = fitInfo.params.map((p, i) => (p.integer ? -1 : i)).filter((i) => i >= 0);
+    // A fresh payload per request: its pixel buffer is transferred to a worker.
+    const common = () => ({
+      program: d.program, params: named(fitInfo, d.values, { integersOnly: true }),
+      target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
+      budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
+    });
+    let shownLoss = Infinity;
+    const show = (fraction, stage, loss, best) => {
+      if (running !== ctrl) return;
+      q('progress').value = fraction;
+      status(`${stage} ${Math.round(fraction * 100)}% — loss ${Number.isFinite(loss) ? loss.toPrecision(4) : '…'}`);
+      if (Number.isFinite(loss)) plot.push(fraction, loss);
+      if (best && loss <= shownLoss) {
+        shownLoss = loss;
+        const values = [...d.values];
+        floatIdx.forEach((k, j) => { values[k] = best[j]; });
+        schedulePreview(values);
+      }
+    };
+    try {
+      const r = await parallelFit(common, ctrl.signal, show);
+      // A fit finishes into the document it started from, or not at all.
+      if (running !== ctrl || doc().program !== d.program) return;
+      const values = [...doc().values];
+      floatIdx.forEach((k, j) => { values[k] = r.params[j]; });
+      ctx.commit({ ...doc(), values, result: { params: r.params, loss: r.loss, names: r.names, evaluations: r.evaluations } });
+      plot.push(1, r.loss);
+      q('progress').value = 1;
+      status(`fitted in ${((performance.now() - t0) / 1000).toFixed(1)} s — loss ${r.loss.toPrecision(4)} after ${r.evaluations} evaluations`);
+    } catch (err) {
+      if (err.kind === 'cancelled') {
+        if (ctx.alive() && (running === ctrl || running === null)) status('cancelled — the values from before the fit are kept');
+      } else if (running === ctrl) ctx.error(err);
+    } finally {
+      if (running === ctrl) { running = null; setRunning(false); }
+      if (ctx.alive() && !running) renderResults(doc());
+    }
+  }
+
+  // One fit sharded across the worker pool (all workers but one, which
+  // stays free for previews): every shard runs the same seeded fit,
+  // evaluates its part of each initialisation batch, and the page merges
+  // the parts and hands the full batch back to all of them, so they stay
+  // identical; then each refines a contiguous share of the candidates with
+  // Adam. The best over the shards is exactly the result of one fit
+  // (tests/fit.rs checks this natively).
+  async function parallelFit(common, signal, show) {
+    const n = Math.max(1, ctx.pool.slots.length - 1);
+    const inner = new AbortController();
+    const abort = () => inner.abort();
+    signal.addEventListener('abort', abort, { once: true });
+    let parts = [];
+    const exchange = (k, losses) => new Promise((resolve) => {
+      parts.push({ k, losses, resolve });
+      if (parts.length < n) return;
+      const merged = Array.from(parts[0].losses, (_, i) => {
+        const own = parts.find((p) => !Number.isNaN(p.losses[i]));
+        return own ? own.losses[i] : NaN;
+      });
+      const waiting = parts;
+      parts = [];
+      for (const p of waiting) p.resolve(merged);
+    });
+    const fractions = Array(n).fill(0);
+    const losses = Array(n).fill(Infinity);
+    try {
+      const results = await Promise.all(Array.from({ length: n }, (_, k) => ctx.run('fit', { ...common(), shards: [k, n] }, {
+        signal: inner.signal,
+        onNeed: (need) => exchange(k, need),
+        onProgress: (p) => {
+          // A shard still reporting after the fit ended must not repaint the status.
+          if (inner.signal.aborted) return;
+          fractions[k] = p.fraction;
+          if (p.figure != null) losses[k] = p.figure;
+          const best = Math.min(...losses);
+          const stage = n > 1 ? `${p.stage} (${n} workers)` : p.stage;
+          show(fractions.reduce((a, b) => a + b, 0) / n, stage, best, losses[k] === best ? p.values : null);
+        },
+      }).catch((err) => { inner.abort(); throw err; })));
+      // Ties go to the earlier shard, as one fit keeps the first best.
+      const best = results.reduce((a, b) => (b.loss < a.loss ? b : a));
+      return { ...best, evaluations: results.reduce((e, r) => e + r.evaluations, 0) };
+    } finally {
+      signal.removeEventListener('abort', abort);
+    }
+  }
+
+  function renderResults(d) {
+    if (!info || info.params.length !== d.values.length) return;
+    q('.results tbody').replaceChildren(...info.params.filter((p) => !p.integer).map((p) => {
+      const i = info.params.indexOf(p);
+      const tr = document.createElement('tr');
+      tr.dataset.param = p.name;
+      const cells = [p.name, d.result ? fmt(d.values[i]) : '—', d.truth ? fmt(d.truth[i]) : '—'];
+      tr.replaceChildren(...cells.map((text, j) => {
+        const td = document.createElement('td');
+        td.textContent = text;
+        if (j) td.dataset.col = j === 1 ? 'fitted' : 'truth';
+        return td;
+      }));
+      return tr;
+    }));
+  }
+
+  // ---- controls -------------------------------------------------------------------------------
+
+  q('[name=generator]').onchange = async (e) => {
+    const g = generators.find((x) => x.name === e.target.value);
+    if (!g) return;
+    // A new generator ends the fit of the old one: its values would not fit the new sliders.
+    stopFit();
+    try {
+      ctx.commit(await generatorDoc(ctx.run, g, doc()));
+    } catch (err) {
+      ctx.error(err);
+      q('[name=generator]').value = doc()?.generator ?? '';
+    }
+  };
+  q('[data-act=apply-program]').onclick = async () => {
+    const program = q('[name=program]').value;
+    const d = doc();
+    try {
+      const next = await programInfo(ctx.run, program);
+      ctx.clearError();
+      const same = info && next.params.length === info.params.length && next.params.every((p, i) => p.name === info.params[i].name);
+      if (program !== d.program) stopFit();
+      ctx.commit({
+        ...d, program, generator: null,
+        values: same ? d.values : next.params.map((p) => p.default),
+        truth: same ? d.truth : null, result: null,
+      });
+    } catch (err) {
+      // Keep the last good program running; say where this one is wrong.
+      ctx.error(err);
+    }
+  };
+  q('[data-act=make-target]').onclick = () => makeTarget();
+  q('[data-act=clear-target]').onclick = () => info && ctx.commit({ ...doc(), target: backgroundTarget(info), truth: null });
+  q('[data-act=fit]').onclick = fit;
+  q('[data-act=cancel]').onclick = () => running?.abort();
+  q('[name=overlay]').oninput = (e) => { overlay.style.opacity = e.target.value; };
+  overlay.style.opacity = q('[name=overlay]').value;
+  for (const name of ['budget', 'loss', 'seed']) {
+    q(`[name=${name}]`).onchange = (e) => {
+      const v = name === 'seed' ? Math.max(0, Math.round(Number(e.target.value) || 0)) : e.target.value;
+      ctx.commit({ ...doc(), settings: { ...doc().settings, [name]: v } });
+    };
+  }
+  // The target takes a dropped, pasted or picked image like Pixel's source does.
+  const detachFiles = acceptFiles(q('.fit-target'), uploadTarget, { pickerLabel: 'Upload target…' });
+  q('.fit-target input[type=file]').dataset.input = 'target';
+
+  const baseName = () => doc()?.generator || 'pattern';
+  q('[data-act=export-svg]').onclick = async () => {
+    try {
+      const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, doc().values), size: 512 });
+      download(`${baseName()}.svg`, r.svg, 'image/svg+xml');
+    } catch (err) {
+      ctx.error(err);
+    }
+  };
+  q('[data-act=export-json]').onclick = () => {
+    const d = doc();
+    const params = Object.fromEntries(info.params.map((p, i) => [p.name, d.values[i]]));
+    download(`${baseName()}-params.json`, JSON.stringify({ generator: d.generator, params, loss: d.result?.loss ?? null }, null, 2), 'application/json');
+  };
+
+  const generatorsReady = ctx.run('pattern-generators', {}).then((list) => {
+    generators = list;
+    q('[name=generator]').replaceChildren(
+      new Option('(custom program)', ''),
+      ...generators.map((g) => new Option(g.paper ? `${g.name} — ${g.paper}` : g.name, g.name)),
+    );
+    const d = doc();
+    if (d) q('[name=generator]').value = generators.some((g) => g.name === d.generator) ? d.generator : '';
+  }).catch((err) => ctx.error(err));
+
+  window.filigreeFit = { state: doc, info: () => info, plot, running: () => running !== null };
+
+  return {
+    render(d, prev) {
+      if (!d) return;
+      for (const name of ['budget', 'loss', 'seed']) q(`[name=${name}]`).value = d.settings[name];
+      if (!prev || d.target !== prev.target) drawTarget(d.target);
+      if (!info || keyOf(d, info) !== infoKey) {
+        // A program or integer change: re-read the program (async), then sliders and preview.
+        generatorsReady.then(() => ctx.alive() && syncProgram(d));
+      } else {
+        syncSliders(d);
+        renderResults(d);
+        if (!prev || d.values !== prev.values) schedulePreview(d.values);
+      }
+    },
+    markError(err) {
+      if (err.field !== 'program' && err.kind !== 'syntax') return;
+      const ta = q('[name=program]');
+      q('details.program').open = true;
+      // line/column come with the error (or, from an older core, in its message).
+      const m = /line (\d+), column (\d+)/.exec(err.message || '');
+      const at = Number.isInteger(err.line) ? [err.line, err.column ?? 1] : m && [Number(m[1]), Number(m[2])];
+      if (at) {
+        const lines = ta.value.split('\n');
+        const line = Math.min(Math.max(1, at[0]), lines.length);
+        const offset = lines.slice(0, line - 1).reduce((a, l) => a + l.length + 1, 0) + Math.max(0, Math.min(at[1] - 1, lines[line - 1].length));
+        ta.focus();
+        ta.setSelectionRange(offset, offset);
+      }
+    },
+    unmount() {
+      detachFiles();
+      running?.abort();
+      if (window.filigreeFit?.state === doc) delete window.filigreeFit;
+    },
+  };
+}
+
+export default { id: 'fit', title: 'Fit', state: fitState, mount };

@@ -1,7 +1,9 @@
 // App shell: header, tool switcher, worker pool, service worker, toasts.
-// Each tool is a module exporting {id, title, mount(el, app), unmount?()};
-// the switcher lists only the tools registered in TOOLS.
+// Each tool is a module declaring {id, title, state, mount(el, ctx)} (see
+// document.js); the switcher lists only the tools registered in TOOLS.
 import { WorkerPool } from './client.js';
+import { DocumentController } from './document.js';
+import { hasShare } from './share.js';
 import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
@@ -49,43 +51,53 @@ const pool = new WorkerPool({
 });
 pool.warm();
 
-const app = { pool, toast };
-// Tests and the console reach the pool through this handle.
-window.filigree = app;
-let current = null;
+const embed = embedOptions(); // ?embed=1: one tool, no chrome, never saves (embed-mode.js)
 
-function selectTool(id) {
-  const tool = TOOLS.find((t) => t.id === id) || TOOLS[0];
-  if (current?.tool === tool) return;
-  current?.tool.unmount?.();
-  const panel = $('#panel');
-  panel.replaceChildren();
-  const el = document.createElement('section');
-  el.className = `tool tool-${tool.id}`;
-  el.setAttribute('aria-label', tool.title);
-  panel.append(el);
-  tool.mount(el, app);
-  current = { tool, el };
-  for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', String(b.dataset.tool === tool.id));
-  const params = new URLSearchParams(location.hash.slice(1));
-  if (params.get('tool') !== tool.id) {
-    params.set('tool', tool.id);
-    history.replaceState(null, '', `#${params}`);
-  }
-}
+// One document controller for every tool: history, autosave, project files,
+// share links, shortcuts and the panels' lifecycle (see document.js).
+const doc = new DocumentController({
+  pool, toast, tools: TOOLS, host: $('#panel'), persist: !embed,
+  onShow(id) {
+    for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', String(b.dataset.tool === id));
+    const params = new URLSearchParams(location.hash.slice(1));
+    if (params.get('tool') !== id || params.has('share')) history.replaceState(null, '', `#tool=${id}`);
+  },
+});
+
+const app = {
+  pool,
+  toast,
+  doc,
+  /** Switch to `toolId` and load `state` (a shared state) through its validate(); rejects with a plain Error. */
+  openState: (toolId, state, opts) => doc.openState(toolId, state, opts),
+  /** {tool, fragment} of the current document (a ShareTooBig error when it does not fit a link). */
+  currentShare: () => doc.currentShare(),
+  selectTool: (id) => doc.show(id),
+};
+// Tests, embedding and the console reach the app through this handle.
+window.filigree = app;
+
+const toolParam = () => new URLSearchParams(location.hash.slice(1)).get('tool');
 
 for (const tool of TOOLS) {
   const b = document.createElement('button');
   b.type = 'button';
   b.dataset.tool = tool.id;
   b.textContent = tool.title;
-  b.onclick = () => selectTool(tool.id);
+  b.onclick = () => doc.show(tool.id);
   $('#tools').append(b);
 }
-const embed = embedOptions(); // ?embed=1: one tool, no chrome, no storage (embed-mode.js)
-if (embed) enterEmbed(app, embed, selectTool);
-else selectTool(new URLSearchParams(location.hash.slice(1)).get('tool'));
-addEventListener('hashchange', () => selectTool(new URLSearchParams(location.hash.slice(1)).get('tool')));
+
+// A share link (#tool=…&share=…) opens as a new, undoable document state;
+// a bad one says so and leaves the user's work alone.
+async function route() {
+  if (!hasShare(location.hash)) return doc.show(toolParam());
+  await doc.openFragment(location.hash, toolParam());
+  // The link is consumed: a reload shows the (autosaved) document, not the link again.
+  if (doc.current) history.replaceState(null, '', `#tool=${doc.current.tool.id}`);
+}
+if (embed) enterEmbed(app, embed);
+else { route(); addEventListener('hashchange', route); }
 
 // Service worker: offline after the first visit; updates are offered, never forced.
 if (serviceWorkerAllowed(embed)) {

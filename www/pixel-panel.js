@@ -2,13 +2,26 @@
 // The user loads a source, a mask and an element sheet (or one click on an
 // example), paints the mask, draws orientation strokes on a zoomable pixel
 // grid, and moves parameters; the core re-runs in a worker after each change
-// (debounced, the previous run cancelled). State is autosaved and undoable.
+// (debounced, the previous run cancelled). History, autosave, project files
+// and links come from the document controller (document.js).
+//
+// The view is layered so a brush drag never re-lays out or redraws it all:
+// a base canvas (source or result, at source resolution, scaled by CSS),
+// a mask canvas fed from one ImageData (only the brushed rectangle is put
+// back), a stroke canvas (the stroke being drawn is extended segment by
+// segment), and the pixel grid as a CSS background. Pointer moves are
+// gathered and painted once per animation frame.
 import { acceptFiles, putRgba, hex } from './file-input.js';
-import { Autosave, History, projectText, parseProject, download } from './project.js';
+import { download } from './project.js';
 
 const ASSETS = new URL('../assets/pixel/', import.meta.url);
+const EXAMPLES = ['fish', 'trunk'];
 const DIRECTIONS = ['up', 'up-right', 'right', 'down-right', 'down', 'down-left', 'left', 'up-left'];
 const RUN_DELAY_MS = 120;
+const MAX_SIDE = 4096;
+// The stroke layer's backing store is capped (a 4096² source at ×4 would be 1 GB).
+const MAX_STROKE_PIXELS = 16e6;
+const MASK_RGBA = [127, 209, 199, 90];
 
 /** Parameter controls, generated into the side panel. Keys are the core's PixelParams fields. */
 const CONTROLS = [
@@ -21,16 +34,10 @@ const CONTROLS = [
   { key: 'hsv', label: 'HSV shift h°, s, v', type: 'ints', n: 3, min: -180, max: 180 },
   { key: 'exclude', label: 'Excluded colours', type: 'colours' },
   { key: 'element_colour', label: 'Element colour', type: 'select', options: ['region', 'pixel'] },
-  { key: 'annotation_scale', label: 'Annotation scale K', type: 'range', min: 1, max: 16, step: 1, show: (v) => `×${v}` },
+  { key: 'annotation_scale', label: 'Annotation scale K', type: 'range', min: 1, max: 32, step: 1, show: (v) => `×${v}` },
   { key: 'default_direction', label: 'Direction without strokes', type: 'select', options: DIRECTIONS },
   { key: 'seed', label: 'Seed', type: 'seed' },
 ];
-
-const DEFAULT_PARAMS = {
-  annotation_scale: 4, positions: 'random', density: 1, margins: [0, 0], partial: false,
-  colour: 'auto', hsv: [0, 0, -30], exclude: [[0, 0, 0]], d_max: 50, element_colour: 'region',
-  default_direction: 'down', sprite_direction: 'up', seed: 1,
-};
 
 const html = `
   <div class="pixel-layout">
@@ -52,8 +59,6 @@ const html = `
           <button type="button" data-act="zoom-in" aria-label="Zoom in">+</button>
         </span>
         <span class="group">
-          <button type="button" data-act="undo" title="Undo (Ctrl+Z)">↶</button>
-          <button type="button" data-act="redo" title="Redo (Ctrl+Shift+Z)">↷</button>
           <button type="button" data-act="clear-strokes">Clear strokes</button>
         </span>
       </div>
@@ -64,9 +69,12 @@ const html = `
         <label><input type="checkbox" name="show-arrows"> vector field</label>
         <span class="status muted" data-testid="pixel-status" aria-live="polite"></span>
       </div>
-      <div class="error" role="alert" hidden></div>
       <div class="viewport checker" data-testid="pixel-viewport">
-        <canvas class="view" data-testid="pixel-canvas" aria-label="pixel art: draw strokes or paint the mask here"></canvas>
+        <div class="layers">
+          <canvas class="base" aria-hidden="true"></canvas>
+          <canvas class="mask-layer" aria-hidden="true" hidden></canvas>
+          <canvas class="view" data-testid="pixel-canvas" aria-label="pixel art: draw strokes or paint the mask here"></canvas>
+        </div>
         <div class="empty muted">Load an example, or drop a source image here.</div>
       </div>
       <dl class="stats" data-testid="pixel-stats"></dl>
@@ -74,10 +82,10 @@ const html = `
     <aside class="card pixel-side">
       <h3>Inputs</h3>
       <div class="inputs">
-        <label>Source <input type="file" accept="image/*" data-input="source"></label>
-        <label>Mask <input type="file" accept="image/*" data-input="mask"></label>
-        <label>Element sheet (3×3) <input type="file" accept="image/*" data-input="sheet"></label>
-        <label>…or one sprite <input type="file" accept="image/*" data-input="sprite"></label>
+        <label>Source <input type="file" accept="image/*" data-input="source" data-field="source"></label>
+        <label>Mask <input type="file" accept="image/*" data-input="mask" data-field="mask"></label>
+        <label>Element sheet (3×3) <input type="file" accept="image/*" data-input="sheet" data-field="sheet"></label>
+        <label>…or one sprite <input type="file" accept="image/*" data-input="sprite" data-field="sprite"></label>
         <div class="elements"><canvas class="sheet-preview pixelated" aria-label="elements"></canvas><span class="muted" data-field="elements"></span></div>
       </div>
       <h3>Parameters</h3>
@@ -86,16 +94,9 @@ const html = `
       <div class="exports">
         <label class="inline">PNG scale <select name="export-scale"><option>1</option><option>2</option><option selected>4</option><option>8</option></select></label>
         <button type="button" data-act="export-png">Export PNG</button>
-        <button type="button" data-act="save-project">Save project</button>
-        <label class="button-like">Open project <input type="file" accept=".json,application/json" data-input="project" hidden></label>
       </div>
     </aside>
   </div>`;
-
-/** Decode an image file in the worker: {width, height, rgba}. */
-function decodeImage(pool, bytes) {
-  return pool.run('decode-image', { bytes: bytes.slice() });
-}
 
 async function fetchBytes(url) {
   const res = await fetch(url);
@@ -103,532 +104,744 @@ async function fetchBytes(url) {
   return new Uint8Array(await res.arrayBuffer());
 }
 
-export default {
-  id: 'pixel',
-  title: 'Pixel',
-  mount(el, { pool }) {
-    el.innerHTML = html;
-    const q = (s) => el.querySelector(s);
-    const canvas = q('canvas.view');
-    const ctx = canvas.getContext('2d');
-    const autosave = new Autosave('pixel');
+let casesPromise = null;
+const cases = () => (casesPromise ??= fetch(new URL('cases.json', ASSETS)).then((r) => r.json()).catch((e) => { casesPromise = null; throw e; }));
 
-    // Document state (undoable, saved): inputs, mask, strokes, parameters.
-    let history = new History(null);
-    // Derived, not saved: decoded images, the last result, view settings.
-    const view = { zoom: 4, mode: 'stroke', brush: 3, showResult: true, showMask: false, showStrokes: true, showArrows: false };
-    let sourceImg = null; // {width, height, rgba}
-    let sourceBitmap = null;
-    let result = null; // the core's answer for the current state, or the last good one
-    let resultBitmap = null;
-    let running = null; // AbortController of the job in flight
-    let runTimer = null;
-    let drawing = null; // the stroke or mask edit in progress
-    let generation = 0;
+/** The source bytes of example `name`. */
+async function exampleSource(name) {
+  const ex = (await cases())[name];
+  return fetchBytes(new URL(ex.source, ASSETS));
+}
 
-    const state = () => history.present;
+/** A whole document for example `name`; `ctx` gives run() and coreDefaults(). */
+async function exampleDoc(name, ctx) {
+  // The same cases (files, parameters, strokes) the native benchmark runs.
+  const ex = (await cases())[name];
+  const [source, maskPng, sheet, strokesJson] = await Promise.all(
+    [ex.source, ex.mask, ex.sheet, ex.strokes].map((f) => fetchBytes(new URL(f, ASSETS))),
+  );
+  const [mask, defaults] = await Promise.all([ctx.run('pixel-mask', { bytes: maskPng }), ctx.coreDefaults()]);
+  return {
+    example: name, source, sheet, sprite: null, mask,
+    strokes: JSON.parse(new TextDecoder().decode(strokesJson)).strokes,
+    params: { ...defaults.params, ...ex.params },
+    names: { source: ex.source, sheet: ex.sheet },
+  };
+}
 
-    function setError(message) {
-      q('.error').hidden = !message;
-      q('.error').textContent = message || '';
-    }
-    const status = (text) => { q('[data-testid=pixel-status]').textContent = text; };
+// ---- the state's schema ----------------------------------------------------------
 
-    // ---- state changes ------------------------------------------------------
+function invalid(field, why) {
+  const e = new Error(`${field} ${why}`);
+  e.field = field;
+  return e;
+}
 
-    function commit(next, opts) {
-      history.push(next, opts);
-      changed();
-    }
+function checkBytes(v, field, optional = false) {
+  if (v == null && optional) return null;
+  if (!(v instanceof Uint8Array) || v.length === 0) throw invalid(field, 'must be the bytes of an image file');
+  return v;
+}
 
-    function changed({ rerun = true } = {}) {
-      autosave.save(state());
-      syncControls();
-      q('[data-act=undo]').disabled = !history.canUndo;
-      q('[data-act=redo]').disabled = !history.canRedo;
-      draw();
-      if (rerun) scheduleRun();
-    }
-
-    async function loadDocument(doc, { fresh = true } = {}) {
-      const gen = ++generation;
-      const img = await decodeImage(pool, doc.source);
-      if (gen !== generation) return;
-      sourceImg = img;
-      sourceBitmap = await rgbaBitmap(img);
-      result = null;
-      resultBitmap = null;
-      if (fresh) history = new History(doc);
-      else history.push(doc);
-      fitZoom();
-      await showElements(doc);
-      q('.empty').hidden = true;
-      changed();
-    }
-
-    async function loadExample(name) {
-      setError('');
-      status(`loading the ${name} example…`);
-      // The same cases (files, parameters, strokes) the native benchmark runs.
-      const cases = await (await fetch(new URL('cases.json', ASSETS))).json();
-      const ex = cases[name];
-      const [source, maskPng, sheet, strokesJson] = await Promise.all(
-        [ex.source, ex.mask, ex.sheet, ex.strokes].map((f) => fetchBytes(new URL(f, ASSETS))),
-      );
-      const mask = await pool.run('pixel-mask', { bytes: maskPng });
-      await loadDocument({
-        example: name, source, sheet, sprite: null, mask,
-        strokes: JSON.parse(new TextDecoder().decode(strokesJson)).strokes,
-        params: { ...DEFAULT_PARAMS, ...ex.params },
-        names: { source: ex.source, sheet: ex.sheet },
-      });
-    }
-
-    async function loadInput(which, file) {
-      setError('');
-      const bytes = new Uint8Array(await file.arrayBuffer());
-      const doc = state();
-      try {
-        if (which === 'project') {
-          const loaded = parseProject(new TextDecoder().decode(bytes), 'pixel');
-          await loadDocument(loaded, { fresh: false });
-          return;
-        }
-        if (which === 'source') {
-          const img = await decodeImage(pool, bytes);
-          // A new source keeps the mask when the sizes agree, else starts with a full one.
-          const keepMask = doc?.mask && doc.mask.width === img.width && doc.mask.height === img.height;
-          const mask = keepMask ? doc.mask : { width: img.width, height: img.height, bits: new Uint8Array(img.width * img.height).fill(1) };
-          await loadDocument({
-            ...(doc || { sheet: null, sprite: null, strokes: [], params: { ...DEFAULT_PARAMS } }),
-            example: null, source: bytes, mask, names: { ...(doc?.names || {}), source: file.name },
-          }, { fresh: !doc });
-          return;
-        }
-        if (!doc) throw new Error('load a source image first');
-        if (which === 'mask') {
-          const mask = await pool.run('pixel-mask', { bytes });
-          if (mask.width !== sourceImg.width || mask.height !== sourceImg.height) {
-            throw new Error(`the mask is ${mask.width}×${mask.height} pixels but the source image is ${sourceImg.width}×${sourceImg.height}; they must be the same size`);
-          }
-          commit({ ...doc, mask });
-        } else {
-          await decodeImage(pool, bytes);
-          const next = { ...doc, sheet: which === 'sheet' ? bytes : null, sprite: which === 'sprite' ? bytes : null, names: { ...doc.names, sheet: file.name } };
-          commit(next);
-          await showElements(next);
-        }
-      } catch (err) {
-        setError(`${file.name}: ${err.message}`);
-      }
-    }
-
-    async function showElements(doc) {
-      const bytes = doc.sheet || doc.sprite;
-      const c = q('.sheet-preview');
-      if (!bytes) { c.width = c.height = 0; q('[data-field=elements]').textContent = 'no elements yet'; return; }
-      const img = await decodeImage(pool, bytes);
-      putRgba(c, img.width, img.height, img.rgba);
-      q('[data-field=elements]').textContent = `${doc.sheet ? 'sheet' : 'sprite'} ${img.width}×${img.height}`;
-    }
-
-    // ---- running the core ---------------------------------------------------
-
-    function scheduleRun() {
-      clearTimeout(runTimer);
-      runTimer = setTimeout(() => { runTimer = null; run(); }, RUN_DELAY_MS);
-    }
-
-    async function run() {
-      const doc = state();
-      if (!doc || !(doc.sheet || doc.sprite)) return;
-      running?.abort();
-      const ctrl = new AbortController();
-      running = ctrl;
-      status('texturing…');
-      const t0 = performance.now();
-      try {
-        const r = await pool.run('pixel', {
-          source: doc.source.slice(), sheet: doc.sheet?.slice(), sprite: doc.sprite?.slice(),
-          mask: { width: doc.mask.width, height: doc.mask.height, bits: doc.mask.bits.slice() },
-          strokes: doc.strokes, params: doc.params,
-        }, { signal: ctrl.signal, onProgress: (p) => status(`${p.stage}…`) });
-        if (running !== ctrl) return;
-        result = r;
-        resultBitmap = await rgbaBitmap(r);
-        setError('');
-        status(`done in ${Math.round(performance.now() - t0)} ms`);
-        showStats(r);
-        draw();
-        // Counts finished runs, so a test (or a person) can tell two results apart.
-        const el2 = q('[data-testid=pixel-status]');
-        el2.dataset.runs = String(Number(el2.dataset.runs || 0) + 1);
-      } catch (err) {
-        if (err.kind === 'cancelled') return;
-        // Keep the last good result on screen; say what is wrong now.
-        setError(err.message);
-        status('');
-      } finally {
-        if (running === ctrl) running = null;
-      }
-    }
-
-    function showStats(r) {
-      const rows = [
-        ['Elements placed', r.placed], ['Colours before', r.colours_before], ['Colours after', r.colours_after],
-        ['Colour map', r.colour_map_used],
-      ];
-      q('.stats').replaceChildren(...rows.flatMap(([k, v]) => {
-        const dt = document.createElement('dt'); dt.textContent = k;
-        const dd = document.createElement('dd'); dd.textContent = String(v); dd.dataset.stat = k;
-        return [dt, dd];
-      }));
-    }
-
-    // ---- drawing ------------------------------------------------------------
-
-    async function rgbaBitmap({ width, height, rgba }) {
-      return createImageBitmap(new ImageData(new Uint8ClampedArray(rgba), width, height));
-    }
-
-    function fitZoom() {
-      const avail = Math.max(200, q('.viewport').clientWidth - 4);
-      view.zoom = Math.max(1, Math.min(16, Math.floor(avail / sourceImg.width)));
-    }
-
-    function draw() {
-      const doc = state();
-      if (!doc || !sourceImg) return;
-      const z = view.zoom;
-      const { width: w, height: h } = sourceImg;
-      canvas.width = w * z;
-      canvas.height = h * z;
-      q('[data-testid=zoom]').textContent = `×${z}`;
-      ctx.imageSmoothingEnabled = false;
-      const base = view.showResult && resultBitmap ? resultBitmap : sourceBitmap;
-      ctx.drawImage(base, 0, 0, w * z, h * z);
-      if (z >= 8) drawGrid(w, h, z);
-      if (view.showMask || view.mode !== 'stroke') drawMask(doc.mask, z);
-      if (view.showArrows && result?.field) drawArrows(result.field, w, h, z);
-      if (view.showStrokes) {
-        for (const s of doc.strokes) drawStroke(s, z, '#ff5db1');
-        if (drawing?.kind === 'stroke') drawStroke(drawing.points, z, '#ffd166');
-      }
-    }
-
-    // The pixel grid, once cells are big enough to aim at.
-    function drawGrid(w, h, z) {
-      ctx.strokeStyle = 'rgba(0, 0, 0, 0.18)';
-      ctx.lineWidth = 1;
-      ctx.beginPath();
-      for (let x = 0; x <= w; x++) { ctx.moveTo(x * z + 0.5, 0); ctx.lineTo(x * z + 0.5, h * z); }
-      for (let y = 0; y <= h; y++) { ctx.moveTo(0, y * z + 0.5); ctx.lineTo(w * z, y * z + 0.5); }
-      ctx.stroke();
-    }
-
-    function drawMask(mask, z) {
-      ctx.fillStyle = 'rgba(127, 209, 199, 0.35)';
-      for (let y = 0; y < mask.height; y++) {
-        for (let x = 0; x < mask.width; x++) if (mask.bits[y * mask.width + x]) ctx.fillRect(x * z, y * z, z, z);
-      }
-    }
-
-    function drawStroke(points, z, colour) {
-      if (points.length < 2) return;
-      ctx.strokeStyle = colour;
-      ctx.lineWidth = Math.max(1.5, z / 3);
-      ctx.lineCap = ctx.lineJoin = 'round';
-      ctx.beginPath();
-      points.forEach(([x, y], i) => (i ? ctx.lineTo(x * z, y * z) : ctx.moveTo(x * z, y * z)));
-      ctx.stroke();
-      const [x1, y1] = points[points.length - 1];
-      const [x0, y0] = points[Math.max(0, points.length - 4)];
-      arrowHead(x0 * z, y0 * z, x1 * z, y1 * z, Math.max(6, z * 1.5), colour);
-    }
-
-    function arrowHead(x0, y0, x1, y1, size, colour) {
-      const a = Math.atan2(y1 - y0, x1 - x0);
-      ctx.fillStyle = colour;
-      ctx.beginPath();
-      ctx.moveTo(x1, y1);
-      ctx.lineTo(x1 - size * Math.cos(a - 0.45), y1 - size * Math.sin(a - 0.45));
-      ctx.lineTo(x1 - size * Math.cos(a + 0.45), y1 - size * Math.sin(a + 0.45));
-      ctx.fill();
-    }
-
-    // The diffused field as small arrows, one per cell of `step` pixels inside the mask.
-    function drawArrows(field, w, h, z) {
-      const step = Math.max(1, Math.ceil(12 / z));
-      const mask = state().mask.bits;
-      ctx.strokeStyle = 'rgba(255, 255, 255, 0.85)';
-      ctx.lineWidth = 1;
-      for (let y = Math.floor(step / 2); y < h; y += step) {
-        for (let x = Math.floor(step / 2); x < w; x += step) {
-          if (!mask[y * w + x]) continue;
-          const vx = field[2 * (y * w + x)], vy = field[2 * (y * w + x) + 1];
-          const len = Math.hypot(vx, vy);
-          if (len < 1e-6) continue;
-          const L = step * z * 0.42;
-          const cx = (x + 0.5) * z, cy = (y + 0.5) * z;
-          const dx = (vx / len) * L, dy = (vy / len) * L;
-          ctx.beginPath();
-          ctx.moveTo(cx - dx, cy - dy);
-          ctx.lineTo(cx + dx, cy + dy);
-          ctx.stroke();
-          arrowHead(cx - dx, cy - dy, cx + dx, cy + dy, Math.max(3, L * 0.5), 'rgba(255, 255, 255, 0.85)');
-        }
-      }
-    }
-
-    // ---- pointer input: strokes and mask painting ----------------------------
-
-    const toPixel = (e) => {
-      const r = canvas.getBoundingClientRect();
-      return [(e.clientX - r.left) / r.width * sourceImg.width, (e.clientY - r.top) / r.height * sourceImg.height];
-    };
-
-    function paintAt([fx, fy], on) {
-      const m = drawing.mask;
-      const r = view.brush / 2;
-      for (let y = Math.floor(fy - r); y <= Math.floor(fy + r); y++) {
-        for (let x = Math.floor(fx - r); x <= Math.floor(fx + r); x++) {
-          if (x < 0 || y < 0 || x >= m.width || y >= m.height) continue;
-          if (Math.hypot(x + 0.5 - fx, y + 0.5 - fy) <= Math.max(r, 0.5)) m.bits[y * m.width + x] = on ? 1 : 0;
-        }
-      }
-    }
-
-    canvas.addEventListener('pointerdown', (e) => {
-      if (!state() || e.button > 0) return;
-      canvas.setPointerCapture(e.pointerId);
-      const p = toPixel(e);
-      if (view.mode === 'stroke') {
-        drawing = { kind: 'stroke', points: [p] };
-      } else {
-        const m = state().mask;
-        drawing = { kind: 'mask', mask: { width: m.width, height: m.height, bits: m.bits.slice() } };
-        paintAt(p, view.mode === 'paint');
-        const doc = state();
-        history.push({ ...doc, mask: drawing.mask }, { coalesce: 'mask-drag' });
-      }
-      draw();
+/** A pixel-state `raw` checked field by field; throws an Error naming the field at fault. */
+export function validatePixel(raw) {
+  if (!raw || typeof raw !== 'object' || Array.isArray(raw)) throw invalid('state', 'is not a Pixel document');
+  const source = checkBytes(raw.source, 'source');
+  const sheet = checkBytes(raw.sheet, 'sheet', true);
+  const sprite = checkBytes(raw.sprite, 'sprite', true);
+  const m = raw.mask;
+  if (!m || typeof m !== 'object') throw invalid('mask', 'is missing');
+  if (!Number.isInteger(m.width) || !Number.isInteger(m.height) || m.width < 1 || m.height < 1 || m.width > MAX_SIDE || m.height > MAX_SIDE) {
+    throw invalid('mask', `must be 1 to ${MAX_SIDE} pixels on each side (found ${m.width}×${m.height})`);
+  }
+  if (!(m.bits instanceof Uint8Array) || m.bits.length !== m.width * m.height) {
+    throw invalid('mask.bits', `must hold ${m.width * m.height} values (${m.width}×${m.height}), found ${m.bits?.length ?? 'none'}`);
+  }
+  const bits = m.bits.some((b) => b > 1) ? m.bits.map((b) => (b ? 1 : 0)) : m.bits;
+  if (!Array.isArray(raw.strokes) || raw.strokes.length > 10000) throw invalid('strokes', 'must be a list of at most 10000 strokes');
+  const strokes = raw.strokes.map((s, i) => {
+    if (!Array.isArray(s) || s.length < 2 || s.length > 100000) throw invalid(`strokes.${i}`, 'must be a list of at least 2 points');
+    return s.map((p, j) => {
+      if (!Array.isArray(p) || p.length !== 2 || !p.every(Number.isFinite)) throw invalid(`strokes.${i}.${j}`, 'must be a point [x, y] of finite numbers');
+      if (p[0] < -1 || p[1] < -1 || p[0] > m.width + 1 || p[1] > m.height + 1) throw invalid(`strokes.${i}.${j}`, `lies outside the ${m.width}×${m.height} image`);
+      return [p[0], p[1]];
     });
-
-    canvas.addEventListener('pointermove', (e) => {
-      if (!drawing) return;
-      const p = toPixel(e);
-      if (drawing.kind === 'stroke') {
-        const last = drawing.points[drawing.points.length - 1];
-        if (Math.hypot(p[0] - last[0], p[1] - last[1]) >= 0.25) drawing.points.push(p);
-      } else {
-        paintAt(p, view.mode === 'paint');
+  });
+  const p = raw.params;
+  if (!p || typeof p !== 'object' || Array.isArray(p)) throw invalid('params', 'are missing');
+  const params = {};
+  for (const [k, v] of Object.entries(p)) {
+    const c = CONTROLS.find((x) => x.key === k);
+    const field = `params.${k}`;
+    if (!c) {
+      const plain = (x) => x === null || ['string', 'number', 'boolean'].includes(typeof x) || (Array.isArray(x) && x.every(plain));
+      if (!plain(v)) throw invalid(field, 'has a value of the wrong kind');
+      params[k] = v;
+    } else if (c.type === 'select') {
+      if (!c.options.includes(v)) throw invalid(field, `must be one of ${c.options.join(', ')}`);
+      params[k] = v;
+    } else if (c.type === 'range') {
+      if (!Number.isFinite(v) || v < c.min || v > c.max) throw invalid(field, `must be a number from ${c.min} to ${c.max}`);
+      params[k] = v;
+    } else if (c.type === 'checkbox') {
+      if (typeof v !== 'boolean') throw invalid(field, 'must be true or false');
+      params[k] = v;
+    } else if (c.type === 'ints') {
+      if (!Array.isArray(v) || v.length !== c.n || !v.every((x) => Number.isInteger(x) && x >= c.min && x <= c.max)) {
+        throw invalid(field, `must be ${c.n} whole numbers from ${c.min} to ${c.max}`);
       }
-      draw();
-    });
-
-    const endDrawing = () => {
-      if (!drawing) return;
-      const d = drawing;
-      drawing = null;
-      if (d.kind === 'stroke') {
-        if (d.points.length >= 2) {
-          const pts = d.points.map(([x, y]) => [Math.round(x * 100) / 100, Math.round(y * 100) / 100]);
-          commit({ ...state(), strokes: [...state().strokes, pts] });
-        } else draw();
-      } else {
-        history.seal();
-        changed();
+      params[k] = [...v];
+    } else if (c.type === 'colours') {
+      if (!Array.isArray(v) || v.length > 256 || !v.every((rgb) => Array.isArray(rgb) && rgb.length === 3 && rgb.every((x) => Number.isInteger(x) && x >= 0 && x <= 255))) {
+        throw invalid(field, 'must be a list of [r, g, b] colours (0 to 255)');
       }
-    };
-    canvas.addEventListener('pointerup', endDrawing);
-    canvas.addEventListener('pointercancel', endDrawing);
-
-    // ---- controls -------------------------------------------------------------
-
-    const form = q('form.params');
-    for (const c of CONTROLS) form.append(controlRow(c));
-
-    function controlRow(c) {
-      const row = document.createElement('div');
-      row.className = 'row';
-      row.dataset.key = c.key;
-      const label = document.createElement('label');
-      label.textContent = c.label;
-      const id = `pixel-${c.key}`;
-      label.htmlFor = id;
-      row.append(label);
-      const set = (value, opts) => {
-        const doc = state();
-        if (!doc) return;
-        commit({ ...doc, params: { ...doc.params, [c.key]: value } }, opts);
-      };
-      let input;
-      if (c.type === 'select') {
-        input = document.createElement('select');
-        for (const o of c.options) input.append(new Option(o, o));
-        input.onchange = () => set(input.value);
-      } else if (c.type === 'range') {
-        input = document.createElement('input');
-        Object.assign(input, { type: 'range', min: c.min, max: c.max, step: c.step });
-        const out = document.createElement('output');
-        row.append(out);
-        input.oninput = () => set(Number(input.value), { coalesce: c.key });
-        input.onchange = () => history.seal();
-      } else if (c.type === 'checkbox') {
-        input = document.createElement('input');
-        input.type = 'checkbox';
-        input.onchange = () => set(input.checked);
-      } else if (c.type === 'ints') {
-        input = document.createElement('span');
-        input.className = 'ints';
-        for (let i = 0; i < c.n; i++) {
-          const n = document.createElement('input');
-          Object.assign(n, { type: 'number', min: c.min, max: c.max, step: 1 });
-          n.setAttribute('aria-label', `${c.label} ${i + 1}`);
-          n.onchange = () => {
-            const v = [...input.querySelectorAll('input')].map((x) => Math.round(Number(x.value) || 0));
-            set(v);
-          };
-          input.append(n);
-        }
-      } else if (c.type === 'colours') {
-        input = document.createElement('input');
-        input.type = 'text';
-        input.placeholder = '#000000, #ffffff';
-        input.onchange = () => {
-          const parsed = parseColours(input.value);
-          if (parsed.error) { setError(`Excluded colours: ${parsed.error}`); return; }
-          setError('');
-          set(parsed.colours);
-        };
-      } else if (c.type === 'seed') {
-        input = document.createElement('span');
-        input.className = 'ints';
-        const n = document.createElement('input');
-        Object.assign(n, { type: 'number', min: 0, step: 1 });
-        n.setAttribute('aria-label', 'seed');
-        n.onchange = () => set(Math.max(0, Math.round(Number(n.value) || 0)));
-        const b = document.createElement('button');
-        b.type = 'button';
-        b.textContent = '⟳';
-        b.title = 'New seed';
-        b.onclick = () => set((state()?.params.seed ?? 0) + 1);
-        input.append(n, b);
-      }
-      input.id = id;
-      row.insertBefore(input, row.children[1] || null);
-      return row;
+      params[k] = v.map((rgb) => [...rgb]);
+    } else if (c.type === 'seed') {
+      if (!Number.isInteger(v) || v < 0 || v > 2 ** 53) throw invalid(field, 'must be a whole number ≥ 0');
+      params[k] = v;
     }
+  }
+  for (const c of CONTROLS) if (!(c.key in params)) throw invalid(`params.${c.key}`, 'is missing');
+  const example = raw.example ?? null;
+  if (example !== null && !EXAMPLES.includes(example)) throw invalid('example', `must be one of ${EXAMPLES.join(', ')} or none`);
+  const names = {};
+  for (const k of ['source', 'sheet']) {
+    const n = raw.names?.[k];
+    if (n != null) names[k] = String(n).slice(0, 200);
+  }
+  return { example, source, sheet, sprite, mask: { width: m.width, height: m.height, bits }, strokes, params, names };
+}
 
-    function syncControls() {
-      const p = state()?.params;
-      if (!p) return;
-      for (const c of CONTROLS) {
-        const row = form.querySelector(`[data-key=${c.key}]`);
-        const v = p[c.key];
-        if (c.type === 'select') row.querySelector('select').value = v;
-        else if (c.type === 'range') {
-          row.querySelector('input').value = v;
-          row.querySelector('output').textContent = c.show(v);
-        } else if (c.type === 'checkbox') row.querySelector('input').checked = v;
-        else if (c.type === 'ints') row.querySelectorAll('input').forEach((x, i) => { x.value = v[i]; });
-        else if (c.type === 'colours') row.querySelector('input').value = v.map((rgb) => hex([...rgb, 255])).join(', ');
-        else if (c.type === 'seed') row.querySelector('input').value = v;
-      }
-      const hsvRow = form.querySelector('[data-key=hsv]');
-      hsvRow.classList.toggle('dim', p.colour !== 'hsv' && p.colour !== 'auto');
-      form.querySelector('[data-key=d_max]').classList.toggle('dim', p.colour !== 'auto');
-    }
+function packBits(bits) {
+  const out = new Uint8Array(Math.ceil(bits.length / 8));
+  for (let i = 0; i < bits.length; i++) if (bits[i]) out[i >> 3] |= 1 << (i & 7);
+  return out;
+}
 
-    // ---- toolbar, toggles, keys ------------------------------------------------
+function unpackBits(packed, n) {
+  if (!(packed instanceof Uint8Array) || packed.length !== Math.ceil(n / 8)) throw invalid('mask', 'is cut short');
+  const out = new Uint8Array(n);
+  for (let i = 0; i < n; i++) out[i] = (packed[i >> 3] >> (i & 7)) & 1;
+  return out;
+}
 
-    el.querySelectorAll('[data-example]').forEach((b) => {
-      b.onclick = () => loadExample(b.dataset.example).catch((err) => setError(err.message));
-    });
-    el.querySelectorAll('[data-mode]').forEach((b) => {
-      b.onclick = () => {
-        view.mode = b.dataset.mode;
-        el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-pressed', String(x === b)));
-        draw();
-      };
-    });
-    q('[name=brush]').onchange = (e) => { view.brush = Math.max(1, Math.min(32, Number(e.target.value) || 1)); };
-    const zoomBy = (d) => { view.zoom = Math.max(1, Math.min(32, view.zoom + d)); draw(); };
-    q('[data-act=zoom-in]').onclick = () => zoomBy(view.zoom >= 8 ? 2 : 1);
-    q('[data-act=zoom-out]').onclick = () => zoomBy(view.zoom > 8 ? -2 : -1);
-    q('.viewport').addEventListener('wheel', (e) => {
-      if (!e.ctrlKey || !sourceImg) return;
-      e.preventDefault();
-      zoomBy(e.deltaY < 0 ? 1 : -1);
-    }, { passive: false });
-    const undo = () => { history.undo(); changed(); };
-    const redo = () => { history.redo(); changed(); };
-    q('[data-act=undo]').onclick = undo;
-    q('[data-act=redo]').onclick = redo;
-    q('[data-act=clear-strokes]').onclick = () => state()?.strokes.length && commit({ ...state(), strokes: [] });
-    for (const [name, key] of [['show-result', 'showResult'], ['show-mask', 'showMask'], ['show-strokes', 'showStrokes'], ['show-arrows', 'showArrows']]) {
-      q(`[name=${name}]`).onchange = (e) => { view[key] = e.target.checked; draw(); };
-    }
-    this.onKey = (e) => {
-      if (e.target.closest?.('input, select, textarea')) return;
-      if ((e.ctrlKey || e.metaKey) && e.key.toLowerCase() === 'z') {
-        e.preventDefault();
-        if (e.shiftKey) redo(); else undo();
-      } else if (e.key === 's' || e.key === 'm' || e.key === 'e') {
-        el.querySelector(`[data-mode=${{ s: 'stroke', m: 'paint', e: 'erase' }[e.key]}]`).click();
-      }
+const pixelState = {
+  version: 1,
+  defaults: (ctx) => exampleDoc('fish', ctx),
+  validate: validatePixel,
+  migrate: (raw) => raw,
+  fileName: (s) => s.names?.source || 'pixel',
+  // A link carries everything but an example's source (named instead) and
+  // packs the mask's bits; a big source or mask makes it too big for a link.
+  toShare(s) {
+    return {
+      example: s.example, source: s.example ? null : s.source, sheet: s.sheet, sprite: s.sprite,
+      mask: { width: s.mask.width, height: s.mask.height, packed: packBits(s.mask.bits) },
+      strokes: s.strokes, params: s.params, names: s.names,
     };
-    document.addEventListener('keydown', this.onKey);
-
-    el.querySelectorAll('input[data-input]').forEach((input) => {
-      input.onchange = () => {
-        if (input.files[0]) loadInput(input.dataset.input, input.files[0]);
-        input.value = '';
-      };
-    });
-    this.detach = acceptFiles(q('.viewport'), (file) => loadInput('source', file), { pickerLabel: 'Choose a source image…' });
-    q('.viewport .pick').classList.add('overlay-pick');
-
-    q('[data-act=export-png]').onclick = async () => {
-      if (!result) { setError('nothing to export yet: load an example or a source and an element sheet'); return; }
-      const s = Number(q('[name=export-scale]').value);
-      const c = document.createElement('canvas');
-      c.width = result.width * s;
-      c.height = result.height * s;
-      const x = c.getContext('2d');
-      x.imageSmoothingEnabled = false;
-      x.drawImage(resultBitmap, 0, 0, c.width, c.height);
-      const blob = await new Promise((r) => c.toBlob(r, 'image/png'));
-      const base = (state().names?.source || 'pixel').replace(/\.[^.]+$/, '');
-      download(`${base}-textured${s > 1 ? `@${s}x` : ''}.png`, blob);
-    };
-    q('[data-act=save-project]').onclick = () => {
-      if (!state()) return;
-      const base = (state().names?.source || 'pixel').replace(/\.[^.]+$/, '');
-      download(`${base}.filigree.json`, projectText('pixel', state()), 'application/json');
-    };
-
-    // Flush the autosave when the tab goes away (discard, close, crash-to-be).
-    this.onHide = () => autosave.flush();
-    addEventListener('pagehide', this.onHide);
-
-    // Resume the autosaved document, or start from the fish.
-    autosave.load().then((saved) => {
-      if (saved?.source) return loadDocument(saved);
-      return loadExample('fish');
-    }).catch((err) => setError(err.message));
-
-    // For tests and the console: the current document and result.
-    // For tests and the console: the document, the last result, and whether a run is due or going.
-    window.filigreePixel = { state, result: () => result, pending: () => runTimer !== null || running !== null };
   },
-  unmount() {
-    this.detach?.();
-    document.removeEventListener('keydown', this.onKey);
-    removeEventListener('pagehide', this.onHide);
-    this.onHide?.();
+  async fromShare(x) {
+    if (!x || typeof x !== 'object' || Array.isArray(x)) throw invalid('state', 'is not a Pixel document');
+    let source = x.source;
+    if (x.example != null) {
+      if (!EXAMPLES.includes(x.example)) throw invalid('example', `must be one of ${EXAMPLES.join(', ')}`);
+      source = await exampleSource(x.example);
+    }
+    const m = x.mask;
+    if (!m || !Number.isInteger(m.width) || !Number.isInteger(m.height) || m.width < 1 || m.height < 1 || m.width > MAX_SIDE || m.height > MAX_SIDE) {
+      throw invalid('mask', 'has no valid size');
+    }
+    return { ...x, source, mask: { width: m.width, height: m.height, bits: unpackBits(m.packed, m.width * m.height) } };
   },
 };
+
+// ---- the view -----------------------------------------------------------------------
+
+function mount(el, ctx) {
+  el.innerHTML = html;
+  const q = (s) => el.querySelector(s);
+  const layersEl = q('.layers');
+  const baseC = q('canvas.base');
+  const maskC = q('canvas.mask-layer');
+  const strokeC = q('canvas.view');
+  const baseCtx = baseC.getContext('2d');
+  const maskCtx = maskC.getContext('2d');
+  const strokeCtx = strokeC.getContext('2d');
+  const statusEl = q('[data-testid=pixel-status]');
+
+  // Derived, not saved: decoded images, the last result, view settings.
+  const view = { zoom: 4, mode: 'stroke', brush: 3, showResult: true, showMask: false, showStrokes: true, showArrows: false };
+  let sourceImg = null; // {width, height} of the decoded source
+  let sourceBitmap = null;
+  let sourceOf = null; // the source bytes sourceImg was decoded from
+  let sourceLoading = null;
+  let loadingFor = null; // the source bytes being decoded
+  let result = null; // the core's answer for the current state, or the last good one
+  let resultBitmap = null;
+  let running = null; // AbortController of the job in flight
+  let runTimer = null;
+  let drawing = null; // the stroke or mask edit in progress
+  let maskImage = null; // ImageData of the mask overlay
+  let strokeScale = 1; // stroke-layer pixels per source pixel
+  let frameWanted = false;
+  let dirty = null; // mask rectangle to put back at the next frame
+  let segments = []; // stroke segments to draw at the next frame
+  let rect = null; // the stroke canvas's box, read once per drag
+
+  const state = () => ctx.state();
+  const status = (text) => { statusEl.textContent = text; };
+
+  // ---- inputs -----------------------------------------------------------------------
+
+  async function loadExample(name) {
+    ctx.clearError();
+    status(`loading the ${name} example…`);
+    try {
+      const doc = await exampleDoc(name, ctx);
+      // Examples replace the work as an undoable step.
+      ctx.commit(doc);
+    } catch (err) {
+      status('');
+      ctx.error(err, { prefix: `The ${name} example` });
+    }
+  }
+
+  async function loadInput(which, file) {
+    ctx.clearError();
+    const bytes = new Uint8Array(await file.arrayBuffer());
+    const doc = state();
+    try {
+      if (which === 'source') {
+        const img = await ctx.run('decode-image', { bytes: bytes.slice() });
+        // A new source keeps the mask when the sizes agree, else starts with a full one;
+        // strokes are rescaled to the new size so they stay on the same part of the picture.
+        const keepMask = doc?.mask && doc.mask.width === img.width && doc.mask.height === img.height;
+        const mask = keepMask ? doc.mask : { width: img.width, height: img.height, bits: new Uint8Array(img.width * img.height).fill(1) };
+        const sx = doc ? img.width / doc.mask.width : 1, sy = doc ? img.height / doc.mask.height : 1;
+        const strokes = (doc?.strokes || []).map((s) => s.map(([x, y]) => [Math.round(x * sx * 100) / 100, Math.round(y * sy * 100) / 100]));
+        ctx.commit({
+          ...doc, example: null, source: bytes, mask, strokes, names: { ...(doc?.names || {}), source: file.name },
+        });
+        return;
+      }
+      if (!doc) throw new Error('load a source image first');
+      if (which === 'mask') {
+        const mask = await ctx.run('pixel-mask', { bytes });
+        if (mask.width !== doc.mask.width || mask.height !== doc.mask.height) {
+          throw new Error(`the mask is ${mask.width}×${mask.height} pixels but the source image is ${doc.mask.width}×${doc.mask.height}; they must be the same size`);
+        }
+        ctx.commit({ ...doc, mask });
+      } else {
+        await ctx.run('decode-image', { bytes: bytes.slice() });
+        ctx.commit({ ...doc, sheet: which === 'sheet' ? bytes : null, sprite: which === 'sprite' ? bytes : null, names: { ...doc.names, sheet: file.name } });
+      }
+    } catch (err) {
+      if (!err.field) err.field = which;
+      ctx.error(err, { prefix: file.name });
+    }
+  }
+
+  async function showElements(doc) {
+    const bytes = doc.sheet || doc.sprite;
+    const c = q('.sheet-preview');
+    if (!bytes) { c.width = c.height = 0; q('[data-field=elements]').textContent = 'no elements yet'; return; }
+    try {
+      const img = await ctx.run('decode-image', { bytes: bytes.slice() });
+      putRgba(c, img.width, img.height, img.rgba);
+      q('[data-field=elements]').textContent = `${doc.sheet ? 'sheet' : 'sprite'} ${img.width}×${img.height}`;
+    } catch (err) {
+      ctx.error(err, { prefix: 'Element sheet' });
+    }
+  }
+
+  // ---- running the core ---------------------------------------------------------------
+
+  function scheduleRun() {
+    ctx.clearTimeout(runTimer);
+    runTimer = ctx.setTimeout(() => { runTimer = null; run(); }, RUN_DELAY_MS);
+  }
+
+  async function run() {
+    const doc = state();
+    if (!doc || !(doc.sheet || doc.sprite)) return;
+    running?.abort();
+    const ctrl = new AbortController();
+    running = ctrl;
+    status('texturing…');
+    // The figures on screen belong to the previous run: clear them while this one works.
+    q('.stats').replaceChildren();
+    const t0 = performance.now();
+    try {
+      const r = await ctx.run('pixel', {
+        source: doc.source.slice(), sheet: doc.sheet?.slice(), sprite: doc.sprite?.slice(),
+        mask: { width: doc.mask.width, height: doc.mask.height, bits: doc.mask.bits.slice() },
+        strokes: doc.strokes, params: doc.params,
+      }, {
+        signal: ctrl.signal,
+        onProgress: (p) => {
+          if (running !== ctrl) return;
+          const pct = Number.isFinite(p.fraction) ? ` ${Math.round(p.fraction * 100)}%` : '';
+          status(`texturing: ${p.stage}${pct}`);
+        },
+      });
+      if (running !== ctrl) return;
+      const bitmap = await ctx.bitmap(new ImageData(new Uint8ClampedArray(r.rgba), r.width, r.height));
+      if (running !== ctrl) { ctx.release(bitmap); return; }
+      result = r;
+      ctx.release(resultBitmap);
+      resultBitmap = bitmap;
+      ctx.clearError();
+      status(`done in ${Math.round(performance.now() - t0)} ms`);
+      showStats(r);
+      drawBase();
+      drawStrokes();
+      // Counts finished runs, so a test (or a person) can tell two results apart.
+      statusEl.dataset.runs = String(Number(statusEl.dataset.runs || 0) + 1);
+    } catch (err) {
+      if (err.kind === 'cancelled') return;
+      // Keep the last good result on screen; say what is wrong now.
+      ctx.error(err);
+      status('');
+    } finally {
+      if (running === ctrl) running = null;
+    }
+  }
+
+  function showStats(r) {
+    const rows = [
+      ['Elements placed', r.placed], ['Colours before', r.colours_before], ['Colours after', r.colours_after],
+      ['Colour map', r.colour_map_used],
+    ];
+    q('.stats').replaceChildren(...rows.flatMap(([k, v]) => {
+      const dt = document.createElement('dt'); dt.textContent = k;
+      const dd = document.createElement('dd'); dd.textContent = String(v); dd.dataset.stat = k;
+      return [dt, dd];
+    }));
+  }
+
+  // ---- layers ---------------------------------------------------------------------------
+
+  /** Decode the document's source and size every layer for it. */
+  function loadSource(doc) {
+    const bytes = doc.source;
+    loadingFor = bytes;
+    const job = (async () => {
+      const img = await ctx.run('decode-image', { bytes: bytes.slice() });
+      const bitmap = await ctx.bitmap(new ImageData(new Uint8ClampedArray(img.rgba), img.width, img.height));
+      if (state()?.source !== bytes) { ctx.release(bitmap); return; }
+      ctx.release(sourceBitmap);
+      sourceBitmap = bitmap;
+      sourceImg = { width: img.width, height: img.height };
+      sourceOf = bytes;
+      // The old result belongs to the old source.
+      result = null;
+      ctx.release(resultBitmap);
+      resultBitmap = null;
+      q('.stats').replaceChildren();
+      fitZoom();
+      layout();
+      q('.empty').hidden = true;
+    })().catch((err) => ctx.error(err, { prefix: 'Source image' })).finally(() => {
+      if (sourceLoading === job) { sourceLoading = null; loadingFor = null; }
+    });
+    sourceLoading = job;
+  }
+
+  function fitZoom() {
+    const avail = Math.max(200, q('.viewport').clientWidth - 4);
+    view.zoom = Math.max(1, Math.min(16, Math.floor(avail / sourceImg.width)));
+  }
+
+  /** Sizes and full repaints: only on a new source, a zoom change or a view toggle — never per pointer move. */
+  function layout() {
+    if (!sourceImg) return;
+    const { width: w, height: h } = sourceImg;
+    const z = view.zoom;
+    layersEl.style.width = `${w * z}px`;
+    layersEl.style.height = `${h * z}px`;
+    layersEl.style.setProperty('--cell', `${z}px`);
+    layersEl.classList.toggle('grid', z >= 8);
+    q('[data-testid=zoom]').textContent = `×${z}`;
+    if (baseC.width !== w || baseC.height !== h) { baseC.width = w; baseC.height = h; }
+    strokeScale = Math.min(z * (window.devicePixelRatio || 1), Math.sqrt(MAX_STROKE_PIXELS / (w * h)));
+    const sw = Math.max(1, Math.round(w * strokeScale)), sh = Math.max(1, Math.round(h * strokeScale));
+    if (strokeC.width !== sw || strokeC.height !== sh) { strokeC.width = sw; strokeC.height = sh; }
+    drawBase();
+    drawMaskFull();
+    drawStrokes();
+  }
+
+  function drawBase() {
+    if (!sourceImg) return;
+    const base = view.showResult && resultBitmap ? resultBitmap : sourceBitmap;
+    if (!base) return;
+    baseCtx.clearRect(0, 0, baseC.width, baseC.height);
+    baseCtx.drawImage(base, 0, 0);
+  }
+
+  function maskVisible() {
+    return view.showMask || view.mode !== 'stroke';
+  }
+
+  function drawMaskFull() {
+    const m = drawing?.kind === 'mask' ? drawing.mask : state()?.mask;
+    maskC.hidden = !maskVisible();
+    if (!m || !sourceImg || m.width !== sourceImg.width || m.height !== sourceImg.height) return;
+    if (maskC.width !== m.width || maskC.height !== m.height) { maskC.width = m.width; maskC.height = m.height; }
+    if (!maskImage || maskImage.width !== m.width || maskImage.height !== m.height) maskImage = new ImageData(m.width, m.height);
+    const px = new Uint32Array(maskImage.data.buffer);
+    const on = new Uint32Array(new Uint8ClampedArray(MASK_RGBA).buffer)[0];
+    for (let i = 0; i < m.bits.length; i++) px[i] = m.bits[i] ? on : 0;
+    maskCtx.putImageData(maskImage, 0, 0);
+  }
+
+  function drawStrokes() {
+    const doc = state();
+    strokeCtx.setTransform(1, 0, 0, 1, 0, 0);
+    strokeCtx.clearRect(0, 0, strokeC.width, strokeC.height);
+    if (!doc || !sourceImg) return;
+    strokeCtx.setTransform(strokeScale, 0, 0, strokeScale, 0, 0);
+    if (view.showArrows && result?.field && result.width === sourceImg.width) drawArrows(result.field, sourceImg.width, sourceImg.height);
+    if (view.showStrokes) {
+      for (const s of doc.strokes) drawStroke(s, '#ff5db1');
+      if (drawing?.kind === 'stroke') drawStroke(drawing.points, '#ffd166', false);
+    }
+  }
+
+  // Widths are in screen pixels; the layer draws in source pixels.
+  const px = (css) => css / view.zoom;
+
+  function drawStroke(points, colour, head = true) {
+    if (points.length < 2) return;
+    strokeCtx.strokeStyle = colour;
+    strokeCtx.lineWidth = px(Math.max(1.5, view.zoom / 3));
+    strokeCtx.lineCap = strokeCtx.lineJoin = 'round';
+    strokeCtx.beginPath();
+    points.forEach(([x, y], i) => (i ? strokeCtx.lineTo(x, y) : strokeCtx.moveTo(x, y)));
+    strokeCtx.stroke();
+    if (!head) return;
+    const [x1, y1] = points[points.length - 1];
+    const [x0, y0] = points[Math.max(0, points.length - 4)];
+    arrowHead(x0, y0, x1, y1, px(Math.max(6, view.zoom * 1.5)), colour);
+  }
+
+  function arrowHead(x0, y0, x1, y1, size, colour) {
+    const a = Math.atan2(y1 - y0, x1 - x0);
+    strokeCtx.fillStyle = colour;
+    strokeCtx.beginPath();
+    strokeCtx.moveTo(x1, y1);
+    strokeCtx.lineTo(x1 - size * Math.cos(a - 0.45), y1 - size * Math.sin(a - 0.45));
+    strokeCtx.lineTo(x1 - size * Math.cos(a + 0.45), y1 - size * Math.sin(a + 0.45));
+    strokeCtx.fill();
+  }
+
+  // The diffused field as small arrows, one per cell of `step` pixels inside the mask.
+  function drawArrows(field, w, h) {
+    const z = view.zoom;
+    const step = Math.max(1, Math.ceil(12 / z));
+    const mask = state().mask.bits;
+    strokeCtx.strokeStyle = 'rgba(255, 255, 255, 0.85)';
+    strokeCtx.lineWidth = px(1);
+    for (let y = Math.floor(step / 2); y < h; y += step) {
+      for (let x = Math.floor(step / 2); x < w; x += step) {
+        if (!mask[y * w + x]) continue;
+        const vx = field[2 * (y * w + x)], vy = field[2 * (y * w + x) + 1];
+        const len = Math.hypot(vx, vy);
+        if (len < 1e-6) continue;
+        const L = step * 0.42;
+        const cx = x + 0.5, cy = y + 0.5;
+        const dx = (vx / len) * L, dy = (vy / len) * L;
+        strokeCtx.beginPath();
+        strokeCtx.moveTo(cx - dx, cy - dy);
+        strokeCtx.lineTo(cx + dx, cy + dy);
+        strokeCtx.stroke();
+        arrowHead(cx - dx, cy - dy, cx + dx, cy + dy, Math.max(px(3), L * 0.5), 'rgba(255, 255, 255, 0.85)');
+      }
+    }
+  }
+
+  // ---- pointer input: strokes and mask painting ----------------------------------------
+
+  // Image coordinates of a pointer event, kept inside the image (a drag may leave the canvas).
+  const clamp = (v, hi) => Math.max(0, Math.min(hi, v));
+  const toPixel = (e) => [
+    clamp((e.clientX - rect.left) / rect.width * sourceImg.width, sourceImg.width),
+    clamp((e.clientY - rect.top) / rect.height * sourceImg.height, sourceImg.height),
+  ];
+
+  function paintAt([fx, fy], on) {
+    const m = drawing.mask;
+    const r = view.brush / 2;
+    const x0 = Math.max(0, Math.floor(fx - r)), x1 = Math.min(m.width - 1, Math.floor(fx + r));
+    const y0 = Math.max(0, Math.floor(fy - r)), y1 = Math.min(m.height - 1, Math.floor(fy + r));
+    if (x1 < x0 || y1 < y0) return;
+    const pxs = maskImage && new Uint32Array(maskImage.data.buffer);
+    const colour = on ? new Uint32Array(new Uint8ClampedArray(MASK_RGBA).buffer)[0] : 0;
+    for (let y = y0; y <= y1; y++) {
+      for (let x = x0; x <= x1; x++) {
+        if (Math.hypot(x + 0.5 - fx, y + 0.5 - fy) > Math.max(r, 0.5)) continue;
+        m.bits[y * m.width + x] = on ? 1 : 0;
+        if (pxs) pxs[y * m.width + x] = colour;
+      }
+    }
+    dirty = dirty
+      ? { x0: Math.min(dirty.x0, x0), y0: Math.min(dirty.y0, y0), x1: Math.max(dirty.x1, x1), y1: Math.max(dirty.y1, y1) }
+      : { x0, y0, x1, y1 };
+    wantFrame();
+  }
+
+  function wantFrame() {
+    if (frameWanted) return;
+    frameWanted = true;
+    requestAnimationFrame(frame);
+  }
+
+  // One paint per frame, whatever the number of pointer events: the mask's
+  // dirty rectangle and the new stroke segments.
+  function frame() {
+    frameWanted = false;
+    if (!ctx.alive()) return;
+    if (dirty && maskImage) {
+      const d = dirty;
+      maskCtx.putImageData(maskImage, 0, 0, d.x0, d.y0, d.x1 - d.x0 + 1, d.y1 - d.y0 + 1);
+    }
+    dirty = null;
+    if (segments.length && view.showStrokes) {
+      strokeCtx.setTransform(strokeScale, 0, 0, strokeScale, 0, 0);
+      strokeCtx.strokeStyle = '#ffd166';
+      strokeCtx.lineWidth = px(Math.max(1.5, view.zoom / 3));
+      strokeCtx.lineCap = strokeCtx.lineJoin = 'round';
+      strokeCtx.beginPath();
+      for (const [a, b] of segments) { strokeCtx.moveTo(a[0], a[1]); strokeCtx.lineTo(b[0], b[1]); }
+      strokeCtx.stroke();
+    }
+    segments = [];
+  }
+
+  strokeC.addEventListener('pointerdown', (e) => {
+    if (!state() || !sourceImg || e.button > 0 || ctx.readOnly) return;
+    strokeC.setPointerCapture(e.pointerId);
+    rect = strokeC.getBoundingClientRect();
+    const p = toPixel(e);
+    if (view.mode === 'stroke') {
+      drawing = { kind: 'stroke', points: [p] };
+    } else {
+      const m = state().mask;
+      drawing = { kind: 'mask', mask: { width: m.width, height: m.height, bits: m.bits.slice() } };
+      paintAt(p, view.mode === 'paint');
+    }
+  });
+
+  strokeC.addEventListener('pointermove', (e) => {
+    if (!drawing) return;
+    const events = e.getCoalescedEvents?.().length ? e.getCoalescedEvents() : [e];
+    for (const ev of events) {
+      const p = toPixel(ev);
+      if (drawing.kind === 'stroke') {
+        const last = drawing.points[drawing.points.length - 1];
+        if (Math.hypot(p[0] - last[0], p[1] - last[1]) < 0.25) continue;
+        drawing.points.push(p);
+        segments.push([last, p]);
+        wantFrame();
+      } else {
+        paintAt(p, view.mode === 'paint');
+      }
+    }
+  });
+
+  const endDrawing = () => {
+    if (!drawing) return;
+    const d = drawing;
+    drawing = null;
+    if (d.kind === 'stroke') {
+      if (d.points.length >= 2) {
+        const pts = d.points.map(([x, y]) => [Math.round(x * 100) / 100, Math.round(y * 100) / 100]);
+        ctx.commit({ ...state(), strokes: [...state().strokes, pts] });
+      } else drawStrokes();
+    } else {
+      // The whole brush drag is one undo step.
+      ctx.commit({ ...state(), mask: d.mask });
+    }
+  };
+  strokeC.addEventListener('pointerup', endDrawing);
+  strokeC.addEventListener('pointercancel', endDrawing);
+
+  // ---- controls -----------------------------------------------------------------------------
+
+  const form = q('form.params');
+  for (const c of CONTROLS) form.append(controlRow(c));
+
+  function controlRow(c) {
+    const row = document.createElement('div');
+    row.className = 'row';
+    row.dataset.key = c.key;
+    const label = document.createElement('label');
+    label.textContent = c.label;
+    const id = `pixel-${c.key}`;
+    label.htmlFor = id;
+    row.append(label);
+    const set = (value, opts) => {
+      const doc = state();
+      if (!doc) return;
+      ctx.commit({ ...doc, params: { ...doc.params, [c.key]: value } }, opts);
+    };
+    let input;
+    if (c.type === 'select') {
+      input = document.createElement('select');
+      for (const o of c.options) input.append(new Option(o, o));
+      input.onchange = () => set(input.value);
+    } else if (c.type === 'range') {
+      input = document.createElement('input');
+      Object.assign(input, { type: 'range', min: c.min, max: c.max, step: c.step });
+      const out = document.createElement('output');
+      row.append(out);
+      input.oninput = () => set(Number(input.value), { coalesce: c.key });
+      input.onchange = () => ctx.seal();
+    } else if (c.type === 'checkbox') {
+      input = document.createElement('input');
+      input.type = 'checkbox';
+      input.onchange = () => set(input.checked);
+    } else if (c.type === 'ints') {
+      input = document.createElement('span');
+      input.className = 'ints';
+      for (let i = 0; i < c.n; i++) {
+        const n = document.createElement('input');
+        Object.assign(n, { type: 'number', min: c.min, max: c.max, step: 1 });
+        n.setAttribute('aria-label', `${c.label} ${i + 1}`);
+        n.onchange = () => {
+          const v = [...input.querySelectorAll('input')].map((x) => Math.max(c.min, Math.min(c.max, Math.round(Number(x.value) || 0))));
+          set(v);
+        };
+        input.append(n);
+      }
+    } else if (c.type === 'colours') {
+      input = document.createElement('input');
+      input.type = 'text';
+      input.placeholder = '#000000, #ffffff';
+      input.onchange = () => {
+        const parsed = parseColours(input.value);
+        if (parsed.error) { ctx.error(Object.assign(new Error(`Excluded colours: ${parsed.error}`), { field: 'params.exclude' })); return; }
+        ctx.clearError();
+        set(parsed.colours);
+      };
+    } else if (c.type === 'seed') {
+      input = document.createElement('span');
+      input.className = 'ints';
+      const n = document.createElement('input');
+      Object.assign(n, { type: 'number', min: 0, step: 1 });
+      n.setAttribute('aria-label', 'seed');
+      n.onchange = () => set(Math.max(0, Math.round(Number(n.value) || 0)));
+      const b = document.createElement('button');
+      b.type = 'button';
+      b.textContent = '⟳';
+      b.title = 'New seed';
+      b.setAttribute('aria-label', 'New seed');
+      b.onclick = () => set((state()?.params.seed ?? 0) + 1);
+      input.append(n, b);
+    }
+    input.id = id;
+    input.dataset.field = `params.${c.key}`;
+    row.insertBefore(input, row.children[1] || null);
+    return row;
+  }
+
+  function syncControls(p) {
+    for (const c of CONTROLS) {
+      const row = form.querySelector(`[data-key=${c.key}]`);
+      const v = p[c.key];
+      if (c.type === 'select') row.querySelector('select').value = v;
+      else if (c.type === 'range') {
+        row.querySelector('input').value = v;
+        row.querySelector('output').textContent = c.show(v);
+      } else if (c.type === 'checkbox') row.querySelector('input').checked = v;
+      else if (c.type === 'ints') row.querySelectorAll('input').forEach((x, i) => { x.value = v[i]; });
+      else if (c.type === 'colours') row.querySelector('input').value = v.map((rgb) => hex([...rgb, 255])).join(', ');
+      else if (c.type === 'seed') row.querySelector('input').value = v;
+    }
+    form.querySelector('[data-key=hsv]').classList.toggle('dim', p.colour !== 'hsv' && p.colour !== 'auto');
+    form.querySelector('[data-key=d_max]').classList.toggle('dim', p.colour !== 'auto');
+  }
+
+  // ---- toolbar, toggles -----------------------------------------------------------------------
+
+  el.querySelectorAll('[data-example]').forEach((b) => { b.onclick = () => loadExample(b.dataset.example); });
+  const setMode = (mode) => {
+    view.mode = mode;
+    el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-pressed', String(x.dataset.mode === mode)));
+    maskC.hidden = !maskVisible();
+  };
+  el.querySelectorAll('[data-mode]').forEach((b) => { b.onclick = () => setMode(b.dataset.mode); });
+  q('[name=brush]').onchange = (e) => { view.brush = Math.max(1, Math.min(32, Number(e.target.value) || 1)); };
+  const zoomBy = (d) => { view.zoom = Math.max(1, Math.min(32, view.zoom + d)); layout(); };
+  q('[data-act=zoom-in]').onclick = () => zoomBy(view.zoom >= 8 ? 2 : 1);
+  q('[data-act=zoom-out]').onclick = () => zoomBy(view.zoom > 8 ? -2 : -1);
+  q('.viewport').addEventListener('wheel', (e) => {
+    if (!e.ctrlKey || !sourceImg) return;
+    e.preventDefault();
+    zoomBy(e.deltaY < 0 ? 1 : -1);
+  }, { passive: false });
+  q('[data-act=clear-strokes]').onclick = () => state()?.strokes.length && ctx.commit({ ...state(), strokes: [] });
+  const toggles = { 'show-result': 'showResult', 'show-mask': 'showMask', 'show-strokes': 'showStrokes', 'show-arrows': 'showArrows' };
+  for (const [name, key] of Object.entries(toggles)) {
+    q(`[name=${name}]`).onchange = (e) => {
+      view[key] = e.target.checked;
+      if (key === 'showResult') drawBase();
+      else if (key === 'showMask') maskC.hidden = !maskVisible();
+      else drawStrokes();
+    };
+  }
+
+  el.querySelectorAll('input[data-input]').forEach((input) => {
+    input.onchange = () => {
+      if (input.files[0]) loadInput(input.dataset.input, input.files[0]);
+      input.value = '';
+    };
+  });
+  const detachFiles = acceptFiles(q('.viewport'), (file) => loadInput('source', file), { pickerLabel: 'Choose a source image…' });
+  q('.viewport .pick').classList.add('overlay-pick');
+
+  q('[data-act=export-png]').onclick = async () => {
+    if (!result) { ctx.error(new Error('nothing to export yet: load an example or a source and an element sheet')); return; }
+    const s = Number(q('[name=export-scale]').value);
+    const c = document.createElement('canvas');
+    c.width = result.width * s;
+    c.height = result.height * s;
+    const x = c.getContext('2d');
+    x.imageSmoothingEnabled = false;
+    x.drawImage(resultBitmap, 0, 0, c.width, c.height);
+    const blob = await new Promise((r) => c.toBlob(r, 'image/png'));
+    const base = (state().names?.source || 'pixel').replace(/\.[^.]+$/, '');
+    download(`${base}-textured${s > 1 ? `@${s}x` : ''}.png`, blob);
+  };
+
+  // For tests and the console: the document, the last result, and whether a run is due or going.
+  window.filigreePixel = {
+    state, result: () => result, pending: () => runTimer !== null || running !== null || sourceLoading !== null,
+  };
+
+  const inputsOf = (s) => [s.source, s.sheet, s.sprite, s.mask, s.strokes, s.params];
+  return {
+    render(s, prev) {
+      if (!s) return;
+      if (s.source !== sourceOf && s.source !== loadingFor) loadSource(s);
+      else if (sourceImg) {
+        if (!prev || s.mask !== prev.mask) drawMaskFull();
+        if (!prev || s.strokes !== prev.strokes) drawStrokes();
+      }
+      if (!prev || s.sheet !== prev.sheet || s.sprite !== prev.sprite) showElements(s);
+      syncControls(s.params);
+      if (!prev || inputsOf(s).some((v, i) => v !== inputsOf(prev)[i])) scheduleRun();
+    },
+    keys: { s: () => setMode('stroke'), m: () => setMode('paint'), e: () => setMode('erase') },
+    unmount() {
+      detachFiles();
+      running?.abort();
+      if (window.filigreePixel?.state === state) delete window.filigreePixel;
+    },
+  };
+}
+
+export default { id: 'pixel', title: 'Pixel', state: pixelState, mount };
 
 /** '#000000, #fff' → {colours: [[0,0,0],[255,255,255]]} or {error}. */
 export function parseColours(text) {

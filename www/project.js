@@ -1,5 +1,6 @@
-// Projects (MISSION S8): every tool's state can be autosaved to IndexedDB,
-// saved to / loaded from a project file, and undone/redone.
+// Projects (MISSION S8): storage, project files and undo history used by
+// the document controller (document.js): every tool's state is autosaved to
+// IndexedDB, saved to / loaded from a project file, and undone/redone.
 //
 // State is plain data; byte inputs (images) are Uint8Arrays. IndexedDB stores
 // them as they are; project files encode them as {"$bytes": base64}.
@@ -7,72 +8,112 @@
 const DB_NAME = 'filigree';
 const STORE = 'autosave';
 export const PROJECT_FORMAT = 'filigree-project';
-export const PROJECT_VERSION = 1;
+// File format 2 adds `stateVersion` (the tool's state schema version);
+// format-1 files carry tool states of version 1.
+export const PROJECT_VERSION = 2;
+/** A storage call that has not answered by then is taken as refused (an
+ * `about:blank` host or a third-party frame may hang IndexedDB for ever). */
+export const STORAGE_TIMEOUT_MS = 1500;
+
+/** `promise`, or a rejection once `ms` have passed. */
+export function withTimeout(promise, ms, what) {
+  let timer;
+  return Promise.race([
+    promise,
+    new Promise((_, reject) => { timer = setTimeout(() => reject(new Error(`${what} did not answer within ${ms} ms`)), ms); }),
+  ]).finally(() => clearTimeout(timer));
+}
 
 function openDb() {
   return new Promise((resolve, reject) => {
-    const req = indexedDB.open(DB_NAME, 1);
+    const req = indexedDB.open(DB_NAME, 1); // throws in an opaque origin
     req.onupgradeneeded = () => req.result.createObjectStore(STORE);
     req.onsuccess = () => resolve(req.result);
     req.onerror = () => reject(req.error);
+    req.onblocked = () => reject(new Error('the database is blocked by another tab'));
   });
 }
 
-async function withStore(mode, fn) {
-  const db = await openDb();
-  try {
-    return await new Promise((resolve, reject) => {
-      const tx = db.transaction(STORE, mode);
-      const req = fn(tx.objectStore(STORE));
-      tx.oncomplete = () => resolve(req?.result);
-      tx.onerror = () => reject(tx.error);
-      tx.onabort = () => reject(tx.error);
-    });
-  } finally {
-    db.close();
+let dbPromise = null;
+function db() {
+  if (!dbPromise) {
+    dbPromise = withTimeout(new Promise((resolve, reject) => {
+      try { openDb().then(resolve, reject); } catch (err) { reject(err); }
+    }), STORAGE_TIMEOUT_MS, 'storage');
+    dbPromise.catch(() => { dbPromise = null; });
   }
+  return dbPromise;
+}
+
+async function withStore(mode, fn) {
+  const database = await db();
+  return withTimeout(new Promise((resolve, reject) => {
+    const tx = database.transaction(STORE, mode);
+    const req = fn(tx.objectStore(STORE));
+    tx.oncomplete = () => resolve(req?.result);
+    tx.onerror = () => reject(tx.error);
+    tx.onabort = () => reject(tx.error);
+  }), STORAGE_TIMEOUT_MS, 'storage');
 }
 
 let persistAsked = false;
 
-/** Autosave of one tool's state: `load()` once on mount, `save(state)` on every change. */
+/**
+ * Autosave of one key: `load()` once, `save(value)` on every change
+ * (debounced), `flush()` on pagehide or when leaving. Every call fails fast
+ * (STORAGE_TIMEOUT_MS); `onBlocked(err)` hears about the first failure so the
+ * page can say plainly that it cannot save here.
+ */
 export class Autosave {
-  constructor(tool, { delayMs = 400 } = {}) {
-    this.key = tool;
+  constructor(key, { delayMs = 400, onBlocked } = {}) {
+    this.key = key;
     this.delayMs = delayMs;
     this.timer = null;
     this.pending = null;
     this.lastSaved = Promise.resolve();
+    this.onBlocked = onBlocked;
+    this.blocked = false;
+  }
+
+  fail(err) {
+    console.warn('autosave unavailable:', err?.message || err);
+    if (!this.blocked) { this.blocked = true; this.onBlocked?.(err); }
   }
 
   async load() {
     try {
       return (await withStore('readonly', (s) => s.get(this.key))) ?? null;
     } catch (err) {
-      console.warn('autosave unavailable:', err);
+      this.fail(err);
       return null;
     }
   }
 
-  /** Debounced write; `flush()` forces it (e.g. on pagehide). */
-  save(state) {
-    this.pending = state;
+  /** Debounced write; `flush()` forces it. */
+  save(value) {
+    this.pending = value;
     clearTimeout(this.timer);
     this.timer = setTimeout(() => this.flush(), this.delayMs);
     if (!persistAsked && navigator.storage?.persist) {
       persistAsked = true;
-      navigator.storage.persist().catch(() => {});
+      withTimeout(Promise.resolve().then(() => navigator.storage.persist()), STORAGE_TIMEOUT_MS, 'storage.persist')
+        .catch(() => {});
     }
+  }
+
+  /** Drop a pending write (e.g. the document was rejected). */
+  cancel() {
+    clearTimeout(this.timer);
+    this.pending = null;
   }
 
   flush() {
     clearTimeout(this.timer);
     if (this.pending === null) return this.lastSaved;
-    const state = this.pending;
+    const value = this.pending;
     this.pending = null;
-    this.lastSaved = withStore('readwrite', (s) => s.put(state, this.key)).catch((err) => {
-      console.warn('autosave failed:', err);
-    });
+    if (this.blocked) return this.lastSaved;
+    this.lastSaved = withStore('readwrite', (s) => s.put(value, this.key)).catch((err) => this.fail(err));
     return this.lastSaved;
   }
 }
@@ -146,32 +187,50 @@ function encode(v) {
   return v;
 }
 
-function decode(v) {
-  if (Array.isArray(v)) return v.map(decode);
+function decode(v, depth = 0) {
+  if (depth > 64) throw new Error('the project is nested too deeply');
+  if (Array.isArray(v)) return v.map((x) => decode(x, depth + 1));
   if (v && typeof v === 'object') {
-    if (typeof v.$bytes === 'string') return fromBase64(v.$bytes);
-    return Object.fromEntries(Object.entries(v).map(([k, x]) => [k, decode(x)]));
+    if (typeof v.$bytes === 'string') {
+      try { return fromBase64(v.$bytes); } catch { throw new Error('the project holds image data that is not valid base64'); }
+    }
+    return Object.fromEntries(Object.entries(v).map(([k, x]) => [k, decode(x, depth + 1)]));
   }
   return v;
 }
 
-/** The text of a project file for `tool` with `state`. */
-export function projectText(tool, state) {
-  return JSON.stringify({ format: PROJECT_FORMAT, version: PROJECT_VERSION, tool, state: encode(state) });
+/** The text of a project file for `tool` whose state (schema `stateVersion`) is `state`. */
+export function projectText(tool, stateVersion, state) {
+  return JSON.stringify({ format: PROJECT_FORMAT, version: PROJECT_VERSION, tool, stateVersion, state: encode(state) });
 }
 
-/** Parse a project file's text; throws an Error saying what is wrong. */
-export function parseProject(text, expectedTool) {
+/**
+ * Parse a project file's text: {tool, stateVersion, state}. Throws an Error
+ * saying what is wrong; the caller still validates `state` with the tool.
+ */
+export function parseProject(text) {
   let doc;
   try {
     doc = JSON.parse(text);
   } catch (err) {
     throw new Error(`not a Filigree project: the file is not valid JSON (${err.message})`);
   }
-  if (doc?.format !== PROJECT_FORMAT) throw new Error('not a Filigree project: "format" is missing or different');
-  if (doc.version > PROJECT_VERSION) throw new Error(`this project was saved by a newer Filigree (format ${doc.version})`);
-  if (expectedTool && doc.tool !== expectedTool) throw new Error(`this is a ${doc.tool} project; open it in the ${doc.tool} tool`);
-  return decode(doc.state);
+  if (!doc || typeof doc !== 'object' || doc.format !== PROJECT_FORMAT) {
+    throw new Error('not a Filigree project: "format" is missing or different');
+  }
+  if (!Number.isInteger(doc.version) || doc.version < 1) throw new Error('not a Filigree project: "version" is missing');
+  if (doc.version > PROJECT_VERSION) throw new Error(`this project was saved by a newer Filigree (file format ${doc.version}); update Filigree to open it`);
+  if (typeof doc.tool !== 'string' || !doc.tool) throw new Error('not a Filigree project: "tool" is missing');
+  const stateVersion = doc.version === 1 ? 1 : doc.stateVersion;
+  if (!Number.isInteger(stateVersion) || stateVersion < 1) throw new Error('not a Filigree project: "stateVersion" is missing');
+  if (!doc.state || typeof doc.state !== 'object') throw new Error('not a Filigree project: "state" is missing');
+  let state;
+  try {
+    state = decode(doc.state);
+  } catch (err) {
+    throw new Error(`not a Filigree project: ${err.message}`);
+  }
+  return { tool: doc.tool, stateVersion, state };
 }
 
 /** Offer `data` (string, bytes or Blob) as a download named `name`. */

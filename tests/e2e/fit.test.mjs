@@ -19,8 +19,8 @@ async function pickGenerator(page, name) {
 async function runFit(page) {
   await page.click('button[data-act=fit]');
   await page.waitForFunction(() => /^fitted/.test(document.querySelector('[data-testid=fit-status]').textContent)
-    || !document.querySelector('.fit-error').hidden, null, { timeout: 120000 });
-  assert.equal(await page.isHidden('.fit-error'), true, await page.textContent('.fit-error'));
+    || !document.querySelector('[data-testid=doc-error]').hidden, null, { timeout: 120000 });
+  assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
 }
 
 test('fit a stripes target made from known parameters, cancel a second fit, export SVG', async () => {
@@ -100,7 +100,7 @@ test('draw a target by hand and fit it; a broken program is reported with its li
   await page.click('details.program summary');
   await page.fill('[data-testid=fit-program]', 'param a in [0, 1] = 0.5;\ncircle(0.5, 0.5, a +, fill: "#000000");\n');
   await page.click('button[data-act=apply-program]');
-  await page.waitForSelector('[data-testid=fit-program-error]:not([hidden])');
-  assert.match(await page.textContent('[data-testid=fit-program-error]'), /line 2, column \d+/);
+  await page.waitForSelector('[data-testid=doc-error]:not([hidden])');
+  assert.match(await page.textContent('[data-testid=doc-error]'), /line 2, column \d+/);
   assert.equal(await page.$$eval('[data-testid=fit-sliders] .row', (r) => r.length), before);
 });

@@ -17,12 +17,12 @@ const ARGS = [
   '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
 ];
 
-/** Start server (serving `root`, the repository by default) + browser.
+/** Start server (serving `root`, the repository by default) + browser (extra Chromium `args`).
  * Returns {url, browser, server, newPage(), close()}. */
-export async function launch({ root = ROOT } = {}) {
+export async function launch({ root = ROOT, args = [] } = {}) {
   const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
-  const browser = await chromium.launch({ executablePath: CHROMIUM, args: ARGS, headless: true });
+  const browser = await chromium.launch({ executablePath: CHROMIUM, args: [...ARGS, ...args], headless: true });
   const contexts = [];
   const env = {
     url, browser, server,

@@ -30,7 +30,7 @@ test('dropping a PNG shows its size, palette and thumbnail', async () => {
 test('bad files get a clear error and the next good file still works', async () => {
   const page = await env.newPage({ path: '#tool=inspect' });
   const zone = '[data-testid=drop-zone]';
-  const error = '[data-testid=inspect-result] .error';
+  const error = '[data-testid=doc-error]';
   await dropFile(page, zone, fixture('fish.png'));
   await page.waitForSelector('[data-testid=palette] li');
 

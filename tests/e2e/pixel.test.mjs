@@ -123,8 +123,8 @@ test('a wrong-size mask is refused with a clear error; a saved project reopens',
 
   // The fish mask (128×128) does not fit the trunk (64×64).
   await page.setInputFiles('input[data-input=mask]', new URL('../../assets/pixel/fish_body_boundary.png', import.meta.url).pathname);
-  await page.waitForSelector('.pixel-stage .error:not([hidden])');
-  assert.match(await page.textContent('.pixel-stage .error'),
+  await page.waitForSelector('[data-testid=doc-error]:not([hidden])');
+  assert.match(await page.textContent('[data-testid=doc-error]'),
     /fish_body_boundary\.png: the mask is 128×128 pixels but the source image is 64×64/);
   const after = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
   assert.equal(after, before, 'the mask the user had is untouched');

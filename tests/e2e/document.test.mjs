@@ -1,0 +1,396 @@
+// The document controller (www/document.js) and share links (www/share.js):
+// links round-trip a Pixel and a Fit state into a fresh browser with the
+// same result pixels; bad project files and links are refused without
+// touching the user's work; leaving a tool or changing the generator during
+// a fit stops it cleanly; examples are undoable; blocked storage is said
+// plainly and the app still works.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import zlib from 'node:zlib';
+import { launch } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+const ERROR = '[data-testid=doc-error]';
+
+function watchErrors(page) {
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  return errors;
+}
+
+// ---- Pixel helpers -------------------------------------------------------------------
+
+async function waitForPixel(page, previous = null) {
+  await page.waitForFunction((prev) => {
+    const el = document.querySelector('[data-testid=pixel-status]');
+    const runs = Number(el?.dataset.runs || 0);
+    return el.textContent.startsWith('done') && runs > 0 && (prev === null || runs > prev)
+      && !window.filigreePixel.pending();
+  }, previous, { timeout: 30000 });
+  return page.$eval('[data-testid=pixel-status]', (el) => Number(el.dataset.runs));
+}
+
+async function dragStroke(page, points, size = 128) {
+  const box = await page.locator('[data-testid=pixel-canvas]').boundingBox();
+  const z = box.width / size;
+  const at = ([x, y]) => [box.x + x * z, box.y + y * z];
+  await page.mouse.move(...at(points[0]));
+  await page.mouse.down();
+  for (const p of points.slice(1)) await page.mouse.move(...at(p), { steps: 6 });
+  await page.mouse.up();
+}
+
+// FNV-1a of a result's pixels, computed in the page.
+const PIXEL_HASH = `(rgba) => { let h = 2166136261; for (let i = 0; i < rgba.length; i++) { h ^= rgba[i]; h = Math.imul(h, 16777619) >>> 0; } return h; }`;
+const pixelResultHash = (page) => page.evaluate(`(${PIXEL_HASH})(window.filigreePixel.result().rgba)`);
+
+async function pixelReady(page) {
+  await page.waitForFunction(() => window.filigreePixel?.state()?.example === 'fish');
+  return waitForPixel(page);
+}
+
+// ---- Fit helpers ----------------------------------------------------------------------
+
+async function pickGenerator(page, name) {
+  await page.waitForSelector('[data-testid=fit-sliders] .row');
+  await page.selectOption('[data-testid=fit-generator]', name);
+  await page.waitForFunction((n) => window.filigreeFit.state()?.generator === n
+    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length
+    && document.querySelector(`[data-testid=fit-sliders] .row[data-param="${window.filigreeFit.info().params[0].name}"]`), name);
+}
+
+async function runFit(page) {
+  await page.click('button[data-act=fit]');
+  await page.waitForFunction(() => /^fitted/.test(document.querySelector('[data-testid=fit-status]').textContent)
+    || !document.querySelector('[data-testid=doc-error]').hidden, null, { timeout: 120000 });
+  assert.equal(await page.isHidden(ERROR), true, await page.textContent(ERROR));
+}
+
+/** Hash of the program rendered at 256² with the document's values. */
+const fitRenderHash = (page) => page.evaluate(async (hashSrc) => {
+  const hash = eval(hashSrc); // eslint-disable-line no-eval
+  const d = window.filigreeFit.state();
+  const info = window.filigreeFit.info();
+  const params = Object.fromEntries(info.params.map((p, i) => [p.name, d.values[i]]));
+  const r = await window.filigree.pool.run('render-pattern', { program: d.program, params, size: 256 });
+  return { render: hash(r.rgba), target: hash(d.target.rgba) };
+}, PIXEL_HASH);
+
+async function startPaperFit(page) {
+  await pickGenerator(page, 'stripes');
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await page.selectOption('select[name=budget]', 'paper');
+  await page.waitForFunction(() => window.filigreeFit.state().settings.budget === 'paper');
+  await page.click('button[data-act=fit]');
+  await page.waitForFunction(() => /loss/.test(document.querySelector('[data-testid=fit-status]').textContent)
+    && !document.querySelector('button[data-act=cancel]').disabled);
+}
+
+// ---- share links ----------------------------------------------------------------------------
+
+test('a Pixel share link opens the same state and the same result pixels in a fresh browser', async () => {
+  const a = await env.newPage({ path: '#tool=pixel' });
+  let runs = await pixelReady(a);
+  await dragStroke(a, [[20, 70], [45, 62], [70, 66], [95, 80]]);
+  runs = await waitForPixel(a, runs);
+  await a.$eval('[data-key=density] input', (el) => { el.value = '0.6'; el.dispatchEvent(new Event('input', { bubbles: true })); el.dispatchEvent(new Event('change', { bubbles: true })); });
+  runs = await waitForPixel(a, runs);
+  const want = await a.evaluate(() => {
+    const s = window.filigreePixel.state();
+    return { strokes: s.strokes, params: s.params, maskOn: s.mask.bits.reduce((x, y) => x + y, 0) };
+  });
+  const wantHash = await pixelResultHash(a);
+
+  // The Copy link button makes the link (the clipboard may be refused headless; the link is shown then).
+  await a.click('button[data-act=copy-link]');
+  await a.waitForSelector('.toast[data-link]');
+  const link = await a.$eval('.toast[data-link]', (t) => t.dataset.link);
+  assert.match(link, /#tool=pixel&share=[A-Za-z0-9_-]+$/);
+  assert.ok(link.length < 8192 + 200, `the link is ${link.length} characters`);
+
+  const b = await env.newPage({ path: link.slice(link.indexOf('#')) });
+  await b.waitForFunction((n) => window.filigreePixel?.state()?.strokes.length === n, want.strokes.length);
+  await waitForPixel(b);
+  const got = await b.evaluate(() => {
+    const s = window.filigreePixel.state();
+    return { strokes: s.strokes, params: s.params, maskOn: s.mask.bits.reduce((x, y) => x + y, 0) };
+  });
+  assert.deepEqual(got, want);
+  assert.equal(await pixelResultHash(b), wantHash, 'same result pixels');
+  assert.equal(new URL(b.url()).hash, '#tool=pixel', 'the link is consumed (a reload does not reapply it)');
+  // The link came in as an undoable step over the fresh document.
+  assert.equal(await b.isEnabled('button[data-act=undo]'), true);
+});
+
+test('a Fit share link restores program, target and values; the same seed fits to the same result', async () => {
+  const a = await env.newPage({ path: '#tool=fit' });
+  await pickGenerator(a, 'stripes');
+  await a.click('button[data-act=make-target]');
+  await a.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await runFit(a);
+  const want = await a.evaluate(() => {
+    const s = window.filigreeFit.state();
+    return { generator: s.generator, values: s.values, truth: s.truth, settings: s.settings, loss: s.result.loss };
+  });
+  const wantHash = await fitRenderHash(a);
+  const { fragment } = await a.evaluate(() => window.filigree.currentShare());
+
+  const b = await env.newPage({ path: `#${fragment}` });
+  await b.waitForFunction(() => window.filigreeFit?.state()?.generator === 'stripes'
+    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length);
+  const got = await b.evaluate(() => {
+    const s = window.filigreeFit.state();
+    return { generator: s.generator, values: s.values, truth: s.truth, settings: s.settings, loss: s.result.loss };
+  });
+  assert.deepEqual(got, want);
+  assert.deepEqual(await fitRenderHash(b), wantHash, 'same target pixels and same pattern pixels');
+  // Fitting again with the same seed gives exactly the same values.
+  await runFit(b);
+  assert.deepEqual(await b.evaluate(() => window.filigreeFit.state().values), want.values);
+  assert.deepEqual(await fitRenderHash(b), wantHash);
+});
+
+test('a corrupt or hostile link says so plainly and leaves the autosaved work alone', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await pixelReady(page);
+  await dragStroke(page, [[20, 70], [60, 64], [95, 80]]);
+  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 4);
+  await page.waitForTimeout(700); // the autosave is debounced
+  const strokes = () => page.evaluate(() => window.filigreePixel.state().strokes.length);
+
+  const cases = [
+    ['tool=pixel&share=%%%not-base64', /This link is damaged or not a Filigree link/],
+    ['tool=pixel&share=AAAAAAAA', /This link is damaged or not a Filigree link/],
+    // A zip bomb: 8 MB of zeros deflate to a few KB.
+    [`tool=pixel&share=${zlib.deflateRawSync(Buffer.alloc(8 << 20)).toString('base64url')}`, /unpacks to more than 1 MB/],
+  ];
+  // A well-formed link whose state is wrong: the mask does not match its size.
+  const bad = await page.evaluate(async () => {
+    const { encodeShare } = await import('./www/share.js');
+    return encodeShare('pixel', { example: 'fish', sheet: null, sprite: null, mask: { width: 128, height: 128, packed: new Uint8Array(3) }, strokes: [], params: {}, names: {} });
+  });
+  cases.push([bad, /could not be opened: mask is cut short/]);
+  for (const [fragment, message] of cases) {
+    await page.evaluate((f) => { location.hash = f; }, fragment);
+    await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=doc-error]').textContent), message.source);
+    const text = await page.textContent(ERROR);
+    assert.match(text, /Your own work is unchanged\.$/);
+    assert.ok(!/TypeError|undefined|at \w+ \(/.test(text), `plain words: ${text}`);
+    assert.equal(await strokes(), 4, 'the document is untouched');
+  }
+  await page.reload();
+  await page.waitForFunction(() => window.filigreePixel?.state()?.strokes.length === 4);
+  await waitForPixel(page);
+  assert.equal(await strokes(), 4, 'the autosave is untouched');
+});
+
+// ---- project files ------------------------------------------------------------------------------
+
+test('a corrupt project file is refused before anything is autosaved; the work stays', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await pixelReady(page);
+  await dragStroke(page, [[20, 70], [60, 64], [95, 80]]);
+  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 4);
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
+  const good = JSON.parse(fs.readFileSync(await download.path(), 'utf8'));
+  assert.equal(good.tool, 'pixel');
+  assert.equal(good.stateVersion, 1);
+
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'filigree-doc-'));
+  const write = (name, text) => { const f = path.join(dir, name); fs.writeFileSync(f, text); return f; };
+  const broken = structuredClone(good);
+  broken.state.mask.bits = { $bytes: Buffer.from([1, 0, 1]).toString('base64') };
+  const files = [
+    [write('notes.filigree.json', 'hello'), /notes\.filigree\.json was not opened — not a Filigree project: the file is not valid JSON/],
+    [write('mask.filigree.json', JSON.stringify(broken)), /mask\.filigree\.json was not opened — mask\.bits must hold 16384 values \(128×128\), found 3/],
+    [write('future.filigree.json', JSON.stringify({ ...good, version: 99 })), /saved by a newer Filigree/],
+    [write('strokes.filigree.json', JSON.stringify({ ...good, state: { ...good.state, strokes: [[[1, 2], [3, 'x']]] } })), /strokes\.0\.1 must be a point/],
+  ];
+  for (const [file, message] of files) {
+    await page.setInputFiles('input[data-input=project]', file);
+    await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=doc-error]').textContent), message.source);
+    assert.match(await page.textContent(ERROR), /Your work is unchanged\.$/);
+    assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 4);
+  }
+  // A format-1 project (before stateVersion) still opens: older files migrate.
+  const v1 = { format: 'filigree-project', version: 1, tool: 'pixel', state: { ...good.state, strokes: [] } };
+  await page.setInputFiles('input[data-input=project]', write('old.filigree.json', JSON.stringify(v1)));
+  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 0);
+  assert.equal(await page.isHidden(ERROR), true);
+  // Undo brings the whole previous document back.
+  await page.click('button[data-act=undo]');
+  assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 4);
+  await page.waitForTimeout(700);
+  await page.reload();
+  await page.waitForFunction(() => window.filigreePixel?.state()?.strokes.length === 4);
+  fs.rmSync(dir, { recursive: true, force: true });
+});
+
+test('undo after opening a project restores size, sheet and strokes together', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await pixelReady(page);
+  // Save the trunk as a project, go back to the fish, open the trunk project, undo.
+  await page.click('button[data-example=trunk]');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  let runs = await waitForPixel(page);
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
+  const file = path.join(os.tmpdir(), `trunk-${process.pid}.filigree.json`);
+  fs.copyFileSync(await download.path(), file);
+  await page.click('button[data-example=fish]');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
+  runs = await waitForPixel(page, runs);
+  const fish = await page.evaluate(() => {
+    const s = window.filigreePixel.state();
+    return { w: s.mask.width, strokes: s.strokes.length, sheet: s.sheet.length };
+  });
+  await page.setInputFiles('input[data-input=project]', file);
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  runs = await waitForPixel(page, runs);
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
+  await waitForPixel(page, runs);
+  const after = await page.evaluate(() => {
+    const s = window.filigreePixel.state();
+    const r = window.filigreePixel.result();
+    const layers = document.querySelector('.viewport .layers');
+    const zoom = Number(document.querySelector('[data-testid=zoom]').textContent.slice(1));
+    return {
+      doc: { w: s.mask.width, strokes: s.strokes.length, sheet: s.sheet.length },
+      resultWidth: r.width, layerWidth: parseFloat(layers.style.width) / zoom,
+    };
+  });
+  assert.deepEqual(after.doc, fish);
+  assert.equal(after.resultWidth, 128, 'the result is the fish again');
+  assert.equal(after.layerWidth, 128, 'the canvas is sized for the fish again');
+  fs.rmSync(file, { force: true });
+});
+
+// ---- examples ----------------------------------------------------------------------------------
+
+test('an example click after edits is one undoable step', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await pixelReady(page);
+  await page.click('button[data-act=clear-strokes]');
+  await dragStroke(page, [[20, 70], [60, 64], [95, 80]]);
+  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 1);
+  await page.click('button[data-example=trunk]');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.locator('body').focus();
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
+  assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 1, 'the drawing is back');
+  await page.keyboard.press('Control+y');
+  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.keyboard.press('Control+Shift+z'); // nothing left to redo
+  assert.equal(await page.evaluate(() => window.filigreePixel.state().example), 'trunk');
+});
+
+// ---- lifecycle during a fit -----------------------------------------------------------------
+
+test('switching tools during a fit stops it: workers idle within 1 s, no error, the Fit state kept', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  const errors = watchErrors(page);
+  await startPaperFit(page);
+  const before = await page.evaluate(() => window.filigreeFit.state());
+  await page.click('#tools button[data-tool=inspect]');
+  const t0 = Date.now();
+  await page.waitForFunction(() => window.filigree.pool.pending === 0, null, { timeout: 1000, polling: 20 });
+  const idleMs = Date.now() - t0;
+  assert.ok(idleMs <= 1000, `idle after ${idleMs} ms`);
+  await page.waitForTimeout(300);
+  assert.equal(await page.$$eval('.toast-error', (t) => t.length), 0, 'no error toast');
+
+  await page.click('#tools button[data-tool=fit]');
+  await page.waitForFunction(() => window.filigreeFit?.info()?.params.length === window.filigreeFit.state().values.length
+    && document.querySelectorAll('[data-testid=fit-sliders] .row').length > 0);
+  assert.equal(await page.isEnabled('button[data-act=fit]'), true, 'Fit enabled');
+  assert.equal(await page.isDisabled('button[data-act=cancel]'), true, 'Cancel disabled');
+  const back = await page.evaluate(() => window.filigreeFit.state());
+  assert.deepEqual({ ...back, target: null }, { ...before, target: null });
+  assert.equal(await page.isHidden(ERROR), true);
+  assert.deepEqual(errors, []);
+});
+
+test('changing the generator during a fit stops the old fit; the new sliders stay intact', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  const errors = watchErrors(page);
+  await startPaperFit(page);
+  await page.selectOption('[data-testid=fit-generator]', 'circles-grid');
+  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'circles-grid'
+    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length);
+  await page.waitForFunction(() => window.filigree.pool.pending === 0, null, { timeout: 2000 });
+  await page.waitForTimeout(500);
+  const s = await page.evaluate(() => ({
+    running: window.filigreeFit.running(), result: window.filigreeFit.state().result,
+    sliders: document.querySelectorAll('[data-testid=fit-sliders] .row').length,
+    params: window.filigreeFit.info().params.length,
+  }));
+  assert.equal(s.running, false);
+  assert.equal(s.result, null, 'the old fit did not finish into the new generator');
+  assert.equal(s.sliders, s.params);
+  assert.equal(await page.isHidden(ERROR), true, await page.textContent(ERROR));
+  assert.equal(await page.isEnabled('button[data-act=fit]'), true);
+  assert.deepEqual(errors, []);
+  // One undo brings the stripes back, with their values.
+  await page.click('button[data-act=undo]');
+  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'stripes');
+});
+
+// ---- storage ------------------------------------------------------------------------------------
+
+test('when storage hangs the panels still work and say plainly that they cannot save', async () => {
+  const page = await env.newPage({ path: null });
+  // IndexedDB that never answers (as in some sandboxed or about:blank hosts).
+  await page.addInitScript(() => {
+    Object.defineProperty(window, 'indexedDB', { value: { open: () => ({}) }, configurable: true });
+  });
+  const t0 = Date.now();
+  await page.goto(`${env.url}#tool=fit`);
+  await page.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 15000 });
+  await page.waitForSelector('[data-testid=doc-note]:not([hidden])');
+  assert.equal(await page.textContent('[data-testid=doc-note]'),
+    'This page cannot save your work here (storage is blocked) — use Save project.');
+  assert.ok(Date.now() - t0 < 15000);
+  // Still usable: a target from values, and Save project offers the file.
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
+  assert.equal(JSON.parse(fs.readFileSync(await download.path(), 'utf8')).tool, 'fit');
+});
+
+test('the app in an about:blank host loads and works', async () => {
+  // An opaque about:blank page framing the app (Chromium's local-network
+  // checks would refuse a localhost frame in it; a deployed app is not local).
+  const blankEnv = await launch({ args: ['--disable-features=LocalNetworkAccessChecks'] });
+  try {
+    const page = await blankEnv.newPage({ path: null });
+    await page.goto('about:blank');
+    await page.setContent(`<iframe src="${blankEnv.url}#tool=fit" style="width:1260px;height:780px;border:0"></iframe>`);
+    const frame = await (await page.waitForSelector('iframe')).contentFrame();
+    await frame.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 20000 });
+    await frame.click('button[data-act=make-target]');
+    await frame.waitForFunction(() => window.filigreeFit.state().truth !== null);
+    // Whether this host lets the frame store or not, the page says the truth.
+    const canStore = await frame.evaluate(async () => {
+      try {
+        await new Promise((resolve, reject) => {
+          const r = indexedDB.open('probe');
+          r.onsuccess = resolve; r.onerror = reject;
+          setTimeout(() => reject(new Error('timeout')), 1500);
+        });
+        return true;
+      } catch { return false; }
+    });
+    await frame.waitForTimeout(2000);
+    assert.equal(await frame.isHidden('[data-testid=doc-note]'), canStore, `storage ${canStore ? 'works' : 'is blocked'} here`);
+  } finally {
+    await blankEnv.close();
+  }
+});

@@ -1,0 +1,552 @@
+// The document controller: ONE place for what every tool needs around its
+// state — undo/redo (drags coalesced), autosave to IndexedDB, project files
+// (validated, versioned, migrated), share links, keyboard shortcuts, error
+// display, and the lifecycle of a mounted panel. A tool adds no glue: it
+// declares its state and its view.
+//
+//   export default {
+//     id: 'pixel', title: 'Pixel',
+//     state: {
+//       version: 1,                         // schema version of the state
+//       async defaults(ctx) → state,        // a fresh document (ctx.coreDefaults() for the core's defaults)
+//       validate(raw) → state,              // throw Error('mask.bits: …') naming the field at fault
+//       migrate(raw, fromVersion) → raw,    // an older schema → the current one (before validate)
+//       toShare?(state) → shareState,       // what a link carries (small; throw Error to refuse)
+//       async fromShare?(shareState, ctx) → raw state (then validated),
+//     },
+//     mount(el, ctx) → view,                // build the DOM once; view = {render, markError?, keys?, unmount?}
+//   }
+//   view.render(state, previous)            // after every change (commit, undo, redo, load); diff by identity
+//   view.markError?(err)                    // e.g. put the editor cursor at err.line/err.column
+//   view.keys?                              // {s: () => …}: single-key shortcuts (no modifier held)
+//
+// ctx (one per mount; dead once the panel is left):
+//   ctx.state()                  the current document
+//   ctx.commit(next, {coalesce}) a new undoable document; same `coalesce` key in a row = one step
+//   ctx.seal()                   end a coalesced drag
+//   ctx.run(kind, payload, opts) pool.run tied to the panel: leaving aborts it; a result
+//                                arriving after leaving rejects as 'cancelled'
+//   ctx.signal                   aborts when the panel is left
+//   ctx.setTimeout/clearTimeout  timers cleared when the panel is left
+//   ctx.bitmap(imageData)        createImageBitmap, closed when the panel is left (ctx.release(b) earlier)
+//   ctx.error(err, {prefix})     the panel's ONE error area (replaced, not appended), plain words
+//   ctx.clearError()
+//   ctx.coreDefaults()           the tool's default request(s) from the core
+//   ctx.readOnly, ctx.alive()
+import { Autosave, History, projectText, parseProject, download, withTimeout } from './project.js';
+import { encodeShare, decodeShare, ShareTooBig } from './share.js';
+
+export const STORAGE_BLOCKED_NOTE = 'This page cannot save your work here (storage is blocked) — use Save project.';
+const AUTOSAVE_FORMAT = 'filigree-autosave';
+
+// ---- plain words for errors ---------------------------------------------------
+
+/** A sentence a person can act on for any error; null for a cancellation. */
+export function plainError(err) {
+  if (!err) return null;
+  if (err.name === 'JobError' || typeof err.kind === 'string') {
+    switch (err.kind) {
+      case 'cancelled': return null;
+      case 'crash': return 'The computation crashed and its worker was restarted; your work is kept. Try again.';
+      case 'protocol': return 'The page and its computation worker disagree (an internal error); your work is kept. Reload the page.';
+      default: break;
+    }
+    const m = String(err.message || '');
+    // A request the core could not even read is the page's fault, not the user's.
+    if (/^bad [\w-]+ request\b/.test(m) || /invalid type: |missing field `/.test(m)) {
+      console.warn('request refused by the core:', m);
+      return 'Filigree sent its computation a request it could not read (an internal error); your work is kept. Reload the page.';
+    }
+    return m;
+  }
+  if (err instanceof TypeError || err instanceof RangeError || err instanceof ReferenceError || err instanceof SyntaxError) {
+    console.error(err);
+    return 'Something went wrong inside Filigree (an internal error); your work is kept. Details are in the browser console.';
+  }
+  return String(err.message || err);
+}
+
+function cancelled() {
+  const e = new Error('cancelled');
+  e.name = 'JobError';
+  e.kind = 'cancelled';
+  return e;
+}
+
+// ---- core defaults ----------------------------------------------------------------
+
+// TEMPORARY fallback until the core's `defaults` request (H1) is on main:
+// the values below mirror the Rust `Default` impls. Delete this table when
+// `pool.run('defaults', {tool})` answers; it is the only copy in JS.
+const TEMPORARY_DEFAULTS = {
+  pixel: {
+    params: {
+      annotation_scale: 4, positions: 'random', density: 1, margins: [0, 0], partial: false,
+      colour: 'auto', hsv: [0, 0, -30], exclude: [[0, 0, 0]], d_max: 50, element_colour: 'region',
+      default_direction: 'down', sprite_direction: 'up', seed: 1,
+    },
+  },
+  fit: { budget: 'quick', loss: 'sdf', seed: 1 },
+  inspect: {},
+};
+
+const defaultsCache = new Map();
+/** The tool's default request(s), from the core (`defaults` request kind). */
+export function coreDefaults(pool, tool) {
+  if (!defaultsCache.has(tool)) {
+    const p = pool.run('defaults', { tool }).catch((err) => {
+      if (err.kind === 'crash' || err.kind === 'cancelled') { defaultsCache.delete(tool); throw err; }
+      return structuredClone(TEMPORARY_DEFAULTS[tool] ?? {});
+    });
+    defaultsCache.set(tool, p);
+  }
+  return defaultsCache.get(tool).then((d) => structuredClone(d));
+}
+
+// ---- the controller -------------------------------------------------------------------
+
+const CHROME = `
+  <div class="doc-bar" role="toolbar" aria-label="Document">
+    <button type="button" data-act="undo" aria-label="Undo" title="Undo (Ctrl+Z)" disabled>↶ Undo</button>
+    <button type="button" data-act="redo" aria-label="Redo" title="Redo (Ctrl+Shift+Z or Ctrl+Y)" disabled>↷ Redo</button>
+    <button type="button" data-act="save-project" title="Save project (Ctrl+S)">Save project</button>
+    <button type="button" data-act="open-project" title="Open project (Ctrl+O)">Open project</button>
+    <input type="file" accept=".json,application/json" data-input="project" hidden tabindex="-1" aria-hidden="true">
+    <button type="button" data-act="copy-link" title="Copy a link to this state">Copy link</button>
+    <span class="doc-busy muted" aria-live="polite"></span>
+  </div>
+  <div class="doc-note" role="status" data-testid="doc-note" hidden></div>
+  <div class="error doc-error" role="alert" data-testid="doc-error" hidden></div>
+  <div class="doc-body"></div>`;
+
+export class DocumentController {
+  /**
+   * `tools`: the declared tools; `host`: the element panels mount into;
+   * `persist`: false for an embedded instance (never writes autosave).
+   */
+  constructor({ pool, toast, tools, host, persist = true, onShow }) {
+    this.onShow = onShow;
+    this.pool = pool;
+    this.toast = toast;
+    this.tools = tools;
+    this.host = host;
+    this.persist = persist;
+    this.docs = new Map(); // tool id → {history, version, autosave}
+    this.current = null; // {tool, el, ctx, view, rendered, life}
+    this.storageBlocked = false;
+    this.keydown = (e) => this.onKey(e);
+    document.addEventListener('keydown', this.keydown);
+    addEventListener('pagehide', () => { for (const d of this.docs.values()) d.autosave?.flush(); });
+  }
+
+  tool(id) {
+    return this.tools.find((t) => t.id === id);
+  }
+
+  // ---- per-tool documents -------------------------------------------------------------
+
+  docOf(tool) {
+    let d = this.docs.get(tool.id);
+    if (!d) {
+      d = {
+        history: null,
+        loading: null,
+        autosave: this.persist && tool.state ? new Autosave(tool.id, { onBlocked: () => this.blocked() }) : null,
+      };
+      this.docs.set(tool.id, d);
+    }
+    return d;
+  }
+
+  blocked() {
+    this.storageBlocked = true;
+    this.showNote();
+  }
+
+  showNote() {
+    const note = this.current?.el.querySelector('.doc-note');
+    if (!note) return;
+    note.hidden = !this.storageBlocked || !this.persist;
+    note.textContent = STORAGE_BLOCKED_NOTE;
+  }
+
+  /** Migrate and validate `raw` (schema `version`) for `tool`; throws Error with a plain message. */
+  check(tool, raw, version) {
+    const spec = tool.state;
+    if (!Number.isInteger(version) || version < 1) throw new Error('the state has no schema version');
+    if (version > spec.version) throw new Error(`it was made by a newer Filigree (${tool.title} state version ${version}); update Filigree to open it`);
+    let s = raw;
+    if (version < spec.version) {
+      if (!spec.migrate) throw new Error(`${tool.title} state version ${version} can no longer be read`);
+      s = spec.migrate(s, version);
+    }
+    return spec.validate(s);
+  }
+
+  /** The document of `tool` at first sight: its autosave if valid, else its defaults. */
+  async firstDocument(tool, ctx) {
+    const d = this.docOf(tool);
+    const saved = await d.autosave?.load();
+    if (saved) {
+      try {
+        const legacy = saved.format !== AUTOSAVE_FORMAT; // before the controller: the bare state, version 1
+        return this.check(tool, legacy ? saved : saved.state, legacy ? 1 : saved.version);
+      } catch (err) {
+        ctx.error(new Error(`Your autosaved ${tool.title} work could not be restored (${err.message}); a fresh document was started.`));
+      }
+    }
+    return tool.state.defaults(ctx);
+  }
+
+  // ---- mounting -------------------------------------------------------------------------
+
+  /** Leave the current panel: abort its jobs, clear its timers, close its bitmaps, flush its autosave. */
+  leave() {
+    const cur = this.current;
+    if (!cur) return;
+    this.current = null;
+    cur.life.dead = true;
+    cur.life.ctrl.abort();
+    for (const t of cur.life.timers) clearTimeout(t);
+    cur.life.timers.clear();
+    for (const b of cur.life.bitmaps) b.close?.();
+    cur.life.bitmaps.clear();
+    try { cur.view?.unmount?.(); } catch (err) { console.error(err); }
+    this.docs.get(cur.tool.id)?.autosave?.flush();
+  }
+
+  /**
+   * Show tool `id` (its kept document when it was open before). `incoming`
+   * = {state, source} is a validated document to load as an undoable step.
+   */
+  async show(id, incoming = null, { readOnly = false } = {}) {
+    const tool = this.tool(id) || this.tools[0];
+    if (this.current?.tool === tool && !incoming) return this.current;
+    if (this.current?.tool !== tool) this.mount(tool, readOnly);
+    const cur = this.current;
+    const d = this.docOf(tool);
+    while (tool.state && !d.history) {
+      if (!d.loading) {
+        const p = this.firstDocument(tool, cur.ctx).then((s) => { d.history = new History(s); });
+        d.loading = p;
+        p.catch(() => { if (d.loading === p) d.loading = null; });
+      }
+      try {
+        await d.loading;
+      } catch (err) {
+        if (cur.life.dead) return cur;
+        // An earlier visit's load was cut short by leaving: load again for this one.
+        if (err.kind === 'cancelled') { await null; continue; }
+        cur.ctx.error(err);
+        if (!incoming) break;
+        d.history = new History(incoming.state);
+        incoming = null;
+        this.changed();
+      }
+    }
+    cur.el.querySelector('.doc-busy').textContent = '';
+    if (cur.life.dead) return cur;
+    if (incoming) {
+      d.history.push(incoming.state);
+      d.history.seal();
+      this.changed();
+    } else this.refresh();
+    return cur;
+  }
+
+  mount(tool, readOnly) {
+    this.leave();
+    const el = document.createElement('section');
+    el.className = `tool tool-${tool.id}`;
+    el.setAttribute('aria-label', tool.title);
+    el.innerHTML = CHROME;
+    if (!tool.state) el.querySelector('.doc-bar').hidden = true;
+    if (readOnly) el.dataset.readonly = '1';
+    this.host.replaceChildren(el);
+    const life = { ctrl: new AbortController(), timers: new Set(), bitmaps: new Set(), dead: false };
+    const cur = { tool, el, life, view: null, rendered: null, readOnly };
+    this.current = cur;
+    cur.ctx = this.context(cur);
+    this.wireChrome(cur);
+    el.querySelector('.doc-busy').textContent = tool.state ? 'loading…' : '';
+    cur.view = tool.mount(el.querySelector('.doc-body'), cur.ctx) || {};
+    this.showNote();
+    this.onShow?.(tool.id);
+  }
+
+  context(cur) {
+    const ctl = this;
+    const { life, tool } = cur;
+    const doc = () => this.docs.get(tool.id);
+    const errorEl = cur.el.querySelector('.doc-error');
+    const ctx = {
+      pool: this.pool,
+      toast: this.toast,
+      signal: life.ctrl.signal,
+      readOnly: cur.readOnly,
+      alive: () => !life.dead,
+      state: () => doc()?.history?.present ?? null,
+      commit(next, opts) {
+        if (life.dead || cur.readOnly || !doc()?.history) return false;
+        doc().history.push(next, opts);
+        ctl.changed();
+        return true;
+      },
+      seal() { doc()?.history?.seal(); },
+      run(kind, payload, opts = {}) {
+        if (life.dead) return Promise.reject(cancelled());
+        const inner = new AbortController();
+        const abort = () => inner.abort();
+        life.ctrl.signal.addEventListener('abort', abort, { once: true });
+        opts.signal?.addEventListener('abort', abort, { once: true });
+        if (opts.signal?.aborted) inner.abort();
+        return ctl.pool.run(kind, payload, { ...opts, signal: inner.signal }).then((r) => {
+          if (life.dead) throw cancelled();
+          return r;
+        }).finally(() => {
+          life.ctrl.signal.removeEventListener('abort', abort);
+          opts.signal?.removeEventListener('abort', abort);
+        });
+      },
+      setTimeout(fn, ms) {
+        if (life.dead) return 0;
+        const t = setTimeout(() => { life.timers.delete(t); if (!life.dead) fn(); }, ms);
+        life.timers.add(t);
+        return t;
+      },
+      clearTimeout(t) { clearTimeout(t); life.timers.delete(t); },
+      async bitmap(source) {
+        const b = await createImageBitmap(source);
+        if (life.dead) { b.close(); throw cancelled(); }
+        life.bitmaps.add(b);
+        return b;
+      },
+      release(b) { if (b) { life.bitmaps.delete(b); b.close(); } },
+      error(err, { prefix = '' } = {}) {
+        if (life.dead) return;
+        const message = plainError(err);
+        if (message === null) return;
+        ctx.clearError();
+        errorEl.textContent = prefix ? `${prefix}: ${message}` : message;
+        errorEl.hidden = false;
+        if (err?.field) {
+          const control = cur.el.querySelector(`[data-field="${CSS.escape(err.field)}"]`)
+            || cur.el.querySelector(`[data-field="${CSS.escape(err.field.split('.')[0])}"]`);
+          if (control) {
+            control.setAttribute('aria-invalid', 'true');
+            control.setAttribute('aria-errormessage', errorEl.id || (errorEl.id = `doc-error-${tool.id}`));
+          }
+        }
+        try { cur.view?.markError?.(err); } catch (e) { console.error(e); }
+      },
+      clearError() {
+        errorEl.hidden = true;
+        errorEl.textContent = '';
+        for (const c of cur.el.querySelectorAll('[aria-invalid=true]')) {
+          c.removeAttribute('aria-invalid');
+          c.removeAttribute('aria-errormessage');
+        }
+      },
+      coreDefaults: () => coreDefaults(ctl.pool, tool.id),
+      undo: () => ctl.undo(),
+      redo: () => ctl.redo(),
+    };
+    return ctx;
+  }
+
+  wireChrome(cur) {
+    const q = (s) => cur.el.querySelector(s);
+    q('[data-act=undo]').onclick = () => this.undo();
+    q('[data-act=redo]').onclick = () => this.redo();
+    q('[data-act=save-project]').onclick = () => this.saveProject();
+    const input = q('input[data-input=project]');
+    q('[data-act=open-project]').onclick = () => input.click();
+    input.onchange = () => {
+      const file = input.files[0];
+      input.value = '';
+      if (file) this.openProjectFile(file);
+    };
+    q('[data-act=copy-link]').onclick = () => this.copyLink();
+    if (cur.readOnly) for (const a of ['undo', 'redo', 'open-project']) q(`[data-act=${a}]`).hidden = true;
+  }
+
+  // ---- changes ---------------------------------------------------------------------------
+
+  /** After a new present: autosave, buttons, render. */
+  changed() {
+    const cur = this.current;
+    if (!cur) return;
+    const d = this.docs.get(cur.tool.id);
+    if (d.autosave && this.persist && !cur.readOnly) {
+      d.autosave.save({ format: AUTOSAVE_FORMAT, version: cur.tool.state.version, state: d.history.present });
+    }
+    this.refresh();
+  }
+
+  refresh() {
+    const cur = this.current;
+    if (!cur) return;
+    const d = this.docs.get(cur.tool.id);
+    const h = d?.history;
+    cur.el.querySelector('[data-act=undo]').disabled = !h?.canUndo;
+    cur.el.querySelector('[data-act=redo]').disabled = !h?.canRedo;
+    if (!h || h.present === cur.rendered) return;
+    const prev = cur.rendered;
+    cur.rendered = h.present;
+    try {
+      cur.view.render?.(h.present, prev);
+    } catch (err) {
+      cur.ctx.error(err);
+    }
+  }
+
+  undo() {
+    const h = this.current && this.docs.get(this.current.tool.id)?.history;
+    if (!h?.canUndo || this.current.readOnly) return;
+    h.undo();
+    this.changed();
+  }
+
+  redo() {
+    const h = this.current && this.docs.get(this.current.tool.id)?.history;
+    if (!h?.canRedo || this.current.readOnly) return;
+    h.redo();
+    this.changed();
+  }
+
+  // ---- project files and links -----------------------------------------------------------
+
+  saveProject() {
+    const cur = this.current;
+    const state = cur && this.docs.get(cur.tool.id)?.history?.present;
+    if (!state) return;
+    const base = String(cur.tool.state.fileName?.(state) || cur.tool.id).replace(/\.[^.]+$/, '').replace(/[^\w.-]+/g, '-');
+    download(`${base}.filigree.json`, projectText(cur.tool.id, cur.tool.state.version, state), 'application/json');
+  }
+
+  /** Open a project file: validated in full before anything changes; the current work stays on failure. */
+  async openProjectFile(file) {
+    const ctx = this.current?.ctx;
+    let parsed, tool, state;
+    try {
+      const text = await file.text();
+      parsed = parseProject(text);
+      tool = this.tool(parsed.tool);
+      if (!tool?.state) throw new Error(`it is a project of a tool this Filigree does not have ('${parsed.tool}')`);
+      state = this.check(tool, parsed.state, parsed.stateVersion);
+    } catch (err) {
+      ctx?.error(new Error(`${file.name} was not opened — ${err.message}. Your work is unchanged.`));
+      return false;
+    }
+    const cur = await this.show(tool.id, { state, source: 'project' });
+    cur.ctx.clearError();
+    return true;
+  }
+
+  /**
+   * Open a shared state (what a link carries) in tool `toolId`: converted
+   * (`fromShare`), migrated and validated BEFORE anything changes, then
+   * loaded as an undoable step (autosaved unless `readOnly` or persist is off).
+   * Rejects with an Error with a plain message; the user's work is untouched then.
+   */
+  async openState(toolId, state, { version, readOnly = false, source = 'link' } = {}) {
+    const tool = this.tool(toolId);
+    if (!tool?.state) throw new Error(`Filigree has no tool '${toolId}'.`);
+    let full;
+    try {
+      const raw = tool.state.fromShare ? await tool.state.fromShare(state, this.helperCtx(tool)) : state;
+      full = this.check(tool, raw, version ?? tool.state.version);
+    } catch (err) {
+      const why = String(plainError(err) ?? 'it was cancelled').replace(/([^.])$/, '$1.');
+      throw new Error(`This ${source} could not be opened: ${why} Your own work is unchanged.`);
+    }
+    if (readOnly) this.persist = false;
+    await this.show(tool.id, { state: full, source }, { readOnly });
+    return true;
+  }
+
+  /** A context for conversions outside a mounted panel (opening a link). */
+  helperCtx(tool) {
+    return { pool: this.pool, run: (k, p, o) => this.pool.run(k, p, o), coreDefaults: () => coreDefaults(this.pool, tool.id) };
+  }
+
+  /** {tool, fragment} of the current document; throws ShareTooBig or an Error saying why it cannot be shared. */
+  async currentShare() {
+    const cur = this.current;
+    const state = cur && this.docs.get(cur.tool.id)?.history?.present;
+    if (!state) throw new Error('There is nothing to share yet.');
+    const s = cur.tool.state.toShare ? cur.tool.state.toShare(state) : state;
+    const fragment = await encodeShare(cur.tool.id, s, { version: cur.tool.state.version });
+    return { tool: cur.tool.id, fragment };
+  }
+
+  async copyLink() {
+    let share;
+    try {
+      share = await this.currentShare();
+    } catch (err) {
+      if (err instanceof ShareTooBig) {
+        this.toast(err.message, { timeout: 15000, action: { label: 'Save project', run: () => this.saveProject() } });
+      } else this.current?.ctx.error(err);
+      return null;
+    }
+    const url = new URL(location.href);
+    url.searchParams.delete('embed');
+    url.searchParams.delete('mode');
+    url.hash = share.fragment;
+    const link = url.href;
+    this.lastLink = link;
+    let copied = false;
+    try {
+      await withTimeout(navigator.clipboard.writeText(link), 1000, 'clipboard');
+      copied = true;
+    } catch { /* no clipboard permission: show the link instead */ }
+    const t = this.toast(copied ? 'Link copied. Anyone who opens it sees this state.' : 'Copy this link (the clipboard is not available here):', { timeout: 12000 });
+    t.dataset.link = link;
+    if (!copied) {
+      const field = document.createElement('input');
+      field.readOnly = true;
+      field.value = link;
+      field.setAttribute('aria-label', 'link to this state');
+      t.querySelector('span').after(field);
+      field.select();
+    }
+    return link;
+  }
+
+  /** Open the state a fragment carries (a share link); shows a plain error on failure. */
+  async openFragment(fragment, fallbackTool) {
+    let decoded;
+    try {
+      decoded = await decodeShare(fragment);
+      await this.openState(decoded.tool, decoded.state, { version: decoded.version, source: 'link' });
+      return true;
+    } catch (err) {
+      const cur = await this.show(decoded?.tool || fallbackTool);
+      const msg = /Your own work is unchanged/.test(err.message) ? err.message : `${err.message} Your own work is unchanged.`;
+      cur.ctx.error(new Error(msg));
+      return false;
+    }
+  }
+
+  // ---- keys ---------------------------------------------------------------------------------
+
+  onKey(e) {
+    const cur = this.current;
+    if (!cur || e.defaultPrevented) return;
+    const t = e.target;
+    if (t?.closest?.('input, select, textarea, [contenteditable=""], [contenteditable=true], .cm-editor')) return;
+    const mod = e.ctrlKey || e.metaKey;
+    const key = e.key.length === 1 ? e.key.toLowerCase() : e.key;
+    if (mod && !e.altKey) {
+      if (key === 'z') { e.preventDefault(); if (e.shiftKey) this.redo(); else this.undo(); } else if (key === 'y' && !e.shiftKey) { e.preventDefault(); this.redo(); } else if (key === 's' && !e.shiftKey && cur.tool.state) { e.preventDefault(); this.saveProject(); } else if (key === 'o' && !e.shiftKey && cur.tool.state && !cur.readOnly) {
+        e.preventDefault();
+        cur.el.querySelector('input[data-input=project]').click();
+      }
+      return;
+    }
+    if (e.altKey || e.shiftKey || mod) return;
+    const fn = cur.view?.keys?.[key];
+    if (fn) { e.preventDefault(); fn(); }
+  }
+}
