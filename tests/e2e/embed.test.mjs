@@ -280,16 +280,24 @@ test('an interactive embed on the app\'s own origin never writes the user\'s aut
   assert.deepEqual(errors, []);
 });
 
-test('an embedded instance does not register a service worker', async () => {
+test('an embedded instance registers no service worker; the full app in the same place does', async () => {
+  // Top-level, first-party: the one place a registration would succeed.
   const state = await fitShare('stripes');
-  const context = await env.browser.newContext();
-  const page = await context.newPage();
-  await page.goto(hostPage({ state }));
-  const { frame } = await embedFrame(page);
-  await page.waitForTimeout(1500);
-  assert.deepEqual(await frame.evaluate(async () => (await navigator.serviceWorker.getRegistrations()).length), 0);
-  assert.equal(await frame.evaluate(() => navigator.serviceWorker.controller), null);
-  await context.close();
+  const registrations = async (path) => {
+    const context = await env.browser.newContext();
+    try {
+      const page = await context.newPage();
+      await page.goto(env.url + path);
+      await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+      await page.waitForTimeout(1500);
+      return await page.evaluate(async () => (await navigator.serviceWorker.getRegistrations()).length);
+    } finally {
+      await context.close();
+    }
+  };
+  assert.equal(await registrations(`#tool=fit`), 1, 'the full app registers its worker (the control)');
+  assert.equal(await registrations(`index.html?embed=1#${state}`), 0, 'read-only embed: none');
+  assert.equal(await registrations(`index.html?embed=1&mode=interactive#${state}`), 0, 'interactive embed: none');
 });
 
 test('a damaged embed link says so plainly and the tool still opens', async () => {
