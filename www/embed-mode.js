@@ -81,7 +81,8 @@ html[data-embed] [data-role=storage-note] { display: none !important; }
   border: 1px solid var(--accent, #c9a2ff); border-radius: 7px; padding: .25rem .7rem; white-space: nowrap; }
 .embed-bar .open:hover, .embed-bar .open:focus-visible { background: var(--accent, #c9a2ff); color: #1b1526; }
 .embed-note { margin: .6rem; }
-html[data-embed=readonly] #panel :is(input, select, textarea, button, .button-like, [role=toolbar]) { opacity: .55; }
+html[data-embed=readonly] #panel :is(.doc-bar, [role=toolbar], button) { display: none !important; }
+html[data-embed=readonly] #panel :is(input, select, textarea, button, .button-like) { opacity: .55; }
 html[data-embed=readonly] #panel canvas { cursor: default !important; }
 `;
 
