@@ -120,15 +120,23 @@ export async function enterEmbed(app, embed) {
   // Read-only: everything in the tool is shown but cannot be focused or changed.
   if (embed.readOnly && panel) panel.inert = true;
 
-  // Interactive: the link carries what the reader made, fetched as they reach for it.
+  // Interactive: the link carries what the reader made. The href is kept
+  // fresh as the pointer or focus reaches it (for middle-click and "open in
+  // new tab"); a plain click waits for the current state, then opens it.
   if (!embed.readOnly) {
     const refresh = async () => {
       try {
         const share = await app.currentShare?.();
         if (share?.fragment) open.href = fullAppUrl(share.fragment);
       } catch { /* too big for a link or not ready: keep the embed's own state */ }
+      return open.href;
     };
-    for (const type of ['pointerenter', 'focus', 'pointerdown']) open.addEventListener(type, refresh);
+    for (const type of ['pointerenter', 'focus']) open.addEventListener(type, refresh);
+    open.addEventListener('click', async (e) => {
+      if (e.ctrlKey || e.metaKey || e.shiftKey || e.button !== 0) return;
+      e.preventDefault();
+      window.open(await refresh(), '_blank', 'noopener');
+    });
   }
 
   const label = (tool) => document.querySelector(`#tools [data-tool="${CSS.escape(tool || '')}"]`)?.textContent || tool;

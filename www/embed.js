@@ -69,8 +69,10 @@
     }
 
     connectedCallback() {
+      // (Re)connected: start from the facade (a moved iframe reloads anyway).
+      this.iframe = null;
       this.render();
-      if (this.getAttribute('load') === 'click' || this.iframe) return;
+      if (this.getAttribute('load') === 'click') return;
       if (!('IntersectionObserver' in window)) {
         this.activate();
         return;

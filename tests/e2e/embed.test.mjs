@@ -154,11 +154,15 @@ test('an embed on a third-party page waits below the fold, then shows the read-o
 test('load="click": nothing loads until the facade button is pressed (keyboard works)', async () => {
   const state = await fitShare('stripes');
   const page = await env.newPage({ path: null });
-  await page.goto(hostPage({ state, tool: 'fit', load: 'click' }));
+  await page.goto(hostPage({ state, tool: 'fit', load: 'click', preview: `${env.url}www/icons/icon-512.png` }));
   const button = page.getByRole('button', { name: /Open the embedded Filigree: Filigree Fit/ });
   await button.waitFor();
   await page.waitForTimeout(800);
   assert.equal(await page.locator('filigree-embed iframe').count(), 0, 'a click-to-load embed stays a facade when visible');
+  // The preview image is shown, decorative (the title says what it is).
+  const img = await page.locator('filigree-embed img').evaluate((i) => ({ alt: i.alt, w: i.naturalWidth, shown: i.getBoundingClientRect().width }));
+  assert.deepEqual({ alt: img.alt, w: img.w }, { alt: '', w: 512 });
+  assert.ok(img.shown > 300, `the preview fills the facade (${img.shown} px wide)`);
   await button.focus();
   await page.keyboard.press('Enter');
   const { frame } = await embedFrame(page);
@@ -189,7 +193,7 @@ test('interactive embed: an edit changes the result and "Open in Filigree" carri
   // "Open in Filigree" opens the full app in a new tab with the edited state.
   const link = frame.getByRole('link', { name: /Open in Filigree/ });
   assert.equal(await link.getAttribute('target'), '_blank');
-  await link.hover();
+  // A plain click (no hover first) carries the state as it is now.
   const [popup] = await Promise.all([page.context().waitForEvent('page'), link.click()]);
   await popup.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
   await popup.waitForSelector('[data-testid=fit-sliders] .row');
