@@ -73,6 +73,8 @@ async function storageFacts(frame) {
 test('the app in a cross-origin iframe works and its storage state is said plainly', async () => {
   const page = await env.newPage({ path: null });
   const errors = await watchErrors(page);
+  const swNoise = [];
+  page.on('console', (m) => { if (/service ?worker/i.test(m.text())) swNoise.push(`${m.type()}: ${m.text()}`); });
   await page.goto(`${hostUrl}host.html?frame=${encodeURIComponent(`${env.url}#tool=fit`)}`);
   const frame = await (await page.waitForSelector('iframe')).contentFrame();
   await fitWorks(frame);
@@ -83,6 +85,7 @@ test('the app in a cross-origin iframe works and its storage state is said plain
   else assert.equal(facts.note, true, `storage ${facts.idb}, and the app says it cannot save`);
   // No service worker from a third-party frame, and nothing noisy about it.
   assert.equal(await frame.evaluate(() => { try { return navigator.serviceWorker?.controller ?? null; } catch { return null; } }), null);
+  assert.deepEqual(swNoise, [], 'a framed app does not try to register a service worker (no refusal to log)');
   await page.waitForTimeout(1000);
   assert.deepEqual(errors, [], 'no console errors in a cross-origin frame');
   assert.deepEqual(await frameErrors(frame), [], 'no uncaught errors in the frame');
