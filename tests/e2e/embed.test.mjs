@@ -305,6 +305,22 @@ test('an embedded instance registers no service worker; the full app in the same
   assert.equal(await registrations(`index.html?embed=1&mode=interactive#${state}`), 0, 'interactive embed: none');
 });
 
+test('on a 390 px phone the embed fits the page width (no sideways scrolling of the host or the tool)', async () => {
+  const state = await fitShare('stripes');
+  const page = await env.newPage({ path: null, viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+  await page.goto(hostPage({ state, title: 'Stripes on a phone', mode: 'interactive' }));
+  // In view at once, so it loads without a tap.
+  const { frame, handle } = await embedFrame(page);
+  const box = await handle.boundingBox();
+  const host = await page.evaluate(() => ({ scroll: document.documentElement.scrollWidth, client: document.documentElement.clientWidth }));
+  assert.ok(host.scroll <= host.client, `host page ${host.scroll} px wide in a ${host.client} px viewport`);
+  assert.ok(box.x >= 0 && box.x + box.width <= 390, `the iframe spans ${box.x}..${box.x + box.width}`);
+  const inner = await frame.evaluate(() => ({ scroll: document.documentElement.scrollWidth, client: document.documentElement.clientWidth }));
+  console.log(`phone embed: frame content ${inner.scroll} px in ${inner.client} px`);
+  assert.ok(inner.scroll <= inner.client, `the embedded tool is ${inner.scroll} px wide in a ${inner.client} px frame`);
+  assert.ok((await waitForPreview(frame)).painted > 0);
+});
+
 test('a damaged embed link says so plainly and the tool still opens', async () => {
   const page = await env.newPage({ path: null });
   await page.goto(hostPage({ state: 'tool=fit&share=AAAAbroken-data' }));
