@@ -154,7 +154,8 @@ test('an embed on a third-party page waits below the fold, then shows the read-o
 test('load="click": nothing loads until the facade button is pressed (keyboard works)', async () => {
   const state = await fitShare('stripes');
   const page = await env.newPage({ path: null });
-  await page.goto(hostPage({ state, tool: 'fit', load: 'click', preview: `${env.url}www/icons/icon-512.png` }));
+  // No src: the element finds the app next to embed.js.
+  await page.goto(hostPage({ state, tool: 'fit', load: 'click', nosrc: '1', preview: `${env.url}www/icons/icon-512.png` }));
   const button = page.getByRole('button', { name: /Open the embedded Filigree: Filigree Fit/ });
   await button.waitFor();
   await page.waitForTimeout(800);
@@ -166,6 +167,7 @@ test('load="click": nothing loads until the facade button is pressed (keyboard w
   await button.focus();
   await page.keyboard.press('Enter');
   const { frame } = await embedFrame(page);
+  assert.equal(new URL(frame.url()).pathname, '/index.html');
   assert.ok((await waitForPreview(frame)).painted > 0);
 });
 
