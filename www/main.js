@@ -7,6 +7,7 @@ import { hasShare } from './share.js';
 import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
+import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 
 const TOOLS = [pixelTool, fitTool, inspectTool];
 
@@ -50,10 +51,12 @@ const pool = new WorkerPool({
 });
 pool.warm();
 
+const embed = embedOptions(); // ?embed=1: one tool, no chrome, never saves (embed-mode.js)
+
 // One document controller for every tool: history, autosave, project files,
 // share links, shortcuts and the panels' lifecycle (see document.js).
 const doc = new DocumentController({
-  pool, toast, tools: TOOLS, host: $('#panel'),
+  pool, toast, tools: TOOLS, host: $('#panel'), persist: !embed,
   onShow(id) {
     for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', String(b.dataset.tool === id));
     const params = new URLSearchParams(location.hash.slice(1));
@@ -93,11 +96,11 @@ async function route() {
   // The link is consumed: a reload shows the (autosaved) document, not the link again.
   if (doc.current) history.replaceState(null, '', `#tool=${doc.current.tool.id}`);
 }
-route();
-addEventListener('hashchange', route);
+if (embed) enterEmbed(app, embed);
+else { route(); addEventListener('hashchange', route); }
 
 // Service worker: offline after the first visit; updates are offered, never forced.
-if ('serviceWorker' in navigator) {
+if (serviceWorkerAllowed(embed)) {
   const offerUpdate = (reg) => {
     if (!reg.waiting || !navigator.serviceWorker.controller) return;
     toast('A new version of Filigree is ready.', {
