@@ -33,8 +33,8 @@ cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --featu
 step "cargo test"
 cargo test
 
-step "release wasm build"
-bash scripts/build.sh
+step "release wasm build (and the test-hooks core for the crash tests)"
+FILIGREE_TEST_HOOKS=1 bash scripts/build.sh   # pkg/ and the test-only pkg-test/
 
 step "browser end-to-end tests (headless Chromium)"
 node --test --test-concurrency=1 tests/e2e/
