@@ -124,23 +124,10 @@ pub const MAX_NESTING: usize = 160;
 pub const MAX_RENDER_SIDE: usize = 4096;
 
 // -------------------------------------------------------------- requests --
-// (Used by the request layer, src/pattern/api.rs, src/web/, src/cmd/.)
-
-/// Largest side of a `render-pattern` request, in pixels.
-pub const MAX_REQUEST_RENDER_SIDE: usize = 2048;
-
-/// Smallest and largest side of a Fit target snapped to the palette.
-pub const MIN_TARGET_SIDE: usize = 8;
-/// See [`MIN_TARGET_SIDE`].
-pub const MAX_TARGET_SIDE: usize = 2048;
-
-/// Largest genetic-algorithm population and generation count of a fit.
-pub const MAX_GA_POPULATION: usize = 10_000;
-/// See [`MAX_GA_POPULATION`].
-pub const MAX_GA_GENERATIONS: usize = 10_000;
-
-/// Largest number of parameter points one `fit-eval` request evaluates.
-pub const MAX_EVAL_POINTS: usize = 10_000;
+// The ranges of the numbers a person types or a panel sends (tolerance,
+// render size, GA population, shards, Pixel margins, ...) are the other half
+// of this list: [`crate::core::request_limits`], beside the checks that
+// apply them where a request enters the core.
 
 #[cfg(test)]
 mod tests {

@@ -2,14 +2,15 @@
 //! where a request enters the core (the browser's payloads and the CLI's
 //! flags become the same request structs, so both are checked here).
 //!
-//! Image and buffer limits live with the raster code ([`crate::raster::Limits`]);
-//! these are the limits of the numbers a person types or a panel sends.
+//! Image, buffer and program limits are the other half of the list, in
+//! [`crate::core::limits`]; these are the limits of the numbers a person
+//! types or a panel sends.
 //! Every message names the field (its dotted request path) and the range.
 use crate::core::error::{Error, Result};
 
 /// RGB distance (tolerance) range: 0 (exact) to the largest distance
 /// between two RGB colours, √3·255 ≈ 441.7.
-pub const TOLERANCE: (f64, f64) = (0.0, 442.0);
+pub const TOLERANCE: (f64, f64) = (0.0, super::limits::MAX_TOLERANCE);
 /// Side of a rendered pattern (`render-pattern`, `filigree render`).
 pub const RENDER_SIZE: (usize, usize) = (1, 2048);
 /// Samples per pixel side of a rendered pattern.
@@ -34,8 +35,8 @@ pub const PARAM_MAGNITUDE: f64 = 1e9;
 pub const THREADS: (usize, usize) = (1, SHARDS);
 /// Pixel: annotation scale K, margins (pixels, either sign), HSV shift,
 /// CIELAB distance d_max.
-pub const ANNOTATION_SCALE: (u32, u32) = (1, 32);
-pub const MARGIN: i32 = 4096;
+pub const ANNOTATION_SCALE: (u32, u32) = (1, super::limits::MAX_ANNOTATION_SCALE);
+pub const MARGIN: i32 = super::limits::MAX_MARGIN;
 pub const HUE_SHIFT: f64 = 360.0;
 pub const SV_SHIFT: f64 = 100.0;
 pub const D_MAX: (f64, f64) = (0.0, 1000.0);
