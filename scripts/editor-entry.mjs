@@ -105,7 +105,7 @@ const theme = EditorView.theme({
 // ---- the API ------------------------------------------------------------------
 
 /** See www/code-editor.js for the contract. */
-export function createEditor(parent, { value = '', language = 'filigree', onChange, label = 'code' } = {}) {
+export function createEditor(parent, { value = '', language = 'filigree', onChange, label = 'code', attributes = {} } = {}) {
   const lang = (LANGUAGES[language] || LANGUAGES.filigree)();
   const ariaLabel = new Compartment();
   let quiet = false;
@@ -120,7 +120,7 @@ export function createEditor(parent, { value = '', language = 'filigree', onChan
         // Tab is not bound: it moves focus out of the editor, as everywhere on
         // the page (indent with Ctrl+] / Ctrl+[ instead).
         keymap.of([...defaultKeymap, ...historyKeymap]),
-        ariaLabel.of(EditorView.contentAttributes.of({ 'aria-label': label, 'aria-multiline': 'true' })),
+        ariaLabel.of(EditorView.contentAttributes.of({ ...attributes, 'aria-label': label, 'aria-multiline': 'true' })),
         EditorView.updateListener.of((u) => {
           if (u.docChanged && !quiet) onChange?.(u.state.doc.toString());
         }),

@@ -7,6 +7,7 @@
 //                                   there and scrolls it into view
 //   ed.clearError()                 ed.focus()          ed.kind: 'codemirror' | 'textarea'
 //
+// attributes: extra attributes for the editable element (e.g. {'data-testid': …}).
 // language: 'filigree' (Fit's pattern language), 'tangle' or 'json'.
 // CodeMirror 6 is bundled at build time (scripts/bundle-editor.mjs) into
 // www/vendor/code-editor.bundle.js, served from our own origin and precached
@@ -29,27 +30,28 @@ export function preloadCodeEditor() {
   loadBundle();
 }
 
-export async function createCodeEditor(parent, { value = '', language = 'filigree', onChange, label = 'code', fallback = false } = {}) {
+export async function createCodeEditor(parent, { value = '', language = 'filigree', onChange, label = 'code', attributes = {}, fallback = false } = {}) {
   const wrap = document.createElement('div');
   wrap.className = 'code-editor';
   wrap.dataset.language = language;
   parent.append(wrap);
   const mod = fallback ? null : await loadBundle();
   if (mod) {
-    const ed = mod.createEditor(wrap, { value, language, onChange, label });
+    const ed = mod.createEditor(wrap, { value, language, onChange, label, attributes });
     wrap.dataset.editor = 'codemirror';
     return ed;
   }
-  return textareaEditor(wrap, { value, onChange, label });
+  return textareaEditor(wrap, { value, onChange, label, attributes });
 }
 
-function textareaEditor(wrap, { value, onChange, label }) {
+function textareaEditor(wrap, { value, onChange, label, attributes }) {
   wrap.dataset.editor = 'textarea';
   const ta = document.createElement('textarea');
   ta.spellcheck = false;
   ta.wrap = 'off';
   ta.rows = 16;
   ta.value = value;
+  for (const [k, v] of Object.entries(attributes)) ta.setAttribute(k, v);
   ta.setAttribute('aria-label', label);
   const note = document.createElement('div');
   note.className = 'code-editor-error';
