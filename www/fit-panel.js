@@ -6,6 +6,7 @@
 import { putRgba, hex } from './file-input.js';
 import { Autosave, History, projectText, parseProject, download } from './project.js';
 import { LossPlot } from './loss-plot.js';
+import { createCodeEditor } from './code-editor.js';
 
 const TARGET_SIZE = 256;
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
@@ -17,7 +18,7 @@ const html = `
       <label class="inline">Generator <select name="generator" data-testid="fit-generator"></select></label>
       <details class="program">
         <summary>Program</summary>
-        <textarea name="program" spellcheck="false" rows="16" data-testid="fit-program" aria-label="pattern program"></textarea>
+        <div class="program-editor"></div>
         <div class="row-buttons"><button type="button" data-act="apply-program">Apply program</button></div>
       </details>
       <div class="error program-error" role="alert" data-testid="fit-program-error" hidden></div>
@@ -81,6 +82,10 @@ export default {
     const overlay = q('canvas.overlay');
     const plot = new LossPlot(q('canvas.plot'));
     const autosave = new Autosave('fit');
+    // The program editor (CodeMirror, lazily loaded; a textarea without the bundle).
+    let editor = null;
+    createCodeEditor(q('.program-editor'), { language: 'filigree', label: 'pattern program', attributes: { 'data-testid': 'fit-program' } })
+      .then((ed) => { editor = ed; if (doc()) ed.setValue(doc().program); });
 
     // The document (saved, undoable): program, values, target pixels, settings, result.
     let history = new History(null);
@@ -121,9 +126,11 @@ export default {
       } catch (err) {
         // Keep the last good program running; say where this one is wrong.
         showError('.program-error', err.message);
+        if (err.line) editor?.markError(err.line, err.column, err.message);
         return false;
       }
       showError('.program-error', '');
+      editor?.clearError();
       info = next;
       const vals = values && values.length === info.params.length ? values : info.params.map((p) => p.default);
       const base = doc() || { target: null, truth: null, result: null, settings: { budget: 'quick', loss: 'sdf', seed: 1 } };
@@ -137,7 +144,7 @@ export default {
 
     function renderProgramUi() {
       const d = doc();
-      q('[name=program]').value = d.program;
+      editor?.setValue(d.program);
       q('[name=generator]').value = d.generator ?? '';
       q('[data-testid=fit-facts]').textContent =
         `${info.params.filter((p) => !p.integer).length} parameters to fit, ${info.shapes} shapes, ${info.colours.length - 1} colour${info.colours.length === 2 ? '' : 's'} on ${info.colours[0]}`;
@@ -428,7 +435,7 @@ export default {
       const g = generators.find((x) => x.name === e.target.value);
       if (g) setProgram(g.source, { generator: g.name }).then((ok) => ok && fillTarget(palette()[0]));
     };
-    q('[data-act=apply-program]').onclick = () => setProgram(q('[name=program]').value, { values: doc()?.values, generator: null });
+    q('[data-act=apply-program]').onclick = () => setProgram(editor.getValue(), { values: doc()?.values, generator: null });
     q('[data-act=make-target]').onclick = () => makeTarget().catch((err) => showError('.target-error', err.message));
     q('[data-act=clear-target]').onclick = () => info && fillTarget(palette()[0]);
     q('[data-act=fit]').onclick = fit;
@@ -446,7 +453,7 @@ export default {
     q('[data-act=undo]').onclick = undo;
     q('[data-act=redo]').onclick = redo;
     this.onKey = (e) => {
-      if (e.target.closest?.('input, select, textarea')) return;
+      if (e.target.closest?.('input, select, textarea, [contenteditable]')) return;
       if ((e.ctrlKey || e.metaKey) && e.key.toLowerCase() === 'z') {
         e.preventDefault();
         if (e.shiftKey) redo(); else undo();
