@@ -5,6 +5,7 @@ import { WorkerPool } from './client.js';
 import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
+import { mountHome } from './home.js';
 
 const TOOLS = [pixelTool, fitTool, inspectTool];
 
@@ -53,8 +54,11 @@ const app = { pool, toast };
 window.filigree = app;
 let current = null;
 
+// No tool (or an unknown one) in the hash: the home view with one card per tool.
+const HOME = { id: 'home', title: 'Home', mount(el) { this.view = mountHome(el, app, TOOLS); }, unmount() { this.view?.unmount(); } };
+
 function selectTool(id) {
-  const tool = TOOLS.find((t) => t.id === id) || TOOLS[0];
+  const tool = TOOLS.find((t) => t.id === id) || HOME;
   if (current?.tool === tool) return;
   current?.tool.unmount?.();
   const panel = $('#panel');
@@ -65,11 +69,12 @@ function selectTool(id) {
   panel.append(el);
   tool.mount(el, app);
   current = { tool, el };
+  document.documentElement.dataset.view = tool.id;
   for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', String(b.dataset.tool === tool.id));
   const params = new URLSearchParams(location.hash.slice(1));
-  if (params.get('tool') !== tool.id) {
-    params.set('tool', tool.id);
-    history.replaceState(null, '', `#${params}`);
+  if (tool === HOME ? params.has('tool') : params.get('tool') !== tool.id) {
+    if (tool === HOME) params.delete('tool'); else params.set('tool', tool.id);
+    history.replaceState(null, '', params.size ? `#${params}` : location.pathname + location.search);
   }
 }
 
