@@ -3,7 +3,8 @@
 // example), paints the mask, draws orientation strokes on a zoomable pixel
 // grid, and moves parameters; the core re-runs in a worker after each change
 // (debounced, the previous run cancelled). State is autosaved and undoable.
-import { acceptFiles, putRgba, hex } from './file-input.js';
+import { acceptFiles, putRgba, hex, wirePickers } from './file-input.js';
+import { radioGroup } from './radio-group.js';
 import { Autosave, History, projectText, parseProject, download } from './project.js';
 
 const ASSETS = new URL('../assets/pixel/', import.meta.url);
@@ -41,19 +42,19 @@ const html = `
           <button type="button" data-example="trunk">Trunk example</button>
         </span>
         <span class="group" role="radiogroup" aria-label="Brush">
-          <button type="button" data-mode="stroke" aria-pressed="true" title="Draw orientation strokes (S)">✎ Strokes</button>
-          <button type="button" data-mode="paint" aria-pressed="false" title="Paint the mask (M)">▣ Paint mask</button>
-          <button type="button" data-mode="erase" aria-pressed="false" title="Erase the mask (E)">▢ Erase mask</button>
-          <label class="inline">size <input type="number" name="brush" min="1" max="32" value="3"></label>
+          <button type="button" data-mode="stroke" role="radio" aria-checked="true" title="Draw orientation strokes (S)">✎ Strokes</button>
+          <button type="button" data-mode="paint" role="radio" aria-checked="false" title="Paint the mask (M)">▣ Paint mask</button>
+          <button type="button" data-mode="erase" role="radio" aria-checked="false" title="Erase the mask (E)">▢ Erase mask</button>
         </span>
+        <label class="inline">size <input type="number" name="brush" min="1" max="32" value="3"></label>
         <span class="group">
           <button type="button" data-act="zoom-out" aria-label="Zoom out">−</button>
           <span class="zoom" data-testid="zoom">×4</span>
           <button type="button" data-act="zoom-in" aria-label="Zoom in">+</button>
         </span>
         <span class="group">
-          <button type="button" data-act="undo" title="Undo (Ctrl+Z)">↶</button>
-          <button type="button" data-act="redo" title="Redo (Ctrl+Shift+Z)">↷</button>
+          <button type="button" data-act="undo" title="Undo (Ctrl+Z)" aria-label="Undo">↶</button>
+          <button type="button" data-act="redo" title="Redo (Ctrl+Shift+Z)" aria-label="Redo">↷</button>
           <button type="button" data-act="clear-strokes">Clear strokes</button>
         </span>
       </div>
@@ -87,7 +88,7 @@ const html = `
         <label class="inline">PNG scale <select name="export-scale"><option>1</option><option>2</option><option selected>4</option><option>8</option></select></label>
         <button type="button" data-act="export-png">Export PNG</button>
         <button type="button" data-act="save-project">Save project</button>
-        <label class="button-like">Open project <input type="file" accept=".json,application/json" data-input="project" hidden></label>
+        <button type="button" data-pick="project">Open project…</button><input type="file" accept=".json,application/json" data-input="project" hidden>
       </div>
     </aside>
   </div>`;
@@ -512,6 +513,7 @@ export default {
         b.type = 'button';
         b.textContent = '⟳';
         b.title = 'New seed';
+        b.setAttribute('aria-label', 'New seed');
         b.onclick = () => set((state()?.params.seed ?? 0) + 1);
         input.append(n, b);
       }
@@ -548,7 +550,7 @@ export default {
     el.querySelectorAll('[data-mode]').forEach((b) => {
       b.onclick = () => {
         view.mode = b.dataset.mode;
-        el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-pressed', String(x === b)));
+        el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-checked', String(x === b)));
         draw();
       };
     });
@@ -580,6 +582,8 @@ export default {
     };
     document.addEventListener('keydown', this.onKey);
 
+    radioGroup(q('[role=radiogroup]'));
+    wirePickers(el);
     el.querySelectorAll('input[data-input]').forEach((input) => {
       input.onchange = () => {
         if (input.files[0]) loadInput(input.dataset.input, input.files[0]);
