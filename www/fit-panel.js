@@ -3,7 +3,8 @@
 // program's colours, upload an image, or make a target from chosen values;
 // the fit runs in workers with a live loss plot and the best pattern so far
 // drawn over the target.
-import { putRgba, hex } from './file-input.js';
+import { putRgba, hex, wirePickers } from './file-input.js';
+import { radioGroup } from './radio-group.js';
 import { Autosave, History, projectText, parseProject, download } from './project.js';
 import { LossPlot } from './loss-plot.js';
 import { createCodeEditor } from './code-editor.js';
@@ -33,10 +34,10 @@ const html = `
       <div class="toolbar">
         <span class="swatches-inline" role="radiogroup" aria-label="Brush colour" data-testid="fit-brush-colours"></span>
         <label class="inline">size <input type="number" name="brush" min="1" max="64" value="12"></label>
-        <button type="button" data-act="undo" title="Undo (Ctrl+Z)">↶</button>
-        <button type="button" data-act="redo" title="Redo (Ctrl+Shift+Z)">↷</button>
+        <button type="button" data-act="undo" title="Undo (Ctrl+Z)" aria-label="Undo">↶</button>
+        <button type="button" data-act="redo" title="Redo (Ctrl+Shift+Z)" aria-label="Redo">↷</button>
         <button type="button" data-act="clear-target">Clear</button>
-        <label class="button-like">Upload target <input type="file" accept="image/*" data-input="target" hidden></label>
+        <button type="button" data-pick="target">Upload target…</button><input type="file" accept="image/*" data-input="target" hidden>
       </div>
       <div class="stack checker">
         <canvas class="target" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-target" aria-label="target: draw here"></canvas>
@@ -45,7 +46,7 @@ const html = `
       <label class="inline">overlay <input type="range" name="overlay" min="0" max="1" step="0.05" value="0.6"></label>
       <div class="error target-error" role="alert" hidden></div>
     </section>
-    <section class="card fit-run" aria-label="Fit">
+    <section class="card fit-run" aria-label="Fitting">
       <div class="fit-settings">
         <label class="inline">Budget <select name="budget"><option value="quick">quick</option><option value="paper">paper</option></select></label>
         <label class="inline">Loss <select name="loss">
@@ -54,7 +55,7 @@ const html = `
         <label class="inline">Seed <input type="number" name="seed" min="0" value="1"></label>
       </div>
       <div class="row-buttons">
-        <button type="button" class="primary" data-act="fit">Fit</button>
+        <button type="button" class="primary" data-act="fit">Run fit</button>
         <button type="button" data-act="cancel" disabled>Cancel</button>
       </div>
       <progress max="1" value="0"></progress>
@@ -66,7 +67,7 @@ const html = `
         <button type="button" data-act="export-svg">Export SVG</button>
         <button type="button" data-act="export-json">Export JSON</button>
         <button type="button" data-act="save-project">Save project</button>
-        <label class="button-like">Open project <input type="file" accept=".json,application/json" data-input="project" hidden></label>
+        <button type="button" data-pick="project">Open project…</button><input type="file" accept=".json,application/json" data-input="project" hidden>
       </div>
     </section>
   </div>`;
@@ -188,8 +189,9 @@ export default {
         b.style.background = hex([...c, 255]);
         b.title = i === colours.length - 1 ? `background ${hex([...c, 255])} (erase)` : hex([...c, 255]);
         b.setAttribute('aria-label', b.title);
-        b.setAttribute('aria-pressed', String(i === brush));
-        b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-pressed', String(j === i))); };
+        b.setAttribute('role', 'radio');
+        b.setAttribute('aria-checked', String(i === brush));
+        b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-checked', String(j === i))); };
         return b;
       }));
       if (!doc().target) fillTarget(palette()[0]);
@@ -461,6 +463,8 @@ export default {
     };
     document.addEventListener('keydown', this.onKey);
 
+    radioGroup(q('[data-testid=fit-brush-colours]'));
+    wirePickers(el);
     el.querySelectorAll('input[data-input]').forEach((input) => {
       input.onchange = async () => {
         const file = input.files[0];
