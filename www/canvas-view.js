@@ -78,6 +78,9 @@ export class CanvasView {
       this.geometry = null;
     });
     this.resizer.observe(container);
+    // Scrolling moves the stack: measure again at the next pointer event.
+    this.onScroll = () => { this.geometry = null; };
+    addEventListener('scroll', this.onScroll, { capture: true, passive: true });
   }
 
   setImage(source, width, height) {
@@ -219,6 +222,7 @@ export class CanvasView {
   destroy() {
     cancelAnimationFrame(this.frame);
     this.resizer.disconnect();
+    removeEventListener('scroll', this.onScroll, { capture: true });
     this.element.remove();
   }
 }
