@@ -293,8 +293,11 @@ export default {
     }
 
     function fitZoom() {
-      const avail = Math.max(200, q('.viewport').clientWidth - 4);
-      view.zoom = Math.max(1, Math.min(16, Math.floor(avail / sourceImg.width)));
+      // The whole picture in the window: the viewport's width, and the height left below its top.
+      const vp = q('.viewport');
+      const availW = Math.max(200, vp.clientWidth - 4);
+      const availH = Math.max(160, innerHeight - (vp.getBoundingClientRect().top + scrollY) - 24);
+      view.zoom = Math.max(1, Math.min(16, Math.floor(Math.min(availW / sourceImg.width, availH / sourceImg.height))));
     }
 
     function draw() {
