@@ -127,7 +127,9 @@ export default {
       } catch (err) {
         // Keep the last good program running; say where this one is wrong.
         showError('.program-error', err.message);
-        if (err.line) editor?.markError(err.line, err.column, err.message);
+        // Typed errors carry line and column; older workers only say them in the message.
+        const at = err.line ? [err.line, err.column] : /line (\d+), column (\d+)/.exec(err.message)?.slice(1).map(Number);
+        if (at) editor?.markError(at[0], at[1] ?? 1, err.message);
         return false;
       }
       showError('.program-error', '');
