@@ -115,7 +115,7 @@ test('code editor: line numbers, Fit syntax colours, no wrapping, an error marke
     const lines = [...document.querySelectorAll('.code-editor .cm-line')];
     const gutter = document.querySelectorAll('.code-editor .cm-lint-marker-error').length;
     // The cursor is at the error: the active line is the marked one.
-    return { line: lines.indexOf(lineEl) + 1, gutter, active: lines.indexOf(document.querySelector('.code-editor .cm-activeLine')) + 1, before: lineEl.textContent.slice(0, lineEl.textContent.indexOf(range.textContent)) };
+    return { line: lines.indexOf(lineEl) + 1, gutter, active: lines.indexOf(document.querySelector('.code-editor .cm-activeLine')) + 1, before: (() => { const r = document.createRange(); r.setStart(lineEl, 0); r.setEndBefore(range); return r.toString(); })() };
   });
   assert.equal(mark.line, 3, 'underline on the error line');
   assert.equal(mark.active, 3, 'cursor moved to the error line');
