@@ -25,7 +25,7 @@ async function open(tool) {
 // Every visible, enabled control of the page: what a keyboard user must reach.
 const controls = () => [...document.querySelectorAll('button, a[href], input, select, textarea, [contenteditable=true], summary')]
   .filter((e) => !e.disabled && e.type !== 'hidden' && !e.hidden && e.getClientRects().length
-    && getComputedStyle(e).visibility !== 'hidden' && !e.closest('[hidden], [inert]'));
+    && getComputedStyle(e).visibility !== 'hidden' && !e.closest('[hidden], [inert], details:not([open]) > :not(summary)'));
 
 /** Tab through the page from the top; returns the ids of the controls focused, in order. */
 async function tabThrough(page, max = 200) {
@@ -68,6 +68,11 @@ test('every button and control has an accessible name; the Fit tab and the Run f
 test('keyboard alone: Tab reaches every control of each panel, and key actions work', async () => {
   for (const tool of ['pixel', 'fit', 'inspect']) {
     const page = await open(tool);
+    // The program editor too (it sits in a closed <details> at first).
+    if (tool === 'fit') {
+      await page.click('details.program summary');
+      await page.waitForSelector('.code-editor [data-testid=fit-program]');
+    }
     const total = await page.evaluate((src) => new Function(`return (${src})`)()().length, controls.toString());
     const seen = await tabThrough(page);
     const missed = await page.evaluate(({ seen, src }) => new Function(`return (${src})`)()()
@@ -154,24 +159,26 @@ test('paste: Ctrl+V of an image from the clipboard is inspected', async () => {
   assert.equal(await page.textContent('[data-field=size]'), '128 × 128 px');
 });
 
-test('pointer input: touch and pen draw on the Fit target like a mouse', async () => {
-  const page = await open('fit');
-  const before = await page.evaluate(() => window.filigreeFit.state().target.rgba.reduce((a, b) => a + b, 0));
+test('pointer input: pen and touch draw on the Fit target like a mouse', async () => {
+  const page = await env.newPage({ path: '#tool=fit', hasTouch: true });
+  await page.waitForFunction(READY.fit);
+  const sum = () => page.evaluate(() => window.filigreeFit.state().target.rgba.reduce((a, b) => a + b, 0));
   const box = await page.locator('.fit-target .stack').boundingBox();
-  // A pen stroke, then a touch stroke, as pointer events with their pointerType.
-  for (const pointerType of ['pen', 'touch']) {
-    await page.evaluate(({ box, pointerType }) => {
-      const stack = document.querySelector('.fit-target .stack');
-      const ev = (type, x, y) => stack.dispatchEvent(new PointerEvent(type, {
-        bubbles: true, pointerId: pointerType === 'pen' ? 2 : 3, pointerType, isPrimary: true,
-        clientX: box.x + x * box.width, clientY: box.y + y * box.height, buttons: type === 'pointerup' ? 0 : 1, button: 0, pressure: 0.5,
-      }));
-      ev('pointerdown', 0.2, 0.2);
-      for (let i = 1; i <= 10; i++) ev('pointermove', 0.2 + i * 0.05, 0.2 + (pointerType === 'pen' ? 0 : i * 0.05));
-      ev('pointerup', 0.7, 0.7);
-    }, { box, pointerType });
-  }
-  const after = await page.evaluate(() => window.filigreeFit.state().target.rgba.reduce((a, b) => a + b, 0));
-  assert.notEqual(after, before, 'the target changed');
+  const at = (fx, fy) => ({ x: box.x + fx * box.width, y: box.y + fy * box.height });
+  const cdp = await page.context().newCDPSession(page);
+  // A pen stroke: real input events with pointerType 'pen' (Chromium's input pipeline).
+  let before = await sum();
+  const pen = (type, p, buttons) => cdp.send('Input.dispatchMouseEvent', { type, ...p, button: 'left', buttons, clickCount: 1, pointerType: 'pen', force: 0.5 });
+  await pen('mousePressed', at(0.2, 0.2), 1);
+  for (let i = 1; i <= 10; i++) await pen('mouseMoved', at(0.2 + i * 0.05, 0.2), 1);
+  await pen('mouseReleased', at(0.7, 0.2), 0);
+  await page.waitForFunction((b) => window.filigreeFit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
+  // A touch stroke with one finger.
+  before = await sum();
+  const touch = (type, p) => cdp.send('Input.dispatchTouchEvent', { type, touchPoints: p ? [{ ...p, id: 1 }] : [] });
+  await touch('touchStart', at(0.2, 0.5));
+  for (let i = 1; i <= 10; i++) await touch('touchMove', at(0.2 + i * 0.05, 0.5 + i * 0.03));
+  await touch('touchEnd');
+  await page.waitForFunction((b) => window.filigreeFit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
   assert.equal(await page.$eval('.fit-target .stack', (e) => getComputedStyle(e).touchAction), 'none', 'no scrolling while drawing with touch');
 });
