@@ -171,3 +171,26 @@ test('the editor bundle ships: served from our origin and listed in the service 
   assert.equal(res[0], 200);
   assert.match(res[1], /javascript/);
 });
+
+test('offline after one visit, the program editor is still CodeMirror (the bundle is precached)', async () => {
+  const own = await launch();
+  try {
+    const page = await own.newPage({ path: '#tool=fit' });
+    await page.evaluate(async () => {
+      await navigator.serviceWorker.ready;
+      if (!navigator.serviceWorker.controller) {
+        await new Promise((r) => navigator.serviceWorker.addEventListener('controllerchange', r, { once: true }));
+      }
+    });
+    await new Promise((r) => own.server.close(r));
+    own.server.closeAllConnections?.();
+    await page.context().setOffline(true);
+    await page.reload();
+    await page.waitForFunction(VIEWS.fit.ready, null, { timeout: 30000 });
+    await page.click('details.program summary');
+    await page.waitForSelector('.code-editor[data-editor=codemirror] .cm-content', { timeout: 10000 });
+    own.server.listen(0);
+  } finally {
+    await own.close();
+  }
+});
