@@ -2,46 +2,43 @@
 // brush drag repaints one small rectangle per frame and never re-lays out.
 //
 //   const view = new CanvasView(container, { integer: true, maxZoom: 32, onPaint });
-//   view.setImage(source, width, height)   base layer: an ImageBitmap, canvas,
-//                                          image or ImageData of width×height pixels
+//   view.setImage(source, width, height)   base layer: an ImageBitmap, canvas, image
+//                                          or ImageData of width×height pixels
 //   view.setMask(mask, rgba = [127, 209, 199, 90])   overlay from {width, height,
-//                                          bits: Uint8Array (1 = inside)}; shown when
+//                                          bits: Uint8Array (1 = inside)}; drawn while
 //                                          view.showMask is true
-//   view.maskChanged(rect)                 bits changed inside rect (image pixels):
-//                                          the overlay's ImageData is updated there and
-//                                          that rectangle repainted next frame with ONE
-//                                          putImageData
+//   view.maskChanged(rect)                 bits changed inside rect (image pixels): that
+//                                          rectangle of the overlay is rebuilt in an
+//                                          ImageData and put with ONE putImageData in
+//                                          the next animation frame
 //   view.invalidate(rect?, layer?)         repaint rect (image pixels; default all) of
-//                                          'base' | 'overlay' | 'strokes' | all layers
+//                                          'base' | 'overlay' | 'strokes' (default all)
 //                                          in the next animation frame; calls coalesce
 //   view.setZoom('fit' | n)                'fit' (the default) follows the container's
 //                                          width and the window's height below it, less
-//                                          `reserve` px; `integer` rounds zoom down to whole
-//                                          numbers ≥ 1 (crisp pixel art)
-//   view.zoom, view.fitting                current zoom and whether it follows the container
-//   view.toImage(event) → [x, y]           pointer → image pixels (floats); uses the
-//                                          geometry cached at pointerdown / resize, so
-//                                          pointermove does no layout work
-//   view.element                           the stack to attach pointer listeners to
+//                                          `reserve` px; `integer` rounds zooms ≥ 1 down
+//                                          to whole numbers (crisp pixel art)
+//   view.zoom, view.fitting                current zoom, and whether it follows the container
+//   view.toImage(event) → [x, y]           pointer → image pixels (floats), from the
+//                                          geometry cached at pointerdown / resize /
+//                                          scroll: pointermove does no layout work
+//   view.element                           the stack; attach pointer listeners to it
 //   view.destroy()
 //
 // onPaint(ctx, zoom, rect) draws the stroke layer (strokes, grid, arrows): ctx is
-// scaled so one unit is one image pixel and clipped to rect, already cleared.
-// Base and overlay canvases hold the image at its own resolution and are scaled
-// by CSS (`image-rendering: pixelated`); only the stroke layer is drawn at screen
-// resolution (capped at MAX_STROKE_SIDE pixels a side).
-
-const MAX_STROKE_SIDE = 4096;
+// transformed so one unit is one image pixel, clipped to rect and cleared there.
+//
+// Why this shape: the browser re-composites a changed canvas in proportion to its
+// backing size (a 20×20 putImageData costs 0.7 s a frame on a 4096² canvas in
+// headless Chromium, 38 ms on a 600² one). So only the base layer, which changes
+// when a new result arrives, holds the image at its own resolution (scaled by CSS
+// with `image-rendering: pixelated`); the overlay and stroke layers, which change
+// on every brush move, cover just the visible part of the view at screen
+// resolution and are redrawn whole only when that part scrolls or zooms.
 
 export class CanvasView {
   constructor(container, { integer = false, minZoom = 1 / 64, maxZoom = 32, onPaint = null, reserve = 24, minFitHeight = 160 } = {}) {
-    this.reserve = reserve;
-    this.minFitHeight = minFitHeight;
-    this.container = container;
-    this.integer = integer;
-    this.minZoom = minZoom;
-    this.maxZoom = maxZoom;
-    this.onPaint = onPaint;
+    Object.assign(this, { container, integer, minZoom, maxZoom, onPaint, reserve, minFitHeight });
     this.width = 0;
     this.height = 0;
     this.zoom = 1;
@@ -49,10 +46,11 @@ export class CanvasView {
     this.showMask = false;
     this.source = null;
     this.mask = null;
-    this.maskImage = null;
     this.maskRgba = [127, 209, 199, 90];
+    this.visible = { x: 0, y: 0, w: 0, h: 0 }; // CSS px of the stack covered by the top layers
     this.dirty = { base: null, overlay: null, strokes: null };
     this.frame = 0;
+    this.geometry = null;
 
     this.element = document.createElement('div');
     this.element.className = 'canvas-view';
@@ -71,15 +69,19 @@ export class CanvasView {
     this.strokeCtx = this.strokes.getContext('2d');
     container.append(this.element);
 
-    this.geometry = null;
     this.element.addEventListener('pointerdown', () => this.measure(), { capture: true });
     this.resizer = new ResizeObserver(() => {
       if (this.fitting) this.applyZoom(this.fitZoom());
-      this.geometry = null;
+      this.relayout();
     });
     this.resizer.observe(container);
-    // Scrolling moves the stack: measure again at the next pointer event.
-    this.onScroll = () => { this.geometry = null; };
+    // Scrolling moves the stack: re-cover the visible part, measure again at the next pointer event.
+    this.onScroll = () => {
+      this.geometry = null;
+      if (!this.scrollFrame) {
+        this.scrollFrame = requestAnimationFrame(() => { this.scrollFrame = 0; this.relayout(); });
+      }
+    };
     addEventListener('scroll', this.onScroll, { capture: true, passive: true });
   }
 
@@ -89,8 +91,8 @@ export class CanvasView {
     this.width = width;
     this.height = height;
     if (resized) {
-      for (const c of [this.base, this.overlay]) { c.width = width; c.height = height; }
-      this.maskImage = null;
+      this.base.width = width;
+      this.base.height = height;
       this.applyZoom(this.fitting ? this.fitZoom() : this.zoom, true);
     }
     this.invalidate(null, 'base');
@@ -99,7 +101,6 @@ export class CanvasView {
   setMask(mask, rgba = this.maskRgba) {
     this.mask = mask;
     this.maskRgba = rgba;
-    this.maskImage = null;
     this.invalidate(null, 'overlay');
   }
 
@@ -112,12 +113,9 @@ export class CanvasView {
     this.applyZoom(this.fitting ? this.fitZoom() : z);
   }
 
-  /** The zoom that shows the whole image inside the container. */
+  /** The zoom that shows the whole image: the container's width, the window's height below it. */
   fitZoom() {
     if (!this.width || !this.height) return 1;
-    // Width: the container's. Height: what is left of the window below the
-    // container's top (less `reserve` px for what follows it), so the whole
-    // image is visible without scrolling.
     const cw = this.container.clientWidth;
     const top = this.container.getBoundingClientRect().top + (globalThis.scrollY || 0);
     const ch = Math.max(this.minFitHeight, innerHeight - Math.max(0, top) - this.reserve);
@@ -130,21 +128,34 @@ export class CanvasView {
     if (this.integer && zoom >= 1) zoom = Math.floor(zoom);
     if (zoom === this.zoom && !force) return;
     this.zoom = zoom;
-    const w = Math.round(this.width * zoom), h = Math.round(this.height * zoom);
-    this.element.style.width = `${w}px`;
-    this.element.style.height = `${h}px`;
-    // Stroke layer: screen resolution, capped.
-    const dpr = Math.min(2, globalThis.devicePixelRatio || 1);
-    const s = Math.min(dpr, MAX_STROKE_SIDE / Math.max(1, w), MAX_STROKE_SIDE / Math.max(1, h));
-    this.strokeScale = zoom * s;
-    this.strokes.width = Math.max(1, Math.round(this.width * this.strokeScale));
-    this.strokes.height = Math.max(1, Math.round(this.height * this.strokeScale));
-    this.geometry = null;
+    this.element.style.width = `${Math.round(this.width * zoom)}px`;
+    this.element.style.height = `${Math.round(this.height * zoom)}px`;
     this.element.dispatchEvent(new CustomEvent('zoom', { detail: { zoom } }));
+    this.relayout();
+  }
+
+  /** Place the overlay and stroke layers over the visible part of the stack and redraw them. */
+  relayout() {
+    this.geometry = null;
+    const W = Math.round(this.width * this.zoom), H = Math.round(this.height * this.zoom);
+    const s = this.element.getBoundingClientRect();
+    const c = this.container.getBoundingClientRect();
+    // Visible = the stack ∩ the container's box ∩ the window, in stack CSS px.
+    const x0 = Math.max(0, Math.max(c.left, 0) - s.left), y0 = Math.max(0, Math.max(c.top, 0) - s.top);
+    const x1 = Math.min(W, Math.min(c.right, innerWidth) - s.left), y1 = Math.min(H, Math.min(c.bottom, innerHeight) - s.top);
+    const v = { x: Math.floor(x0), y: Math.floor(y0), w: Math.max(0, Math.ceil(x1) - Math.floor(x0)), h: Math.max(0, Math.ceil(y1) - Math.floor(y0)) };
+    this.visible = v;
+    this.dpr = Math.min(2, globalThis.devicePixelRatio || 1);
+    for (const [cv, scale] of [[this.overlay, 1], [this.strokes, this.dpr]]) {
+      Object.assign(cv.style, { left: `${v.x}px`, top: `${v.y}px`, width: `${v.w}px`, height: `${v.h}px` });
+      cv.width = Math.max(1, Math.round(v.w * scale));
+      cv.height = Math.max(1, Math.round(v.h * scale));
+    }
+    this.invalidate(null, 'overlay');
     this.invalidate(null, 'strokes');
   }
 
-  /** Cache the stack's position (done at pointerdown and after resizes, never on pointermove). */
+  /** Cache the stack's position (at pointerdown and after resizes or scrolls, never on pointermove). */
   measure() {
     const r = this.element.getBoundingClientRect();
     this.geometry = { left: r.left, top: r.top, sx: this.width / (r.width || 1), sy: this.height / (r.height || 1) };
@@ -160,9 +171,7 @@ export class CanvasView {
     const full = { x: 0, y: 0, w: this.width, h: this.height };
     const r = rect ? clip(rect, full) : full;
     if (!r) return;
-    for (const name of layer ? [layer] : ['base', 'overlay', 'strokes']) {
-      this.dirty[name] = union(this.dirty[name], r);
-    }
+    for (const name of layer ? [layer] : ['base', 'overlay', 'strokes']) this.dirty[name] = union(this.dirty[name], r);
     if (!this.frame) this.frame = requestAnimationFrame(() => this.paint());
   }
 
@@ -180,47 +189,63 @@ export class CanvasView {
       }
     }
     if (overlay) this.paintOverlay(overlay);
-    if (strokes && this.onPaint) {
-      const ctx = this.strokeCtx;
-      const s = this.strokeScale;
-      // One image pixel of margin: strokes are wider than the pixels they cross.
-      const px = Math.max(0, Math.floor(strokes.x - 1) * s), py = Math.max(0, Math.floor(strokes.y - 1) * s);
-      ctx.setTransform(1, 0, 0, 1, 0, 0);
-      ctx.save();
-      ctx.beginPath();
-      ctx.rect(px, py, Math.ceil((strokes.w + 2) * s), Math.ceil((strokes.h + 2) * s));
-      ctx.clip();
-      ctx.clearRect(px, py, Math.ceil((strokes.w + 2) * s), Math.ceil((strokes.h + 2) * s));
-      ctx.setTransform(s, 0, 0, s, 0, 0);
-      this.onPaint(ctx, this.zoom, strokes);
-      ctx.restore();
-    }
+    if (strokes && this.onPaint) this.paintStrokes(strokes);
   }
 
-  paintOverlay({ x, y, w, h }) {
+  /** The screen pixels of the top layers that image rect `r` covers (clipped to the visible part). */
+  screenRect(r, scale, margin = 0) {
+    const v = this.visible, z = this.zoom;
+    const u0 = Math.max(0, Math.floor(((r.x - margin) * z - v.x) * scale));
+    const v0 = Math.max(0, Math.floor(((r.y - margin) * z - v.y) * scale));
+    const u1 = Math.min(Math.round(v.w * scale), Math.ceil(((r.x + r.w + margin) * z - v.x) * scale));
+    const v1 = Math.min(Math.round(v.h * scale), Math.ceil(((r.y + r.h + margin) * z - v.y) * scale));
+    return u1 > u0 && v1 > v0 ? { x: u0, y: v0, w: u1 - u0, h: v1 - v0 } : null;
+  }
+
+  paintOverlay(r) {
     const m = this.mask;
+    const sr = this.screenRect(r, 1);
+    if (!sr) return;
     if (!m || !this.showMask || m.width !== this.width || m.height !== this.height) {
-      this.overlayCtx.clearRect(x, y, w, h);
+      this.overlayCtx.clearRect(sr.x, sr.y, sr.w, sr.h);
       return;
     }
-    if (!this.maskImage) {
-      this.maskImage = new ImageData(this.width, this.height);
-      ({ x, y, w, h } = { x: 0, y: 0, w: this.width, h: this.height });
+    // Each screen pixel shows the mask bit of the image pixel under its centre.
+    const img = new ImageData(sr.w, sr.h);
+    const data = new Uint32Array(img.data.buffer);
+    const [R, G, B, A] = this.maskRgba;
+    const on = new Uint32Array(new Uint8ClampedArray([R, G, B, A]).buffer)[0];
+    const z = this.zoom, v = this.visible;
+    const cols = new Int32Array(sr.w);
+    for (let i = 0; i < sr.w; i++) cols[i] = Math.min(this.width - 1, Math.floor((v.x + sr.x + i + 0.5) / z));
+    for (let j = 0; j < sr.h; j++) {
+      const row = Math.min(this.height - 1, Math.floor((v.y + sr.y + j + 0.5) / z)) * this.width;
+      const o = j * sr.w;
+      for (let i = 0; i < sr.w; i++) if (m.bits[row + cols[i]]) data[o + i] = on;
     }
-    const data = this.maskImage.data;
-    const [r, g, b, a] = this.maskRgba;
-    for (let j = y; j < y + h; j++) {
-      let k = j * this.width + x;
-      for (let i = 0; i < w; i++, k++) {
-        const o = 4 * k;
-        if (m.bits[k]) { data[o] = r; data[o + 1] = g; data[o + 2] = b; data[o + 3] = a; } else data[o + 3] = 0;
-      }
-    }
-    this.overlayCtx.putImageData(this.maskImage, 0, 0, x, y, w, h);
+    this.overlayCtx.putImageData(img, sr.x, sr.y);
+  }
+
+  paintStrokes(r) {
+    const ctx = this.strokeCtx, s = this.dpr, v = this.visible;
+    // One image pixel of margin (strokes are wider than the pixels they cross) plus a few screen pixels.
+    const sr = this.screenRect(r, s, 1 + 4 / this.zoom);
+    if (!sr) return;
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.save();
+    ctx.beginPath();
+    ctx.rect(sr.x, sr.y, sr.w, sr.h);
+    ctx.clip();
+    ctx.clearRect(sr.x, sr.y, sr.w, sr.h);
+    const k = this.zoom * s;
+    ctx.setTransform(k, 0, 0, k, -v.x * s, -v.y * s);
+    this.onPaint(ctx, this.zoom, r);
+    ctx.restore();
   }
 
   destroy() {
     cancelAnimationFrame(this.frame);
+    cancelAnimationFrame(this.scrollFrame);
     this.resizer.disconnect();
     removeEventListener('scroll', this.onScroll, { capture: true });
     this.element.remove();
