@@ -98,6 +98,7 @@ async function brushDrag(page, size) {
 test('canvas view: a brush drag repaints one small rectangle per frame, no layout on pointermove (1024² and 4096²)', async () => {
   const page = await env.newPage({ path: '#tool=inspect' });
   const results = {};
+  await brushDrag(page, 256); // warm-up: compile the code paths, create the GPU layers
   for (const size of [1024, 4096]) {
     const r = await brushDrag(page, size);
     results[size] = r;
