@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what building the app needs, only when missing:
-# the wasm32 target and the wasm-bindgen-cli whose version equals the
-# wasm-bindgen crate in Cargo.lock (they must match exactly).
+# the wasm32 target, the wasm-bindgen-cli whose version equals the
+# wasm-bindgen crate in Cargo.lock (they must match exactly), and binaryen's
+# wasm-opt (Debian package).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -17,4 +18,11 @@ have=$(wasm-bindgen --version 2>/dev/null | awk '{print $2}' || true)
 if [ "$have" != "$want" ]; then
   echo "setup: installing wasm-bindgen-cli $want (found '${have:-none}'); takes a few minutes"
   cargo install wasm-bindgen-cli --version "=$want"
+fi
+
+if [ "${FILIGREE_WASM_OPT:-1}" != 0 ] && ! command -v wasm-opt >/dev/null; then
+  echo "setup: installing binaryen (wasm-opt) with apt"
+  sudo=""; [ "$(id -u)" = 0 ] || sudo="sudo"
+  $sudo apt-get update
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y binaryen
 fi

@@ -194,10 +194,17 @@ fn fits_are_deterministic_by_seed() {
     o2.seed = 8;
     let c = run(o2);
     assert_ne!(a.history, c.history);
-    // Threads change nothing but speed.
+    // Shards on threads change nothing but speed.
     let mut o3 = o;
-    o3.threads = 3;
-    assert_eq!(run(o3), a);
+    let jobs: Vec<_> = (0..3)
+        .map(|k| {
+            o3.shards = (k, 3);
+            FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o3).unwrap()
+        })
+        .collect();
+    let sharded =
+        filigree::core::parallel::run_sharded_threads(jobs, &Cancel::new(), |_, _| {}).unwrap();
+    assert_eq!(sharded, a);
 }
 
 #[test]
@@ -469,12 +476,15 @@ fn cli_render_and_fit() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A fit sharded over several jobs (the browser's worker pool) gives the
-/// result of one unsharded fit: the shards evaluate parts of every
-/// initialisation batch, exchange losses, stay identical, then refine
-/// contiguous shares of the candidates.
+/// A fit sharded over several jobs, driven natively exactly as the browser's
+/// worker pool drives it (the all-gather relay of `core::parallel`), gives
+/// every shard the result of one unsharded fit, bit for bit: the shards
+/// evaluate parts of every initialisation batch, exchange losses, stay
+/// identical, refine contiguous shares of the candidates, share their bests
+/// and polish the same point. Both native drivers (one thread, threads) agree.
 #[test]
 fn a_sharded_fit_equals_one_fit() {
+    use filigree::core::parallel::{run_sharded, run_sharded_threads};
     use filigree::pattern::api::{start_fit, FitSettings, TargetSpec};
     use std::collections::BTreeMap;
     let src = generator("stripes-dots").unwrap().source;
@@ -491,66 +501,85 @@ fn a_sharded_fit_equals_one_fit() {
         generations: Some(3),
         candidates: Some(3),
         iterations: Some(30),
+        polish: Some(5),
         seed: Some(9),
         ..Default::default()
     };
     let whole = run_quietly(start_fit(src, &named, &target, &base).unwrap().0).unwrap();
-
-    let n = 2;
-    let mut jobs: Vec<_> = (0..n)
-        .map(|k| {
-            let s = FitSettings {
-                shards: Some((k, n)),
-                ..base.clone()
-            };
-            start_fit(src, &named, &target, &s).unwrap().0
-        })
-        .collect();
-    let mut results = vec![None; n];
-    let mut exchanges = 0;
-    while results.iter().any(|r| r.is_none()) {
-        // Step each shard until it finishes or hands out its losses.
-        let mut outs = vec![None; n];
-        for (k, job) in jobs.iter_mut().enumerate() {
-            while results[k].is_none() && outs[k].is_none() {
-                match job.step().unwrap() {
-                    Step::Done(r) => results[k] = Some(r),
-                    Step::Running(_) => outs[k] = job.outbox(),
+    let shards = |n: usize| -> Vec<_> {
+        (0..n)
+            .map(|k| {
+                let s = FitSettings {
+                    shards: Some((k, n)),
+                    ..base.clone()
+                };
+                start_fit(src, &named, &target, &s).unwrap().0
+            })
+            .collect()
+    };
+    for n in [2, 3, 4] {
+        let mut exchanges = vec![0; n];
+        let mut seen = vec![0usize; n];
+        let one = run_sharded(shards(n), &Cancel::new(), |k, _| seen[k] += 1).unwrap();
+        assert_eq!(one, whole, "{n} shards, one thread");
+        assert!(seen.iter().all(|&s| s > 0), "every shard reports progress");
+        // Count the exchanges a shard takes part in by stepping it by hand.
+        let mut jobs = shards(n);
+        let mut done = vec![false; n];
+        while !done.iter().all(|&d| d) {
+            let mut parts = vec![];
+            for (k, job) in jobs.iter_mut().enumerate() {
+                loop {
+                    match job.step().unwrap() {
+                        Step::Done(r) => {
+                            assert_eq!(r, whole);
+                            done[k] = true;
+                            break;
+                        }
+                        Step::Running(_) => {
+                            if let Some(p) = job.outbox() {
+                                parts.push(p);
+                                exchanges[k] += 1;
+                                break;
+                            }
+                        }
+                    }
+                }
+            }
+            if !parts.is_empty() {
+                assert_eq!(parts.len(), n, "shards exchange in lockstep");
+                for job in &mut jobs {
+                    job.inbox(parts.clone()).unwrap();
                 }
             }
         }
-        if outs.iter().any(|o| o.is_some()) {
-            assert!(
-                outs.iter().all(|o| o.is_some()),
-                "shards exchange in lockstep"
-            );
-            let parts: Vec<Vec<f64>> = outs.into_iter().map(|o| o.unwrap()).collect();
-            let merged: Vec<f64> = (0..parts[0].len())
-                .map(|i| {
-                    parts
-                        .iter()
-                        .map(|p| p[i])
-                        .find(|v| !v.is_nan())
-                        .expect("someone evaluated it")
-                })
-                .collect();
-            for job in &mut jobs {
-                job.inbox(merged.clone()).unwrap();
+        // One exchange per initialisation batch (the first population and
+        // each generation) and one for the bests.
+        assert_eq!(exchanges, vec![3 + 1 + 1; n], "{n} shards");
+        let threaded = run_sharded_threads(shards(n), &Cancel::new(), |_, _| {}).unwrap();
+        assert_eq!(threaded, whole, "{n} shards, threads");
+    }
+    // The work is split, not repeated: each shard evaluates its share of a batch.
+    let mut a = shards(2);
+    let mut first = vec![];
+    for job in &mut a {
+        while first.len() < 2 {
+            if let Step::Running(_) = job.step().unwrap() {
+                if let Some(p) = job.outbox() {
+                    first.push(p);
+                    break;
+                }
             }
-            exchanges += 1;
         }
     }
-    // One exchange per initialisation batch (the first population and each generation).
-    assert!(exchanges >= 3, "{exchanges} exchanges");
-    let results: Vec<_> = results.into_iter().map(|r| r.unwrap()).collect();
-    let best = results
-        .iter()
-        .fold(&results[0], |a, b| if b.loss < a.loss { b } else { a });
-    assert_eq!(best.loss, whole.loss);
-    assert_eq!(best.params, whole.params);
-    let evals: u64 = results.iter().map(|r| r.evaluations).sum();
-    assert_eq!(evals, whole.evaluations, "the work is split, not repeated");
-    // A job refuses input it did not ask for.
+    assert_eq!(
+        first[0].len() + first[1].len(),
+        25,
+        "a population of 25, split"
+    );
+    // A job refuses input it did not ask for, and a shard cannot run alone.
     let mut lone = start_fit(src, &named, &target, &base).unwrap().0;
-    assert!(lone.inbox(vec![1.0]).is_err());
+    assert!(lone.inbox(vec![vec![1.0]]).is_err());
+    let e = run_quietly(shards(2).remove(0)).unwrap_err();
+    assert!(e.to_string().contains("run_sharded"), "{e}");
 }

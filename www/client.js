@@ -135,6 +135,47 @@ export class WorkerPool {
     });
   }
 
+  /**
+   * Run one job split into `shards` sibling jobs (shard k gets the payload
+   * plus `shards: [k, n]`) and relay their exchanges: when every shard has
+   * posted its `need`, each one gets the list of all parts in shard order
+   * (an all-gather). The page never merges anything; the core does (see
+   * src/core/parallel.rs, whose native driver relays the same way). Every
+   * shard ends with the same merged result; resolves with shard 0's.
+   * `onProgress(progress, k)` reports each shard.
+   * @param {{shards?: number, onProgress?: Function, signal?: AbortSignal}} [opts]
+   */
+  async runSharded(kind, payload, { shards, onProgress, signal } = {}) {
+    const n = Math.max(1, shards ?? this.slots.length - 1);
+    const inner = new AbortController();
+    const abort = () => inner.abort();
+    if (signal?.aborted) abort();
+    signal?.addEventListener('abort', abort, { once: true });
+    let round = [];
+    let handed = 0;
+    const relay = (k, part) => new Promise((resolve) => {
+      round[k] = { part, resolve };
+      if (++handed < n) return;
+      const waiting = round;
+      round = [];
+      handed = 0;
+      const parts = waiting.map((r) => r.part);
+      for (const r of waiting) r.resolve(parts);
+    });
+    try {
+      const results = await Promise.all(Array.from({ length: n }, (_, k) => this.run(kind, { ...payload, shards: [k, n] }, {
+        signal: inner.signal,
+        // The shards share the payload's buffers: copy them, never transfer.
+        transfer: [],
+        onNeed: (need) => relay(k, need),
+        onProgress: (p) => { if (!inner.signal.aborted) onProgress?.(p, k); },
+      }).catch((err) => { inner.abort(); throw err; })));
+      return results[0];
+    } finally {
+      signal?.removeEventListener('abort', abort);
+    }
+  }
+
   abort(req) {
     const queued = this.queue.indexOf(req);
     if (queued >= 0) {

@@ -371,51 +371,24 @@ export default {
     }
 
     // One fit sharded across the worker pool (all workers but one, which
-    // stays free for previews): every shard runs the same seeded fit,
-    // evaluates its part of each initialisation batch, and the page merges
-    // the parts and hands the full batch back to all of them, so they stay
-    // identical; then each refines a contiguous share of the candidates with
-    // Adam. The best over the shards is exactly the result of one fit
-    // (tests/fit.rs checks this natively).
+    // stays free for previews). The pool relays the shards' exchanges and
+    // the core merges them, so the result is exactly that of one fit
+    // (tests/fit.rs checks this with the native driver).
     async function parallelFit(common, signal, show) {
       const n = Math.max(1, pool.slots.length - 1);
-      const inner = new AbortController();
-      const abort = () => inner.abort();
-      signal.addEventListener('abort', abort, { once: true });
-      let parts = [];
-      const exchange = (k, losses) => new Promise((resolve) => {
-        parts.push({ k, losses, resolve });
-        if (parts.length < n) return;
-        const merged = Array.from(parts[0].losses, (_, i) => {
-          const own = parts.find((p) => !Number.isNaN(p.losses[i]));
-          return own ? own.losses[i] : NaN;
-        });
-        const waiting = parts;
-        parts = [];
-        for (const p of waiting) p.resolve(merged);
-      });
       const fractions = Array(n).fill(0);
       const losses = Array(n).fill(Infinity);
-      try {
-        const results = await Promise.all(Array.from({ length: n }, (_, k) => pool.run('fit', { ...common(), shards: [k, n] }, {
-          signal: inner.signal,
-          onNeed: (need) => exchange(k, need),
-          onProgress: (p) => {
-            // A shard still reporting after the fit ended must not repaint the status.
-            if (inner.signal.aborted) return;
-            fractions[k] = p.fraction;
-            if (p.figure != null) losses[k] = p.figure;
-            const best = Math.min(...losses);
-            const stage = n > 1 ? `${p.stage} (${n} workers)` : p.stage;
-            show(fractions.reduce((a, b) => a + b, 0) / n, stage, best, losses[k] === best ? p.values : null);
-          },
-        }).catch((err) => { inner.abort(); throw err; })));
-        // Ties go to the earlier shard, as one fit keeps the first best.
-        const best = results.reduce((a, b) => (b.loss < a.loss ? b : a));
-        return { ...best, evaluations: results.reduce((e, r) => e + r.evaluations, 0) };
-      } finally {
-        signal.removeEventListener('abort', abort);
-      }
+      return pool.runSharded('fit', common(), {
+        shards: n,
+        signal,
+        onProgress: (p, k) => {
+          fractions[k] = p.fraction;
+          if (p.figure != null) losses[k] = p.figure;
+          const best = Math.min(...losses);
+          const stage = n > 1 ? `${p.stage} (${n} workers)` : p.stage;
+          show(fractions.reduce((a, b) => a + b, 0) / n, stage, best, losses[k] === best ? p.values : null);
+        },
+      });
     }
 
     function renderResults() {

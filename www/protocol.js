@@ -7,7 +7,10 @@
 //                                      are transferred, not copied.
 //   {type: 'cancel', id}               stop job `id` at its next slice boundary
 //                                      (read within ~15 ms of wall time).
-//   {type: 'input', id, data}          the answer to the job's `need` (below).
+//   {type: 'input', id, data}          the answer to the job's `need` (below):
+//                                      every sibling shard's `need`, in shard
+//                                      order (WorkerPool.runSharded relays them;
+//                                      the core merges, the page never does).
 //
 // Worker → page
 //   {type: 'ready', version}           the wasm core is loaded.

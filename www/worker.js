@@ -59,7 +59,9 @@ async function run({ id, kind, payload }) {
         self.postMessage({ type: MSG.PROGRESS, id, progress: r.progress });
         self.postMessage({ type: MSG.NEED, id, need: r.need });
         const data = await new Promise((resolve) => waiting.set(id, resolve));
-        if (data) job.provide(data);
+        // A cancel wakes the job with no data (read at the top of the loop);
+        // anything else must be every shard's part, or provide() says why.
+        if (!cancelled.has(id)) job.provide(data ?? []);
         sliceStart = performance.now();
         continue;
       }

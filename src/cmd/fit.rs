@@ -1,6 +1,7 @@
 //! `filigree fit` and `filigree render`: fit a pattern program to an image,
 //! draw a program with given parameters.
-use filigree::core::job::{run_to_end, Cancel};
+use filigree::core::job::Cancel;
+use filigree::core::parallel::run_sharded_threads;
 use filigree::pattern::fit::{Budget, FitJob, FitOptions, TargetSource};
 use filigree::pattern::generators::{generator, GENERATORS};
 use filigree::pattern::loss::{LossKind, SdfUnits};
@@ -182,11 +183,7 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let vals = param_values(&prog, a.params.as_deref())?;
     let mut opts = options(&a.budget, &a.loss, &a.init, a.grid, &a.units, a.seed)?;
     opts.polish = a.polish;
-    opts.threads = a.threads.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    });
+    let threads = super::threads(a.threads)?;
     let target_img;
     let target_vals;
     let target = match (&a.target, &a.target_params) {
@@ -201,12 +198,20 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
         (None, None) => return Err("give --target IMAGE or --target-params JSON".into()),
     };
     let t0 = Instant::now();
-    let job = FitJob::new(&prog, &vals, &target, opts).map_err(|e| format!("{name}: {e}"))?;
-    let scene = job.objective().scene.clone();
+    // One shard per thread, exchanged by the same driver contract as the
+    // browser's worker pool; the result equals a one-thread fit.
+    let jobs = (0..threads)
+        .map(|k| {
+            let mut o = opts;
+            o.shards = (k, threads);
+            FitJob::new(&prog, &vals, &target, o).map_err(|e| format!("{name}: {e}"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let scene = jobs[0].objective().scene.clone();
     let mut last = 0.0;
     let quiet = a.json;
-    let r = run_to_end(job, &Cancel::new(), |p| {
-        if !quiet && (p.fraction - last >= 0.05) {
+    let r = run_sharded_threads(jobs, &Cancel::new(), |k, p| {
+        if !quiet && k == 0 && (p.fraction - last >= 0.05) {
             last = p.fraction;
             eprintln!(
                 "{:>3.0}%  {}  best loss {:.5}",

@@ -1,5 +1,6 @@
 //! `filigree bench fit`: the Table-1 style benchmark of the Fit tool.
-use filigree::core::job::run_quietly;
+use filigree::core::job::{run_quietly, Cancel};
+use filigree::core::parallel::run_sharded_threads;
 use filigree::core::rng::Rng;
 use filigree::pattern::field::Scene;
 use filigree::pattern::fit::{colour_indices, Budget, FitJob, FitOptions, FitResult};
@@ -86,6 +87,23 @@ fn rate(obj: &mut Objective, p: &[f64], grad: bool) -> (f64, f64) {
     (rates[2], rates[1])
 }
 
+/// One fit sharded over `threads` threads (the same result as one thread).
+fn fit_on_threads(
+    scene: &Scene,
+    target: &Target,
+    opts: FitOptions,
+    threads: usize,
+) -> Result<FitResult, String> {
+    let jobs = (0..threads)
+        .map(|k| {
+            let mut o = opts;
+            o.shards = (k, threads);
+            FitJob::from_parts(scene.clone(), target.clone(), o)
+        })
+        .collect();
+    run_sharded_threads(jobs, &Cancel::new(), |_, _| {}).map_err(|e| e.to_string())
+}
+
 pub fn run(
     quick: bool,
     seeds: u64,
@@ -94,11 +112,7 @@ pub fn run(
     speed_only: bool,
 ) -> Result<(), String> {
     let budget = if quick { Budget::Quick } else { Budget::Paper };
-    let threads = threads.unwrap_or_else(|| {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    });
+    let threads = super::threads(threads)?;
     let wanted: Option<Vec<&str>> = only.map(|s| s.split(',').map(str::trim).collect());
     let mut fits = vec![];
     if !speed_only {
@@ -110,11 +124,9 @@ pub fn run(
                 let c = case(g.source, 1000 + seed)?;
                 let mut opts = FitOptions::budget(budget);
                 opts.seed = seed + 1;
-                opts.threads = threads;
                 let t = target(&c, &opts.loss)?;
                 let t0 = Instant::now();
-                let r = run_quietly(FitJob::from_parts(c.scene.clone(), t.clone(), opts))
-                    .map_err(|e| e.to_string())?;
+                let r = fit_on_threads(&c.scene, &t, opts, threads)?;
                 let sdf_secs = t0.elapsed().as_secs_f64();
                 // Image-space L2 from the same initial candidates.
                 let mut io = opts;
@@ -187,10 +199,8 @@ pub fn run(
             for (key, u) in [("pixels", SdfUnits::Pixels), ("canvas", SdfUnits::Canvas)] {
                 let mut opts = FitOptions::budget(Budget::Quick);
                 opts.loss.units = u;
-                opts.threads = threads;
                 let t = target(&c, &opts.loss)?;
-                let r = run_quietly(FitJob::from_parts(c.scene.clone(), t, opts))
-                    .map_err(|e| e.to_string())?;
+                let r = fit_on_threads(&c.scene, &t, opts, threads)?;
                 row[key] = json!({"param_mse": mse(&c, &r.params), "loss": r.loss});
             }
             units.push(row);

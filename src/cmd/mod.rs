@@ -24,3 +24,17 @@ pub fn min_median(mut v: Vec<f64>) -> (f64, f64) {
     v.sort_by(|a, b| a.total_cmp(b));
     (v[0], v[v.len() / 2])
 }
+
+/// Threads for a parallel run: all cores by default, at most the 64 shards
+/// a fit can be split into.
+pub fn threads(asked: Option<usize>) -> Result<usize, String> {
+    const MAX: usize = 64;
+    match asked {
+        Some(n @ 1..=MAX) => Ok(n),
+        Some(n) => Err(format!("--threads {n}: give 1 to {MAX}")),
+        None => Ok(std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+            .min(MAX)),
+    }
+}

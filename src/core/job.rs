@@ -61,16 +61,19 @@ pub trait Job {
     /// Do one slice of work.
     fn step(&mut self) -> Result<Step<Self::Output>>;
 
-    /// Data this job must share with sibling jobs before it can go on
-    /// (e.g. a sharded fit's losses). Checked after every step; when it
-    /// returns `Some`, the driver delivers the merged answer with
-    /// [`Job::inbox`] before stepping again. Most jobs never exchange.
+    /// This job's part of an exchange with its sibling shards (e.g. a
+    /// sharded fit's losses of one batch). Checked after every step; when it
+    /// returns `Some`, the job cannot go on until the driver hands it every
+    /// shard's part with [`Job::inbox`]. The exchange is an all-gather: the
+    /// driver only relays, it never merges (see [`crate::core::parallel`]).
+    /// Most jobs never exchange.
     fn outbox(&mut self) -> Option<Vec<f64>> {
         None
     }
 
-    /// Deliver the answer to the last [`Job::outbox`].
-    fn inbox(&mut self, _data: Vec<f64>) -> Result<()> {
+    /// Every shard's answer to the last [`Job::outbox`], in shard order
+    /// (this job's own part included).
+    fn inbox(&mut self, _parts: Vec<Vec<f64>>) -> Result<()> {
         Err(Error::input("this job takes no input while it runs"))
     }
 }
@@ -92,7 +95,9 @@ impl Cancel {
 }
 
 /// Drive `job` to completion natively, reporting progress after each slice and
-/// checking `cancel` between slices.
+/// checking `cancel` between slices. A job that asks for an exchange with
+/// sibling shards ([`Job::outbox`]) cannot be finished alone: that is an
+/// error here; use [`crate::core::parallel::run_sharded`].
 pub fn run_to_end<J: Job>(
     mut job: J,
     cancel: &Cancel,
@@ -103,7 +108,15 @@ pub fn run_to_end<J: Job>(
             return Err(Error::Cancelled);
         }
         match job.step()? {
-            Step::Running(p) => on_progress(&p),
+            Step::Running(p) => {
+                on_progress(&p);
+                if job.outbox().is_some() {
+                    return Err(Error::input(
+                        "this job is one shard of a parallel run and asks to exchange data with \
+                         its siblings; drive it with core::parallel::run_sharded",
+                    ));
+                }
+            }
             Step::Done(out) => return Ok(out),
         }
     }
@@ -181,6 +194,24 @@ mod tests {
         });
         assert_eq!(r, Err(Error::Cancelled));
         assert_eq!(steps, 3);
+    }
+
+    /// A job that wants an exchange after its first step.
+    struct Asks;
+    impl Job for Asks {
+        type Output = ();
+        fn step(&mut self) -> Result<Step<()>> {
+            Ok(Step::Running(Progress::new(0.5, "waiting")))
+        }
+        fn outbox(&mut self) -> Option<Vec<f64>> {
+            Some(vec![1.0])
+        }
+    }
+
+    #[test]
+    fn run_to_end_refuses_a_job_that_needs_siblings_instead_of_looping() {
+        let e = run_quietly(Asks).unwrap_err();
+        assert!(e.to_string().contains("run_sharded"), "{e}");
     }
 
     #[test]

@@ -57,8 +57,6 @@ pub struct FitOptions {
     /// Work per [`Job::step`] in item evaluations (~5–20 ns each); at least
     /// one loss evaluation is always done.
     pub work_per_step: u64,
-    /// Native threads for evaluating GA batches (1 = none; ignored in wasm).
-    pub threads: usize,
     /// Extra Adam iterations on the image-space loss from the best SDF
     /// result (0 = off, the paper's method). The SDF loss finds the basin
     /// robustly but its composed fields are not exact distances inside
@@ -66,13 +64,16 @@ pub struct FitOptions {
     /// (`image_same_init`) shows this polish removing most of that bias.
     #[serde(default)]
     pub polish: usize,
-    /// Split one fit over `shards.1` identical jobs (a browser worker pool):
-    /// job `shards.0` evaluates every `shards.1`-th point of each
-    /// initialisation batch, the driver exchanges the losses
-    /// ([`Job::outbox`] / [`Job::inbox`]) so every job tells its initialiser
-    /// the same full batch and stays identical, and then each job refines a
-    /// contiguous share of the candidates with Adam. The best result over
-    /// the shares equals the result of one unsharded fit. `(0, 1)` = alone.
+    /// Split one fit over `shards.1` identical jobs (the browser's worker
+    /// pool, or native threads; see [`crate::core::parallel`]): job
+    /// `shards.0` evaluates every `shards.1`-th point of each initialisation
+    /// batch and the shards exchange their losses ([`Job::outbox`] /
+    /// [`Job::inbox`]), so every job tells its initialiser the same full
+    /// batch and stays identical; then each job refines a contiguous share
+    /// of the candidates with Adam, and a last exchange gives every shard
+    /// the best of all shares (and the merged history and evaluation count)
+    /// before the polish. Every shard then returns the result of one
+    /// unsharded fit, bit for bit. `(0, 1)` = alone.
     #[serde(default = "one_shard")]
     pub shards: (usize, usize),
 }
@@ -95,7 +96,6 @@ impl FitOptions {
             seed: 1,
             loss: LossOptions::default(),
             work_per_step: 300_000,
-            threads: 1,
             polish: 0,
             shards: (0, 1),
         };
@@ -244,26 +244,38 @@ pub struct FitJob {
     planned: usize,
     generation: usize,
     grad: Vec<f64>,
-    #[cfg(not(target_arch = "wasm32"))]
-    workers: Vec<Objective>,
     polish: Option<(Objective, Adam)>,
     polish_loss: Option<f64>,
     /// Sharded initialisation: this job's losses of the current batch (NaN
-    /// where another shard evaluates), the next index to look at, and
-    /// whether the batch waits for the other shards' losses.
+    /// where another shard evaluates) and the next index to look at.
     shard_losses: Vec<f64>,
     shard_next: usize,
+    /// Every candidate of the whole fit (a shard refines only its share).
+    all_candidates: Vec<Scored>,
+    /// Length of `history` when refinement began.
+    refine_from: usize,
+    /// Whether the shards have shared their refinement results.
+    shared_best: bool,
     exchange: Exchange,
 }
 
-/// Where a sharded job is in a loss exchange.
+/// Where a sharded job is in an exchange with its sibling shards.
 #[derive(Debug, Clone, PartialEq)]
 enum Exchange {
     None,
-    /// Own losses ready to hand out.
-    Ready(Vec<f64>),
-    /// Handed out; waiting for the full batch.
-    Waiting,
+    /// Own part ready to hand out.
+    Ready(Shared, Vec<f64>),
+    /// Handed out; waiting for every shard's part.
+    Waiting(Shared),
+}
+
+/// What the shards exchange.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Shared {
+    /// Losses of their points of the current initialisation batch.
+    Batch,
+    /// `[best loss, evaluations, best point (dim values), refinement history...]`.
+    Best,
 }
 
 impl FitJob {
@@ -316,12 +328,13 @@ impl FitJob {
             generation: 0,
             grad: vec![0.0; dim],
             opts,
-            #[cfg(not(target_arch = "wasm32"))]
-            workers: vec![],
             polish: None,
             polish_loss: None,
             shard_losses: vec![],
             shard_next: 0,
+            all_candidates: vec![],
+            refine_from: 0,
+            shared_best: false,
             exchange: Exchange::None,
         }
     }
@@ -346,6 +359,7 @@ impl FitJob {
                 loss: f64::INFINITY,
             })
             .collect();
+        job.all_candidates = job.candidates.clone();
         job.planned = (job.candidates.len() * opts.iterations + opts.polish).max(1);
         job.phase = Phase::Refine;
         job
@@ -403,50 +417,9 @@ impl FitJob {
         }
     }
 
-    /// Evaluate pending batch points; returns work done.
-    fn eval_batch_points(&mut self) -> u64 {
+    /// Evaluate the next batch point; returns work done.
+    fn eval_batch_point(&mut self) -> u64 {
         let i = self.batch_losses.len();
-        #[cfg(not(target_arch = "wasm32"))]
-        if self.opts.threads > 1 {
-            let t = self.opts.threads;
-            while self.workers.len() < t {
-                self.workers.push(self.obj.clone());
-            }
-            let end = (i + 4 * t).min(self.batch.len());
-            let points: Vec<Vec<f64>> = self.batch[i..end]
-                .iter()
-                .map(|u| self.denormalise(u))
-                .collect();
-            let chunk = points.len().div_ceil(t).max(1);
-            let mut out = vec![0.0; points.len()];
-            let mut work = 0u64;
-            std::thread::scope(|s| {
-                let mut handles = vec![];
-                for ((w, ps), os) in self
-                    .workers
-                    .iter_mut()
-                    .zip(points.chunks(chunk))
-                    .zip(out.chunks_mut(chunk))
-                {
-                    handles.push(s.spawn(move || {
-                        let mut wk = 0;
-                        for (p, o) in ps.iter().zip(os.iter_mut()) {
-                            *o = w.loss(p);
-                            wk += w.last_work;
-                        }
-                        wk
-                    }));
-                }
-                for h in handles {
-                    work += h.join().expect("fit worker thread panicked");
-                }
-            });
-            self.obj.evaluations += out.len() as u64;
-            for (k, l) in out.into_iter().enumerate() {
-                self.record_point(i + k, l);
-            }
-            return work / t as u64;
-        }
         let x = self.denormalise(&self.batch[i]);
         let l = self.obj.loss(&x);
         self.record_point(i, l);
@@ -462,12 +435,111 @@ impl FitJob {
     }
 }
 
+/// Sharding (see [`FitOptions::shards`]).
+impl FitJob {
+    /// This shard's losses of the current batch: points `k, k + n, ...`.
+    fn own_losses(&self) -> Vec<f64> {
+        let (k, n) = self.opts.shards;
+        self.shard_losses
+            .iter()
+            .skip(k)
+            .step_by(n)
+            .copied()
+            .collect()
+    }
+
+    fn merge_batch(&mut self, k: usize, n: usize, parts: Vec<Vec<f64>>) -> Result<()> {
+        let len = self.batch.len();
+        for (j, part) in parts.iter().enumerate() {
+            let want = (len + n - 1 - j) / n;
+            if part.len() != want {
+                return Err(Error::input(format!(
+                    "loss exchange: shard {j} sent {} losses for its {want} points",
+                    part.len()
+                )));
+            }
+        }
+        let own = self.own_losses();
+        if own
+            .iter()
+            .zip(&parts[k])
+            .any(|(a, b)| a.to_bits() != b.to_bits())
+        {
+            return Err(Error::input(
+                "loss exchange: the shards disagree on the batch",
+            ));
+        }
+        // Record in batch order, exactly as one unsharded job does.
+        for i in 0..len {
+            self.record_point(i, parts[i % n][i / n]);
+        }
+        Ok(())
+    }
+
+    /// `[best loss, evaluations, best point..., refinement history...]`.
+    fn best_part(&self) -> Vec<f64> {
+        let mut part = vec![self.best.loss, self.obj.evaluations as f64];
+        part.extend(&self.best.u);
+        part.extend(&self.history[self.refine_from..]);
+        part
+    }
+
+    /// Adopt the best of all shares, as one fit that refined every candidate
+    /// in order would have it: ties go to the earlier shard, evaluations add
+    /// up, and the history is the running best over the shares in order.
+    fn merge_best(&mut self, k: usize, parts: Vec<Vec<f64>>) -> Result<()> {
+        let dim = self.lo.len();
+        if parts.iter().any(|p| p.len() < 2 + dim) {
+            return Err(Error::input("best exchange: a shard sent a short part"));
+        }
+        let own = self.best_part();
+        if parts[k].len() != own.len()
+            || parts[k]
+                .iter()
+                .zip(&own)
+                .any(|(a, b)| a.to_bits() != b.to_bits())
+        {
+            return Err(Error::input(
+                "best exchange: the shards disagree on this shard's result",
+            ));
+        }
+        let mut best: Option<Scored> = None;
+        let mut evaluations = 0u64;
+        let mut history = self.history[..self.refine_from].to_vec();
+        let mut running = history.last().copied().unwrap_or(f64::INFINITY);
+        for p in &parts {
+            if best.as_ref().is_none_or(|b| p[0] < b.loss) {
+                best = Some(Scored {
+                    u: p[2..2 + dim].to_vec(),
+                    loss: p[0],
+                });
+            }
+            evaluations += p[1] as u64;
+            for &h in &p[2 + dim..] {
+                running = running.min(h);
+                history.push(running);
+            }
+        }
+        self.best = best.expect("at least one shard");
+        self.obj.evaluations = evaluations;
+        self.history = history;
+        self.done = self
+            .done
+            .max(self.init.budget() + self.opts.candidates * self.opts.iterations);
+        self.shared_best = true;
+        Ok(())
+    }
+}
+
 impl Job for FitJob {
     type Output = FitResult;
 
     fn outbox(&mut self) -> Option<Vec<f64>> {
-        match std::mem::replace(&mut self.exchange, Exchange::Waiting) {
-            Exchange::Ready(v) => Some(v),
+        match std::mem::replace(&mut self.exchange, Exchange::None) {
+            Exchange::Ready(what, part) => {
+                self.exchange = Exchange::Waiting(what);
+                Some(part)
+            }
             other => {
                 self.exchange = other;
                 None
@@ -475,27 +547,23 @@ impl Job for FitJob {
         }
     }
 
-    /// The full batch of losses, every shard's part merged.
-    fn inbox(&mut self, losses: Vec<f64>) -> Result<()> {
-        if self.exchange != Exchange::Waiting || losses.len() != self.batch.len() {
+    /// Every shard's part of the exchange, in shard order.
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        let (k, n) = self.opts.shards;
+        let Exchange::Waiting(what) = self.exchange else {
+            return Err(Error::input(
+                "unexpected exchange: this fit is not waiting for its sibling shards",
+            ));
+        };
+        if parts.len() != n {
             return Err(Error::input(format!(
-                "unexpected loss exchange: {} losses for a batch of {}",
-                losses.len(),
-                self.batch.len()
+                "exchange: {} parts for {n} shards",
+                parts.len()
             )));
         }
-        let (k, n) = self.opts.shards;
-        for (i, &l) in losses.iter().enumerate() {
-            // Our own losses must come back unchanged: the shards agree on the batch.
-            if i % n == k && l.to_bits() != self.shard_losses[i].to_bits() {
-                return Err(Error::input(
-                    "loss exchange: the shards disagree on the batch",
-                ));
-            }
-        }
-        // Record in batch order, exactly as one unsharded job does.
-        for (i, l) in losses.into_iter().enumerate() {
-            self.record_point(i, l);
+        match what {
+            Shared::Batch => self.merge_batch(k, n, parts)?,
+            Shared::Best => self.merge_best(k, parts)?,
         }
         self.exchange = Exchange::None;
         Ok(())
@@ -521,6 +589,8 @@ impl Job for FitJob {
                         if self.batch.is_empty() {
                             self.candidates =
                                 best_distinct(&self.archive, self.opts.candidates.max(1));
+                            self.all_candidates = self.candidates.clone();
+                            self.refine_from = self.history.len();
                             let (k, n) = self.opts.shards;
                             if n > 1 {
                                 // This shard refines its contiguous share.
@@ -546,7 +616,7 @@ impl Job for FitJob {
                             self.shard_next += 1;
                         }
                         if self.shard_next == self.batch.len() {
-                            self.exchange = Exchange::Ready(self.shard_losses.clone());
+                            self.exchange = Exchange::Ready(Shared::Batch, self.own_losses());
                             return Ok(Step::Running(self.progress()));
                         }
                         let i = self.shard_next;
@@ -557,12 +627,19 @@ impl Job for FitJob {
                         evals += 1;
                         continue;
                     }
-                    work += self.eval_batch_points();
+                    work += self.eval_batch_point();
                     evals += 1;
                 }
                 Phase::Refine => {
                     if self.adam.is_none() {
                         if self.cand >= self.candidates.len() || self.opts.iterations == 0 {
+                            if self.opts.shards.1 > 1 && !self.shared_best {
+                                if self.exchange == Exchange::None {
+                                    self.exchange = Exchange::Ready(Shared::Best, self.best_part());
+                                }
+                                // Nothing to do until every shard's best arrives.
+                                return Ok(Step::Running(self.progress()));
+                            }
                             self.phase = if self.opts.polish > 0 {
                                 Phase::Polish
                             } else {
@@ -658,7 +735,7 @@ impl Job for FitJob {
                         all_values[i] = params[k];
                     }
                     let start_points = self
-                        .candidates
+                        .all_candidates
                         .iter()
                         .map(|c| self.denormalise(&c.u))
                         .collect();

@@ -12,8 +12,8 @@ use wasm_bindgen::JsValue;
 /// A job with its output already turned into a JS value.
 pub trait DynJob {
     fn step(&mut self) -> Result<JsValue, String>;
-    /// Deliver the merged answer to the job's last `need`.
-    fn provide(&mut self, data: Vec<f64>) -> Result<(), String>;
+    /// Deliver every shard's part of the job's last `need`, in shard order.
+    fn provide(&mut self, parts: Vec<Vec<f64>>) -> Result<(), String>;
 }
 
 #[derive(Serialize)]
@@ -35,8 +35,8 @@ where
     J: Job,
     F: FnMut(J::Output) -> Result<JsValue, String>,
 {
-    fn provide(&mut self, data: Vec<f64>) -> Result<(), String> {
-        self.job.inbox(data).map_err(|e| e.to_string())
+    fn provide(&mut self, parts: Vec<Vec<f64>>) -> Result<(), String> {
+        self.job.inbox(parts).map_err(|e| e.to_string())
     }
 
     fn step(&mut self) -> Result<JsValue, String> {

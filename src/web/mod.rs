@@ -45,8 +45,11 @@ impl WebJob {
         self.inner.step().map_err(|e| JsError::new(&e))
     }
 
-    /// Answer the `need` of the last step (merged data from sibling jobs).
-    pub fn provide(&mut self, data: Vec<f64>) -> Result<(), JsError> {
-        self.inner.provide(data).map_err(|e| JsError::new(&e))
+    /// Answer the `need` of the last step: every sibling shard's `need`,
+    /// in shard order (an array of number arrays; the page only relays).
+    pub fn provide(&mut self, parts: JsValue) -> Result<(), JsError> {
+        let parts: Vec<Vec<f64>> = serde_wasm_bindgen::from_value(parts)
+            .map_err(|e| JsError::new(&format!("bad exchange data: {e}")))?;
+        self.inner.provide(parts).map_err(|e| JsError::new(&e))
     }
 }
