@@ -95,7 +95,7 @@ test('keyboard alone: Tab reaches every control of each panel, and key actions w
   assert.equal(await pixel.getAttribute('[data-mode=stroke]', 'tabindex'), '-1');
   // Open project… opens the file picker from the keyboard.
   await pixel.focus('button[data-pick=project]');
-  const [chooser] = await Promise.all([pixel.waitForEvent('filechooser', { timeout: 5000 }), pixel.keyboard.press('Enter')]);
+  const [chooser] = await Promise.all([pixel.waitForEvent('filechooser', { timeout: 15000 }), pixel.keyboard.press('Enter')]);
   assert.ok(chooser, 'file chooser opened by Enter');
   await pixel.context().close();
 
@@ -105,7 +105,7 @@ test('keyboard alone: Tab reaches every control of each panel, and key actions w
   await fit.keyboard.press('ArrowRight');
   assert.equal(await fit.$$eval('[data-testid=fit-brush-colours] [role=radio]', (bs) => bs.findIndex((b) => b.getAttribute('aria-checked') === 'true')), 1);
   await fit.focus('button[data-pick=target]');
-  const [fc] = await Promise.all([fit.waitForEvent('filechooser', { timeout: 5000 }), fit.keyboard.press('Space')]);
+  const [fc] = await Promise.all([fit.waitForEvent('filechooser', { timeout: 15000 }), fit.keyboard.press('Space')]);
   await fc.setFiles(fixture('fish.png'));
   await fit.waitForFunction(() => /snapped/.test(document.querySelector('[data-testid=fit-status]').textContent) || !document.querySelector('.target-error').hidden);
   await fit.focus('button[data-act=make-target]');
@@ -120,7 +120,7 @@ test('keyboard alone: Tab reaches every control of each panel, and key actions w
   // Inspect: the picker is a button reached by Tab and opened by Enter.
   const inspect = await open('inspect');
   await inspect.focus('[data-testid=drop-zone] button');
-  const [ic] = await Promise.all([inspect.waitForEvent('filechooser', { timeout: 5000 }), inspect.keyboard.press('Enter')]);
+  const [ic] = await Promise.all([inspect.waitForEvent('filechooser', { timeout: 15000 }), inspect.keyboard.press('Enter')]);
   await ic.setFiles(fixture('fish.png'));
   await inspect.waitForSelector('[data-testid=palette] li');
   await inspect.context().close();
