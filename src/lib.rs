@@ -9,11 +9,16 @@
 //!   progress and cancellation, seeded randomness.
 //! - [`raster`]: image decoding with explicit limits, palettes, thumbnails, PNG encoding.
 //! - [`inspect`]: the shared "what is in this image" service (size, palette, thumbnail).
+//! - shared building blocks, public so every tool (and its benches) can use
+//!   them: [`geom`] (2-D primitives, their distance functions, the distance
+//!   transform) and [`optim`] (ask/tell optimisers, Adam).
 //! - one folder per tool (`pixel`, ...), plain Rust with no browser types.
 #![forbid(unsafe_code)]
 
 pub mod core;
+pub mod geom;
 pub mod inspect;
+pub mod optim;
 pub mod pattern;
 pub mod pixel;
 pub mod raster;

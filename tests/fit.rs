@@ -3,7 +3,7 @@
 //! them fast in debug builds.
 use filigree::core::job::{run_quietly, run_to_end, Cancel, Job, Step};
 use filigree::core::rng::Rng;
-use filigree::pattern::field::{Evaluator, Scene};
+use filigree::pattern::field::Scene;
 use filigree::pattern::fit::{colour_indices, Budget, FitJob, FitOptions, TargetSource};
 use filigree::pattern::generators::{generator, GENERATORS};
 use filigree::pattern::loss::{LossKind, LossOptions, Objective};
@@ -145,6 +145,29 @@ fn fit_from_a_png_target() {
     assert!((r.params[k] - 0.05).abs() < 0.004, "radius {}", r.params[k]);
     let k = float_index(&p, "dx");
     assert!((r.params[k] - 0.16).abs() < 0.006, "dx {}", r.params[k]);
+    // The same fit from the parameters themselves lands in the same place,
+    // within one pixel of the 96-pixel target (every circles-grid parameter
+    // is a length on the canvas).
+    let q = run_quietly(
+        FitJob::new(
+            &p,
+            &p.defaults(),
+            &TargetSource::Params(&truth),
+            small_opts(5),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let decls: Vec<_> = p.params().iter().filter(|d| !d.integer).collect();
+    for (k, d) in decls.iter().enumerate() {
+        assert!(
+            (r.params[k] - q.params[k]).abs() < 1.0 / 96.0,
+            "{}: {} from the PNG, {} from the parameters",
+            d.name,
+            r.params[k],
+            q.params[k]
+        );
+    }
 }
 
 #[test]
@@ -219,12 +242,31 @@ fn every_initialiser_runs_and_the_job_can_be_cancelled() {
         let mut o = small_opts(2);
         o.init = init;
         o.iterations = 10;
-        let r =
-            run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap())
-                .unwrap();
+        let job = FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap();
+        // The loss at the program's defaults, by an objective of its own.
+        let mut obj = job.objective().clone();
+        let defaults: Vec<f64> = p
+            .params()
+            .iter()
+            .filter(|d| !d.integer)
+            .map(|d| d.default)
+            .collect();
+        let at_defaults = obj.loss(&defaults);
+        let r = run_quietly(job).unwrap();
         assert!(
-            r.loss.is_finite() && r.loss < r.history[0] + 1e-12,
-            "{init:?}"
+            r.evaluations as usize > o.iterations,
+            "{init:?}: {} evaluations; the initialiser did not run",
+            r.evaluations
+        );
+        assert_eq!(
+            obj.loss(&r.params),
+            r.loss,
+            "{init:?}: the reported loss is the loss of the reported parameters"
+        );
+        assert!(
+            r.loss < 0.5 * at_defaults,
+            "{init:?}: fitted loss {} vs {at_defaults} at the defaults",
+            r.loss
         );
     }
     let cancel = Cancel::new();
@@ -244,19 +286,30 @@ fn every_initialiser_runs_and_the_job_can_be_cancelled() {
         }
     });
     assert_eq!(res, Err(Error::Cancelled));
-    // Progress is monotone and steps are bounded.
-    let mut job = FitJob::new(
-        &p,
-        &p.defaults(),
-        &TargetSource::Params(&truth),
-        small_opts(2),
-    )
-    .unwrap();
-    let mut last = 0.0;
-    while let Step::Running(pr) = job.step().unwrap() {
-        assert!(pr.fraction >= last, "{} < {last}", pr.fraction);
-        last = pr.fraction;
-    }
+    assert_eq!(steps, 3, "no step runs after the cancel");
+    // Progress is monotone, and the work is cut into many slices of bounded size.
+    let mut o = small_opts(2);
+    o.work_per_step = 20_000;
+    let mut job = FitJob::new(&p, &p.defaults(), &TargetSource::Params(&truth), o).unwrap();
+    let (mut last, mut slices) = (0.0, 0);
+    let r = loop {
+        match job.step().unwrap() {
+            Step::Running(pr) => {
+                assert!(pr.fraction >= last, "{} < {last}", pr.fraction);
+                last = pr.fraction;
+                slices += 1;
+            }
+            Step::Done(r) => break r,
+        }
+    };
+    assert!(last > 0.9, "progress ended at {last}");
+    // Each slice does about `work_per_step` item evaluations (at least one
+    // loss), so the number of slices follows the work.
+    assert!(
+        slices as u64 >= r.evaluations / 10,
+        "{slices} slices for {} loss evaluations",
+        r.evaluations
+    );
 }
 
 /// Exact gradients of the full pipeline (program → tape → fields → loss)
@@ -308,12 +361,207 @@ fn pipeline_gradients_match_central_differences() {
     }
 }
 
+/// A brute-force painter's algorithm, written from the language's
+/// definitions and independent of the field code: at a point, go through
+/// the shapes in drawing order; a filled shape containing the point paints
+/// its fill colour, then a stroked shape within half its width of the
+/// shape's outline paints its stroke colour; the last paint wins.
+mod painter {
+    use filigree::pattern::record::{BoolOp, Geom, PrimKind, Recording};
+
+    type P = [f64; 2];
+
+    fn dist(a: P, b: P) -> f64 {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+    }
+
+    fn seg_dist(p: P, a: P, b: P) -> f64 {
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let l2 = ex * ex + ey * ey;
+        let t = if l2 > 0.0 {
+            (((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        dist(p, [a[0] + t * ex, a[1] + t * ey])
+    }
+
+    /// A quadratic Bézier as a 512-piece polyline.
+    fn flatten(f: &[f64; 6]) -> Vec<P> {
+        (0..=512)
+            .map(|i| {
+                let t = i as f64 / 512.0;
+                let u = 1.0 - t;
+                [
+                    u * u * f[0] + 2.0 * u * t * f[2] + t * t * f[4],
+                    u * u * f[1] + 2.0 * u * t * f[3] + t * t * f[5],
+                ]
+            })
+            .collect()
+    }
+
+    /// A path piece (segment or quadratic) as a polyline.
+    fn piece(kind: PrimKind, f: &[f64; 6]) -> Vec<P> {
+        match kind {
+            PrimKind::Segment => vec![[f[0], f[1]], [f[2], f[3]]],
+            PrimKind::Quad => flatten(f),
+            k => panic!("{k:?} inside a path"),
+        }
+    }
+
+    /// A rounded rectangle in its own frame, folded into the first quadrant:
+    /// `q = (|x|, |y|)` against half sides `hw, hh` and corner radius `r`.
+    fn rect_local(f: &[f64; 6], p: P) -> (P, f64, f64, f64) {
+        let (c, s) = (f[5].cos(), f[5].sin());
+        let (vx, vy) = (p[0] - f[0], p[1] - f[1]);
+        // Undo a counter-clockwise rotation by the angle.
+        let (lx, ly) = (c * vx + s * vy, -s * vx + c * vy);
+        let (hw, hh) = (f[2], f[3]);
+        let r = f[4].clamp(0.0, hw.min(hh).max(0.0));
+        ([lx.abs(), ly.abs()], hw, hh, r)
+    }
+
+    fn in_rect(f: &[f64; 6], p: P) -> bool {
+        let (q, hw, hh, r) = rect_local(f, p);
+        if q[0] > hw || q[1] > hh {
+            return false;
+        }
+        let corner = [hw - r, hh - r];
+        !(q[0] > corner[0] && q[1] > corner[1] && dist(q, corner) > r)
+    }
+
+    /// Distance to a rounded rectangle's outline: its two straight edges
+    /// and corner arc in the first quadrant (the shape is symmetric).
+    fn rect_outline(f: &[f64; 6], p: P) -> f64 {
+        let (q, hw, hh, r) = rect_local(f, p);
+        let corner = [hw - r, hh - r];
+        let top = seg_dist(q, [0.0, hh], [corner[0], hh]);
+        let side = seg_dist(q, [hw, 0.0], [hw, corner[1]]);
+        let arc = if q[0] >= corner[0] && q[1] >= corner[1] {
+            (dist(q, corner) - r).abs()
+        } else {
+            dist(q, [corner[0], hh]).min(dist(q, [hw, corner[1]]))
+        };
+        top.min(side).min(arc)
+    }
+
+    pub struct Drawing<'a> {
+        rec: &'a Recording,
+        nodes: Vec<f64>,
+    }
+
+    impl<'a> Drawing<'a> {
+        pub fn new(rec: &'a Recording, params: &[f64]) -> Self {
+            let mut nodes = vec![];
+            rec.tape.forward(params, &mut nodes);
+            Drawing { rec, nodes }
+        }
+
+        fn prim(&self, i: u32) -> (PrimKind, [f64; 6]) {
+            let p = &self.rec.prims[i as usize];
+            let mut f = [0.0; 6];
+            for (k, v) in f.iter_mut().enumerate().take(p.kind.field_count()) {
+                *v = self.nodes[p.fields[k] as usize];
+            }
+            (p.kind, f)
+        }
+
+        fn polylines(&self, first: u32, len: u32) -> Vec<Vec<P>> {
+            (first..first + len)
+                .map(|i| {
+                    let (k, f) = self.prim(i);
+                    piece(k, &f)
+                })
+                .collect()
+        }
+
+        /// Whether `p` is inside the geometry (zero-area geometry never is).
+        fn inside(&self, g: &Geom, p: P) -> bool {
+            match g {
+                Geom::Prim(i) => match self.prim(*i) {
+                    (PrimKind::Circle, f) => dist(p, [f[0], f[1]]) < f[2],
+                    (PrimKind::Rect, f) => in_rect(&f, p),
+                    _ => false,
+                },
+                Geom::Path { first, len, closed } => {
+                    if !closed {
+                        return false;
+                    }
+                    // Non-zero winding of a ray towards +x.
+                    let mut w = 0;
+                    for line in self.polylines(*first, *len) {
+                        for s in line.windows(2) {
+                            let (a, b) = (s[0], s[1]);
+                            if (a[1] <= p[1]) != (b[1] <= p[1]) {
+                                let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                                if x > p[0] {
+                                    w += if b[1] > a[1] { 1 } else { -1 };
+                                }
+                            }
+                        }
+                    }
+                    w != 0
+                }
+                Geom::Bool(op, ch) => match op {
+                    BoolOp::Union => ch.iter().any(|c| self.inside(c, p)),
+                    BoolOp::Intersect => ch.iter().all(|c| self.inside(c, p)),
+                    BoolOp::Difference => {
+                        self.inside(&ch[0], p) && !ch[1..].iter().any(|c| self.inside(c, p))
+                    }
+                },
+            }
+        }
+
+        /// Distance from `p` to the geometry's outline (or to the geometry
+        /// itself when it has no area).
+        fn outline(&self, g: &Geom, p: P) -> f64 {
+            match g {
+                Geom::Prim(i) => match self.prim(*i) {
+                    (PrimKind::Point, f) => dist(p, [f[0], f[1]]),
+                    (PrimKind::Circle, f) => (dist(p, [f[0], f[1]]) - f[2]).abs(),
+                    (PrimKind::Rect, f) => rect_outline(&f, p),
+                    (k, f) => piece(k, &f)
+                        .windows(2)
+                        .map(|s| seg_dist(p, s[0], s[1]))
+                        .fold(f64::INFINITY, f64::min),
+                },
+                Geom::Path { first, len, .. } => self
+                    .polylines(*first, *len)
+                    .iter()
+                    .flat_map(|l| l.windows(2).map(|s| seg_dist(p, s[0], s[1])))
+                    .fold(f64::INFINITY, f64::min),
+                Geom::Bool(..) => panic!("the brute force does not stroke boolean shapes"),
+            }
+        }
+
+        /// The palette index the painter's algorithm leaves at `p`.
+        pub fn colour_at(&self, p: P) -> u16 {
+            let mut c = 0;
+            for s in &self.rec.shapes {
+                if let Some(fill) = s.fill {
+                    if self.inside(&s.geom, p) {
+                        c = fill;
+                    }
+                }
+                if let Some(stroke) = s.stroke {
+                    let w = self.nodes[s.width as usize].max(0.0);
+                    if self.outline(&s.geom, p) < 0.5 * w {
+                        c = stroke;
+                    }
+                }
+            }
+            c
+        }
+    }
+}
+
 /// The pattern fields of every shipped generator agree in sign with a
 /// brute-force painter's-algorithm raster (point-in-shape by drawing order)
 /// and the loss at the truth is far below the loss elsewhere.
 #[test]
 fn generators_render_and_the_truth_is_a_minimum() {
     let mut rng = Rng::new(4);
+    let n = 64;
     for g in GENERATORS {
         let p = Program::parse(g.source).unwrap();
         let rec = p.record(&p.defaults(), &RecordLimits::default()).unwrap();
@@ -327,6 +575,47 @@ fn generators_render_and_the_truth_is_a_minimum() {
             .iter()
             .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.2, 0.8))
             .collect();
+
+        // Fields against the painter, pixel centre by pixel centre. A pixel
+        // whose centre lies within 1e-3 of an outline (the painter's colour
+        // changes within that distance) is ambiguous and skipped.
+        let fields = colour_indices(&scene, &truth, n).unwrap();
+        let painter = painter::Drawing::new(&scene.rec, &truth);
+        let (mut compared, mut colours) = (0, std::collections::BTreeSet::new());
+        for y in 0..n {
+            for x in 0..n {
+                let c = [(x as f64 + 0.5) / n as f64, (y as f64 + 0.5) / n as f64];
+                let want = painter.colour_at(c);
+                let e = 1e-3;
+                let clear = [[e, 0.0], [-e, 0.0], [0.0, e], [0.0, -e]]
+                    .iter()
+                    .all(|d| painter.colour_at([c[0] + d[0], c[1] + d[1]]) == want);
+                if !clear {
+                    continue;
+                }
+                compared += 1;
+                colours.insert(want);
+                let got = fields[y * n + x];
+                assert_eq!(
+                    got, want,
+                    "{}: pixel ({x}, {y}) has colour {got} by the fields, {want} by the painter",
+                    g.name
+                );
+            }
+        }
+        assert!(
+            compared > n * n * 3 / 4,
+            "{}: only {compared} of {} pixels are unambiguous",
+            g.name,
+            n * n
+        );
+        assert_eq!(
+            colours.len(),
+            scene.channels.len() + usize::from(!scene.channels.iter().any(|c| c.colour == 0)),
+            "{}: the painter shows every colour the pattern uses, and the background",
+            g.name
+        );
+
         let opts = LossOptions {
             grid: 48,
             kind: LossKind::Sdf,
@@ -342,17 +631,6 @@ fn generators_render_and_the_truth_is_a_minimum() {
             "{}: loss at truth {at} vs elsewhere {off}",
             g.name
         );
-        let svg = render::svg(&scene, &truth, 256.0).unwrap();
-        assert!(
-            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
-            "{}",
-            g.name
-        );
-        let mut ev = Evaluator::new(16, 1.0);
-        let mut nodes = vec![];
-        scene.rec.tape.forward(&truth, &mut nodes);
-        ev.eval(&scene, &nodes, false);
-        assert_eq!(ev.s.len(), scene.channels.len() * 256);
     }
 }
 
@@ -427,6 +705,18 @@ fn cli_render_and_fit() {
         "64",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The PNG is the pattern: 64² in exactly its two colours, both present.
+    let img = decode(&std::fs::read(&png).unwrap(), Limits::default()).unwrap();
+    assert_eq!((img.width, img.height), (64, 64));
+    let (mut bg, mut fg) = (0, 0);
+    for px in img.data.chunks(4) {
+        match px {
+            [255, 255, 255, 255] => bg += 1,
+            [0x1f, 0x4e, 0x79, 255] => fg += 1,
+            other => panic!("colour {other:?} is not in the circles-grid palette"),
+        }
+    }
+    assert!(bg > fg && fg > 64, "{bg} background and {fg} circle pixels");
     let o = run(&[
         "render",
         "--program",
@@ -582,4 +872,70 @@ fn a_sharded_fit_equals_one_fit() {
     assert!(lone.inbox(vec![vec![1.0]]).is_err());
     let e = run_quietly(shards(2).remove(0)).unwrap_err();
     assert!(e.to_string().contains("run_sharded"), "{e}");
+}
+
+/// Every shipped generator drawn at its defaults (256 px, 2×2 samples per
+/// pixel) matches `tests/golden/fit/<name>.png` within a small tolerance
+/// (at most 0.1% of pixels may differ, by at most 8 per channel: float
+/// rounding on anti-aliased edges) and `tests/golden/fit/<name>.svg`
+/// exactly. `REPLACE=1 cargo test --test fit golden` rewrites them; look at
+/// the new PNGs before committing them.
+#[test]
+fn generators_match_their_golden_renders() {
+    use std::collections::BTreeMap;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/fit");
+    let replace = std::env::var_os("REPLACE").is_some();
+    let mut failures = vec![];
+    for g in GENERATORS {
+        let r = filigree::pattern::api::render_program(g.source, &BTreeMap::new(), 256, 2)
+            .unwrap_or_else(|e| panic!("{}: {e}", g.name));
+        let (png_path, svg_path) = (
+            dir.join(format!("{}.png", g.name)),
+            dir.join(format!("{}.svg", g.name)),
+        );
+        if replace {
+            std::fs::create_dir_all(&dir).unwrap();
+            std::fs::write(&png_path, encode_png(&r.image).unwrap()).unwrap();
+            std::fs::write(&svg_path, &r.svg).unwrap();
+            continue;
+        }
+        let want = decode(
+            &std::fs::read(&png_path).expect("golden missing: run with REPLACE=1"),
+            Limits::default(),
+        )
+        .unwrap();
+        assert_eq!((want.width, want.height), (256, 256), "{}", g.name);
+        let (mut differ, mut worst) = (0, 0);
+        for (a, b) in want.data.chunks(4).zip(r.image.data.chunks(4)) {
+            let d = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+            if d > 0 {
+                differ += 1;
+                worst = worst.max(d);
+            }
+        }
+        if differ * 1000 > 256 * 256 || worst > 8 {
+            let actual = std::env::temp_dir().join(format!("filigree-golden-{}.png", g.name));
+            std::fs::write(&actual, encode_png(&r.image).unwrap()).unwrap();
+            failures.push(format!(
+                "{}: {differ} pixels differ (worst by {worst}) from {}; this run's drawing is {}",
+                g.name,
+                png_path.display(),
+                actual.display()
+            ));
+        }
+        let want_svg =
+            std::fs::read_to_string(&svg_path).expect("golden missing: run with REPLACE=1");
+        if want_svg != r.svg {
+            failures.push(format!(
+                "{}: the SVG differs from {}",
+                g.name,
+                svg_path.display()
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{}\n(REPLACE=1 rewrites the goldens if the change is intended)",
+        failures.join("\n")
+    );
 }

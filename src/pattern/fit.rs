@@ -4,12 +4,12 @@
 //! patience 100 and 3 refinements; the best result is returned).
 use super::field::{Evaluator, Scene};
 use super::loss::{LossKind, LossOptions, Objective};
-use super::optim::{best_distinct, Adam, GaOptions, InitMethod, Initializer, Scored};
 use super::record::{Program, RecordLimits};
 use super::target::Target;
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::rng::Rng;
+use crate::optim::{best_distinct, Adam, AskTell, GaOptions, InitMethod, Initializer, Scored};
 use crate::raster::Rgba8Image;
 use serde::{Deserialize, Serialize};
 
@@ -160,7 +160,7 @@ pub struct FitResult {
 }
 
 /// Build the scene (recorded with `values`) and target for a fit.
-pub fn prepare(
+pub(crate) fn prepare(
     program: &Program,
     values: &[f64],
     target: &TargetSource,
@@ -207,6 +207,12 @@ pub fn colour_indices(scene: &Scene, params: &[f64], n: usize) -> Result<Vec<u16
     }
     let mut nodes = vec![];
     scene.rec.tape.forward(params, &mut nodes);
+    if !scene.shapes_finite(&nodes) {
+        return Err(Error::input(
+            "with these parameter values a shape's coordinates or sizes are not finite numbers \
+             (a division by zero in the program?)",
+        ));
+    }
     let mut ev = Evaluator::new(n, 1.0);
     ev.eval(scene, &nodes, false);
     Ok(ev.colour_indices(scene))

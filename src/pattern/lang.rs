@@ -103,6 +103,11 @@ fn lex(src: &str) -> Result<Vec<(Tok, Pos)>> {
             let v: f64 = text
                 .parse()
                 .map_err(|_| pos.err(format!("bad number '{text}'")))?;
+            if !v.is_finite() {
+                return Err(pos.err(format!(
+                    "the number '{text}' is too large; numbers must be finite (at most about 1.8e308)"
+                )));
+            }
             col += i - start;
             out.push((Tok::Num(v), pos));
             continue;
@@ -217,7 +222,8 @@ pub enum Stmt {
     For(String, Expr, Expr, Vec<Stmt>, Pos),
     Return(Option<Expr>, Pos),
     Call(Call),
-    Block(Vec<Stmt>),
+    /// A `{ ... }` block and where it opens.
+    Block(Vec<Stmt>, Pos),
 }
 
 /// A declared parameter.
@@ -266,8 +272,33 @@ struct Parser {
     depth: usize,
 }
 
-/// Deepest nesting the parser accepts (it recurses; this keeps the stack small).
-const MAX_NESTING: usize = 256;
+/// The one nesting budget of the language, shared by the parser and the
+/// recorder (see [`crate::pattern::record::RecordLimits::max_depth`]).
+///
+/// Both recurse: the parser once per nested block, parenthesis, unary
+/// operator or chained binary operator, the recorder once per nested block,
+/// expression node and function call *while running* (so recursion through
+/// user functions adds up the nesting of every active call). Each unit costs
+/// a few stack frames, and the release wasm in a browser worker has far less
+/// stack than a native thread: V8 stops wasm at about 1 MB of native stack
+/// ("RangeError: Maximum call stack size exceeded") and the wasm shadow stack
+/// in linear memory is 1 MiB (overflowing it is "memory access out of
+/// bounds").
+///
+/// Measured in Chromium's worker with the release wasm and no budget, the
+/// deepest program of each kind that still ran was (in units of this budget
+/// per level): 491 nested calls `abs(abs(…))`, 566 parentheses, 832 nested
+/// transforms or boolean blocks, 673 levels of plain recursion, 1,233
+/// nested `if`s (the shadow stack), 1,626–1,717 blocks, negations or chained
+/// operators; 118 levels of a recursion through 10 nested blocks each
+/// (≈ 1,300 units). 160 leaves a safety factor of at least 3 for every kind
+/// (`tests/e2e/pattern-depth.test.mjs` runs the deepest programs the budget
+/// allows there) while ordinary programs stay far below it: 158 chained
+/// operators, ~79 levels of plain recursion.
+pub const MAX_DEPTH: usize = 160;
+
+/// Deepest nesting the parser accepts.
+const MAX_NESTING: usize = MAX_DEPTH;
 
 /// Parse program text. Errors carry line and column.
 pub fn parse(src: &str) -> Result<Ast> {
@@ -305,6 +336,11 @@ pub fn parse(src: &str) -> Result<Ast> {
             p.expect(";")?;
             if lo >= hi {
                 return Err(npos.err(format!("parameter '{name}': range [{lo}, {hi}] is empty; write [low, high] with low < high")));
+            }
+            if !(hi - lo).is_finite() {
+                return Err(npos.err(format!(
+                    "parameter '{name}': range [{lo}, {hi}] is too wide; its width must be a finite number"
+                )));
             }
             if !(lo..=hi).contains(&default) {
                 return Err(npos.err(format!(
@@ -351,7 +387,7 @@ pub fn parse(src: &str) -> Result<Ast> {
                 body,
                 pos: npos,
             });
-        } else if p.is_ident("background") && matches!(p.toks[p.i + 1].0, Tok::Str(_)) {
+        } else if p.is_ident("background") && matches!(p.tok(1), Tok::Str(_)) {
             p.next();
             if let (Tok::Str(s), spos) = p.next() {
                 ast.background = Some((s, spos));
@@ -364,28 +400,40 @@ pub fn parse(src: &str) -> Result<Ast> {
     Ok(ast)
 }
 
+// Every token access goes through `tok`/`pos`, which read past the end as
+// the final `Eof` token: a truncated program (`circle(`, `f(1,`) then meets
+// "end of program" in an error message instead of an index out of bounds.
 impl Parser {
+    /// The token `k` places ahead (`Eof` past the end).
+    fn tok(&self, k: usize) -> &Tok {
+        self.toks
+            .get(self.i.saturating_add(k))
+            .map_or(&Tok::Eof, |t| &t.0)
+    }
     fn pos(&self) -> Pos {
-        self.toks[self.i].1
+        self.toks
+            .get(self.i)
+            .or(self.toks.last())
+            .map_or(Pos::default(), |t| t.1)
     }
     fn at_eof(&self) -> bool {
-        self.toks[self.i].0 == Tok::Eof
+        *self.tok(0) == Tok::Eof
     }
     fn next(&mut self) -> (Tok, Pos) {
-        let t = self.toks[self.i].clone();
+        let t = (self.tok(0).clone(), self.pos());
         if t.0 != Tok::Eof {
             self.i += 1;
         }
         t
     }
     fn is_sym(&self, s: &str) -> bool {
-        matches!(&self.toks[self.i].0, Tok::Sym(x) if *x == s)
+        matches!(self.tok(0), Tok::Sym(x) if *x == s)
     }
     fn is_ident(&self, s: &str) -> bool {
-        matches!(&self.toks[self.i].0, Tok::Ident(x) if x == s)
+        matches!(self.tok(0), Tok::Ident(x) if x == s)
     }
     fn peek_ident(&self, k: usize, s: &str) -> bool {
-        matches!(self.toks.get(self.i + k), Some((Tok::Ident(x), _)) if x == s)
+        matches!(self.tok(k), Tok::Ident(x) if x == s)
     }
     fn eat(&mut self, s: &str) -> bool {
         if self.is_sym(s) {
@@ -396,7 +444,7 @@ impl Parser {
         }
     }
     fn describe(&self) -> String {
-        match &self.toks[self.i].0 {
+        match self.tok(0) {
             Tok::Num(v) => format!("number {v}"),
             Tok::Str(s) => format!("string \"{s}\""),
             Tok::Ident(s) => format!("'{s}'"),
@@ -424,8 +472,9 @@ impl Parser {
         }
     }
     fn ident(&mut self) -> Result<(String, Pos)> {
-        match self.toks[self.i].clone() {
-            (Tok::Ident(s), p) => {
+        match self.tok(0).clone() {
+            Tok::Ident(s) => {
+                let p = self.pos();
                 self.i += 1;
                 Ok((s, p))
             }
@@ -492,7 +541,7 @@ impl Parser {
     fn stmt(&mut self) -> Result<Stmt> {
         let pos = self.pos();
         if self.is_sym("{") {
-            return Ok(Stmt::Block(self.block()?));
+            return Ok(Stmt::Block(self.block()?, pos));
         }
         if self.is_ident("let") {
             self.next();
@@ -524,14 +573,14 @@ impl Parser {
             self.expect(";")?;
             return Ok(Stmt::Return(Some(e), pos));
         }
-        if let Tok::Ident(name) = self.toks[self.i].0.clone() {
-            if matches!(self.toks[self.i + 1].0, Tok::Sym("=")) {
+        if let Tok::Ident(name) = self.tok(0).clone() {
+            if matches!(self.tok(1), Tok::Sym("=")) {
                 self.i += 2;
                 let e = self.expr()?;
                 self.expect(";")?;
                 return Ok(Stmt::Assign(name, e, pos));
             }
-            if matches!(self.toks[self.i + 1].0, Tok::Sym("(")) {
+            if matches!(self.tok(1), Tok::Sym("(")) {
                 self.i += 1;
                 let mut call = self.call_args(name, pos)?;
                 if self.is_sym("{") {
@@ -577,7 +626,7 @@ impl Parser {
         let mut args = vec![];
         if !self.eat(")") {
             loop {
-                let named = match (&self.toks[self.i].0, &self.toks[self.i + 1].0) {
+                let named = match (self.tok(0), self.tok(1)) {
                     (Tok::Ident(n), Tok::Sym(":")) => Some(n.clone()),
                     _ => None,
                 };
@@ -691,8 +740,10 @@ impl Parser {
                 self.expect(")")?;
                 Ok(e)
             }
-            _ => {
-                self.i -= 1;
+            (t, _) => {
+                // `next` consumed it (it is not `Eof`): step back to describe it.
+                self.i = self.i.saturating_sub(1);
+                debug_assert_eq!(*self.tok(0), t);
                 Err(pos.err(format!("expected a value but found {}", self.describe())))
             }
         }
@@ -774,5 +825,89 @@ mod tests {
         );
         let e = parse("let s = \"abc;\n").unwrap_err();
         assert!(e.to_string().contains("unterminated string"), "{e}");
+    }
+
+    /// Every prefix of a program (as a user typing it produces) parses to a
+    /// value or an error, never a panic.
+    #[test]
+    fn truncated_programs_are_errors_not_panics() {
+        let mut sources: Vec<&str> = crate::pattern::generators::GENERATORS
+            .iter()
+            .map(|g| g.source)
+            .collect();
+        let extra = "background \"#fff\";\nparam a in [-PI, 2 * PI] = 0;\nint param n in [1, 4] = 2;\n\
+                     fn f(x, y) { if x > 0 && !(y < 1) || x == 2 { return -x ^ 2 % 3; } else if y { return f(x - 1, y); } }\n\
+                     for i in 0..n { translate(i, a) { circle(f(i, 1), .5e-1, 1.5E+1, fill: rgb(1, 2, 3)); } }\n\
+                     path(stroke: \"#e00\") { move(0, 0); quad(1, 0, 1, 1); close(); }\n";
+        sources.push(extra);
+        for src in sources {
+            for (end, _) in src.char_indices() {
+                let _ = parse(&src[..end]);
+            }
+            parse(src).unwrap();
+        }
+        for src in [
+            "circle(",
+            "f(1,",
+            "f(1, ",
+            "circle(x:",
+            "let a = ",
+            "let a = (1",
+            "param a in [",
+            "param a in [0, 1] =",
+            "int param",
+            "fn f(",
+            "fn f(x,",
+            "fn f(x) {",
+            "background \"#fff\"",
+            "if 1 { } else",
+            "for i in 0..",
+            "translate(0, 0) {",
+            "a =",
+            "return",
+        ] {
+            let e = parse(src).expect_err(src);
+            assert!(matches!(e, Error::Syntax { .. }), "{src}: {e:?}");
+            assert!(
+                e.to_string().contains("end of program")
+                    || e.to_string().contains("ended")
+                    || e.to_string().contains("missing '}'"),
+                "{src}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn numbers_and_ranges_must_be_finite() {
+        let e = parse("let a = 1e999;").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::Syntax {
+                    line: 1,
+                    column: 9,
+                    ..
+                }
+            ) && e.to_string().contains("1e999"),
+            "{e:?}"
+        );
+        let e = parse("param a in [-1e308, 1e308];").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::Syntax {
+                    line: 1,
+                    column: 7,
+                    ..
+                }
+            ) && e.to_string().contains("'a'")
+                && e.to_string().contains("finite"),
+            "{e:?}"
+        );
+        let e = parse("param b in [0, 1e308 * 10];").unwrap_err();
+        assert!(e.to_string().contains("constant number"), "{e}");
+        let e = parse("param c in [1, 1];").unwrap_err();
+        assert!(e.to_string().contains("'c'"), "{e}");
+        parse("param d in [-1e300, 1e300];").unwrap();
     }
 }

@@ -362,6 +362,12 @@ impl Objective {
     /// The loss at `params` (float parameters, declaration order, raw units).
     pub fn loss(&mut self, params: &[f64]) -> f64 {
         self.scene.rec.tape.forward(params, &mut self.nodes);
+        if !self.scene.shapes_finite(&self.nodes) {
+            // The program divides by zero (or worse) at these parameters.
+            self.evaluations += 1;
+            self.last_work = self.scene.rec.prims.len() as u64 + 1;
+            return f64::INFINITY;
+        }
         self.eval.eval(&self.scene, &self.nodes, false);
         self.evaluations += 1;
         self.last_work = self.eval.work;
@@ -382,6 +388,12 @@ impl Objective {
     /// The loss and its exact gradient (written to `grad`, raw units).
     pub fn loss_grad(&mut self, params: &[f64], grad: &mut [f64]) -> f64 {
         self.scene.rec.tape.forward(params, &mut self.nodes);
+        if !self.scene.shapes_finite(&self.nodes) {
+            self.evaluations += 1;
+            self.last_work = self.scene.rec.prims.len() as u64 + 1;
+            grad.iter_mut().for_each(|g| *g = 0.0);
+            return f64::INFINITY;
+        }
         self.eval.eval(&self.scene, &self.nodes, true);
         self.evaluations += 1;
         self.last_work = self.eval.work * 2;
@@ -481,5 +493,23 @@ mod tests {
         assert!(at < 0.15, "{at}");
         let off = o.loss(&[0.25, 0.06, 0.2, 0.015]);
         assert!(off > at * 5.0 && off > at + 0.3, "{off} vs {at}");
+    }
+
+    /// A tape that divides by zero only at some parameter values: those
+    /// points are invalid (infinite loss, zero gradient), never NaN.
+    #[test]
+    fn parameters_that_divide_by_zero_give_an_infinite_loss() {
+        let src = "param a in [0, 1] = 0.25;\ncircle(0.5, 0.5, 0.02 / (a - 0.5) ^ 2 * 0.01, fill: \"#000\");";
+        let mut o = objective(src, &[0.25], LossKind::Sdf, 32);
+        assert!(o.loss(&[0.25]).is_finite());
+        assert_eq!(o.loss(&[0.5]), f64::INFINITY);
+        let mut g = [1.0];
+        assert_eq!(o.loss_grad(&[0.5], &mut g), f64::INFINITY);
+        assert_eq!(g, [0.0]);
+        // 0/0 too.
+        let src = "param a in [0, 1] = 0.25;\ncircle(0.5, 0.5, 0.1 * (a - 0.5) / (a - 0.5), fill: \"#000\");";
+        let mut o = objective(src, &[0.25], LossKind::Sdf, 32);
+        assert!(o.loss(&[0.3]).is_finite());
+        assert_eq!(o.loss(&[0.5]), f64::INFINITY);
     }
 }

@@ -7,13 +7,15 @@
 //!   [`record`] (running a program once to record shapes and a tape),
 //!   [`tape`] (reverse-mode differentiation of the recorded arithmetic).
 //! - §4 "Loss Function": [`loss`] (L = L_S + 0.05·L_N, alternatives, exact gradients).
-//! - §4 "Pattern Distance Fields": [`sdf`] (primitives and their field
-//!   derivatives), [`field`] (per-colour fields, the "on top" operator,
-//!   booleans, tile culling).
-//! - §4 "Target Image SDF": [`target`] (palette masks, exact EDT).
+//! - §4 "Pattern Distance Fields": `sdf` (the primitives packed as tape
+//!   fields; their geometry is the shared [`crate::geom`]), [`field`]
+//!   (per-colour fields, the "on top" operator, booleans, tile culling).
+//! - §4 "Target Image SDF": [`target`] (palette masks; the exact EDT is
+//!   [`crate::geom::distance_transform`]).
 //! - §4 "Optimization Procedure", "Parameter Set Initialization/Optimization":
-//!   [`optim`] (GA, random sampling, Nelder–Mead, Adam with patience and
-//!   refinement), [`fit`] (the whole fit as a stepped [`crate::core::job::Job`]).
+//!   the shared [`crate::optim`] (GA, random sampling, Nelder–Mead, Adam with
+//!   patience and refinement), [`fit`] (the whole fit as a stepped
+//!   [`crate::core::job::Job`]).
 //! - §5 "Results": [`generators`] (Table 1's generator family as programs).
 //! - Output and plain-data entry points: [`render`] (raster, SVG), [`api`].
 //!
@@ -45,15 +47,21 @@
 //! ([`loss::SdfUnits`]); see [`loss`] and `filigree bench fit` (`units`).
 //!
 //! **Coordinates.** The canvas is `[0, 1]²`, y down; angles in radians.
+//!
+//! **Public surface.** The request API ([`api`]) plus what the CLI, the
+//! benchmarks and `tests/fit.rs` drive directly (programs, scenes, targets,
+//! objectives, fit jobs, rendering). The language's parser, the tape and the
+//! primitive packing are crate-private; the types they contribute to that
+//! surface are re-exported from [`record`].
 pub mod api;
 pub mod field;
 pub mod fit;
 pub mod generators;
-pub mod lang;
+pub(crate) mod lang;
 pub mod loss;
 pub mod optim;
 pub mod record;
 pub mod render;
-pub mod sdf;
-pub mod tape;
+pub(crate) mod sdf;
+pub(crate) mod tape;
 pub mod target;

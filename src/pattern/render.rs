@@ -19,13 +19,16 @@ pub fn render(
     supersample: usize,
 ) -> Result<Rgba8Image> {
     let ss = supersample.max(1);
-    if size == 0 || size * ss > MAX_RENDER_SIDE {
-        return Err(Error::limit(format!(
-            "render size {size}×{ss} samples is outside 1..={MAX_RENDER_SIDE}"
-        )));
-    }
-    let idx = super::fit::colour_indices(scene, params, size * ss)?;
-    let n = size * ss;
+    let n = match size.checked_mul(ss) {
+        Some(n) if size > 0 && n <= MAX_RENDER_SIDE => n,
+        _ => {
+            return Err(Error::limit(format!(
+                "render size {size} pixels × {ss} samples per side is outside 1..={MAX_RENDER_SIDE} samples; \
+                 lower the size or the supersampling"
+            )))
+        }
+    };
+    let idx = super::fit::colour_indices(scene, params, n)?;
     let pal = &scene.rec.colours;
     let mut img = Rgba8Image::new(size as u32, size as u32);
     for y in 0..size {
@@ -284,5 +287,18 @@ mod tests {
         assert!(s.contains("mask=\"url(#m0)\""));
         assert!(s.contains(" Q90 60 90 90 L60 90 L60 60 Z"), "{s}");
         assert!(render(&scene, &[0.1], 5000, 1).is_err());
+        // size × supersample would wrap (2 × 2^63 = 0 in 64 bits): a limit error.
+        for (size, ss) in [(2, 1usize << 63), (usize::MAX, 2), (1024, 5)] {
+            let e = render(&scene, &[0.1], size, ss).unwrap_err();
+            assert!(matches!(e, Error::Limit(_)), "{e:?}");
+            assert!(e.to_string().contains("4096"), "{e}");
+        }
+        // Parameters that make a coordinate non-finite: an error, not a picture.
+        let p = Program::parse("param a in [0, 1] = 0.25;\ncircle(0.5, 0.5, 0.1 / (a - 0.5));")
+            .unwrap();
+        let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+        assert!(render(&scene, &[0.25], 16, 1).is_ok());
+        let e = render(&scene, &[0.5], 16, 1).unwrap_err();
+        assert!(e.to_string().contains("not finite"), "{e}");
     }
 }

@@ -1,15 +1,22 @@
-// Figures for the notes, not pass/fail timing: cold load of the page and
-// `inspect` of the 1024² PNG in the worker (compare with `filigree bench inspect`).
-import { test, before, after } from 'node:test';
+// Browser figures for the notes, run by hand (not part of the pass/fail
+// suite): cold load of the page, `inspect` of the 1024² PNG in the worker
+// (compare `filigree bench inspect`), the fish case of `filigree bench pixel`
+// in the worker, and a paper-budget Fit of circles-mix through the panel.
+// Prints one JSON object; exits non-zero if a run fails.
+//
+//   bash scripts/build.sh && node scripts/bench-e2e.mjs
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import { launch, fixture } from './harness.mjs';
+import { launch, fixture } from '../tests/e2e/harness.mjs';
 
-let env;
-before(async () => { env = await launch(); });
-after(async () => { await env?.close(); });
+const env = await launch();
+try {
+  console.log(JSON.stringify(await bench(env)));
+} finally {
+  await env.close();
+}
 
-test('cold load and worker inspect timings are measured', async () => {
+async function bench(env) {
   const page = await env.newPage({ path: null });
   const t0 = Date.now();
   await page.goto(env.url);
@@ -59,15 +66,15 @@ test('cold load and worker inspect timings are measured', async () => {
     times.sort((a, b) => a - b);
     return { placed, min: times[0], median: times[7] };
   });
-  assert.ok(fish.placed > 0);
-  const wasm = fs.statSync(new URL('../../pkg/filigree_bg.wasm', import.meta.url)).size;
-  console.log(JSON.stringify({
+  assert.ok(fish.placed > 0, 'the fish case placed no element');
+  const wasm = fs.statSync(new URL('../pkg/filigree_bg.wasm', import.meta.url)).size;
+  return {
     bench: 'browser', wasm_bytes: wasm, first_contentful_paint_ms: Math.round(paintMs), core_ready_ms: readyMs,
     inspect_1024_worker_ms: { min: +r.min.toFixed(1), median: +r.median.toFixed(1) },
     pixel_fish_worker_ms: { placed: fish.placed, min: +fish.min.toFixed(1), median: +fish.median.toFixed(1) },
     fit_paper_circles_mix_14_params: await paperFit(env),
-  }));
-});
+  };
+}
 
 // A paper-budget fit of the 14-parameter circles-mix generator through the
 // Fit panel, as a person runs it: target made from the defaults, Fit clicked.

@@ -1,0 +1,30 @@
+//! 2-D geometry shared by the tools: exact distances to primitives with
+//! their derivatives ([`primitives`]), quadratic and cubic Bézier helpers
+//! ([`bezier`]), winding numbers ([`winding`]) and the exact Euclidean
+//! distance transform of a raster mask ([`distance_transform`]).
+//!
+//! Plain `[f64; 2]` points ([`Vec2`]): the functions are small scalar
+//! kernels that callers (Fit's field evaluator) inline into lane loops, and
+//! keeping their arithmetic exactly as written keeps results bit-identical
+//! natively and in wasm. Coordinates are whatever the caller uses (Fit: the
+//! `[0, 1]²` canvas, y down); nothing here knows about patterns or images.
+//!
+//! Distances of closed primitives (circles, rounded rectangles) are signed,
+//! negative inside; points, segments and curve pieces are unsigned (a closed
+//! path gets its sign from the winding number of its pieces). Derivatives
+//! follow from the envelope theorem: for `d = |p − q(θ)|` with `q` the
+//! closest point, `∂d/∂θ = −n·∂q/∂θ` at the fixed closest parameter,
+//! `n = (p − q)/d`.
+pub mod bezier;
+pub mod distance_transform;
+pub mod primitives;
+pub mod winding;
+
+/// A point or vector.
+pub type Vec2 = [f64; 2];
+
+/// Euclidean length of `(x, y)`.
+#[inline(always)]
+pub fn len(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
+}

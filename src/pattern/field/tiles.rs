@@ -1,0 +1,420 @@
+//! The evaluator: every colour's field on an `n × n` grid with two-level
+//! tile culling (see [`cull`]), per-pixel evaluation of what survives, and
+//! the backward pass from field adjoints to tape nodes.
+use super::scene::{GeomCache, Scene};
+use super::{CombineOp, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+use crate::pattern::sdf::{self, Fields, PrimKind};
+
+/// Scratch and results of evaluating all colour fields on an `n × n` grid.
+#[derive(Debug, Clone)]
+pub struct Evaluator {
+    /// Grid side in pixels.
+    pub n: usize,
+    /// Multiplier from canvas units to the stored field units.
+    pub scale: f64,
+    /// Field values, channel-major: `s[c * n² + y * n + x]`, in `scale` units,
+    /// clamped to `±CAP·scale`.
+    pub s: Vec<f64>,
+    /// Winners, same layout (filled only when asked for).
+    pub win: Vec<Win>,
+    /// Item evaluations done by the last call (a deterministic work measure).
+    pub work: u64,
+    pub(super) prim_vals: Vec<Fields>,
+    pub(super) widths: Vec<f64>,
+    pub(super) centre_vals: Vec<f64>,
+    pub(super) keep: Vec<bool>,
+    pub(super) stamp: Vec<u32>,
+    pub(super) used: Vec<u32>,
+    pub(super) chain1: Vec<(CombineOp, u32)>,
+    pub(super) chain2: Vec<(CombineOp, u32)>,
+    pub(super) ranges1: Vec<(usize, usize)>,
+    pub(super) ranges2: Vec<(usize, usize)>,
+    pub(super) gcache: GeomCache,
+    pub(super) lane_channels: Vec<bool>,
+}
+
+impl Evaluator {
+    /// An evaluator for `n × n` grids whose values are canvas distances × `scale`.
+    pub fn new(n: usize, scale: f64) -> Self {
+        Evaluator {
+            n,
+            scale,
+            s: vec![],
+            win: vec![],
+            work: 0,
+            prim_vals: vec![],
+            widths: vec![],
+            centre_vals: vec![],
+            keep: vec![],
+            stamp: vec![],
+            used: vec![],
+            chain1: vec![],
+            chain2: vec![],
+            ranges1: vec![],
+            ranges2: vec![],
+            gcache: GeomCache::default(),
+            lane_channels: vec![],
+        }
+    }
+
+    pub(super) fn gather(&mut self, scene: &Scene, nodes: &[f64]) {
+        self.prim_vals.clear();
+        for p in &scene.rec.prims {
+            let mut f = [0.0; 6];
+            for k in 0..p.kind.field_count() {
+                f[k] = nodes[p.fields[k] as usize];
+            }
+            self.prim_vals.push(f);
+        }
+        self.widths.clear();
+        self.widths.extend(
+            scene
+                .rec
+                .shapes
+                .iter()
+                .map(|s| nodes[s.width as usize].max(0.0)),
+        );
+    }
+
+    /// Evaluate every channel's field from the tape's node values.
+    pub fn eval(&mut self, scene: &Scene, nodes: &[f64], winners: bool) {
+        self.gather(scene, nodes);
+        self.gcache.start(scene.rec.shapes.len());
+        let n = self.n;
+        let nc = scene.channels.len();
+        self.s.resize(nc * n * n, 0.0);
+        if winners {
+            self.win.resize(nc * n * n, NO_WIN);
+        }
+        let inv = 1.0 / n as f64;
+        // Half diagonals (canvas units) of the two tile levels, a hair larger for rounding.
+        let h1 = (T1 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
+        let h2 = (T2 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
+        let mut work = 0u64;
+        self.centre_vals.resize(scene.items.len(), 0.0);
+        self.stamp.resize(scene.items.len(), u32::MAX);
+        let mut chain1 = std::mem::take(&mut self.chain1);
+        let mut chain2 = std::mem::take(&mut self.chain2);
+        let mut used = std::mem::take(&mut self.used);
+        let mut tile_id = 0u32;
+        for ty in 0..n.div_ceil(T1) {
+            for tx in 0..n.div_ceil(T1) {
+                let (x0, y0) = (tx * T1, ty * T1);
+                let pc = [(x0 + T1 / 2) as f64 * inv, (y0 + T1 / 2) as f64 * inv];
+                self.gcache.next();
+                for (i, it) in scene.items.iter().enumerate() {
+                    self.centre_vals[i] = scene
+                        .item_hit(it, &self.prim_vals, &self.widths, pc, &mut self.gcache)
+                        .0;
+                }
+                work += scene.items.len() as u64;
+                // Level 1: cull each channel's full chain for the big tile.
+                chain1.clear();
+                self.ranges1.clear();
+                used.clear();
+                tile_id = tile_id.wrapping_add(1);
+                for ch in &scene.channels {
+                    let a = chain1.len();
+                    cull(
+                        &ch.ops,
+                        ch.init,
+                        &self.centre_vals,
+                        h1,
+                        &mut self.keep,
+                        &mut chain1,
+                    );
+                    self.ranges1.push((a, chain1.len()));
+                }
+                for &(_, it) in &chain1 {
+                    if self.stamp[it as usize] != tile_id {
+                        self.stamp[it as usize] = tile_id;
+                        used.push(it);
+                    }
+                }
+                // Level 2: small tiles, only the items level 1 kept.
+                for sy in (y0..(y0 + T1).min(n)).step_by(T2) {
+                    for sx in (x0..(x0 + T1).min(n)).step_by(T2) {
+                        let pc = [(sx + T2 / 2) as f64 * inv, (sy + T2 / 2) as f64 * inv];
+                        self.gcache.next();
+                        for &it in &used {
+                            let it_ = &scene.items[it as usize];
+                            self.centre_vals[it as usize] = scene
+                                .item_hit(it_, &self.prim_vals, &self.widths, pc, &mut self.gcache)
+                                .0;
+                        }
+                        work += used.len() as u64;
+                        chain2.clear();
+                        self.ranges2.clear();
+                        for (c, ch) in scene.channels.iter().enumerate() {
+                            let (a, b) = self.ranges1[c];
+                            let start = chain2.len();
+                            cull(
+                                &chain1[a..b],
+                                ch.init,
+                                &self.centre_vals,
+                                h2,
+                                &mut self.keep,
+                                &mut chain2,
+                            );
+                            self.ranges2.push((start, chain2.len()));
+                        }
+                        let (xe, ye) = ((sx + T2).min(n), (sy + T2).min(n));
+                        // Chains of single circles, points and segments: a 4-lane kernel.
+                        self.lane_channels.clear();
+                        for (c, ch) in scene.channels.iter().enumerate() {
+                            let (a, b) = self.ranges2[c];
+                            let ops = &chain2[a..b];
+                            let fast = ops.iter().all(|&(_, it)| scene.items[it as usize].lanes);
+                            self.lane_channels.push(fast);
+                            if fast {
+                                work += (ops.len() * (xe - sx) * (ye - sy)) as u64;
+                                self.lanes(scene, ch.init, ops, c, (sx, xe), (sy, ye), winners);
+                            }
+                        }
+                        let scalar = !self.lane_channels.iter().all(|&l| l);
+                        for y in (sy..ye).filter(|_| scalar) {
+                            for x in sx..xe {
+                                let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                                self.gcache.next();
+                                for (c, ch) in scene.channels.iter().enumerate() {
+                                    if self.lane_channels[c] {
+                                        continue;
+                                    }
+                                    let (a, b) = self.ranges2[c];
+                                    let ops = &chain2[a..b];
+                                    work += ops.len() as u64;
+                                    let idx = c * n * n + y * n + x;
+                                    self.pixel(scene, ch.init, ops, p, idx, winners);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        self.chain1 = chain1;
+        self.chain2 = chain2;
+        self.used = used;
+        // Weighted by the mean item cost so the figure tracks time.
+        self.work = (work as f64 * scene.cost) as u64;
+    }
+
+    /// Apply a culled chain at one pixel; consecutive same-kind operations
+    /// form a run whose minimum is applied once.
+    #[inline]
+    pub(super) fn pixel(
+        &mut self,
+        scene: &Scene,
+        init: f64,
+        ops: &[(CombineOp, u32)],
+        p: [f64; 2],
+        idx: usize,
+        winners: bool,
+    ) {
+        let cap = CAP;
+        let mut b = init * cap;
+        // Winner: item, hit, and whether a difference flipped it.
+        let mut win: Option<(u32, Hit, bool)> = None;
+        let mut i = 0;
+        while i < ops.len() {
+            let op = ops[i].0;
+            let mut best = f64::INFINITY;
+            let mut bw = (
+                NONE,
+                Hit {
+                    d: 0.0,
+                    prim: NONE,
+                    sign: 1.0,
+                },
+            );
+            while i < ops.len() && ops[i].0 == op {
+                let it = ops[i].1;
+                let (v, h) = scene.item_hit(
+                    &scene.items[it as usize],
+                    &self.prim_vals,
+                    &self.widths,
+                    p,
+                    &mut self.gcache,
+                );
+                if v < best {
+                    best = v;
+                    bw = (it, h);
+                }
+                i += 1;
+            }
+            match op {
+                CombineOp::Union => {
+                    if best < b {
+                        b = best;
+                        win = Some((bw.0, bw.1, false));
+                    }
+                }
+                CombineOp::Diff => {
+                    if -best > b {
+                        b = -best;
+                        win = Some((bw.0, bw.1, true));
+                    }
+                }
+            }
+        }
+        if b.abs() >= cap {
+            b = b.clamp(-cap, cap);
+            win = None;
+        }
+        self.s[idx] = b * self.scale;
+        if winners {
+            self.win[idx] = match win {
+                None => NO_WIN,
+                Some((it, h, flip)) => {
+                    let mut w = scene.win_of(&scene.items[it as usize], &h);
+                    if flip {
+                        w.psign = -w.psign;
+                        w.wcoef = -w.wcoef;
+                    }
+                    w
+                }
+            };
+        }
+    }
+
+    /// Chain rule from `ds` (dL/dS per channel-pixel, same layout as
+    /// [`Evaluator::s`]) to the tape nodes: adds into `node_adj`.
+    /// Needs the winners of the last [`Evaluator::eval`].
+    pub fn backward(&self, scene: &Scene, ds: &[f64], node_adj: &mut [f64]) {
+        let n = self.n;
+        let inv = 1.0 / n as f64;
+        let mut prim_adj = vec![[0.0f64; 6]; scene.rec.prims.len()];
+        let mut g = [0.0; 6];
+        for c in 0..scene.channels.len() {
+            for y in 0..n {
+                for x in 0..n {
+                    let idx = c * n * n + y * n + x;
+                    let a = ds[idx] * self.scale;
+                    let w = self.win[idx];
+                    if a == 0.0 || w.prim == NONE {
+                        continue;
+                    }
+                    let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                    let kind = scene.rec.prims[w.prim as usize].kind;
+                    let f = &self.prim_vals[w.prim as usize];
+                    let k = a * w.psign as f64;
+                    let pa = &mut prim_adj[w.prim as usize];
+                    if kind == PrimKind::Circle {
+                        // Fast path of sdf::grad for the most common primitive.
+                        let (dx, dy) = (p[0] - f[0], p[1] - f[1]);
+                        let l2 = dx * dx + dy * dy;
+                        if l2 > 0.0 {
+                            let kl = k / l2.sqrt();
+                            pa[0] -= kl * dx;
+                            pa[1] -= kl * dy;
+                        }
+                        pa[2] -= k;
+                    } else {
+                        sdf::grad(kind, f, p, &mut g);
+                        for j in 0..kind.field_count() {
+                            pa[j] += k * g[j];
+                        }
+                    }
+                    if w.wcoef != 0.0 {
+                        node_adj[w.wnode as usize] += a * w.wcoef as f64;
+                    }
+                }
+            }
+        }
+        for (p, pa) in scene.rec.prims.iter().zip(&prim_adj) {
+            for j in 0..p.kind.field_count() {
+                node_adj[p.fields[j] as usize] += pa[j];
+            }
+        }
+    }
+
+    /// The palette index at every pixel, by the fields: the colour whose
+    /// field is most negative, or the background where none is.
+    pub fn colour_indices(&self, scene: &Scene) -> Vec<u16> {
+        let nn = self.n * self.n;
+        (0..nn)
+            .map(|i| {
+                let mut best = (0.0, 0u16);
+                for (c, ch) in scene.channels.iter().enumerate() {
+                    let v = self.s[c * nn + i];
+                    if v < best.0 {
+                        best = (v, ch.colour);
+                    }
+                }
+                best.1
+            })
+            .collect()
+    }
+}
+
+/// Drop the operations of `chain` that cannot change a channel's value
+/// anywhere within `h` of the point where `vals` (item values) were taken;
+/// append the rest, in order, to `out`. Values are 1-Lipschitz, so each
+/// lies in `[v − h, v + h]` over the tile.
+///
+/// 1. Backward: every operation is monotone in the running value B, so a
+///    union (difference) whose value is everywhere ≥ that of a later union
+///    (difference) never matters.
+/// 2. Forward: track an interval for B; a run of unions (differences) that
+///    cannot go below (above) it is dropped, and inside a run (where `min`
+///    commutes) items that are never the smallest are dropped.
+fn cull(
+    chain: &[(CombineOp, u32)],
+    init: f64,
+    vals: &[f64],
+    h: f64,
+    keep: &mut Vec<bool>,
+    out: &mut Vec<(CombineOp, u32)>,
+) {
+    keep.clear();
+    let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
+    for &(op, it) in chain.iter().rev() {
+        let v = vals[it as usize];
+        let suf = if op == CombineOp::Union {
+            &mut suf_u
+        } else {
+            &mut suf_d
+        };
+        keep.push(v - h < *suf);
+        *suf = suf.min(v + h);
+    }
+    keep.reverse();
+    let (mut blo, mut bhi) = (init * CAP, init * CAP);
+    let mut i = 0;
+    while i < chain.len() {
+        let op = chain[i].0;
+        let mut j = i;
+        let (mut m, mut ylo) = (f64::INFINITY, f64::INFINITY);
+        while j < chain.len() && chain[j].0 == op {
+            if keep[j] {
+                let v = vals[chain[j].1 as usize];
+                m = m.min(v + h);
+                ylo = ylo.min(v - h);
+            }
+            j += 1;
+        }
+        let active = m < f64::INFINITY
+            && match op {
+                CombineOp::Union => ylo < bhi,
+                CombineOp::Diff => -ylo > blo,
+            };
+        if active {
+            for k in i..j {
+                if keep[k] && vals[chain[k].1 as usize] - h <= m {
+                    out.push(chain[k]);
+                }
+            }
+            match op {
+                CombineOp::Union => {
+                    blo = blo.min(ylo);
+                    bhi = bhi.min(m);
+                }
+                CombineOp::Diff => {
+                    blo = blo.max(-m);
+                    bhi = bhi.max(-ylo);
+                }
+            }
+        }
+        i = j;
+    }
+}
