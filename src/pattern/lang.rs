@@ -285,16 +285,17 @@ struct Parser {
 /// in linear memory is 1 MiB (overflowing it is "memory access out of
 /// bounds").
 ///
-/// Measured in Chromium's worker with the release wasm and no budget, the
-/// deepest program of each kind that still ran was (in units of this budget
-/// per level): 491 nested calls `abs(abs(…))`, 566 parentheses, 832 nested
-/// transforms or boolean blocks, 673 levels of plain recursion, 1,233
-/// nested `if`s (the shadow stack), 1,626–1,717 blocks, negations or chained
-/// operators; 118 levels of a recursion through 10 nested blocks each
-/// (≈ 1,300 units). 160 leaves a safety factor of at least 3 for every kind
+/// Measured in Chromium's worker with the release wasm (after `wasm-opt -O3`)
+/// and no budget, the deepest program of each kind that still ran was (in
+/// units of this budget per level): 477 nested calls `abs(abs(…))`, 603
+/// parentheses, 989 nested transforms, 461 levels of plain recursion, 1,110
+/// nested `if`s, 106 levels of a recursion through 10 nested blocks each
+/// (≈ 1,200 units); before `wasm-opt` the figures were similar (491, 566,
+/// 833, 673, 1,233 — there the shadow stack overflowed first —, 118).
+/// 160 leaves a safety factor of at least 3 for every kind
 /// (`tests/e2e/pattern-depth.test.mjs` runs the deepest programs the budget
 /// allows there) while ordinary programs stay far below it: 158 chained
-/// operators, ~79 levels of plain recursion.
+/// operators, 78 levels of plain recursion.
 pub const MAX_DEPTH: usize = 160;
 
 /// Deepest nesting the parser accepts.
