@@ -8,6 +8,7 @@ import { acceptFiles, putRgba, hex } from './file-input.js';
 import { download } from './project.js';
 import { LossPlot } from './loss-plot.js';
 import { createCodeEditor } from './code-editor.js';
+import { radioGroup } from './radio-group.js';
 
 const TARGET_SIZE = 256;
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
@@ -43,7 +44,7 @@ const html = `
       </div>
       <label class="inline">overlay <input type="range" name="overlay" min="0" max="1" step="0.05" value="0.6"></label>
     </section>
-    <section class="card fit-run" aria-label="Fit">
+    <section class="card fit-run" aria-label="Fitting">
       <div class="fit-settings">
         <label class="inline">Budget <select name="budget" data-field="settings.budget"><option value="quick">quick</option><option value="paper">paper</option></select></label>
         <label class="inline">Loss <select name="loss" data-field="settings.loss">
@@ -334,8 +335,9 @@ function mount(el, ctx) {
       b.style.background = hex([...c, 255]);
       b.title = i === colours.length - 1 ? `background ${hex([...c, 255])} (erase)` : hex([...c, 255]);
       b.setAttribute('aria-label', b.title);
-      b.setAttribute('aria-pressed', String(i === brush));
-      b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-pressed', String(j === i))); };
+      b.setAttribute('role', 'radio');
+      b.setAttribute('aria-checked', String(i === brush));
+      b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-checked', String(j === i))); };
       return b;
     }));
     renderResults(d);
@@ -623,6 +625,7 @@ function mount(el, ctx) {
   }
   // The target takes a dropped, pasted or picked image like Pixel's source does.
   const detachFiles = acceptFiles(q('.fit-target'), uploadTarget, { pickerLabel: 'Upload target…' });
+  const detachRadios = radioGroup(q('[data-testid=fit-brush-colours]'));
   q('.fit-target input[type=file]').dataset.input = 'target';
 
   const baseName = () => doc()?.generator || 'pattern';
@@ -676,6 +679,7 @@ function mount(el, ctx) {
     },
     unmount() {
       detachFiles();
+      detachRadios();
       running?.abort();
       if (window.filigreeFit?.state === doc) delete window.filigreeFit;
     },

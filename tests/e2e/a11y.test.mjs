@@ -94,7 +94,7 @@ test('keyboard alone: Tab reaches every control of each panel, and key actions w
   assert.equal(await pixel.getAttribute('[data-mode=paint]', 'tabindex'), '0');
   assert.equal(await pixel.getAttribute('[data-mode=stroke]', 'tabindex'), '-1');
   // Open project… opens the file picker from the keyboard.
-  await pixel.focus('button[data-pick=project]');
+  await pixel.focus('[data-act=open-project]');
   const [chooser] = await Promise.all([pixel.waitForEvent('filechooser', { timeout: 15000 }), pixel.keyboard.press('Enter')]);
   assert.ok(chooser, 'file chooser opened by Enter');
   await pixel.context().close();
@@ -104,10 +104,10 @@ test('keyboard alone: Tab reaches every control of each panel, and key actions w
   await fit.focus('[data-testid=fit-brush-colours] [aria-checked=true]');
   await fit.keyboard.press('ArrowRight');
   assert.equal(await fit.$$eval('[data-testid=fit-brush-colours] [role=radio]', (bs) => bs.findIndex((b) => b.getAttribute('aria-checked') === 'true')), 1);
-  await fit.focus('button[data-pick=target]');
+  await fit.focus('.fit-target button.pick');
   const [fc] = await Promise.all([fit.waitForEvent('filechooser', { timeout: 15000 }), fit.keyboard.press('Space')]);
   await fc.setFiles(fixture('fish.png'));
-  await fit.waitForFunction(() => /snapped/.test(document.querySelector('[data-testid=fit-status]').textContent) || !document.querySelector('.target-error').hidden);
+  await fit.waitForFunction(() => /snapped/.test(document.querySelector('[data-testid=fit-status]').textContent) || !document.querySelector('[data-testid=doc-error]').hidden);
   await fit.focus('button[data-act=make-target]');
   await fit.keyboard.press('Enter');
   await fit.waitForFunction(() => window.filigreeFit.state().truth);
