@@ -104,8 +104,8 @@ test('code editor: line numbers, Fit syntax colours, no wrapping, an error marke
   assert.equal(await page.$('.code-editor .cm-lineWrapping'), null, 'no wrapping');
   await page.fill('[data-testid=fit-program]', 'param a in [0, 1] = 0.5;\n// two\ncircle(0.5, 0.5, a +, fill: "#000000");\n');
   await page.click('button[data-act=apply-program]');
-  await page.waitForSelector('[data-testid=fit-program-error]:not([hidden])');
-  const msg = await page.textContent('[data-testid=fit-program-error]');
+  await page.waitForSelector('[data-testid=doc-error]:not([hidden])');
+  const msg = await page.textContent('[data-testid=doc-error]');
   const [, line, column] = /line (\d+), column (\d+)/.exec(msg).map(Number);
   assert.equal(line, 3);
   await page.waitForSelector('.code-editor .cm-lintRange-error');
@@ -125,7 +125,7 @@ test('code editor: line numbers, Fit syntax colours, no wrapping, an error marke
   // A fixed program clears the mark.
   await page.fill('[data-testid=fit-program]', 'param a in [0.1, 0.4] = 0.2;\ncircle(0.5, 0.5, a, fill: "#000000");\n');
   await page.click('button[data-act=apply-program]');
-  await page.waitForSelector('[data-testid=fit-program-error]', { state: 'hidden' });
+  await page.waitForSelector('[data-testid=doc-error]', { state: 'hidden' });
   assert.equal(await page.$('.code-editor .cm-lintRange-error'), null);
   // Syntax colours: keyword, builtin shape, number, string and a plain name all differ from the name.
   const colours = await page.$$eval('.code-editor .cm-line span', (spans) => {
