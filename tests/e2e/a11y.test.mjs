@@ -18,6 +18,10 @@ const READY = {
 
 async function open(tool) {
   const page = await env.newPage({ path: `#tool=${tool}` });
+  // Intercept file choosers from the start: Playwright turns interception on
+  // asynchronously when the first 'filechooser' listener is added, and on a
+  // loaded machine a key press right after can open the dialog before that.
+  page.on('filechooser', () => {});
   await page.waitForFunction(READY[tool], null, { timeout: 30000 });
   return page;
 }
