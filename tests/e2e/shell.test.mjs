@@ -59,7 +59,7 @@ test('desktop 1280×800: each panel shows its whole main canvas and its actions 
   });
   const page = await env.newPage({ path: VIEWS.pixel.path });
   await page.waitForFunction(VIEWS.pixel.ready, null, { timeout: 30000 });
-  for (const sel of ['[data-testid=pixel-canvas]', 'button[data-act=export-png]', 'button[data-act=save-project]', 'button[data-pick=project]', 'button[data-example=fish]']) {
+  for (const sel of ['[data-testid=pixel-canvas]', 'button[data-act=export-png]', 'button[data-act=save-project]', 'button[data-act=open-project]', 'button[data-example=fish]']) {
     const v = await inView(page, sel);
     assert.ok(v.ok, `${sel} visible at 1280×800: ${v.r}`);
   }
@@ -73,7 +73,7 @@ test('desktop 1280×800: each panel shows its whole main canvas and its actions 
 
   const fit = await env.newPage({ path: VIEWS.fit.path });
   await fit.waitForFunction(VIEWS.fit.ready, null, { timeout: 30000 });
-  for (const sel of ['[data-testid=fit-target]', 'button[data-act=fit]', 'button[data-act=make-target]', 'button[data-pick=target]', 'button[data-act=export-svg]', 'button[data-pick=project]']) {
+  for (const sel of ['[data-testid=fit-target]', 'button[data-act=fit]', 'button[data-act=make-target]', '.fit-target button.pick', 'button[data-act=export-svg]', 'button[data-act=open-project]']) {
     const v = await inView(fit, sel);
     assert.ok(v.ok, `${sel} visible at 1280×800: ${v.r}`);
   }
