@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Release wasm build: cargo → wasm-opt → wasm-bindgen --target web → pkg/, then the
-# service worker's precache manifest (content hashes of every shipped file).
+# code editor bundle (scripts/bundle-editor.mjs) and the service worker's
+# precache manifest (content hashes of every shipped file).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -20,6 +21,7 @@ if [ "${FILIGREE_WASM_OPT:-1}" != 0 ]; then
 fi
 rm -rf pkg
 wasm-bindgen --target web --no-typescript --out-dir pkg "$wasm"
+node scripts/bundle-editor.mjs
 node scripts/precache.mjs
 # FILIGREE_TEST_HOOKS=1: also a core with the test-only request kinds
 # (`debug-abort`, feature test-hooks) in pkg-test/, which the e2e tests that

@@ -111,7 +111,7 @@ const CHROME = `
     <button type="button" data-act="undo" aria-label="Undo" title="Undo (Ctrl+Z)" disabled>↶ Undo</button>
     <button type="button" data-act="redo" aria-label="Redo" title="Redo (Ctrl+Shift+Z or Ctrl+Y)" disabled>↷ Redo</button>
     <button type="button" data-act="save-project" title="Save project (Ctrl+S)">Save project</button>
-    <button type="button" data-act="open-project" title="Open project (Ctrl+O)">Open project</button>
+    <button type="button" data-act="open-project" title="Open project (Ctrl+O)">Open project…</button>
     <input type="file" accept=".json,application/json" data-input="project" hidden tabindex="-1" aria-hidden="true">
     <button type="button" data-act="copy-link" title="Copy a link to this state">Copy link</button>
     <span class="doc-busy muted" aria-live="polite"></span>

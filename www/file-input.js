@@ -46,6 +46,19 @@ export function acceptFiles(zone, onFile, { accept = 'image/*', pickerLabel = 'C
   return () => document.removeEventListener('paste', paste);
 }
 
+/**
+ * File pickers that are real buttons: each `button[data-pick=NAME]` in `root`
+ * opens the file dialog of the hidden `input[type=file][data-input=NAME]` next
+ * to it (keyboard reachable and in the accessibility tree, unlike a label
+ * around a hidden input). The input's own change handler does the loading.
+ */
+export function wirePickers(root) {
+  for (const b of root.querySelectorAll('button[data-pick]')) {
+    const input = root.querySelector(`input[type=file][data-input="${b.dataset.pick}"]`);
+    if (input) b.addEventListener('click', () => input.click());
+  }
+}
+
 /** Draw RGBA bytes into a canvas at native size (CSS scales it crisply). */
 export function putRgba(canvas, width, height, rgba) {
   canvas.width = width;

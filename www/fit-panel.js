@@ -7,6 +7,8 @@
 import { acceptFiles, putRgba, hex } from './file-input.js';
 import { download } from './project.js';
 import { LossPlot } from './loss-plot.js';
+import { createCodeEditor } from './code-editor.js';
+import { radioGroup } from './radio-group.js';
 
 const TARGET_SIZE = 256;
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
@@ -20,7 +22,7 @@ const html = `
       <label class="inline">Generator <select name="generator" data-testid="fit-generator" data-field="generator"></select></label>
       <details class="program">
         <summary>Program</summary>
-        <textarea name="program" spellcheck="false" rows="16" data-testid="fit-program" data-field="program" aria-label="pattern program"></textarea>
+        <div class="program-editor"></div>
         <div class="row-buttons"><button type="button" data-act="apply-program">Apply program</button></div>
       </details>
       <div class="muted program-facts" data-testid="fit-facts"></div>
@@ -42,7 +44,7 @@ const html = `
       </div>
       <label class="inline">overlay <input type="range" name="overlay" min="0" max="1" step="0.05" value="0.6"></label>
     </section>
-    <section class="card fit-run" aria-label="Fit">
+    <section class="card fit-run" aria-label="Fitting">
       <div class="fit-settings">
         <label class="inline">Budget <select name="budget" data-field="settings.budget"><option value="quick">quick</option><option value="paper">paper</option></select></label>
         <label class="inline">Loss <select name="loss" data-field="settings.loss">
@@ -220,6 +222,15 @@ const fitState = {
 function mount(el, ctx) {
   el.innerHTML = html;
   const q = (s) => el.querySelector(s);
+  // The program editor (CodeMirror, lazily loaded; a textarea without the bundle).
+  let editor = null;
+  const editorReady = createCodeEditor(q('.program-editor'), {
+    language: 'filigree', label: 'pattern program', attributes: { 'data-testid': 'fit-program', 'data-field': 'program' },
+  }).then((ed) => {
+    editor = ed;
+    if (ctx.state()) ed.setValue(ctx.state().program);
+    return ed;
+  });
   const targetCanvas = q('canvas.target');
   const tctx = targetCanvas.getContext('2d', { willReadFrequently: true });
   const overlay = q('canvas.overlay');
@@ -277,7 +288,7 @@ function mount(el, ctx) {
   }
 
   function renderProgramUi(d) {
-    if (q('[name=program]').value !== d.program) q('[name=program]').value = d.program;
+    if (editor && editor.getValue() !== d.program) editor.setValue(d.program);
     q('[name=generator]').value = generators.some((g) => g.name === d.generator) ? d.generator : '';
     q('[data-testid=fit-facts]').textContent =
       `${info.params.filter((p) => !p.integer).length} parameters to fit, ${info.shapes} shapes, ${info.colours.length - 1} colour${info.colours.length === 2 ? '' : 's'} on ${info.colours[0]}`;
@@ -324,8 +335,9 @@ function mount(el, ctx) {
       b.style.background = hex([...c, 255]);
       b.title = i === colours.length - 1 ? `background ${hex([...c, 255])} (erase)` : hex([...c, 255]);
       b.setAttribute('aria-label', b.title);
-      b.setAttribute('aria-pressed', String(i === brush));
-      b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-pressed', String(j === i))); };
+      b.setAttribute('role', 'radio');
+      b.setAttribute('aria-checked', String(i === brush));
+      b.onclick = () => { brush = i; sw.querySelectorAll('button').forEach((x, j) => x.setAttribute('aria-checked', String(j === i))); };
       return b;
     }));
     renderResults(d);
@@ -581,11 +593,12 @@ function mount(el, ctx) {
     }
   };
   q('[data-act=apply-program]').onclick = async () => {
-    const program = q('[name=program]').value;
+    const program = editor ? editor.getValue() : doc().program;
     const d = doc();
     try {
       const next = await programInfo(ctx.run, program);
       ctx.clearError();
+      editor?.clearError();
       const same = info && next.params.length === info.params.length && next.params.every((p, i) => p.name === info.params[i].name);
       if (program !== d.program) stopFit();
       ctx.commit({
@@ -612,6 +625,7 @@ function mount(el, ctx) {
   }
   // The target takes a dropped, pasted or picked image like Pixel's source does.
   const detachFiles = acceptFiles(q('.fit-target'), uploadTarget, { pickerLabel: 'Upload target…' });
+  const detachRadios = radioGroup(q('[data-testid=fit-brush-colours]'));
   q('.fit-target input[type=file]').dataset.input = 'target';
 
   const baseName = () => doc()?.generator || 'pattern';
@@ -657,21 +671,15 @@ function mount(el, ctx) {
     },
     markError(err) {
       if (err.field !== 'program' && err.kind !== 'syntax') return;
-      const ta = q('[name=program]');
       q('details.program').open = true;
       // line/column come with the error (or, from an older core, in its message).
       const m = /line (\d+), column (\d+)/.exec(err.message || '');
       const at = Number.isInteger(err.line) ? [err.line, err.column ?? 1] : m && [Number(m[1]), Number(m[2])];
-      if (at) {
-        const lines = ta.value.split('\n');
-        const line = Math.min(Math.max(1, at[0]), lines.length);
-        const offset = lines.slice(0, line - 1).reduce((a, l) => a + l.length + 1, 0) + Math.max(0, Math.min(at[1] - 1, lines[line - 1].length));
-        ta.focus();
-        ta.setSelectionRange(offset, offset);
-      }
+      if (at) editorReady.then((ed) => ctx.alive() && ed.markError(at[0], at[1], err.message));
     },
     unmount() {
       detachFiles();
+      detachRadios();
       running?.abort();
       if (window.filigreeFit?.state === doc) delete window.filigreeFit;
     },

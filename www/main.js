@@ -8,6 +8,7 @@ import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
 import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
+import { mountHome } from './home.js';
 
 const TOOLS = [pixelTool, fitTool, inspectTool];
 
@@ -58,6 +59,8 @@ const embed = embedOptions(); // ?embed=1: one tool, no chrome, never saves (emb
 const doc = new DocumentController({
   pool, toast, tools: TOOLS, host: $('#panel'), persist: !embed,
   onShow(id) {
+    leaveHome();
+    document.documentElement.dataset.view = id;
     for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', String(b.dataset.tool === id));
     const params = new URLSearchParams(location.hash.slice(1));
     if (params.get('tool') !== id || params.has('share')) history.replaceState(null, '', `#tool=${id}`);
@@ -79,6 +82,26 @@ window.filigree = app;
 
 const toolParam = () => new URLSearchParams(location.hash.slice(1)).get('tool');
 
+// No tool (or an unknown one) in the hash: the home view, one card per tool
+// with a live example (home.js); a card links to #tool=<id>.
+let home = null;
+function leaveHome() {
+  home?.unmount();
+  home = null;
+}
+function showHome() {
+  if (home) return;
+  doc.leave();
+  const el = document.createElement('section');
+  el.className = 'tool tool-home';
+  el.setAttribute('aria-label', 'Home');
+  $('#panel').replaceChildren(el);
+  home = mountHome(el, app, TOOLS);
+  document.documentElement.dataset.view = 'home';
+  for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', 'false');
+  if (location.hash) history.replaceState(null, '', location.pathname + location.search);
+}
+
 for (const tool of TOOLS) {
   const b = document.createElement('button');
   b.type = 'button';
@@ -91,7 +114,10 @@ for (const tool of TOOLS) {
 // A share link (#tool=…&share=…) opens as a new, undoable document state;
 // a bad one says so and leaves the user's work alone.
 async function route() {
-  if (!hasShare(location.hash)) return doc.show(toolParam());
+  if (!hasShare(location.hash)) {
+    if (!TOOLS.some((t) => t.id === toolParam())) return showHome();
+    return doc.show(toolParam());
+  }
   await doc.openFragment(location.hash, toolParam());
   // The link is consumed: a reload shows the (autosaved) document, not the link again.
   if (doc.current) history.replaceState(null, '', `#tool=${doc.current.tool.id}`);

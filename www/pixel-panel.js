@@ -12,6 +12,7 @@
 // segment), and the pixel grid as a CSS background. Pointer moves are
 // gathered and painted once per animation frame.
 import { acceptFiles, putRgba, hex } from './file-input.js';
+import { radioGroup } from './radio-group.js';
 import { download } from './project.js';
 
 const ASSETS = new URL('../assets/pixel/', import.meta.url);
@@ -48,11 +49,11 @@ const html = `
           <button type="button" data-example="trunk">Trunk example</button>
         </span>
         <span class="group" role="radiogroup" aria-label="Brush">
-          <button type="button" data-mode="stroke" aria-pressed="true" title="Draw orientation strokes (S)">✎ Strokes</button>
-          <button type="button" data-mode="paint" aria-pressed="false" title="Paint the mask (M)">▣ Paint mask</button>
-          <button type="button" data-mode="erase" aria-pressed="false" title="Erase the mask (E)">▢ Erase mask</button>
-          <label class="inline">size <input type="number" name="brush" min="1" max="32" value="3"></label>
+          <button type="button" data-mode="stroke" role="radio" aria-checked="true" title="Draw orientation strokes (S)">✎ Strokes</button>
+          <button type="button" data-mode="paint" role="radio" aria-checked="false" title="Paint the mask (M)">▣ Paint mask</button>
+          <button type="button" data-mode="erase" role="radio" aria-checked="false" title="Erase the mask (E)">▢ Erase mask</button>
         </span>
+        <label class="inline">size <input type="number" name="brush" min="1" max="32" value="3"></label>
         <span class="group">
           <button type="button" data-act="zoom-out" aria-label="Zoom out">−</button>
           <span class="zoom" data-testid="zoom">×4</span>
@@ -448,8 +449,11 @@ function mount(el, ctx) {
   }
 
   function fitZoom() {
-    const avail = Math.max(200, q('.viewport').clientWidth - 4);
-    view.zoom = Math.max(1, Math.min(16, Math.floor(avail / sourceImg.width)));
+    // The whole picture in the window: the viewport's width, and the height left below its top.
+    const vp = q('.viewport');
+    const availW = Math.max(200, vp.clientWidth - 4);
+    const availH = Math.max(160, innerHeight - (vp.getBoundingClientRect().top + scrollY) - 24);
+    view.zoom = Math.max(1, Math.min(16, Math.floor(Math.min(availW / sourceImg.width, availH / sourceImg.height))));
   }
 
   /** Sizes and full repaints: only on a new source, a zoom change or a view toggle — never per pointer move. */
@@ -767,10 +771,11 @@ function mount(el, ctx) {
   el.querySelectorAll('[data-example]').forEach((b) => { b.onclick = () => loadExample(b.dataset.example); });
   const setMode = (mode) => {
     view.mode = mode;
-    el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-pressed', String(x.dataset.mode === mode)));
+    el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-checked', String(x.dataset.mode === mode)));
     maskC.hidden = !maskVisible();
   };
   el.querySelectorAll('[data-mode]').forEach((b) => { b.onclick = () => setMode(b.dataset.mode); });
+  const detachRadios = radioGroup(q('[role=radiogroup]'));
   q('[name=brush]').onchange = (e) => { view.brush = Math.max(1, Math.min(32, Number(e.target.value) || 1)); };
   const zoomBy = (d) => { view.zoom = Math.max(1, Math.min(32, view.zoom + d)); layout(); };
   q('[data-act=zoom-in]').onclick = () => zoomBy(view.zoom >= 8 ? 2 : 1);
@@ -835,6 +840,7 @@ function mount(el, ctx) {
     keys: { s: () => setMode('stroke'), m: () => setMode('paint'), e: () => setMode('erase') },
     unmount() {
       detachFiles();
+      detachRadios();
       running?.abort();
       if (window.filigreePixel?.state === state) delete window.filigreePixel;
     },
