@@ -75,29 +75,15 @@ function cancelled() {
 
 // ---- core defaults ----------------------------------------------------------------
 
-// TEMPORARY fallback until the core's `defaults` request (H1) is on main:
-// the values below mirror the Rust `Default` impls. Delete this table when
-// `pool.run('defaults', {tool})` answers; it is the only copy in JS.
-const TEMPORARY_DEFAULTS = {
-  pixel: {
-    params: {
-      annotation_scale: 4, positions: 'random', density: 1, margins: [0, 0], partial: false,
-      colour: 'auto', hsv: [0, 0, -30], exclude: [[0, 0, 0]], d_max: 50, element_colour: 'region',
-      default_direction: 'down', sprite_direction: 'up', seed: 1,
-    },
-  },
-  fit: { budget: 'quick', loss: 'sdf', seed: 1 },
-  inspect: {},
-};
-
 const defaultsCache = new Map();
 /** The tool's default request(s), from the core (`defaults` request kind). */
 export function coreDefaults(pool, tool) {
   if (!defaultsCache.has(tool)) {
     // The core answers {tool, request, budgets?}: the tool's default request.
+    // The core's `Default` impls are the only copy of the defaults.
     const p = pool.run('defaults', { tool }).then((d) => d?.request ?? d).catch((err) => {
-      if (err.kind === 'crash' || err.kind === 'cancelled') { defaultsCache.delete(tool); throw err; }
-      return structuredClone(TEMPORARY_DEFAULTS[tool] ?? {});
+      defaultsCache.delete(tool);
+      throw err;
     });
     defaultsCache.set(tool, p);
   }
