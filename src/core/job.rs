@@ -103,22 +103,12 @@ pub fn run_to_end<J: Job>(
     cancel: &Cancel,
     mut on_progress: impl FnMut(&Progress),
 ) -> Result<J::Output> {
-    loop {
-        if cancel.is_cancelled() {
-            return Err(Error::Cancelled);
-        }
-        match job.step()? {
-            Step::Running(p) => {
-                on_progress(&p);
-                if job.outbox().is_some() {
-                    return Err(Error::input(
-                        "this job is one shard of a parallel run and asks to exchange data with \
-                         its siblings; drive it with core::parallel::run_sharded",
-                    ));
-                }
-            }
-            Step::Done(out) => return Ok(out),
-        }
+    match crate::core::parallel::advance(&mut job, cancel, &mut on_progress)? {
+        crate::core::parallel::Halt::Done(out) => Ok(out),
+        crate::core::parallel::Halt::Exchange(_) => Err(Error::input(
+            "this job is one shard of a parallel run and asks to exchange data with \
+             its siblings; drive it with core::parallel::run_sharded",
+        )),
     }
 }
 

@@ -17,16 +17,17 @@
 use crate::core::error::{Error, Result};
 use crate::core::job::{Cancel, Job, Progress, Step};
 
-/// Where a shard stopped when advanced.
-enum Halt<T> {
+/// Where a job stopped when advanced.
+pub(crate) enum Halt<T> {
     /// It handed in its part of an exchange.
     Exchange(Vec<f64>),
     /// It finished.
     Done(T),
 }
 
-/// Step `job` until it asks for an exchange or finishes.
-fn advance<J: Job>(
+/// Step `job` until it asks for an exchange or finishes (also the loop of
+/// [`crate::core::job::run_to_end`], which has no siblings to exchange with).
+pub(crate) fn advance<J: Job>(
     job: &mut J,
     cancel: &Cancel,
     on_progress: &mut dyn FnMut(&Progress),
