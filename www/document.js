@@ -29,8 +29,8 @@
 //   ctx.signal                   aborts when the panel is left
 //   ctx.setTimeout/clearTimeout  timers cleared when the panel is left
 //   ctx.bitmap(imageData)        createImageBitmap, closed when the panel is left (ctx.release(b) earlier)
-//   ctx.error(err, {prefix})     the panel's ONE error area (replaced, not appended), plain words
-//   ctx.clearError()
+//   ctx.error(err, {prefix, source})  the panel's ONE error area (replaced, not appended), plain words
+//   ctx.clearError(source?)      hide it; with `source`, only an error raised with that source
 //   ctx.coreDefaults()           the tool's default request(s) from the core
 //   ctx.readOnly, ctx.alive()
 import { Autosave, History, projectText, parseProject, download, withTimeout } from './project.js';
@@ -309,12 +309,13 @@ export class DocumentController {
         return b;
       },
       release(b) { if (b) { life.bitmaps.delete(b); b.close(); } },
-      error(err, { prefix = '' } = {}) {
+      error(err, { prefix = '', source = '' } = {}) {
         if (life.dead) return;
         const message = plainError(err);
         if (message === null) return;
         ctx.clearError();
         errorEl.textContent = prefix ? `${prefix}: ${message}` : message;
+        errorEl.dataset.source = source;
         errorEl.hidden = false;
         if (err?.field) {
           const control = cur.el.querySelector(`[data-field="${CSS.escape(err.field)}"]`)
@@ -326,7 +327,10 @@ export class DocumentController {
         }
         try { cur.view?.markError?.(err); } catch (e) { console.error(e); }
       },
-      clearError() {
+      clearError(source) {
+        // A background job that succeeds clears only the error it raised itself
+        // (not, say, a refused project file shown meanwhile).
+        if (source !== undefined && !errorEl.hidden && errorEl.dataset.source !== source) return;
         errorEl.hidden = true;
         errorEl.textContent = '';
         for (const c of cur.el.querySelectorAll('[aria-invalid=true]')) {

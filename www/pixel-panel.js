@@ -391,7 +391,7 @@ function mount(el, ctx) {
       result = r;
       ctx.release(resultBitmap);
       resultBitmap = bitmap;
-      ctx.clearError();
+      ctx.clearError('run');
       status(`done in ${Math.round(performance.now() - t0)} ms`);
       showStats(r);
       drawBase();
@@ -401,7 +401,7 @@ function mount(el, ctx) {
     } catch (err) {
       if (err.kind === 'cancelled') return;
       // Keep the last good result on screen; say what is wrong now.
-      ctx.error(err);
+      ctx.error(err, { source: 'run' });
       status('');
     } finally {
       if (running === ctrl) running = null;

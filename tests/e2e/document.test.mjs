@@ -10,7 +10,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { launch } from './harness.mjs';
+import { launch, pickGenerator } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -57,13 +57,6 @@ async function pixelReady(page) {
 
 // ---- Fit helpers ----------------------------------------------------------------------
 
-async function pickGenerator(page, name) {
-  await page.waitForSelector('[data-testid=fit-sliders] .row');
-  await page.selectOption('[data-testid=fit-generator]', name);
-  await page.waitForFunction((n) => window.filigreeFit.state()?.generator === n
-    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length
-    && document.querySelector(`[data-testid=fit-sliders] .row[data-param="${window.filigreeFit.info().params[0].name}"]`), name);
-}
 
 async function runFit(page) {
   await page.click('button[data-act=fit]');
@@ -213,12 +206,22 @@ test('a corrupt project file is refused before anything is autosaved; the work s
     [write('future.filigree.json', JSON.stringify({ ...good, version: 99 })), /saved by a newer Filigree/],
     [write('strokes.filigree.json', JSON.stringify({ ...good, state: { ...good.state, strokes: [[[1, 2], [3, 'x']]] } })), /strokes\.0\.1 must be a point/],
   ];
+  let runs = await waitForPixel(page);
   for (const [file, message] of files) {
     await page.setInputFiles('input[data-input=project]', file);
     await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=doc-error]').textContent), message.source);
     assert.match(await page.textContent(ERROR), /Your work is unchanged\.$/);
     assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 4);
   }
+  // A texturing run that finishes after the refusal does not wipe it: the
+  // message stays until the user acts (it once vanished with the next result).
+  const shown = await page.textContent(ERROR);
+  await dragStroke(page, [[30, 40], [70, 44]]);
+  runs = await waitForPixel(page, runs);
+  assert.equal(await page.isHidden(ERROR), false);
+  assert.equal(await page.textContent(ERROR), shown);
+  assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 5);
+  await page.click('button[data-act=undo]');
   // A format-1 project (before stateVersion) still opens: older files migrate.
   const v1 = { format: 'filigree-project', version: 1, tool: 'pixel', state: { ...good.state, strokes: [] } };
   await page.setInputFiles('input[data-input=project]', write('old.filigree.json', JSON.stringify(v1)));

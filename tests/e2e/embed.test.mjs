@@ -5,7 +5,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
-import { launch, ROOT } from './harness.mjs';
+import { launch, pickGenerator, ROOT } from './harness.mjs';
 import { start } from '../../scripts/serve.mjs';
 
 let env;
@@ -32,10 +32,7 @@ function watchErrors(page) {
 /** The share fragment of a Fit state made in the full app: generator `name`, defaults. */
 async function fitShare(name = 'stripes') {
   const page = await env.newPage({ path: '#tool=fit' });
-  await page.waitForSelector('[data-testid=fit-sliders] .row');
-  await page.selectOption('[data-testid=fit-generator]', name);
-  await page.waitForFunction((n) => document.querySelector('[data-testid=fit-generator]').value === n
-    && document.querySelector('[data-testid=fit-sliders] .row'), name);
+  await pickGenerator(page, name);
   const { fragment, tool } = await page.evaluate(() => window.filigree.currentShare());
   assert.equal(tool, 'fit');
   await page.close();
@@ -225,9 +222,7 @@ test('read-only "Open in Filigree" arrives with the same state', async () => {
 test('an interactive embed on the app\'s own origin never writes the user\'s autosave nor registers a service worker', async () => {
   // The user's own work: the full app with honeycomb, autosaved.
   const page = await env.newPage({ path: '#tool=fit' });
-  await page.waitForSelector('[data-testid=fit-sliders] .row');
-  await page.selectOption('[data-testid=fit-generator]', 'honeycomb');
-  await page.waitForFunction(() => document.querySelector('[data-testid=fit-sliders] .row'));
+  await pickGenerator(page, 'honeycomb');
   const dump = () => page.evaluate(async () => {
     const names = (await indexedDB.databases()).map((d) => d.name).filter(Boolean).sort();
     const out = {};

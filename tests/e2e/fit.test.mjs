@@ -1,7 +1,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import { launch } from './harness.mjs';
+import { launch, pickGenerator } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -9,12 +9,6 @@ after(async () => { await env?.close(); });
 
 const status = (page) => page.textContent('[data-testid=fit-status]');
 
-async function pickGenerator(page, name) {
-  await page.waitForSelector('[data-testid=fit-sliders] .row');
-  await page.selectOption('[data-testid=fit-generator]', name);
-  await page.waitForFunction((n) => window.filigreeFit.state()?.generator === n
-    && document.querySelector('[data-testid=fit-sliders] .row'), name);
-}
 
 async function runFit(page) {
   await page.click('button[data-act=fit]');

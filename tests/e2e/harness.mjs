@@ -46,6 +46,20 @@ export async function launch({ root = ROOT, args = [] } = {}) {
   return env;
 }
 
+/**
+ * Choose Fit generator `name` as a user would (the select), then wait until
+ * the document holds it and its sliders are drawn. The select shows the new
+ * name at once, but the document changes only when the generator's program
+ * has been read, so waiting on the select alone races the commit.
+ */
+export async function pickGenerator(page, name) {
+  await page.waitForSelector('[data-testid=fit-sliders] .row');
+  await page.selectOption('[data-testid=fit-generator]', name);
+  await page.waitForFunction((n) => window.filigreeFit.state()?.generator === n
+    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length
+    && document.querySelector(`[data-testid=fit-sliders] .row[data-param="${window.filigreeFit.info().params[0].name}"]`), name);
+}
+
 /** Drop a file (path or {name, bytes, type}) onto `selector` with real drag events. */
 export async function dropFile(page, selector, file) {
   const { name, bytes, type } = typeof file === 'string'
