@@ -20,7 +20,7 @@ use std::time::Instant;
 struct Timing {
     start_ms: f64,
     steps_ms: Vec<f64>,
-    /// Per stage (the progress stage a step reported, or "done"): step count and max ms.
+    /// Per stage (the stage reported before the step): step count and max ms.
     stages: BTreeMap<String, (usize, f64)>,
     total_s: f64,
 }
@@ -32,16 +32,17 @@ fn time_job<J: Job>(start: impl FnOnce() -> filigree::Result<J>) -> Result<Timin
     let start_ms = t.elapsed().as_secs_f64() * 1e3;
     let mut steps_ms = vec![];
     let mut stages: BTreeMap<String, (usize, f64)> = BTreeMap::new();
-    // A step is named after the stage it reports (what it was doing), so the
-    // worst stage can be found.
+    // A step is named after the stage the step before it reported (what the
+    // job said it would do next), so the worst stage can be found.
+    let mut doing = "first step".to_string();
     loop {
         let t = Instant::now();
         let step = job.step().map_err(|e| e.to_string())?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
         steps_ms.push(ms);
         let name = match &step {
-            Step::Running(p) => p.stage.clone(),
-            Step::Done(_) => "done".to_string(),
+            Step::Running(p) => std::mem::replace(&mut doing, p.stage.clone()),
+            Step::Done(_) => std::mem::take(&mut doing),
         };
         let e = stages.entry(name).or_insert((0, 0.0));
         e.0 += 1;
@@ -167,8 +168,8 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         };
         // Points: the program's defaults, four times (the values do not
         // matter for timing; the count does).
-        let p = filigree::pattern::record::Program::parse(&req.program)
-            .map_err(|e| e.to_string())?;
+        let p =
+            filigree::pattern::record::Program::parse(&req.program).map_err(|e| e.to_string())?;
         let rec = p
             .record(
                 &p.defaults(),
@@ -177,9 +178,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
             .map_err(|e| e.to_string())?;
         let x = rec.float_values();
         let req = FitEvalRequest {
-            extra: EvalPoints {
-                points: vec![x; 4],
-            },
+            extra: EvalPoints { points: vec![x; 4] },
             ..req
         };
         rows.push(report(
@@ -201,7 +200,8 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         ));
     }
     if want("pixel") {
-        let fish = decode(super::bench::fixture("fish.png")?, Limits::default()).map_err(|e| e.to_string())?;
+        let fish = decode(super::bench::fixture("fish.png")?, Limits::default())
+            .map_err(|e| e.to_string())?;
         let k = 32;
         let source = upscale(&fish, k);
         let (w, h) = (source.width, source.height);
@@ -209,8 +209,8 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         struct Strokes {
             strokes: Vec<filigree::pixel::Stroke>,
         }
-        let s: Strokes =
-            serde_json::from_slice(super::bench::fixture("fish_strokes.json")?).map_err(|e| e.to_string())?;
+        let s: Strokes = serde_json::from_slice(super::bench::fixture("fish_strokes.json")?)
+            .map_err(|e| e.to_string())?;
         let strokes = s
             .strokes
             .into_iter()
