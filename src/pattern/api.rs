@@ -195,7 +195,7 @@ enum RenderPhase {
 
 /// Work units (item evaluations, or samples × channels) of one raster step
 /// of `render-pattern`: a few milliseconds (`filigree bench slices`).
-pub const RENDER_WORK_PER_STEP: u64 = 3_000_000;
+pub const RENDER_WORK_PER_STEP: u64 = 300_000;
 
 /// `render-pattern` as a job: record; rasterise in bounded steps
 /// ([`render::Raster`], [`RENDER_WORK_PER_STEP`]); write SVG.
@@ -208,17 +208,18 @@ impl Job for RenderJob {
             RenderPhase::Record(req) => {
                 let (_, scene, fl) = scene_of(&req.program, &req.params)?;
                 let raster = render::Raster::new(&scene, &fl, req.size, req.supersample)?;
+                let stage = raster.stage();
                 self.0 = RenderPhase::Raster(scene, fl, req.size, Box::new(raster));
-                Ok(Step::Running(Progress::new(0.05, "drawing")))
+                Ok(Step::Running(Progress::new(0.05, stage)))
             }
             RenderPhase::Raster(scene, fl, size, mut raster) => {
                 if raster.run(&scene, RENDER_WORK_PER_STEP) {
                     self.0 = RenderPhase::Svg(scene, fl, size, raster.into_image());
                     return Ok(Step::Running(Progress::new(0.95, "writing SVG")));
                 }
-                let f = 0.05 + 0.9 * raster.fraction();
+                let p = Progress::new(0.05 + 0.9 * raster.fraction(), raster.stage());
                 self.0 = RenderPhase::Raster(scene, fl, size, raster);
-                Ok(Step::Running(Progress::new(f, "drawing")))
+                Ok(Step::Running(p))
             }
             RenderPhase::Svg(scene, fl, size, img) => Ok(Step::Done(RenderResponse {
                 svg: render::svg(&scene, &fl, size as f64)?,
@@ -608,7 +609,7 @@ pub struct EvalResponse {
 /// Work units of one `fit-eval` step: item evaluations of the fields, and
 /// field values of the loss pass ([`crate::pattern::loss::LossPass`]),
 /// chosen for steps of a few milliseconds (`filigree bench slices`).
-pub const EVAL_WORK_PER_STEP: u64 = 3_000_000;
+pub const EVAL_WORK_PER_STEP: u64 = 600_000;
 
 /// `fit-eval` as a job: each step spends about [`EVAL_WORK_PER_STEP`]: many
 /// points at a small grid, part of one point's fields at a big one (the
@@ -693,7 +694,12 @@ impl Job for EvalJob {
                 0.0
             };
             let f = (self.losses.len() as f64 + part) / self.points.len() as f64;
-            Ok(Step::Running(Progress::new(f, "evaluating")))
+            let stage = if self.fields_done {
+                "evaluating: loss"
+            } else {
+                "evaluating: fields"
+            };
+            Ok(Step::Running(Progress::new(f, stage)))
         }
     }
 }

@@ -142,6 +142,14 @@ impl Raster {
         }
     }
 
+    /// What the next [`Raster::run`] works on, for progress reports.
+    pub fn stage(&self) -> &'static str {
+        match self.phase {
+            RasterPhase::Fields(_) => "drawing: colour fields",
+            RasterPhase::Pixels(_) | RasterPhase::Done => "drawing: pixels",
+        }
+    }
+
     /// The finished image (call after [`Raster::run`] returned `true`).
     pub fn into_image(self) -> Rgba8Image {
         self.img
