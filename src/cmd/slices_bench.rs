@@ -49,6 +49,8 @@ struct Timing {
     cpu_ms: Vec<f64>,
     /// Per stage (the stage reported before the step): step count and max ms.
     stages: BTreeMap<String, (usize, f64)>,
+    /// The first few steps over 20 ms CPU: (step index, stage, ms).
+    slow: Vec<(usize, String, f64)>,
     total_s: f64,
 }
 
@@ -59,6 +61,7 @@ fn time_job<J: Job>(start: impl FnOnce() -> filigree::Result<J>) -> Result<Timin
     let start_ms = t.elapsed().as_secs_f64() * 1e3;
     let mut steps_ms = vec![];
     let mut cpu_ms = vec![];
+    let mut slow = vec![];
     let mut stages: BTreeMap<String, (usize, f64)> = BTreeMap::new();
     // A step is named after the stage the step before it reported (what the
     // job said it would do next), so the worst stage can be found.
@@ -76,9 +79,13 @@ fn time_job<J: Job>(start: impl FnOnce() -> filigree::Result<J>) -> Result<Timin
             Step::Running(p) => std::mem::replace(&mut doing, p.stage.clone()),
             Step::Done(_) => std::mem::take(&mut doing),
         };
+        let cpu = cpu_ms.last().copied().unwrap_or(ms);
+        if cpu > 20.0 && slow.len() < 8 {
+            slow.push((steps_ms.len() - 1, name.clone(), round(cpu)));
+        }
         let e = stages.entry(name).or_insert((0, 0.0));
         e.0 += 1;
-        e.1 = e.1.max(cpu_ms.last().copied().unwrap_or(ms));
+        e.1 = e.1.max(cpu);
         if let Step::Done(out) = step {
             drop(out);
             break;
@@ -89,6 +96,7 @@ fn time_job<J: Job>(start: impl FnOnce() -> filigree::Result<J>) -> Result<Timin
         steps_ms,
         cpu_ms,
         stages,
+        slow,
         total_s: t_all.elapsed().as_secs_f64(),
     })
 }
@@ -97,7 +105,10 @@ fn report(kind: &str, what: &str, t: Timing) -> Value {
     let stats = |v: &[f64]| {
         let mut v = v.to_vec();
         v.sort_by(|a, b| a.total_cmp(b));
-        let at = |q: f64| v.get(((v.len() as f64 - 1.0) * q).round() as usize).copied();
+        let at = |q: f64| {
+            v.get(((v.len() as f64 - 1.0) * q).round() as usize)
+                .copied()
+        };
         json!({
             "median_ms": at(0.5).map(round),
             "p95_ms": at(0.95).map(round),
@@ -118,6 +129,7 @@ fn report(kind: &str, what: &str, t: Timing) -> Value {
         "cpu": stats(&t.cpu_ms),
         "total_s": (t.total_s * 1e3).round() / 1e3,
         "stages": stages,
+        "slow_steps": t.slow,
     });
     eprintln!("{out}");
     out
