@@ -411,7 +411,8 @@ pub struct ColourMapper {
     seen: std::collections::HashSet<[u8; 4]>,
     pal: Vec<[u8; 4]>,
     labs: Vec<[f64; 3]>,
-    // Regions under construction (see [`regions`]).
+    // Regions under construction (see [`regions`]; here a label is the
+    // region + 1 and 0 means none).
     reg: Regions,
     stack: Vec<usize>,
     current: Option<(u32, [u8; 4])>,
@@ -498,7 +499,9 @@ impl ColourMapper {
                                 MapPhase::Paint
                             }
                             _ => {
-                                self.reg.label = vec![u32::MAX; n];
+                                // Labels are region + 1 here (0 = none): a zeroed
+                                // allocation costs nothing until touched.
+                                self.reg.label = vec![0; n];
                                 self.reg.pixels = Vec::with_capacity(n);
                                 MapPhase::Regions
                             }
@@ -506,7 +509,7 @@ impl ColourMapper {
                     }
                 }
                 MapPhase::Regions => {
-                    // `regions`, resumable between any two pixels.
+                    // `regions`, resumable between any two pixels (labels + 1).
                     let reg = &mut self.reg;
                     if let Some((r, c)) = self.current {
                         while spent < budget {
@@ -514,8 +517,8 @@ impl ColourMapper {
                             reg.pixels.push(i as u32);
                             let (x, y) = (i % w, i / w);
                             let mut visit = |j: usize| {
-                                if reg.label[j] == u32::MAX && src.at(j) == c {
-                                    reg.label[j] = r;
+                                if reg.label[j] == 0 && src.at(j) == c {
+                                    reg.label[j] = r + 1;
                                     self.stack.push(j);
                                 }
                             };
@@ -541,7 +544,7 @@ impl ColourMapper {
                     }
                     while self.pos < n && spent < budget {
                         let seed = self.pos;
-                        if reg.label[seed] == u32::MAX && src.at(seed)[3] != 0 {
+                        if reg.label[seed] == 0 && src.at(seed)[3] != 0 {
                             break;
                         }
                         self.pos += 1;
@@ -556,7 +559,7 @@ impl ColourMapper {
                         let r = reg.colour.len() as u32;
                         let c = src.at(seed);
                         reg.colour.push(c);
-                        reg.label[seed] = r;
+                        reg.label[seed] = r + 1;
                         self.stack.push(seed);
                         self.current = Some((r, c));
                         self.pos += 1;
@@ -592,7 +595,7 @@ impl ColourMapper {
                         }
                         for j in nb {
                             if j == usize::MAX
-                                || reg.label[j] == r as u32
+                                || reg.label[j] == r as u32 + 1
                                 || self.stamp[j] == r as u32 + 1
                             {
                                 continue;
@@ -716,9 +719,10 @@ impl ColourMapper {
                         ColourMapKind::Border => {
                             let label = &self.reg.label[self.pos..end];
                             for (o, &l) in out.chunks_exact_mut(4).zip(label) {
-                                if l != u32::MAX {
-                                    let c = self.border[l as usize]
-                                        .unwrap_or_else(|| self.diff[&self.reg.colour[l as usize]]);
+                                if l != 0 {
+                                    let r = l as usize - 1;
+                                    let c = self.border[r]
+                                        .unwrap_or_else(|| self.diff[&self.reg.colour[r]]);
                                     o.copy_from_slice(&c);
                                 }
                             }
