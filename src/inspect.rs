@@ -307,13 +307,13 @@ impl Job for InspectJob {
                 }
                 Phase::Cluster => {
                     let leaders = self.leaders.as_mut().expect("made before clustering");
-                    let end = self.counts.len().min(self.pos + budget - spent);
-                    for &(c, n) in &self.counts[self.pos..end] {
-                        leaders.add(c.to_be_bytes(), n as u64);
+                    // Each colour costs the representatives it is compared with.
+                    while self.pos < self.counts.len() && spent < budget {
+                        let (c, n) = self.counts[self.pos];
+                        spent += 1 + leaders.add(c.to_be_bytes(), n as u64);
+                        self.pos += 1;
                     }
-                    spent += end - self.pos + 1;
-                    self.pos = end;
-                    if end == self.counts.len() {
+                    if self.pos == self.counts.len() {
                         self.clusters = self.leaders.take().expect("present").into_clusters();
                         self.cluster_count = self.clusters.len();
                         self.pos = 0;

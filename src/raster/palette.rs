@@ -347,14 +347,18 @@ impl Leaders {
         }
     }
 
-    /// The next colour (in falling frequency) and its pixel count.
-    pub fn add(&mut self, rgba: [u8; 4], count: u64) {
+    /// The next colour (in falling frequency) and its pixel count. Returns
+    /// the representatives it was compared with (a work measure).
+    pub fn add(&mut self, rgba: [u8; 4], count: u64) -> usize {
         let tol2 = self.tol2;
-        let found = match &self.grid {
-            None => self
-                .clusters
-                .iter()
-                .position(|c| rgb_dist2(c.rgba, rgba) <= tol2),
+        let (found, work) = match &self.grid {
+            None => {
+                let k = self
+                    .clusters
+                    .iter()
+                    .position(|c| rgb_dist2(c.rgba, rgba) <= tol2);
+                (k, k.map_or(self.clusters.len(), |k| k + 1))
+            }
             Some(g) => g.first_within(&self.clusters, rgba, tol2),
         };
         match found {
@@ -374,6 +378,7 @@ impl Leaders {
                 });
             }
         }
+        work
     }
 
     /// Clusters so far.
@@ -437,20 +442,23 @@ impl Grid {
     }
 
     /// The smallest cluster index whose representative is within the
-    /// tolerance of `c` (exactly the test of the plain scan).
-    fn first_within(&self, clusters: &[Cluster], c: [u8; 4], tol2: f64) -> Option<usize> {
+    /// tolerance of `c` (exactly the test of the plain scan), and how many
+    /// representatives were looked at.
+    fn first_within(&self, clusters: &[Cluster], c: [u8; 4], tol2: f64) -> (Option<usize>, usize) {
         let range = |v: u8| {
             let v = v as f64;
             (self.cell(v - self.reach), self.cell(v + self.reach))
         };
         let (rx, ry, rz) = (range(c[0]), range(c[1]), range(c[2]));
         let mut best: Option<usize> = None;
+        let mut looked = 0;
         for x in rx.0..=rx.1 {
             for y in ry.0..=ry.1 {
                 for z in rz.0..=rz.1 {
                     let mut k = self.head[(x * self.n + y) * self.n + z];
                     while k != 0 {
                         let i = k as usize - 1;
+                        looked += 1;
                         if best.is_none_or(|b| i < b) && rgb_dist2(clusters[i].rgba, c) <= tol2 {
                             best = Some(i);
                         }
@@ -459,7 +467,7 @@ impl Grid {
                 }
             }
         }
-        best
+        (best, looked)
     }
 }
 
