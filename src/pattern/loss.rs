@@ -443,13 +443,18 @@ impl LossPass {
             (LossKind::L1 | LossKind::Image, _) => {
                 let end = s.len().min(self.pos.saturating_add(budget));
                 let to_px = n as f64 / t.scale;
-                for i in self.pos..end {
+                let (sv, tv, tm) = (
+                    &s[self.pos..end],
+                    &t.sdf[self.pos..end],
+                    &t.mask[self.pos..end],
+                );
+                for ((&v, &d), &m) in sv.iter().zip(tv).zip(tm) {
                     if opts.kind == LossKind::L1 {
-                        let e = s[i] - t.sdf[i];
+                        let e = v - d;
                         self.total += e.abs() * norm;
                     } else {
-                        let a = (0.5 - s[i] * to_px).clamp(0.0, 1.0);
-                        let e = a - t.mask[i] as f64;
+                        let a = (0.5 - v * to_px).clamp(0.0, 1.0);
+                        let e = a - m as f64;
                         self.total += e * e * norm;
                     }
                 }
