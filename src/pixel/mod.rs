@@ -194,6 +194,8 @@ pub struct PixelJob {
     field: Vec<[f32; 2]>,
     solve: Option<SolveStats>,
     placer: Option<placement::Placer>,
+    /// The placer's copy of the source is complete.
+    copied: bool,
     /// The placed image and element count once placement is done, while
     /// its colours (and, with HSV, the source's) are counted.
     placed: Option<(Rgba8Image, usize)>,
@@ -282,6 +284,7 @@ impl PixelJob {
             field: vec![],
             solve: None,
             placer: None,
+            copied: false,
             placed: None,
             counter: None,
             colours_before,
@@ -389,6 +392,13 @@ impl Job for PixelJob {
                     let placer = self
                         .placer
                         .get_or_insert_with(|| placement::Placer::new(&self.source));
+                    if !self.copied {
+                        // The output starts as the source: copied in parts
+                        // (64 MB at 4096²), copying is cheap per pixel.
+                        self.copied =
+                            placer.copy_source(&self.source, self.budget.saturating_mul(16));
+                        return Ok(self.progress(0.9));
+                    }
                     let inputs = placement::PlaceInputs {
                         mask: &self.mask,
                         sheet: &self.sheet,
