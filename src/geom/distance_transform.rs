@@ -6,6 +6,11 @@
 //! the boundary half a pixel beyond the last inside pixel, so a pixel's
 //! value is `d_out − ½` outside and `−(d_in − ½)` inside, which matches an
 //! analytic signed field sampled at pixel centres.
+//!
+//! Both transforms also come in bounded parts ([`Edt`], [`SignedDistance`]:
+//! a few columns or rows a call), for a job that must not spend more than a
+//! few milliseconds in one slice; the parts give the one-go results bit for
+//! bit.
 
 /// "No feature pixel": the squared distance [`edt_squared`] reports then.
 pub const INF: f64 = 1e20;
@@ -17,29 +22,92 @@ pub const INF: f64 = 1e20;
 /// # Panics
 /// When `feature.len() != w * h` (a caller's bug, not an input error).
 pub fn edt_squared(feature: &[bool], w: usize, h: usize) -> Vec<f64> {
-    assert_eq!(Some(feature.len()), w.checked_mul(h), "mask size");
-    let mut g: Vec<f64> = feature.iter().map(|&f| if f { 0.0 } else { INF }).collect();
-    let mut f = vec![0.0; w.max(h)];
-    let mut d = vec![0.0; w.max(h)];
-    let mut v = vec![0usize; w.max(h)];
-    let mut z = vec![0.0; w.max(h) + 1];
-    // Columns.
-    for x in 0..w {
-        for y in 0..h {
-            f[y] = g[y * w + x];
-        }
-        dt1(&f[..h], &mut d[..h], &mut v, &mut z);
-        for y in 0..h {
-            g[y * w + x] = d[y];
+    let mut e = Edt::new(feature, w, h);
+    while !e.step(usize::MAX) {}
+    e.into_squared()
+}
+
+/// [`edt_squared`] in parts: the column pass, then the row pass, a few
+/// lines per [`Edt::step`].
+#[derive(Debug, Clone)]
+pub struct Edt {
+    g: Vec<f64>,
+    w: usize,
+    h: usize,
+    /// Columns done, then rows done.
+    cols: usize,
+    rows: usize,
+    f: Vec<f64>,
+    d: Vec<f64>,
+    v: Vec<usize>,
+    z: Vec<f64>,
+}
+
+impl Edt {
+    /// Start the transform of `feature` (row-major, `w × h`).
+    ///
+    /// # Panics
+    /// When `feature.len() != w * h` (a caller's bug, not an input error).
+    pub fn new(feature: &[bool], w: usize, h: usize) -> Edt {
+        assert_eq!(Some(feature.len()), w.checked_mul(h), "mask size");
+        let m = w.max(h);
+        Edt {
+            g: feature.iter().map(|&f| if f { 0.0 } else { INF }).collect(),
+            w,
+            h,
+            cols: 0,
+            rows: 0,
+            f: vec![0.0; m],
+            d: vec![0.0; m],
+            v: vec![0usize; m],
+            z: vec![0.0; m + 1],
         }
     }
-    // Rows.
-    for y in 0..h {
-        f[..w].copy_from_slice(&g[y * w..(y + 1) * w]);
-        dt1(&f[..w], &mut d[..w], &mut v, &mut z);
-        g[y * w..(y + 1) * w].copy_from_slice(&d[..w]);
+
+    /// Whether both passes are complete.
+    pub fn done(&self) -> bool {
+        self.cols >= self.w && self.rows >= self.h
     }
-    g
+
+    /// Transform whole columns (then rows) until about `budget` pixels are
+    /// done (one line at least); returns whether the transform is complete.
+    pub fn step(&mut self, budget: usize) -> bool {
+        let (w, h) = (self.w, self.h);
+        let mut spent = 0usize;
+        while self.cols < w {
+            let x = self.cols;
+            for y in 0..h {
+                self.f[y] = self.g[y * w + x];
+            }
+            dt1(&self.f[..h], &mut self.d[..h], &mut self.v, &mut self.z);
+            for y in 0..h {
+                self.g[y * w + x] = self.d[y];
+            }
+            self.cols += 1;
+            spent = spent.saturating_add(h.max(1));
+            if spent >= budget {
+                return self.done();
+            }
+        }
+        while self.rows < h {
+            let y = self.rows;
+            self.f[..w].copy_from_slice(&self.g[y * w..(y + 1) * w]);
+            dt1(&self.f[..w], &mut self.d[..w], &mut self.v, &mut self.z);
+            self.g[y * w..(y + 1) * w].copy_from_slice(&self.d[..w]);
+            self.rows += 1;
+            spent = spent.saturating_add(w.max(1));
+            if spent >= budget {
+                return self.done();
+            }
+        }
+        true
+    }
+
+    /// The squared distances (call once [`Edt::step`] returned `true`).
+    pub fn into_squared(self) -> Vec<f64> {
+        debug_assert!(self.done(), "transform not finished");
+        self.g
+    }
 }
 
 /// 1-D squared distance transform: lower envelope of parabolas.
@@ -102,19 +170,80 @@ fn dt1(f: &[f64], d: &mut [f64], v: &mut [usize], z: &mut [f64]) {
 /// Signed distance (in pixels) of a mask, negative inside, `±big` where
 /// the mask is full or empty.
 pub fn signed_distance(mask: &[bool], w: usize, h: usize, big: f64) -> Vec<f64> {
-    let outside: Vec<bool> = mask.iter().map(|&m| !m).collect();
-    let to_in = edt_squared(mask, w, h);
-    let to_out = edt_squared(&outside, w, h);
-    mask.iter()
-        .enumerate()
-        .map(|(i, &m)| {
-            if m {
-                -(to_out[i].sqrt() - 0.5).min(big)
-            } else {
-                (to_in[i].sqrt() - 0.5).min(big)
+    let mut s = SignedDistance::new(mask.to_vec(), w, h, big);
+    loop {
+        if let Some(d) = s.step(usize::MAX) {
+            return d;
+        }
+    }
+}
+
+/// [`signed_distance`] in parts: the transform of the mask, then of its
+/// complement (each [`Edt`] in parts), then the signed values.
+#[derive(Debug, Clone)]
+pub struct SignedDistance {
+    mask: Vec<bool>,
+    w: usize,
+    h: usize,
+    big: f64,
+    to_in: Edt,
+    /// Started once `to_in` is complete.
+    to_out: Option<Edt>,
+}
+
+impl SignedDistance {
+    /// Start the signed distance of `mask` (row-major, `w × h`).
+    ///
+    /// # Panics
+    /// When `mask.len() != w * h` (a caller's bug, not an input error).
+    pub fn new(mask: Vec<bool>, w: usize, h: usize, big: f64) -> SignedDistance {
+        let to_in = Edt::new(&mask, w, h);
+        SignedDistance {
+            mask,
+            w,
+            h,
+            big,
+            to_in,
+            to_out: None,
+        }
+    }
+
+    /// Go on for about `budget` pixels of work (one line at least); the
+    /// field once it is complete, as [`signed_distance`] gives it. Must not
+    /// be called again after it returned the field.
+    pub fn step(&mut self, budget: usize) -> Option<Vec<f64>> {
+        if !self.to_in.done() {
+            self.to_in.step(budget);
+            return None;
+        }
+        let out = match &mut self.to_out {
+            Some(e) => e,
+            None => {
+                let outside: Vec<bool> = self.mask.iter().map(|&m| !m).collect();
+                self.to_out.insert(Edt::new(&outside, self.w, self.h))
             }
-        })
-        .collect()
+        };
+        if !out.done() {
+            out.step(budget);
+            return None;
+        }
+        let big = self.big;
+        let to_in = &self.to_in.g;
+        let to_out = &out.g;
+        Some(
+            self.mask
+                .iter()
+                .enumerate()
+                .map(|(i, &m)| {
+                    if m {
+                        -(to_out[i].sqrt() - 0.5).min(big)
+                    } else {
+                        (to_in[i].sqrt() - 0.5).min(big)
+                    }
+                })
+                .collect(),
+        )
+    }
 }
 
 #[cfg(test)]
@@ -163,6 +292,41 @@ mod tests {
             let (x, y) = ((i % n) as f64 + 0.5, (i / n) as f64 + 0.5);
             let exact = ((x - 32.0).powi(2) + (y - 32.0).powi(2)).sqrt() - 12.0;
             assert!((v - exact).abs() < 1.0, "pixel {i}: {v} vs {exact}");
+        }
+    }
+
+    /// The transforms done a few lines at a time give the one-go results
+    /// bit for bit (including empty and full masks and 1-pixel sides).
+    #[test]
+    fn stepping_gives_the_same_bits() {
+        let mut r = Rng::new(11);
+        for case in 0..24 {
+            let (w, h) = (1 + r.below(40), 1 + r.below(30));
+            let density = [0.0, 0.03, 0.4, 1.0][case % 4];
+            let m: Vec<bool> = (0..w * h).map(|_| r.f64() < density).collect();
+            let want = edt_squared(&m, w, h);
+            let want_signed = signed_distance(&m, w, h, 50.0);
+            for budget in [0, 1, w.min(h), 3 * w + 1] {
+                let mut e = Edt::new(&m, w, h);
+                while !e.step(budget) {}
+                let got = e.into_squared();
+                assert!(got.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()));
+                let mut s = SignedDistance::new(m.clone(), w, h, 50.0);
+                let mut steps = 0;
+                let got = loop {
+                    steps += 1;
+                    if let Some(d) = s.step(budget) {
+                        break d;
+                    }
+                };
+                if budget <= 1 {
+                    assert_eq!(steps, 2 * (w + h) + 1, "one line a step");
+                }
+                assert!(got
+                    .iter()
+                    .zip(&want_signed)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()));
+            }
         }
     }
 
