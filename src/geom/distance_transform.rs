@@ -310,7 +310,10 @@ mod tests {
                 let mut e = Edt::new(&m, w, h);
                 while !e.step(budget) {}
                 let got = e.into_squared();
-                assert!(got.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()));
+                assert!(got
+                    .iter()
+                    .zip(&want)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()));
                 let mut s = SignedDistance::new(m.clone(), w, h, 50.0);
                 let mut steps = 0;
                 let got = loop {

@@ -9,11 +9,12 @@
 //! the same structs from their flags. Field names are the worker's JSON
 //! names; every error names the field at fault ([`Error::at`]).
 use super::field::Scene;
-use super::fit::{Budget, FitJob, FitOptions, FitResult, TargetSource};
+use super::fit::{Budget, FitJob, FitOptions, FitResult, Preparation, TargetData, TargetSource};
 use super::loss::{LossKind, Objective, SdfUnits};
 use super::optim::InitMethod;
 use super::record::{Program, RecordLimits};
 use super::render;
+use super::target::Target;
 use crate::api::RawImage;
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, OneShot, Progress, Step};
@@ -501,6 +502,16 @@ impl<X> FitRequestOf<X> {
         Ok(o)
     }
 
+    /// The target, owned, for a job that builds its fields in its steps.
+    fn target_data(&self, p: &Program) -> Result<TargetData> {
+        let (mut img, mut fl) = (None, vec![]);
+        let tol = match self.target(p, &mut img, &mut fl)? {
+            TargetSource::Image(_, tol) => tol,
+            TargetSource::Params(_) => return Ok(TargetData::Params(fl)),
+        };
+        Ok(TargetData::Image(img.expect("an image target"), tol))
+    }
+
     /// The target as the fit sees it; `img`/`fl` hold what it borrows.
     fn target<'a>(
         &self,
@@ -593,9 +604,8 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
     let p = parse(&req.program)?;
     let vals = named_values(&p, &req.params)?;
     let opts = req.options()?;
-    let (mut img, mut fl) = (None, vec![]);
-    let t = req.target(&p, &mut img, &mut fl)?;
-    let job = FitJob::new(&p, &vals, &t, opts).map_err(|e| e.at("program"))?;
+    let t = req.target_data(&p)?;
+    let job = FitJob::start(&p, &vals, t, opts).map_err(|e| e.at("program"))?;
     let scene = job.objective().scene.clone();
     Ok(FitRequestJob { job, scene })
 }
@@ -617,6 +627,8 @@ pub const EVAL_WORK_PER_STEP: u64 = 600_000;
 /// [`Objective::begin_loss`]), so no step is unbounded.
 pub struct EvalJob {
     obj: Objective,
+    /// The target in the making: built in the first steps.
+    prep: Option<Preparation>,
     points: Vec<Vec<f64>>,
     losses: Vec<f64>,
     /// The current point's loss is under way ...
@@ -631,6 +643,13 @@ impl Job for EvalJob {
     type Output = EvalResponse;
     fn step(&mut self) -> Result<Step<EvalResponse>> {
         let budget = self.budget;
+        if let Some(prep) = &mut self.prep {
+            if let Some((t, normals)) = prep.step(&self.obj.scene, budget)? {
+                self.obj.set_target(t, normals);
+                self.prep = None;
+            }
+            return Ok(Step::Running(Progress::new(0.0, "preparing the target")));
+        }
         let dim = self.obj.scene.rec.float_params.len();
         let mut spent = 0u64;
         while self.losses.len() < self.points.len() && spent < budget {
@@ -718,12 +737,13 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
     let p = parse(&req.program)?;
     let vals = named_values(&p, &req.params)?;
     let opts = req.options()?;
-    let (mut img, mut fl) = (None, vec![]);
-    let t = req.target(&p, &mut img, &mut fl)?;
-    let (scene, target) =
-        super::fit::prepare(&p, &vals, &t, &opts.loss).map_err(|e| e.at("program"))?;
+    let t = req.target_data(&p)?;
+    let (scene, prep) =
+        super::fit::begin_prepare(&p, &vals, t, &opts.loss).map_err(|e| e.at("program"))?;
+    let pending = Target::pending(opts.loss.grid, opts.loss.scale());
     Ok(EvalJob {
-        obj: Objective::new(scene, target, opts.loss),
+        obj: Objective::new(scene, pending, opts.loss),
+        prep: Some(prep),
         points: req.extra.points,
         losses: Vec::with_capacity(n),
         busy: false,

@@ -5,7 +5,7 @@
 use super::field::{Evaluator, Scene};
 use super::loss::{LossKind, LossOptions, Objective};
 use super::record::{Program, RecordLimits};
-use super::target::Target;
+use super::target::{BuildWork, Target, TargetBuild};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::rng::Rng;
@@ -166,6 +166,22 @@ pub(crate) fn prepare(
     target: &TargetSource,
     loss: &LossOptions,
 ) -> Result<(Scene, Target)> {
+    let scene = fit_scene(program, values, loss)?;
+    let t = match target {
+        TargetSource::Image(img, tol) => {
+            Target::from_image(&scene, img, loss.grid, loss.scale(), *tol)?
+        }
+        TargetSource::Params(p) => {
+            let idx = colour_indices(&scene, p, loss.grid)?;
+            Target::from_indices(&scene, &idx, loss.grid, loss.scale())
+        }
+    };
+    Ok((scene, t))
+}
+
+/// The scene of a fit (recorded with `values`), checked: a grid in range,
+/// shapes to draw and float parameters to fit.
+fn fit_scene(program: &Program, values: &[f64], loss: &LossOptions) -> Result<Scene> {
     if !(8..=1024).contains(&loss.grid) {
         return Err(Error::input(format!(
             "loss grid {} is outside 8..=1024 pixels",
@@ -184,16 +200,116 @@ pub(crate) fn prepare(
             "the program declares no float parameters ('param name in [lo, hi];'), so there is nothing to fit",
         ));
     }
-    let t = match target {
-        TargetSource::Image(img, tol) => {
-            Target::from_image(&scene, img, loss.grid, loss.scale(), *tol)?
+    Ok(scene)
+}
+
+/// A fit's target, owned, for a job that builds it in its steps.
+#[derive(Debug, Clone)]
+pub enum TargetData {
+    /// An image, snapped to the program's palette with an RGB tolerance.
+    Image(Rgba8Image, f64),
+    /// The program itself drawn with these float parameter values.
+    Params(Vec<f64>),
+}
+
+/// Work units of one step of a target's preparation ([`BuildWork`]: about
+/// 5–20 ns each), chosen for steps of a few milliseconds
+/// (`filigree bench slices`).
+pub const PREPARE_WORK_PER_STEP: BuildWork = 400_000;
+
+/// A fit's target built in bounded parts ([`TargetBuild`]), then its
+/// normals a few rows at a time: what [`prepare`] does in one go, bit for bit.
+pub(crate) struct Preparation {
+    build: Option<TargetBuild>,
+    /// The built target while its normals are computed.
+    target: Option<Target>,
+    normals: Vec<[f64; 2]>,
+    /// Next channel and row of the normals.
+    channel: usize,
+    row: usize,
+}
+
+impl Preparation {
+    /// Go on for about `budget` work units (a row or line at least); the
+    /// target and its normals once complete. Fails when the target image
+    /// matches no colour of the program.
+    pub(crate) fn step(
+        &mut self,
+        scene: &Scene,
+        budget: BuildWork,
+    ) -> Result<Option<(Target, Vec<[f64; 2]>)>> {
+        if let Some(b) = &mut self.build {
+            if let Some(t) = b.step(scene, budget)? {
+                self.normals = Vec::with_capacity(t.sdf.len());
+                self.target = Some(t);
+                self.build = None;
+            }
+            return Ok(None);
         }
-        TargetSource::Params(p) => {
-            let idx = colour_indices(&scene, p, loss.grid)?;
-            Target::from_indices(&scene, &idx, loss.grid, loss.scale())
+        let t = self
+            .target
+            .as_ref()
+            .expect("a target while normals are built");
+        let n = t.n;
+        let nn = n * n;
+        let channels = t.sdf.len() / nn;
+        let mut spent: BuildWork = 0;
+        while self.channel < channels && spent < budget.max(1) {
+            let f = &t.sdf[self.channel * nn..(self.channel + 1) * nn];
+            super::loss::normals_rows(f, n, self.row..self.row + 1, &mut self.normals);
+            spent += 4 * n as BuildWork;
+            self.row += 1;
+            if self.row == n {
+                self.row = 0;
+                self.channel += 1;
+            }
         }
+        if self.channel < channels {
+            return Ok(None);
+        }
+        let t = self.target.take().expect("target");
+        Ok(Some((t, std::mem::take(&mut self.normals))))
+    }
+
+    /// A rough fraction done.
+    pub(crate) fn fraction(&self, scene: &Scene) -> f64 {
+        match (&self.build, &self.target) {
+            (Some(b), _) => 0.9 * b.fraction(scene),
+            (None, Some(t)) => {
+                let nn = (t.n * t.n).max(1);
+                0.9 + 0.1 * self.normals.len() as f64 / t.sdf.len().max(nn) as f64
+            }
+            (None, None) => 1.0,
+        }
+    }
+}
+
+/// Check a fit's program and target and start its preparation: only the
+/// recording and the checks happen here; [`Preparation::step`] builds the
+/// target's fields and normals.
+pub(crate) fn begin_prepare(
+    program: &Program,
+    values: &[f64],
+    target: TargetData,
+    loss: &LossOptions,
+) -> Result<(Scene, Preparation)> {
+    let scene = fit_scene(program, values, loss)?;
+    let build = match target {
+        TargetData::Image(img, tol) => {
+            TargetBuild::image(&scene, img, loss.grid, loss.scale(), tol)?
+        }
+        TargetData::Params(p) => TargetBuild::drawn(&scene, &p, loss.grid, loss.scale())?,
     };
-    Ok((scene, t))
+    Ok((
+        scene,
+        Preparation {
+            build: Some(build),
+            target: None,
+            normals: vec![],
+            channel: 0,
+            row: 0,
+        },
+    ))
 }
 
 /// Palette index per pixel of the scene drawn with `params` on an `n × n` grid.
@@ -205,6 +321,8 @@ pub fn colour_indices(scene: &Scene, params: &[f64], n: usize) -> Result<Vec<u16
 }
 
 enum Phase {
+    /// Building the target's fields ([`FitJob::start`]).
+    Prepare,
     Init,
     Refine,
     Polish,
@@ -215,6 +333,8 @@ enum Phase {
 /// `values` = the best float parameters so far (declaration order).
 pub struct FitJob {
     obj: Objective,
+    /// The target in the making (with [`Phase::Prepare`]).
+    prep: Option<Preparation>,
     opts: FitOptions,
     rng: Rng,
     lo: Vec<f64>,
@@ -283,6 +403,25 @@ impl FitJob {
         Ok(FitJob::from_parts(scene, t, opts))
     }
 
+    /// [`FitJob::new`] with the target's fields built in the job's first
+    /// steps rather than here (this only records the program and checks
+    /// the request), so no slice of the job is long. The result is the same,
+    /// bit for bit; until the preparation is done, [`FitJob::objective`]
+    /// has an empty target.
+    pub fn start(
+        program: &Program,
+        values: &[f64],
+        target: TargetData,
+        opts: FitOptions,
+    ) -> Result<FitJob> {
+        let (scene, prep) = begin_prepare(program, values, target, &opts.loss)?;
+        let pending = Target::pending(opts.loss.grid, opts.loss.scale());
+        let mut job = FitJob::from_parts(scene, pending, opts);
+        job.prep = Some(prep);
+        job.phase = Phase::Prepare;
+        Ok(job)
+    }
+
     /// A fit from a prepared scene and target (same grid and units as `opts.loss`).
     pub fn from_parts(scene: Scene, target: Target, opts: FitOptions) -> FitJob {
         let decls = scene.rec.float_decls();
@@ -296,6 +435,7 @@ impl FitJob {
         let obj = Objective::new(scene, target, opts.loss);
         FitJob {
             obj,
+            prep: None,
             rng: Rng::new(opts.seed),
             lo,
             hi,
@@ -386,6 +526,14 @@ impl FitJob {
 
     fn progress(&self) -> Progress {
         let stage = match self.phase {
+            // Before the first loss: a small share of the whole fit.
+            Phase::Prepare => {
+                let f = self
+                    .prep
+                    .as_ref()
+                    .map_or(1.0, |p| p.fraction(&self.obj.scene));
+                return Progress::new(0.01 * f, "preparing the target");
+            }
             Phase::Init => format!(
                 "initialisation ({:?}), batch {}",
                 self.opts.init,
@@ -564,8 +712,18 @@ impl Job for FitJob {
     fn step(&mut self) -> Result<Step<FitResult>> {
         let mut work = 0u64;
         let mut evals = 0;
+        if let Phase::Prepare = self.phase {
+            let prep = self.prep.as_mut().expect("preparation");
+            if let Some((t, normals)) = prep.step(&self.obj.scene, PREPARE_WORK_PER_STEP)? {
+                self.obj.set_target(t, normals);
+                self.prep = None;
+                self.phase = Phase::Init;
+            }
+            return Ok(Step::Running(self.progress()));
+        }
         while work < self.opts.work_per_step || evals == 0 {
             match self.phase {
+                Phase::Prepare => unreachable!("prepared above"),
                 Phase::Init => {
                     if self.batch_losses.len() == self.batch.len() {
                         if !self.batch.is_empty() {
@@ -746,5 +904,102 @@ impl Job for FitJob {
             }
         }
         Ok(Step::Running(self.progress()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::job::run_quietly;
+    use crate::pattern::generators::generator;
+
+    fn small(grid: usize) -> FitOptions {
+        let mut o = FitOptions::budget(Budget::Quick);
+        o.ga.population = 12;
+        o.ga.generations = 2;
+        o.candidates = 2;
+        o.iterations = 6;
+        o.loss.grid = grid;
+        o
+    }
+
+    /// A fit started with [`FitJob::start`] (target built in its steps)
+    /// returns what [`FitJob::new`] (target built at once) returns, bit for
+    /// bit, for a drawn and an image target, and its preparation is spread
+    /// over several steps at a big grid.
+    #[test]
+    fn stepping_the_preparation_gives_the_same_bits() {
+        let p = Program::parse(generator("circles-mix").unwrap().source).unwrap();
+        let vals = p.defaults();
+        let truth: Vec<f64> = p
+            .record(&vals, &RecordLimits::default())
+            .unwrap()
+            .float_values()
+            .iter()
+            .map(|v| v * 1.04)
+            .collect();
+        let img = {
+            let scene = fit_scene(&p, &vals, &small(64).loss).unwrap();
+            let mut ev = Evaluator::new(150, 1.0);
+            let nodes = crate::pattern::render::checked_nodes(&scene, &truth).unwrap();
+            ev.eval(&scene, &nodes, false);
+            let idx = ev.colour_indices(&scene);
+            let mut img = Rgba8Image::new(150, 150);
+            for (px, &i) in img.data.chunks_exact_mut(4).zip(&idx) {
+                let c = scene.rec.colours[i as usize];
+                px.copy_from_slice(&[c[0], c[1], c[2], 255]);
+            }
+            img
+        };
+        let cases = [
+            (TargetData::Params(truth.clone()), 40),
+            (TargetData::Image(img.clone(), 40.0), 64),
+        ];
+        for (data, grid) in cases {
+            let o = small(grid);
+            let src = match &data {
+                TargetData::Params(x) => TargetSource::Params(x),
+                TargetData::Image(i, t) => TargetSource::Image(i, *t),
+            };
+            let want = run_quietly(FitJob::new(&p, &vals, &src, o).unwrap()).unwrap();
+            let job = FitJob::start(&p, &vals, data.clone(), o).unwrap();
+            assert!(
+                job.objective().target.sdf.is_empty(),
+                "nothing built at the start"
+            );
+            let got = run_quietly(job).unwrap();
+            assert_eq!(
+                format!(
+                    "{:?}",
+                    got.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                ),
+                format!(
+                    "{:?}",
+                    want.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                )
+            );
+            assert_eq!(got.loss.to_bits(), want.loss.to_bits());
+            assert_eq!(got, want);
+        }
+        // At grid 1024 the preparation takes many steps.
+        let mut job = FitJob::start(&p, &vals, TargetData::Params(truth), small(1024)).unwrap();
+        let mut prep_steps = 0;
+        while let Phase::Prepare = job.phase {
+            let Step::Running(pr) = job.step().unwrap() else {
+                panic!("done while preparing");
+            };
+            if let Phase::Prepare = job.phase {
+                assert_eq!(pr.stage, "preparing the target");
+            }
+            prep_steps += 1;
+        }
+        assert!(
+            prep_steps > 20,
+            "{prep_steps} preparation steps at grid 1024"
+        );
+        assert_eq!(
+            job.objective().target.sdf.len(),
+            job.objective().scene.channels.len() << 20
+        );
     }
 }

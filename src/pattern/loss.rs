@@ -96,20 +96,30 @@ fn normals(s: &[f64], n: usize, out: &mut Vec<[f64; 2]>) {
     out.clear();
     let nn = n * n;
     for c in 0..s.len() / nn {
-        let f = &s[c * nn..(c + 1) * nn];
-        for y in 0..n {
-            for x in 0..n {
-                let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
-                let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
-                let gx = (f[y * n + xp] - f[y * n + xm]) / (xp - xm).max(1) as f64;
-                let gy = (f[yp * n + x] - f[ym * n + x]) / (yp - ym).max(1) as f64;
-                let l = (gx * gx + gy * gy).sqrt();
-                out.push(if l > 1e-12 {
-                    [gx / l, gy / l]
-                } else {
-                    [0.0, 0.0]
-                });
-            }
+        normals_rows(&s[c * nn..(c + 1) * nn], n, 0..n, out);
+    }
+}
+
+/// Rows `rows` of one channel field's normals (see [`normals`]), appended
+/// to `out`: a job builds the normals a few rows at a time with it.
+pub(crate) fn normals_rows(
+    f: &[f64],
+    n: usize,
+    rows: std::ops::Range<usize>,
+    out: &mut Vec<[f64; 2]>,
+) {
+    for y in rows {
+        for x in 0..n {
+            let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
+            let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
+            let gx = (f[y * n + xp] - f[y * n + xm]) / (xp - xm).max(1) as f64;
+            let gy = (f[yp * n + x] - f[ym * n + x]) / (yp - ym).max(1) as f64;
+            let l = (gx * gx + gy * gy).sqrt();
+            out.push(if l > 1e-12 {
+                [gx / l, gy / l]
+            } else {
+                [0.0, 0.0]
+            });
         }
     }
 }
@@ -531,6 +541,13 @@ impl Objective {
             next_tile: 0,
             pass: None,
         }
+    }
+
+    /// Put in the target (and its normals, built with [`normals_rows`]) of
+    /// an objective made with a pending one while a job builds it in parts.
+    pub(crate) fn set_target(&mut self, target: Target, target_normals: Vec<[f64; 2]>) {
+        self.target = target;
+        self.target_normals = target_normals;
     }
 
     /// Number of float parameters.

@@ -4,10 +4,10 @@
 //! into a signed field.
 //!
 //! The distance transform itself is shared: [`crate::geom::distance_transform`].
-use super::field::{Scene, CAP};
+use super::field::{Evaluator, Scene, CAP};
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
-use crate::geom::distance_transform::signed_distance;
+use crate::geom::distance_transform::SignedDistance;
 use crate::raster::Rgba8Image;
 
 /// A target: per-channel masks and signed fields on the loss grid.
@@ -53,8 +53,25 @@ fn snap_to_palette_wh(
 ) -> (Vec<u16>, f64) {
     let mut out = Vec::with_capacity(nw * nh);
     let mut far = 0usize;
+    snap_rows(img, palette, nw, nh, tolerance, 0..nh, &mut out, &mut far);
+    (out, far as f64 / (nw * nh) as f64)
+}
+
+/// Rows `rows` of [`snap_to_palette_wh`]: appends their indices to `out`
+/// and counts the pixels beyond the tolerance in `far`.
+#[allow(clippy::too_many_arguments)]
+fn snap_rows(
+    img: &Rgba8Image,
+    palette: &[Rgb],
+    nw: usize,
+    nh: usize,
+    tolerance: f64,
+    rows: std::ops::Range<usize>,
+    out: &mut Vec<u16>,
+    far: &mut usize,
+) {
     let (w, h) = (img.width as usize, img.height as usize);
-    for y in 0..nh {
+    for y in rows {
         for x in 0..nw {
             let sx = (((x as f64 + 0.5) * w as f64 / nw as f64) as usize).min(w - 1);
             let sy = (((y as f64 + 0.5) * h as f64 / nh as f64) as usize).min(h - 1);
@@ -73,12 +90,41 @@ fn snap_to_palette_wh(
                 }
             }
             if best.0.sqrt() > tolerance {
-                far += 1;
+                *far += 1;
             }
             out.push(best.1);
         }
     }
-    (out, far as f64 / (nw * nh) as f64)
+}
+
+/// The side of the raster an image target's fields are computed on: the
+/// image's own (up to [`MAX_FIELD_SIDE`]), or the grid's when the image is
+/// no bigger than the grid.
+fn field_side(img: &Rgba8Image, n: usize) -> (usize, usize) {
+    let (w, h) = (img.width as usize, img.height as usize);
+    let fw = w.min(MAX_FIELD_SIDE.max(n));
+    let fh = h.min(MAX_FIELD_SIDE.max(n));
+    if fw <= n && fh <= n {
+        (n, n)
+    } else {
+        (fw.max(1), fh.max(1))
+    }
+}
+
+/// The error for a target whose pixels mostly match no colour of the program.
+fn unmatched_error(scene: &Scene, far: f64, tolerance: f64) -> Error {
+    let names: Vec<String> = scene
+        .rec
+        .colours
+        .iter()
+        .map(|c| format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]))
+        .collect();
+    Error::input(format!(
+        "{:.0}% of the target's pixels are not close to any colour of the program ({}); \
+         draw the target in these colours or raise the tolerance (now {tolerance})",
+        far * 100.0,
+        names.join(", ")
+    ))
 }
 
 /// Value of the `w × h` field `f` at (u, v) in pixel-centre coordinates
@@ -98,63 +144,17 @@ fn bilinear(f: &[f64], w: usize, h: usize, u: f64, v: f64) -> f64 {
 impl Target {
     /// Build the per-channel target fields from palette indices on an `n × n` grid.
     pub fn from_indices(scene: &Scene, idx: &[u16], n: usize, scale: f64) -> Target {
-        let nn = n * n;
-        let mut sdf = Vec::with_capacity(scene.channels.len() * nn);
-        let mut mask = Vec::with_capacity(scene.channels.len() * nn);
-        let px_to_units = scale / n as f64;
-        let big = CAP * n as f64;
-        for ch in &scene.channels {
-            let m: Vec<bool> = idx.iter().map(|&i| i == ch.colour).collect();
-            let d = signed_distance(&m, n, n, big);
-            sdf.extend(d.iter().map(|v| v * px_to_units));
-            mask.extend(m.iter().map(|&b| if b { 1.0f32 } else { 0.0 }));
-        }
-        Target {
-            n,
-            scale,
-            sdf,
-            mask,
-            unmatched: 0.0,
-        }
+        TargetBuild::fields(idx.to_vec(), n, n, n, scale, 0.0).finish(scene)
     }
 
-    /// The fields of palette indices on a finer `fw × fh` raster covering
-    /// the canvas, sampled (bilinear) at the centres of the `n × n` grid.
-    /// Masks are where the sampled field is negative.
-    fn from_fine_indices(
-        scene: &Scene,
-        idx: &[u16],
-        fw: usize,
-        fh: usize,
-        n: usize,
-        scale: f64,
-    ) -> Target {
-        let nn = n * n;
-        let mut sdf = Vec::with_capacity(scene.channels.len() * nn);
-        let mut mask = Vec::with_capacity(scene.channels.len() * nn);
-        // A fine pixel is 1/fw of the canvas across and 1/fh down; the
-        // distances are measured in pixels of the mean size.
-        let px = 1.0 / ((fw * fh) as f64).sqrt();
-        let big = CAP / px;
-        let (sx, sy) = (fw as f64 / n as f64, fh as f64 / n as f64);
-        for ch in &scene.channels {
-            let m: Vec<bool> = idx.iter().map(|&i| i == ch.colour).collect();
-            let d = signed_distance(&m, fw, fh, big);
-            for y in 0..n {
-                let v = (y as f64 + 0.5) * sy - 0.5;
-                for x in 0..n {
-                    let u = (x as f64 + 0.5) * sx - 0.5;
-                    let value = bilinear(&d, fw, fh, u, v) * px * scale;
-                    sdf.push(value);
-                    mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
-                }
-            }
-        }
+    /// A target with no fields yet (on an `n × n` grid), to be replaced by
+    /// one a [`TargetBuild`] completes.
+    pub(crate) fn pending(n: usize, scale: f64) -> Target {
         Target {
             n,
             scale,
-            sdf,
-            mask,
+            sdf: vec![],
+            mask: vec![],
             unmatched: 0.0,
         }
     }
@@ -175,43 +175,354 @@ impl Target {
         if img.width == 0 || img.height == 0 {
             return Err(Error::input("the target image is empty"));
         }
-        // The fields are computed at the image's own resolution (up to
-        // MAX_FIELD_SIDE) and sampled at the grid's cell centres, where the
-        // pattern's fields are evaluated. Snapping straight onto a coarser
-        // grid would take the pixel right of each centre (the centre of a
-        // 2×2 block is a pixel corner), shifting every target by half an
-        // image pixel.
-        let (w, h) = (img.width as usize, img.height as usize);
-        let fw = w.min(MAX_FIELD_SIDE.max(n));
-        let fh = h.min(MAX_FIELD_SIDE.max(n));
-        let (fw, fh) = if fw <= n && fh <= n {
-            (n, n)
-        } else {
-            (fw.max(1), fh.max(1))
-        };
+        let (fw, fh) = field_side(img, n);
         let (idx, far) = snap_to_palette_wh(img, &scene.rec.colours, fw, fh, tolerance);
         if far > 0.5 {
-            let names: Vec<String> = scene
-                .rec
-                .colours
-                .iter()
-                .map(|c| format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]))
-                .collect();
-            return Err(Error::input(format!(
-                "{:.0}% of the target's pixels are not close to any colour of the program ({}); \
-                 draw the target in these colours or raise the tolerance (now {tolerance})",
-                far * 100.0,
-                names.join(", ")
-            )));
+            return Err(unmatched_error(scene, far, tolerance));
         }
-        let mut t = if (fw, fh) == (n, n) {
-            Target::from_indices(scene, &idx, n, scale)
-        } else {
-            Target::from_fine_indices(scene, &idx, fw, fh, n, scale)
-        };
-        t.unmatched = far;
-        Ok(t)
+        Ok(TargetBuild::fields(idx, fw, fh, n, scale, far).finish(scene))
     }
+}
+
+/// Work units of a [`TargetBuild`]: pixels visited (times the palette size
+/// when snapping), item evaluations when drawing; about 5–20 ns each.
+pub type BuildWork = u64;
+
+/// A [`Target`] built in bounded parts, for a job that must not spend more
+/// than a few milliseconds in one slice: snapping an image to the palette a
+/// few rows at a time (or drawing the program a few tiles at a time), then
+/// per channel the signed distance a few lines at a time
+/// ([`SignedDistance`]) and its values on the grid a few rows at a time.
+/// The result is bit for bit [`Target::from_image`] / [`Target::from_indices`]
+/// of the same input.
+pub struct TargetBuild {
+    n: usize,
+    scale: f64,
+    stage: Stage,
+    sdf: Vec<f64>,
+    mask: Vec<f32>,
+    unmatched: f64,
+}
+
+enum Stage {
+    /// Snapping the image's rows onto the `fw × fh` field raster.
+    Snap {
+        img: Rgba8Image,
+        tolerance: f64,
+        fw: usize,
+        fh: usize,
+        idx: Vec<u16>,
+        far: usize,
+    },
+    /// Drawing the program on the grid, a few big tiles at a time ...
+    Draw {
+        ev: Evaluator,
+        next_tile: usize,
+    },
+    /// ... then reading its palette index at every pixel.
+    Pick {
+        ev: Evaluator,
+        idx: Vec<u16>,
+    },
+    /// The fields of palette indices on a `fw × fh` raster: channel
+    /// `channel`'s signed distance in the making ...
+    Field {
+        idx: Vec<u16>,
+        fw: usize,
+        fh: usize,
+        channel: usize,
+        sd: Option<SignedDistance>,
+    },
+    /// ... and its values on the grid, row `row` next.
+    Sample {
+        idx: Vec<u16>,
+        fw: usize,
+        fh: usize,
+        channel: usize,
+        d: Vec<f64>,
+        row: usize,
+    },
+    Done,
+}
+
+impl TargetBuild {
+    /// The target of `img` snapped to the program's palette (see
+    /// [`Target::from_image`]); fails at once only when the image is empty.
+    pub fn image(
+        scene: &Scene,
+        img: Rgba8Image,
+        n: usize,
+        scale: f64,
+        tolerance: f64,
+    ) -> Result<TargetBuild> {
+        if img.width == 0 || img.height == 0 {
+            return Err(Error::input("the target image is empty"));
+        }
+        let _ = scene;
+        let (fw, fh) = field_side(&img, n);
+        Ok(TargetBuild {
+            stage: Stage::Snap {
+                img,
+                tolerance,
+                fw,
+                fh,
+                idx: Vec::with_capacity(fw * fh),
+                far: 0,
+            },
+            ..TargetBuild::empty(n, scale)
+        })
+    }
+
+    /// The target of the program drawn with `params` on the `n × n` grid
+    /// (palette index per pixel, as [`crate::pattern::fit::colour_indices`]).
+    /// Fails at once when the parameters give shapes that are not finite.
+    pub fn drawn(scene: &Scene, params: &[f64], n: usize, scale: f64) -> Result<TargetBuild> {
+        let nodes = super::render::checked_nodes(scene, params)?;
+        let mut ev = Evaluator::new(n, 1.0);
+        ev.begin(scene, &nodes, false);
+        Ok(TargetBuild {
+            stage: Stage::Draw { ev, next_tile: 0 },
+            ..TargetBuild::empty(n, scale)
+        })
+    }
+
+    fn empty(n: usize, scale: f64) -> TargetBuild {
+        TargetBuild {
+            n,
+            scale,
+            stage: Stage::Done,
+            sdf: vec![],
+            mask: vec![],
+            unmatched: 0.0,
+        }
+    }
+
+    /// The fields of palette indices on a `fw × fh` raster covering the
+    /// canvas: computed there, then taken as they are (`fw = fh = n`) or
+    /// sampled bilinearly at the centres of the `n × n` grid (masks are
+    /// where the sampled field is negative).
+    fn fields(
+        idx: Vec<u16>,
+        fw: usize,
+        fh: usize,
+        n: usize,
+        scale: f64,
+        unmatched: f64,
+    ) -> TargetBuild {
+        TargetBuild {
+            stage: Stage::Field {
+                idx,
+                fw,
+                fh,
+                channel: 0,
+                sd: None,
+            },
+            unmatched,
+            ..TargetBuild::empty(n, scale)
+        }
+    }
+
+    /// Run to the end in one go.
+    fn finish(mut self, scene: &Scene) -> Target {
+        loop {
+            match self.step(scene, BuildWork::MAX) {
+                Ok(Some(t)) => return t,
+                Ok(None) => {}
+                Err(_) => unreachable!("only snapping fails, and it is done"),
+            }
+        }
+    }
+
+    /// A rough fraction done (for progress).
+    pub fn fraction(&self, scene: &Scene) -> f64 {
+        let nc = scene.channels.len().max(1) as f64;
+        match &self.stage {
+            Stage::Snap { fh, idx, fw, .. } => 0.2 * idx.len() as f64 / (fw * fh).max(1) as f64,
+            Stage::Draw { ev, next_tile } => 0.2 * *next_tile as f64 / ev.tiles().max(1) as f64,
+            Stage::Pick { .. } => 0.2,
+            Stage::Field { channel, .. } => 0.2 + 0.8 * *channel as f64 / nc,
+            Stage::Sample { channel, row, .. } => {
+                0.2 + 0.8 * (*channel as f64 + 0.9 + 0.1 * *row as f64 / self.n as f64) / nc
+            }
+            Stage::Done => 1.0,
+        }
+    }
+
+    /// Go on for about `budget` work units (one row, tile or line at
+    /// least); the target once it is complete. Fails when the image's
+    /// pixels mostly match no colour of the program. Must not be called
+    /// again after it returned the target or an error.
+    pub fn step(&mut self, scene: &Scene, budget: BuildWork) -> Result<Option<Target>> {
+        let budget = budget.max(1);
+        let mut spent: BuildWork = 0;
+        let (n, scale) = (self.n, self.scale);
+        while spent < budget {
+            match &mut self.stage {
+                Stage::Snap {
+                    img,
+                    tolerance,
+                    fw,
+                    fh,
+                    idx,
+                    far,
+                } => {
+                    let (fw, fh) = (*fw, *fh);
+                    let y = idx.len() / fw;
+                    if y < fh {
+                        let palette = &scene.rec.colours;
+                        snap_rows(img, palette, fw, fh, *tolerance, y..y + 1, idx, far);
+                        spent = spent.saturating_add((fw * (palette.len() + 1)) as BuildWork);
+                        continue;
+                    }
+                    let far = *far as f64 / (fw * fh) as f64;
+                    if far > 0.5 {
+                        let e = unmatched_error(scene, far, *tolerance);
+                        self.stage = Stage::Done;
+                        return Err(e);
+                    }
+                    let idx = std::mem::take(idx);
+                    *self = TargetBuild::fields(idx, fw, fh, n, scale, far);
+                }
+                Stage::Draw { ev, next_tile } => {
+                    let before = ev.raw_work();
+                    while *next_tile < ev.tiles() && ev.raw_work() - before < budget - spent {
+                        let t = *next_tile;
+                        ev.eval_tiles(scene, false, t..t + 1);
+                        *next_tile += 1;
+                    }
+                    spent = spent.saturating_add(ev.raw_work() - before + 1);
+                    if *next_tile >= ev.tiles() {
+                        ev.finish(scene);
+                        let ev = std::mem::replace(ev, Evaluator::new(0, 1.0));
+                        self.stage = Stage::Pick {
+                            ev,
+                            idx: Vec::with_capacity(n * n),
+                        };
+                    }
+                }
+                Stage::Pick { ev, idx } => {
+                    let i = idx.len();
+                    let end = (i + n).min(n * n);
+                    idx.extend((i..end).map(|i| ev.colour_index(scene, i)));
+                    spent = spent.saturating_add(((end - i) * scene.channels.len()) as BuildWork);
+                    if end == n * n {
+                        let idx = std::mem::take(idx);
+                        *self = TargetBuild::fields(idx, n, n, n, scale, 0.0);
+                    }
+                }
+                Stage::Field {
+                    idx,
+                    fw,
+                    fh,
+                    channel,
+                    sd,
+                } => {
+                    let (fw, fh, c) = (*fw, *fh, *channel);
+                    if c == scene.channels.len() {
+                        let t = Target {
+                            n,
+                            scale,
+                            sdf: std::mem::take(&mut self.sdf),
+                            mask: std::mem::take(&mut self.mask),
+                            unmatched: self.unmatched,
+                        };
+                        self.stage = Stage::Done;
+                        return Ok(Some(t));
+                    }
+                    if c == 0 && self.sdf.is_empty() {
+                        let cap = scene.channels.len() * n * n;
+                        self.sdf.reserve_exact(cap);
+                        self.mask.reserve_exact(cap);
+                    }
+                    let sd = match sd {
+                        Some(sd) => sd,
+                        None => {
+                            let colour = scene.channels[c].colour;
+                            let m: Vec<bool> = idx.iter().map(|&i| i == colour).collect();
+                            spent = spent.saturating_add((fw * fh) as BuildWork);
+                            let big = if (fw, fh) == (n, n) {
+                                CAP * n as f64
+                            } else {
+                                CAP / fine_pixel(fw, fh)
+                            };
+                            sd.insert(SignedDistance::new(m, fw, fh, big))
+                        }
+                    };
+                    let left = usize::try_from(budget - spent.min(budget)).unwrap_or(usize::MAX);
+                    let lines_before = spent;
+                    match sd.step(left) {
+                        Some(d) => {
+                            spent = spent.saturating_add(2 * (fw * fh) as BuildWork);
+                            let idx = std::mem::take(idx);
+                            self.stage = Stage::Sample {
+                                idx,
+                                fw,
+                                fh,
+                                channel: c,
+                                d,
+                                row: 0,
+                            };
+                        }
+                        None => {
+                            // The transform did about `left` pixels (one line at least).
+                            spent = lines_before.saturating_add(left.max(fw.max(fh)) as BuildWork);
+                        }
+                    }
+                }
+                Stage::Sample {
+                    idx,
+                    fw,
+                    fh,
+                    channel,
+                    d,
+                    row,
+                } => {
+                    let (fw, fh, c) = (*fw, *fh, *channel);
+                    if (fw, fh) == (n, n) {
+                        // The grid's own fields: all rows at once (a copy).
+                        let px_to_units = scale / n as f64;
+                        let colour = scene.channels[c].colour;
+                        self.sdf.extend(d.iter().map(|v| v * px_to_units));
+                        self.mask
+                            .extend(idx.iter().map(|&i| if i == colour { 1.0f32 } else { 0.0 }));
+                        spent = spent.saturating_add((n * n / 4) as BuildWork);
+                        *row = n;
+                    } else {
+                        let px = fine_pixel(fw, fh);
+                        let (sx, sy) = (fw as f64 / n as f64, fh as f64 / n as f64);
+                        let y = *row;
+                        let v = (y as f64 + 0.5) * sy - 0.5;
+                        for x in 0..n {
+                            let u = (x as f64 + 0.5) * sx - 0.5;
+                            let value = bilinear(d, fw, fh, u, v) * px * scale;
+                            self.sdf.push(value);
+                            self.mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
+                        }
+                        spent = spent.saturating_add(4 * n as BuildWork);
+                        *row += 1;
+                    }
+                    if *row == n {
+                        let idx = std::mem::take(idx);
+                        self.stage = Stage::Field {
+                            idx,
+                            fw,
+                            fh,
+                            channel: c + 1,
+                            sd: None,
+                        };
+                    }
+                }
+                Stage::Done => unreachable!("a finished target build was stepped"),
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// The size of one pixel of a `fw × fh` raster covering the canvas, in
+/// canvas units: distances there are measured in pixels of the mean size.
+fn fine_pixel(fw: usize, fh: usize) -> f64 {
+    1.0 / ((fw * fh) as f64).sqrt()
 }
 
 #[cfg(test)]
@@ -294,6 +605,123 @@ mod tests {
                 "{side}→{n}: largest error {worst}"
             );
         }
+    }
+
+    /// The fields as they were computed before the build was stepped: one
+    /// signed distance per channel, then taken as they are or sampled.
+    fn reference(scene: &Scene, idx: &[u16], fw: usize, fh: usize, n: usize, scale: f64) -> Target {
+        use crate::geom::distance_transform::signed_distance;
+        let (mut sdf, mut mask) = (vec![], vec![]);
+        for ch in &scene.channels {
+            let m: Vec<bool> = idx.iter().map(|&i| i == ch.colour).collect();
+            if (fw, fh) == (n, n) {
+                let d = signed_distance(&m, n, n, CAP * n as f64);
+                sdf.extend(d.iter().map(|v| v * (scale / n as f64)));
+                mask.extend(m.iter().map(|&b| if b { 1.0f32 } else { 0.0 }));
+            } else {
+                let px = 1.0 / ((fw * fh) as f64).sqrt();
+                let d = signed_distance(&m, fw, fh, CAP / px);
+                let (sx, sy) = (fw as f64 / n as f64, fh as f64 / n as f64);
+                for y in 0..n {
+                    for x in 0..n {
+                        let (u, v) = ((x as f64 + 0.5) * sx - 0.5, (y as f64 + 0.5) * sy - 0.5);
+                        let value = bilinear(&d, fw, fh, u, v) * px * scale;
+                        sdf.push(value);
+                        mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
+                    }
+                }
+            }
+        }
+        Target {
+            n,
+            scale,
+            sdf,
+            mask,
+            unmatched: 0.0,
+        }
+    }
+
+    fn same_bits(a: &Target, b: &Target) -> bool {
+        a.n == b.n
+            && a.sdf.len() == b.sdf.len()
+            && a.sdf
+                .iter()
+                .zip(&b.sdf)
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+            && a.mask == b.mask
+            && a.unmatched.to_bits() == b.unmatched.to_bits()
+    }
+
+    /// Run a build to the end with `budget` work units a step.
+    fn stepped(scene: &Scene, mut b: TargetBuild, budget: BuildWork) -> (Target, usize) {
+        let mut steps = 0;
+        loop {
+            steps += 1;
+            let before = b.fraction(scene);
+            if let Some(t) = b.step(scene, budget).unwrap() {
+                return (t, steps);
+            }
+            assert!(b.fraction(scene) >= before, "progress goes back");
+        }
+    }
+
+    /// An image target built a few rows/lines at a time equals the one-go
+    /// target bit for bit, and both equal the fields as computed before the
+    /// build was stepped, for images bigger than, equal to and smaller than
+    /// the grid.
+    #[test]
+    fn stepping_gives_the_same_bits() {
+        for (side, n) in [(100, 32), (32, 32), (20, 32), (37, 16)] {
+            let (scene, img, _) = disc(side, (0.45, 0.55), 0.3);
+            let one_go = Target::from_image(&scene, &img, n, n as f64, 60.0).unwrap();
+            let (fw, fh) = field_side(&img, n);
+            let (idx, _) = snap_to_palette_wh(&img, &scene.rec.colours, fw, fh, 60.0);
+            assert!(same_bits(
+                &one_go,
+                &reference(&scene, &idx, fw, fh, n, n as f64)
+            ));
+            for budget in [1, 500, 1 << 40] {
+                let b = TargetBuild::image(&scene, img.clone(), n, n as f64, 60.0).unwrap();
+                let (t, steps) = stepped(&scene, b, budget);
+                assert!(same_bits(&t, &one_go), "{side}→{n}, budget {budget}");
+                if budget == 1 {
+                    // A row a step while snapping, a line a step in each transform.
+                    let channels = scene.channels.len();
+                    assert!(steps > fh + channels * 2 * (fw + fh), "{steps} steps");
+                }
+            }
+        }
+        // A target drawn by the program itself.
+        let (scene, _, _) = disc(8, (0.4, 0.6), 0.25);
+        let n = 48;
+        let x = scene.rec.float_values();
+        let idx = crate::pattern::fit::colour_indices(&scene, &x, n).unwrap();
+        let one_go = Target::from_indices(&scene, &idx, n, 3.0);
+        assert!(same_bits(&one_go, &reference(&scene, &idx, n, n, n, 3.0)));
+        for budget in [1, 700, 1 << 40] {
+            let b = TargetBuild::drawn(&scene, &x, n, 3.0).unwrap();
+            let (t, _) = stepped(&scene, b, budget);
+            assert!(same_bits(&t, &one_go), "drawn, budget {budget}");
+        }
+    }
+
+    #[test]
+    fn a_target_matching_no_colour_fails_while_it_is_built() {
+        let (scene, mut img, _) = disc(40, (0.5, 0.5), 0.2);
+        for px in img.data.chunks_exact_mut(4) {
+            px.copy_from_slice(&[0, 200, 0, 255]);
+        }
+        let mut b = TargetBuild::image(&scene, img.clone(), 16, 16.0, 30.0).unwrap();
+        let e = loop {
+            match b.step(&scene, 10) {
+                Ok(Some(_)) => panic!("a green image matched"),
+                Ok(None) => {}
+                Err(e) => break e,
+            }
+        };
+        let want = Target::from_image(&scene, &img, 16, 16.0, 30.0).unwrap_err();
+        assert_eq!(e.to_string(), want.to_string());
+        assert!(e.to_string().contains("100% of the target's pixels"), "{e}");
     }
 
     #[test]
