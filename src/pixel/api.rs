@@ -3,9 +3,7 @@
 //! request's `Default` (and [`PixelParams`]'s); every error names the field
 //! at fault ([`Error::at`]): `source`, `mask`, `sheet`, `sprite`,
 //! `strokes`, `params.<name>`.
-use super::{
-    inputs, orientation, ElementSheet, Elements, PixelInputs, PixelJob, PixelParams, Stroke,
-};
+use super::{inputs, orientation, ElementSheet, Elements, PixelJob, PixelParams, Stroke};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, OneShot};
 use crate::core::request_limits as lim;
@@ -123,8 +121,26 @@ pub fn check_params(p: &PixelParams) -> Result<()> {
 pub fn start_pixel(req: PixelRequest) -> Result<PixelJob> {
     check_params(&req.params)?;
     let source = decode(&req.source, Limits::default()).map_err(|e| e.at("source"))?;
-    let mask = req.mask.to_image().map_err(|e| e.at("mask"))?;
-    inputs::check_source_and_mask(&source, &mask).map_err(|e| e.at("mask"))?;
+    // The mask's bits are what `to_image` + `mask_from_image` give (inside
+    // = non-zero); the checks that read every pixel run in the job's steps.
+    let m = &req.mask;
+    if m.bits.len() as u64 != m.width as u64 * m.height as u64 {
+        return Err(Error::input(format!(
+            "the mask has {} values but is declared {}×{}",
+            m.bits.len(),
+            m.width,
+            m.height
+        ))
+        .at("mask"));
+    }
+    if (source.width, source.height) != (m.width, m.height) {
+        return Err(Error::input(format!(
+            "the mask is {}×{} pixels but the source image is {}×{}; they must be the same size",
+            m.width, m.height, source.width, source.height
+        ))
+        .at("mask"));
+    }
+    let mask: Vec<bool> = m.bits.iter().map(|&b| b != 0).collect();
     let elements = match (req.sheet, req.sprite) {
         (Some(b), None) => {
             let img = decode(&b, Limits::default()).map_err(|e| e.at("sheet"))?;
@@ -151,13 +167,13 @@ pub fn start_pixel(req: PixelRequest) -> Result<PixelJob> {
     };
     orientation::check_strokes(source.width, source.height, &req.strokes)
         .map_err(|e| e.at("strokes"))?;
-    let inputs = PixelInputs {
-        source,
-        mask,
-        elements,
-        strokes: req.strokes,
-    };
-    PixelJob::new(inputs, req.params).map_err(|e| e.at("params"))
+    PixelJob::start(source, mask, elements, req.strokes, req.params).map_err(|e| {
+        if e.field().is_some() {
+            e
+        } else {
+            e.at("params")
+        }
+    })
 }
 
 /// The result of a `pixel` job. `field` has `2·width·height` numbers (x, y

@@ -29,7 +29,7 @@ pub use position::PositionStrategy;
 
 use crate::core::error::{Error, Result};
 use crate::core::job::{run_quietly, Job, Progress, Step};
-use crate::raster::{count_colours, ColourCounter, Rgba8Image};
+use crate::raster::{ColourCounter, Rgba8Image};
 use serde::{Deserialize, Serialize};
 
 pub use crate::core::limits::MAX_PALETTE;
@@ -185,6 +185,9 @@ pub struct PixelJob {
     sheet: ElementSheet,
     strokes: Vec<Stroke>,
     stage: Stage,
+    /// Checks of every pixel still to do before the positions (see
+    /// [`PixelJob::start`]).
+    checks: Option<Checks>,
     sampler: Option<position::PositionSampler>,
     positions: Vec<(i32, i32)>,
     colour_map: Option<colour::ColourMap>,
@@ -206,6 +209,16 @@ pub struct PixelJob {
     budget: usize,
 }
 
+/// Where [`PixelJob::run_checks`] is: the next pixel to look at, whether
+/// an opaque source pixel and a marked mask pixel were found, and the
+/// source's colour count (palette colour maps only).
+struct Checks {
+    next: usize,
+    opaque: bool,
+    marked: bool,
+    counter: Option<ColourCounter>,
+}
+
 impl PixelJob {
     /// Check every input and parameter; errors say what to change.
     pub fn new(inputs: PixelInputs, params: PixelParams) -> Result<PixelJob> {
@@ -216,6 +229,41 @@ impl PixelJob {
             strokes,
         } = inputs;
         let mask = inputs::check_source_and_mask(&source, &mask)?;
+        let mut job = PixelJob::start(source, mask, elements, strokes, params)?;
+        // The source has an opaque pixel and the mask a marked one (checked
+        // above): only the colour count is left of the checks.
+        if let Some(c) = &mut job.checks {
+            c.opaque = true;
+            c.marked = true;
+        }
+        while job.checks.is_some() {
+            job.run_checks(usize::MAX)?;
+        }
+        Ok(job)
+    }
+
+    /// Check the inputs and parameters that are cheap to check and set the
+    /// job up; the checks that read every pixel (a source that is not fully
+    /// transparent, a mask that marks a pixel, the palette limit) run in the
+    /// job's first steps, a bounded part a step, with the same errors as
+    /// [`PixelJob::new`]. `mask` is the mask as booleans (see
+    /// [`inputs::mask_from_image`]), row-major, the source's size.
+    pub fn start(
+        source: Rgba8Image,
+        mask: Vec<bool>,
+        elements: Elements,
+        strokes: Vec<Stroke>,
+        params: PixelParams,
+    ) -> Result<PixelJob> {
+        source.validate()?;
+        if mask.len() != source.pixel_count() {
+            return Err(Error::input(format!(
+                "the mask has {} values but the source image is {}×{}; they must be the same size",
+                mask.len(),
+                source.width,
+                source.height
+            )));
+        }
         let (Elements::Sheet(img) | Elements::Sprite(img)) = &elements;
         img.validate()?;
         let sheet = match &elements {
@@ -241,19 +289,6 @@ impl PixelJob {
                 params.d_max
             )));
         }
-        let mut colours_before = None;
-        if params.colour != ColourStrategy::Hsv {
-            match count_colours(&source, 0, MAX_PALETTE) {
-                Some(n) => colours_before = Some(n),
-                None => {
-                    return Err(Error::limit(format!(
-                        "the source has more than {MAX_PALETTE} colours; the palette limit of the \
-                         palette-based colour maps is {MAX_PALETTE} \
-                         (is it pixel art? the HSV shift has no such limit)"
-                    )))
-                }
-            }
-        }
         let pp = position::PositionParams {
             strategy: params.positions,
             margins: params.margins,
@@ -268,6 +303,12 @@ impl PixelJob {
             pp,
             params.seed,
         )?;
+        let checks = Checks {
+            next: 0,
+            opaque: false,
+            marked: false,
+            counter: (params.colour != ColourStrategy::Hsv).then(ColourCounter::new),
+        };
         Ok(PixelJob {
             params,
             source,
@@ -275,6 +316,7 @@ impl PixelJob {
             sheet,
             strokes,
             stage: Stage::Positions,
+            checks: Some(checks),
             sampler: Some(sampler),
             positions: vec![],
             colour_map: None,
@@ -287,10 +329,61 @@ impl PixelJob {
             copied: false,
             placed: None,
             counter: None,
-            colours_before,
+            colours_before: None,
             colours_after: None,
             budget: STEP_BUDGET,
         })
+    }
+
+    /// About `budget` pixels more of the checks [`PixelJob::start`] left
+    /// for the steps; drops them once complete. Errors name the request
+    /// field to change (`mask`, `params`).
+    fn run_checks(&mut self, budget: usize) -> Result<()> {
+        let c = self.checks.as_mut().expect("checks under way");
+        let n = self.source.pixel_count();
+        let budget = budget.max(1);
+        if !(c.opaque && c.marked) {
+            let end = n.min(c.next.saturating_add(budget));
+            for i in c.next..end {
+                c.opaque |= self.source.at(i)[3] != 0;
+                c.marked |= self.mask[i];
+            }
+            c.next = end;
+            if c.opaque && c.marked {
+                return Ok(());
+            }
+            if end < n {
+                return Ok(());
+            }
+            let (w, h) = (self.source.width, self.source.height);
+            if !c.opaque {
+                return Err(Error::input(format!(
+                    "the {w}×{h} source image is fully transparent: there is nothing to texture"
+                ))
+                .at("mask"));
+            }
+            return Err(Error::input(format!(
+                "the {w}×{h} mask is empty: no pixel is marked for texturing \
+                 (inside = opaque pixels, or bright pixels when the mask has no transparency)"
+            ))
+            .at("mask"));
+        }
+        if let Some(counter) = &mut c.counter {
+            if !counter.run(&self.source, 0, budget, MAX_PALETTE) {
+                return Ok(());
+            }
+            if counter.count() > MAX_PALETTE {
+                return Err(Error::limit(format!(
+                    "the source has more than {MAX_PALETTE} colours; the palette limit of the \
+                     palette-based colour maps is {MAX_PALETTE} \
+                     (is it pixel art? the HSV shift has no such limit)"
+                ))
+                .at("params"));
+            }
+            self.colours_before = Some(counter.count());
+        }
+        self.checks = None;
+        Ok(())
     }
 
     /// The stage the next [`Job::step`] works on.
@@ -319,6 +412,10 @@ impl Job for PixelJob {
     type Output = PixelOutput;
 
     fn step(&mut self) -> Result<Step<PixelOutput>> {
+        if self.checks.is_some() {
+            self.run_checks(self.budget)?;
+            return Ok(Step::Running(Progress::new(0.0, "checking the inputs")));
+        }
         match self.stage {
             Stage::Positions => {
                 let s = self
@@ -553,6 +650,100 @@ mod tests {
                         && p[1].to_bits() == q[1].to_bits()));
             }
         }
+    }
+
+    /// The output as comparable bits.
+    fn bits(o: &PixelOutput) -> (Vec<u8>, Vec<(i32, i32)>, String, Vec<u32>) {
+        (
+            o.image.data.clone(),
+            o.positions.clone(),
+            format!("{:?} {:?}", o.stats, o.colour_map),
+            o.field
+                .iter()
+                .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
+                .collect(),
+        )
+    }
+
+    /// A job started with [`PixelJob::start`] (the checks of every pixel
+    /// done in its first steps, a budget at a time) gives the bytes of
+    /// [`PixelJob::new`] (checks at once), whatever the budget.
+    #[test]
+    fn checks_in_the_steps_give_the_same_bytes() {
+        for colour in [ColourStrategy::Auto, ColourStrategy::Hsv] {
+            let params = PixelParams {
+                colour,
+                seed: 3,
+                ..Default::default()
+            };
+            let want = bits(&texture(fish(2), params.clone()).unwrap());
+            for budget in [500, STEP_BUDGET] {
+                let PixelInputs {
+                    source,
+                    mask,
+                    elements,
+                    strokes,
+                } = fish(2);
+                let mask = inputs::mask_from_image(&mask);
+                let mut job = PixelJob::start(source, mask, elements, strokes, params.clone())
+                    .unwrap()
+                    .with_budget(budget);
+                let mut checking = 0;
+                let out = loop {
+                    match job.step().unwrap() {
+                        Step::Running(p) if p.stage == "checking the inputs" => checking += 1,
+                        Step::Running(_) => {}
+                        Step::Done(out) => break out,
+                    }
+                };
+                assert_eq!(bits(&out), want, "{colour:?}, budget {budget}");
+                if budget == 500 && colour != ColourStrategy::Hsv {
+                    // The colour count reads every pixel, 500 a step.
+                    assert!(checking >= job.source.pixel_count() / 500, "{checking}");
+                }
+            }
+        }
+    }
+
+    /// The pixel checks left to the steps fail there with the errors (and
+    /// request fields) [`PixelJob::new`] gives at once.
+    #[test]
+    fn checks_in_the_steps_fail_with_the_same_errors() {
+        let run = |source: Rgba8Image, mask: Vec<bool>, colour| {
+            let PixelInputs {
+                elements, strokes, ..
+            } = fish(1);
+            let params = PixelParams {
+                colour,
+                ..Default::default()
+            };
+            let job = PixelJob::start(source, mask, elements, strokes, params).unwrap();
+            run_quietly(job.with_budget(100)).unwrap_err()
+        };
+        let base = fish(1);
+        let (w, h) = (base.source.width, base.source.height);
+        let full = vec![true; (w * h) as usize];
+        let e = run(Rgba8Image::new(w, h), full.clone(), ColourStrategy::Auto);
+        assert!(e.to_string().contains("fully transparent"), "{e}");
+        assert_eq!(e.field(), Some("mask"));
+        let e = run(
+            base.source.clone(),
+            vec![false; (w * h) as usize],
+            ColourStrategy::Auto,
+        );
+        assert!(e.to_string().contains("mask is empty"), "{e}");
+        assert_eq!(e.field(), Some("mask"));
+        let mut many = base.source.clone();
+        for (i, px) in many.data.chunks_exact_mut(4).enumerate() {
+            px.copy_from_slice(&[i as u8, (i >> 8) as u8, 7, 255]);
+        }
+        assert!(
+            (w * h) as usize > MAX_PALETTE,
+            "the fish has room for the palette limit"
+        );
+        let e = run(many, full, ColourStrategy::Auto);
+        assert!(e.to_string().contains("palette limit"), "{e}");
+        assert_eq!(e.field(), Some("params"));
     }
 
     #[test]
