@@ -44,6 +44,8 @@ fn thread_cpu_ms() -> Option<f64> {
 /// Step timings of one request.
 struct Timing {
     start_ms: f64,
+    /// The start call in thread CPU time (when available).
+    start_cpu_ms: Option<f64>,
     steps_ms: Vec<f64>,
     /// The same steps in thread CPU time (empty where not available).
     cpu_ms: Vec<f64>,
@@ -56,9 +58,11 @@ struct Timing {
 
 fn time_job<J: Job>(start: impl FnOnce() -> filigree::Result<J>) -> Result<Timing, String> {
     let t_all = Instant::now();
+    let c = thread_cpu_ms();
     let t = Instant::now();
     let mut job = start().map_err(|e| e.to_string())?;
     let start_ms = t.elapsed().as_secs_f64() * 1e3;
+    let start_cpu_ms = c.zip(thread_cpu_ms()).map(|(a, b)| b - a);
     let mut steps_ms = vec![];
     let mut cpu_ms = vec![];
     let mut slow = vec![];
@@ -93,6 +97,7 @@ fn time_job<J: Job>(start: impl FnOnce() -> filigree::Result<J>) -> Result<Timin
     }
     Ok(Timing {
         start_ms,
+        start_cpu_ms,
         steps_ms,
         cpu_ms,
         stages,
@@ -125,6 +130,7 @@ fn report(kind: &str, what: &str, t: Timing) -> Value {
         "input": what,
         "steps": t.steps_ms.len(),
         "start_ms": round(t.start_ms),
+        "start_cpu_ms": t.start_cpu_ms.map(round),
         "wall": stats(&t.steps_ms),
         "cpu": stats(&t.cpu_ms),
         "total_s": (t.total_s * 1e3).round() / 1e3,
@@ -250,6 +256,41 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
             time_job(|| start_fit(&req))?,
         ));
     }
+    if want("fit") {
+        // The target's preparation at the biggest grid: a 1024² image
+        // target, a tiny search after it.
+        let program = prog("circles-mix")?;
+        let mut render = start_render(RenderPatternRequest {
+            program: program.clone(),
+            size: 1024,
+            ..Default::default()
+        })
+        .map_err(|e| e.to_string())?;
+        let image = loop {
+            if let Step::Done(r) = render.step().map_err(|e| e.to_string())? {
+                break r.image;
+            }
+        };
+        let req = FitRequest {
+            program,
+            target_rgba: Some(filigree::pattern::api::RawRgba {
+                width: image.width,
+                height: image.height,
+                rgba: image.rgba,
+            }),
+            grid: Some(1024),
+            population: Some(4),
+            generations: Some(1),
+            candidates: Some(1),
+            iterations: Some(2),
+            ..Default::default()
+        };
+        rows.push(report(
+            "fit",
+            "circles-mix, grid 1024, 1024² image target, 4 + 2 evaluations",
+            time_job(|| start_fit(&req))?,
+        ));
+    }
     if want("pixel") {
         let fish = decode(super::bench::fixture("fish.png")?, Limits::default())
             .map_err(|e| e.to_string())?;
@@ -321,7 +362,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         "{}",
         json!({
             "bench": "slices",
-            "about": "one row per request: steps; the start call (request checks and decoding, one slice in the worker) in ms; median, 95th percentile and max step time in ms as wall clock and as this thread's CPU time (which a busy machine does not inflate); total seconds; per stage (the stage reported before the step) the step count and max CPU ms",
+            "about": "one row per request: steps; the start call (request checks and decoding, one slice in the worker) in ms, wall and thread CPU; median, 95th percentile and max step time in ms as wall clock and as this thread's CPU time (which a busy machine does not inflate); total seconds; per stage (the stage reported before the step) the step count and max CPU ms",
             "rows": rows,
         })
     );

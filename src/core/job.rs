@@ -1,8 +1,11 @@
 //! Long work as resumable objects.
 //!
 //! A busy wasm call cannot read a cancel message, so every long computation is
-//! a [`Job`]: each [`Job::step`] call does one bounded slice of work (aim for
-//! well under 10 ms) and says how far along it is. The browser worker runs
+//! a [`Job`]: each [`Job::step`] call does one bounded slice of work (≤ ~20 ms
+//! at the largest inputs, most steps a few ms; `filigree bench slices`
+//! measures them) and says how far along it is. A request's `start_*`
+//! function only checks the request and sets up cheap state; work that grows
+//! with the input happens in the steps. The browser worker runs
 //! slices until ~15 ms have passed, posts progress, yields to its event loop
 //! (where a `cancel` message can arrive) and goes on. Natively,
 //! [`run_to_end`] drives the same object and checks a cancel flag between
