@@ -215,7 +215,7 @@ pub enum TargetData {
 /// Work units of one step of a target's preparation ([`BuildWork`]: about
 /// 5–20 ns each), chosen for steps of a few milliseconds
 /// (`filigree bench slices`).
-pub const PREPARE_WORK_PER_STEP: BuildWork = 400_000;
+pub const PREPARE_WORK_PER_STEP: BuildWork = 200_000;
 
 /// A fit's target built in bounded parts ([`TargetBuild`]), then its
 /// normals a few rows at a time: what [`prepare`] does in one go, bit for bit.

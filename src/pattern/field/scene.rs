@@ -44,7 +44,7 @@ pub struct Scene {
     pub channels: Vec<Channel>,
     pub(super) items: Vec<Item>,
     /// Mean relative cost of an item evaluation (a circle is 1).
-    pub(super) cost: f64,
+    pub(crate) cost: f64,
 }
 
 impl Scene {
