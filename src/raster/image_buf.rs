@@ -274,6 +274,183 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     Rgba8Image::from_raw_checked(w, h, rgba.into_raw())
 }
 
+/// [`decode`] in bounded parts, for a job that must not block: a
+/// non-interlaced PNG is decoded a few rows a [`Decoding::step`] (with the
+/// `png` crate, converted to RGBA exactly as [`decode`] converts it, for
+/// every colour type and bit depth); any other file, an interlaced PNG
+/// included, is decoded in one go by the first step. The image, and any
+/// error, are those of [`decode`]: on an error the bytes are decoded once
+/// more in one go to give [`decode`]'s message.
+pub struct Decoding {
+    bytes: Shared,
+    limits: Limits,
+    png: Option<PngRows>,
+    done: bool,
+}
+
+/// The file's bytes, shared by the row reader and the one-go fallback.
+#[derive(Clone)]
+struct Shared(std::sync::Arc<Vec<u8>>);
+
+impl AsRef<[u8]> for Shared {
+    fn as_ref(&self) -> &[u8] {
+        &self.0
+    }
+}
+
+struct PngRows {
+    reader: png::Reader<Cursor<Shared>>,
+    colour: png::ColorType,
+    sixteen: bool,
+    out: Rgba8Image,
+    row: u32,
+}
+
+impl Decoding {
+    /// Start decoding `bytes`; only the header of a PNG is read here.
+    pub fn new(bytes: Vec<u8>, limits: Limits) -> Decoding {
+        let bytes = Shared(std::sync::Arc::new(bytes));
+        let png = PngRows::start(&bytes, limits);
+        Decoding {
+            bytes,
+            limits,
+            png,
+            done: false,
+        }
+    }
+
+    /// Whether the file is decoded in parts (a non-interlaced PNG of a
+    /// colour type the parts support) rather than in one go.
+    pub fn in_parts(&self) -> bool {
+        self.png.is_some()
+    }
+
+    /// Decode about `budget` more pixels (a row at least); the image once
+    /// complete. Must not be called again after it returned the image or
+    /// an error.
+    pub fn step(&mut self, budget: usize) -> Result<Option<Rgba8Image>> {
+        assert!(!self.done, "a finished decoding was stepped");
+        let Some(p) = &mut self.png else {
+            self.done = true;
+            return decode(self.bytes.as_ref(), self.limits).map(Some);
+        };
+        let mut spent = 0usize;
+        while p.row < p.out.height && spent < budget.max(1) {
+            match p.next_row() {
+                Ok(()) => spent += p.out.width as usize,
+                Err(()) => {
+                    // Whatever went wrong, report it as the one-go decode does.
+                    self.done = true;
+                    return match decode(self.bytes.as_ref(), self.limits) {
+                        Err(e) => Err(e),
+                        Ok(_) => Err(Error::input("the PNG data could not be read row by row")),
+                    };
+                }
+            }
+        }
+        if p.row < p.out.height {
+            return Ok(None);
+        }
+        self.done = true;
+        let p = self.png.take().expect("rows");
+        Ok(Some(p.out))
+    }
+
+    /// Fraction of the rows decoded.
+    pub fn fraction(&self) -> f64 {
+        match &self.png {
+            Some(p) => p.row as f64 / p.out.height.max(1) as f64,
+            None => 0.0,
+        }
+    }
+}
+
+impl PngRows {
+    /// The header of a PNG that can be decoded row by row (`None`: decode
+    /// it in one go, which also gives any error).
+    fn start(bytes: &Shared, limits: Limits) -> Option<PngRows> {
+        if image::guess_format(bytes.as_ref()).ok()? != ImageFormat::Png {
+            return None;
+        }
+        // As the `image` crate sets up its PNG decoder.
+        let max = usize::try_from(image::Limits::default().max_alloc.unwrap_or(u64::MAX))
+            .unwrap_or(usize::MAX);
+        let mut d =
+            png::Decoder::new_with_limits(Cursor::new(bytes.clone()), png::Limits { bytes: max });
+        d.set_ignore_text_chunk(false);
+        d.set_transformations(png::Transformations::EXPAND);
+        let reader = d.read_info().ok()?;
+        let info = reader.info();
+        let (w, h) = (info.width, info.height);
+        if info.interlaced || w == 0 || h == 0 || limits.check(w, h).is_err() {
+            return None;
+        }
+        let (colour, depth) = reader.output_color_type();
+        let sixteen = match depth {
+            png::BitDepth::Eight => false,
+            png::BitDepth::Sixteen => true,
+            _ => return None,
+        };
+        if colour == png::ColorType::Indexed {
+            return None;
+        }
+        Some(PngRows {
+            reader,
+            colour,
+            sixteen,
+            out: Rgba8Image::new(w, h),
+            row: 0,
+        })
+    }
+
+    /// Decode the next row into `out`.
+    fn next_row(&mut self) -> std::result::Result<(), ()> {
+        let w = self.out.width as usize;
+        let y = self.row as usize;
+        let row = self.reader.next_row().map_err(|_| ())?.ok_or(())?;
+        let data = row.data();
+        let channels = match self.colour {
+            png::ColorType::Grayscale => 1,
+            png::ColorType::GrayscaleAlpha => 2,
+            png::ColorType::Rgb => 3,
+            png::ColorType::Rgba => 4,
+            png::ColorType::Indexed => return Err(()),
+        };
+        let bytes = if self.sixteen { 2 } else { 1 };
+        if data.len() < w * channels * bytes {
+            return Err(());
+        }
+        let out = &mut self.out.data[4 * w * y..4 * w * (y + 1)];
+        // A sample as 8 bits, as the `image` crate narrows 16-bit ones.
+        let sixteen = self.sixteen;
+        let at = |i: usize| -> u8 {
+            if sixteen {
+                let v = u16::from_be_bytes([data[2 * i], data[2 * i + 1]]);
+                ((v as u32 + 128) / 257) as u8
+            } else {
+                data[i]
+            }
+        };
+        for (x, px) in out.chunks_exact_mut(4).enumerate() {
+            let i = x * channels;
+            px.copy_from_slice(&match channels {
+                1 => {
+                    let l = at(i);
+                    [l, l, l, 255]
+                }
+                2 => {
+                    let l = at(i);
+                    [l, l, l, at(i + 1)]
+                }
+                3 => [at(i), at(i + 1), at(i + 2), 255],
+                _ => [at(i), at(i + 1), at(i + 2), at(i + 3)],
+            });
+        }
+        self.row += 1;
+        Ok(())
+    }
+}
+
 fn format_name(f: ImageFormat) -> &'static str {
     match f {
         ImageFormat::Png => "PNG",
@@ -405,5 +582,210 @@ mod tests {
         let p = t.get(0, 0);
         assert!((120..=135).contains(&p[0]), "{p:?}");
         assert_eq!(img.thumbnail(200), img);
+    }
+
+    /// A PNG of `w × h` of the given type with pseudo-random samples (and
+    /// an optional tRNS chunk), written with the `png` crate.
+    fn png_of(
+        colour: png::ColorType,
+        depth: png::BitDepth,
+        trns: Option<&[u8]>,
+        seed: u32,
+    ) -> Vec<u8> {
+        let (w, h) = (13u32, 7u32);
+        let bits = depth as usize;
+        let channels = match colour {
+            png::ColorType::Grayscale | png::ColorType::Indexed => 1,
+            png::ColorType::GrayscaleAlpha => 2,
+            png::ColorType::Rgb => 3,
+            png::ColorType::Rgba => 4,
+        };
+        let line = (w as usize * channels * bits).div_ceil(8);
+        let mut state = seed.wrapping_mul(2654435761).max(1);
+        let mut data: Vec<u8> = (0..line * h as usize)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 17;
+                state ^= state << 5;
+                (state >> 11) as u8
+            })
+            .collect();
+        if colour == png::ColorType::Indexed {
+            // Indices below the palette's 5 entries.
+            let per = 8 / bits;
+            for b in data.iter_mut() {
+                let mut v = 0u8;
+                for k in 0..per {
+                    let idx = ((*b as usize >> (k * bits)) % 5) as u8 & ((1u16 << bits) - 1) as u8;
+                    v |= idx.min(((1u16 << bits) - 1) as u8) << (k * bits);
+                }
+                *b = v;
+            }
+        }
+        let mut out = vec![];
+        {
+            let mut e = png::Encoder::new(&mut out, w, h);
+            e.set_color(colour);
+            e.set_depth(depth);
+            if colour == png::ColorType::Indexed {
+                e.set_palette(vec![
+                    0, 0, 0, 255, 10, 20, 30, 200, 100, 7, 8, 9, 250, 251, 252,
+                ]);
+            }
+            if let Some(t) = trns {
+                e.set_trns(t.to_vec());
+            }
+            let mut wr = e.write_header().unwrap();
+            wr.write_image_data(&data).unwrap();
+        }
+        out
+    }
+
+    fn decode_in_parts(bytes: &[u8], budget: usize) -> (Result<Rgba8Image>, usize, bool) {
+        let mut d = Decoding::new(bytes.to_vec(), Limits::default());
+        let parts = d.in_parts();
+        let mut steps = 0;
+        loop {
+            steps += 1;
+            match d.step(budget) {
+                Ok(Some(img)) => return (Ok(img), steps, parts),
+                Ok(None) => {}
+                Err(e) => return (Err(e), steps, parts),
+            }
+        }
+    }
+
+    /// Every PNG colour type and bit depth (palette, grey and RGB with and
+    /// without tRNS) decoded a row a step equals the one-go decode byte for
+    /// byte.
+    #[test]
+    fn decoding_in_parts_gives_the_same_bytes_for_every_png_type() {
+        use png::{BitDepth as B, ColorType as C};
+        let cases: Vec<(C, B, Option<&[u8]>)> = vec![
+            (C::Grayscale, B::One, None),
+            (C::Grayscale, B::Two, None),
+            (C::Grayscale, B::Four, None),
+            (C::Grayscale, B::Eight, None),
+            (C::Grayscale, B::Sixteen, None),
+            (C::Grayscale, B::Eight, Some(&[0, 77])),
+            (C::Grayscale, B::Four, Some(&[0, 3])),
+            (C::Grayscale, B::Sixteen, Some(&[1, 2])),
+            (C::GrayscaleAlpha, B::Eight, None),
+            (C::GrayscaleAlpha, B::Sixteen, None),
+            (C::Rgb, B::Eight, None),
+            (C::Rgb, B::Sixteen, None),
+            (C::Rgb, B::Eight, Some(&[0, 1, 0, 2, 0, 3])),
+            (C::Rgb, B::Sixteen, Some(&[0, 1, 0, 2, 0, 3])),
+            (C::Rgba, B::Eight, None),
+            (C::Rgba, B::Sixteen, None),
+            (C::Indexed, B::One, None),
+            (C::Indexed, B::Two, None),
+            (C::Indexed, B::Four, Some(&[255, 0, 128])),
+            (C::Indexed, B::Eight, None),
+            (C::Indexed, B::Eight, Some(&[255, 0, 128, 7, 1])),
+        ];
+        for (k, (c, b, t)) in cases.iter().enumerate() {
+            let bytes = png_of(*c, *b, *t, k as u32 + 1);
+            let want = decode(&bytes, Limits::default()).unwrap();
+            for budget in [1, 40, usize::MAX] {
+                let (got, steps, parts) = decode_in_parts(&bytes, budget);
+                assert_eq!(got.unwrap(), want, "{c:?} {b:?} tRNS {t:?}");
+                assert!(parts, "{c:?} {b:?}: decoded in parts");
+                if budget == 1 {
+                    assert_eq!(steps, want.height as usize, "a row a step");
+                }
+            }
+        }
+    }
+
+    /// An interlaced 8×8 8-bit grey PNG written by hand (Adam7 passes,
+    /// filter 0, stored deflate blocks).
+    fn interlaced_png() -> Vec<u8> {
+        fn crc(data: &[u8]) -> u32 {
+            let mut c = !0u32;
+            for &b in data {
+                c ^= b as u32;
+                for _ in 0..8 {
+                    c = if c & 1 != 0 {
+                        0xEDB8_8320 ^ (c >> 1)
+                    } else {
+                        c >> 1
+                    };
+                }
+            }
+            !c
+        }
+        fn chunk(out: &mut Vec<u8>, kind: &[u8], data: &[u8]) {
+            out.extend((data.len() as u32).to_be_bytes());
+            let mut body = kind.to_vec();
+            body.extend(data);
+            out.extend(&body);
+            out.extend(crc(&body).to_be_bytes());
+        }
+        // Adam7 pass sizes of an 8×8 image: (columns, rows).
+        let passes = [(1, 1), (1, 1), (2, 1), (2, 2), (4, 2), (4, 4), (8, 4)];
+        let mut raw = vec![];
+        let mut v = 3u8;
+        for (w, h) in passes {
+            for _ in 0..h {
+                raw.push(0);
+                for _ in 0..w {
+                    v = v.wrapping_mul(37).wrapping_add(11);
+                    raw.push(v);
+                }
+            }
+        }
+        let (mut a, mut b) = (1u32, 0u32);
+        for &x in &raw {
+            a = (a + x as u32) % 65521;
+            b = (b + a) % 65521;
+        }
+        let mut z = vec![0x78, 0x01, 0x01];
+        z.extend((raw.len() as u16).to_le_bytes());
+        z.extend((!(raw.len() as u16)).to_le_bytes());
+        z.extend(&raw);
+        z.extend(((b << 16) | a).to_be_bytes());
+        let mut out = vec![137, 80, 78, 71, 13, 10, 26, 10];
+        let mut ihdr = vec![];
+        ihdr.extend(8u32.to_be_bytes());
+        ihdr.extend(8u32.to_be_bytes());
+        ihdr.extend([8, 0, 0, 0, 1]);
+        chunk(&mut out, b"IHDR", &ihdr);
+        chunk(&mut out, b"IDAT", &z);
+        chunk(&mut out, b"IEND", &[]);
+        out
+    }
+
+    #[test]
+    fn an_interlaced_png_is_decoded_in_one_go() {
+        let bytes = interlaced_png();
+        let want = decode(&bytes, Limits::default()).unwrap();
+        assert_eq!((want.width, want.height), (8, 8));
+        let (got, steps, parts) = decode_in_parts(&bytes, 1);
+        assert!(!parts, "interlaced: no rows in order to read");
+        assert_eq!((got.unwrap(), steps), (want, 1));
+    }
+
+    #[test]
+    fn decoding_in_parts_fails_as_decode_does() {
+        let png = encode_png(&checker(64, 64)).unwrap();
+        for bytes in [
+            &png[..png.len() / 2],
+            &png[..40],
+            &b"not an image"[..],
+            &[][..],
+        ] {
+            let want = decode(bytes, Limits::default()).unwrap_err();
+            let (got, _, _) = decode_in_parts(bytes, 10);
+            assert_eq!(got.unwrap_err(), want);
+        }
+        let limits = Limits {
+            max_side: 32,
+            max_pixels: 1 << 20,
+        };
+        let want = decode(&png, limits).unwrap_err();
+        let mut d = Decoding::new(png.clone(), limits);
+        assert!(!d.in_parts(), "over the limits: one go, which refuses it");
+        assert_eq!(d.step(10).unwrap_err(), want);
     }
 }
