@@ -2,10 +2,10 @@
 //! clusters, thumbnail; `filigree inspect`) and `decode-image` (RGBA pixels).
 use super::RawImage;
 use crate::core::error::{Error, Result};
-use crate::core::job::{Job, OneShot, Progress, Step};
+use crate::core::job::{Job, Progress, Step};
 use crate::core::request_limits as lim;
 use crate::inspect::{InspectJob, InspectOptions, Inspection};
-use crate::raster::{decode, Limits};
+use crate::raster::{Decoding, Limits, DECODE_PIXELS_PER_STEP};
 use serde::{Deserialize, Serialize};
 
 /// `inspect` / `filigree inspect`.
@@ -44,10 +44,10 @@ pub struct DecodeImageRequest {
     pub bytes: Vec<u8>,
 }
 
-/// `inspect` as a job: decoding is the first step (one call of the
-/// decoder), then [`InspectJob`] in bounded steps.
+/// `inspect` as a job: decoding first (a PNG a few rows a step, see
+/// [`Decoding`]), then [`InspectJob`] in bounded steps.
 pub struct InspectRequestJob {
-    bytes: Option<Vec<u8>>,
+    decoding: Option<Decoding>,
     opts: InspectOptions,
     job: Option<InspectJob>,
 }
@@ -55,9 +55,12 @@ pub struct InspectRequestJob {
 impl Job for InspectRequestJob {
     type Output = InspectResponse;
     fn step(&mut self) -> Result<Step<InspectResponse>> {
-        if let Some(bytes) = self.bytes.take() {
-            let img = decode(&bytes, self.opts.limits).map_err(|e| e.at("bytes"))?;
-            drop(bytes);
+        if let Some(d) = &mut self.decoding {
+            let Some(img) = d.step(DECODE_PIXELS_PER_STEP).map_err(|e| e.at("bytes"))? else {
+                let f = 0.05 * d.fraction();
+                return Ok(Step::Running(Progress::new(f, "reading pixels")));
+            };
+            self.decoding = None;
             self.job = Some(InspectJob::new(img, &self.opts)?);
             return Ok(Step::Running(Progress::new(0.05, "reading pixels")));
         }
@@ -83,17 +86,32 @@ pub fn start_inspect(req: InspectRequest) -> Result<InspectRequestJob> {
         ..Default::default()
     };
     Ok(InspectRequestJob {
-        bytes: Some(req.bytes),
+        decoding: Some(Decoding::new(req.bytes, opts.limits)),
         opts,
         job: None,
     })
 }
 
-/// Start a `decode-image` request.
+/// Start a `decode-image` request (a PNG a few rows a step, see [`Decoding`]).
 pub fn start_decode(req: DecodeImageRequest) -> impl Job<Output = RawImage> {
-    OneShot::new(move || {
-        decode(&req.bytes, Limits::default())
-            .map(RawImage::from)
-            .map_err(|e| e.at("bytes"))
-    })
+    DecodeJob(Decoding::new(req.bytes, Limits::default()))
+}
+
+/// `decode-image` as a job.
+struct DecodeJob(Decoding);
+
+impl Job for DecodeJob {
+    type Output = RawImage;
+    fn step(&mut self) -> Result<Step<RawImage>> {
+        Ok(
+            match self
+                .0
+                .step(DECODE_PIXELS_PER_STEP)
+                .map_err(|e| e.at("bytes"))?
+            {
+                Some(img) => Step::Done(RawImage::from(img)),
+                None => Step::Running(Progress::new(self.0.fraction(), "reading pixels")),
+            },
+        )
+    }
 }

@@ -274,6 +274,10 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     Rgba8Image::from_raw_checked(w, h, rgba.into_raw())
 }
 
+/// Pixels a [`Decoding`] step of a job decodes: a few milliseconds
+/// (`filigree bench slices`).
+pub const DECODE_PIXELS_PER_STEP: usize = 250_000;
+
 /// [`decode`] in bounded parts, for a job that must not block: a
 /// non-interlaced PNG is decoded a few rows a [`Decoding::step`] (with the
 /// `png` crate, converted to RGBA exactly as [`decode`] converts it, for
@@ -326,10 +330,11 @@ impl Decoding {
     }
 
     /// Decode about `budget` more pixels (a row at least); the image once
-    /// complete. Must not be called again after it returned the image or
-    /// an error.
+    /// complete (then an error if called again).
     pub fn step(&mut self, budget: usize) -> Result<Option<Rgba8Image>> {
-        assert!(!self.done, "a finished decoding was stepped");
+        if self.done {
+            return Err(Error::input("this image has already been decoded"));
+        }
         let Some(p) = &mut self.png else {
             self.done = true;
             return decode(self.bytes.as_ref(), self.limits).map(Some);

@@ -2,7 +2,7 @@
 mod image_buf;
 mod palette;
 
-pub use image_buf::{decode, encode_png, Decoding, Limits, Rgba8Image};
+pub use image_buf::{decode, encode_png, Decoding, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP};
 pub use palette::{
     check_tolerance, cluster_counts, cluster_order, cluster_palette, colour_counts, count_colours,
     exact_palette, Cluster, ColourCounter, Leaders, PaletteEntry, RadixSteps,
