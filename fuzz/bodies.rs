@@ -265,7 +265,10 @@ pub fn project(data: &[u8]) {
     };
     let ProjectState::Checked(state) = &opened.state else {
         // Every tool is at its first state version: an older one cannot exist.
-        panic!("a project of state version {} came back unchecked", opened.state_version);
+        panic!(
+            "a project of state version {} came back unchecked",
+            opened.state_version
+        );
     };
     match state {
         ToolState::Pixel(s) => {
@@ -287,5 +290,8 @@ pub fn project(data: &[u8]) {
     }
     let again = project_text(&opened.tool, opened.state_version, state).expect("saves");
     let reopened = open_project(&again).expect("a saved checked state opens again");
-    assert_eq!(reopened.state, opened.state, "open → save → open changed the state");
+    assert_eq!(
+        reopened.state, opened.state,
+        "open → save → open changed the state"
+    );
 }

@@ -3,10 +3,10 @@
 //! corpora, including the minimised inputs of past crashes, are regression
 //! tests without a fuzz run. Fuzzing itself is `cargo +nightly fuzz run
 //! <target>` (see `fuzz/README.md`).
-#[path = "../fuzz/bodies.rs"]
-mod bodies;
 #[path = "support/app_projects.rs"]
 mod app_projects;
+#[path = "../fuzz/bodies.rs"]
+mod bodies;
 
 use std::path::{Path, PathBuf};
 

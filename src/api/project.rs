@@ -386,7 +386,7 @@ pub fn base64_decode(text: &str) -> Option<Vec<u8>> {
         .bytes()
         .filter(|b| !matches!(b, b' ' | b'\t' | b'\n' | b'\x0c' | b'\r'))
         .collect();
-    if s.len() % 4 == 0 {
+    if s.len().is_multiple_of(4) {
         for _ in 0..2 {
             if s.last() == Some(&b'=') {
                 s.pop();

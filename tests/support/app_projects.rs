@@ -74,10 +74,13 @@ pub fn fit_doc(g: &str, fitted: bool) -> Json {
     });
     if fitted {
         let side = 256usize;
-        let rgba: Vec<u8> = (0..side * side * 4).map(|i| if i % 4 == 3 { 255 } else { (i / 7) as u8 }).collect();
+        let rgba: Vec<u8> = (0..side * side * 4)
+            .map(|i| if i % 4 == 3 { 255 } else { (i / 7) as u8 })
+            .collect();
         doc["target"] = json!({"width": side, "height": side, "rgba": bytes(&rgba)});
         doc["truth"] = json!(values);
-        doc["result"] = json!({"params": values, "loss": 0.0123, "names": names, "evaluations": 512});
+        doc["result"] =
+            json!({"params": values, "loss": 0.0123, "names": names, "evaluations": 512});
     }
     doc
 }
