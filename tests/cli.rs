@@ -18,6 +18,35 @@ fn version_and_help() {
 }
 
 #[test]
+fn a_reader_that_stops_early_ends_the_output_quietly() {
+    // `filigree render --print-request … | head -c 0`: the reader is gone
+    // before the first line is written. A Unix tool then stops as if killed
+    // by SIGPIPE; it used to panic with "failed printing to stdout".
+    let mut child = Command::new(env!("CARGO_BIN_EXE_filigree"))
+        .args([
+            "render",
+            "--program",
+            "circles-grid",
+            "--out",
+            "x.png",
+            "--print-request",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run filigree");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        matches!(out.status.code(), Some(0) | Some(141)),
+        "{:?} {stderr}",
+        out.status
+    );
+}
+
+#[test]
 fn inspect_json_reports_size_and_palette() {
     let out = filigree(&["inspect", "tests/fixtures/fish.png", "--json"]);
     assert!(

@@ -565,7 +565,7 @@ export class DocumentController {
     const mod = e.ctrlKey || e.metaKey;
     const key = e.key.length === 1 ? e.key.toLowerCase() : e.key;
     if (mod && !e.altKey) {
-      if (key === 'z') { e.preventDefault(); if (e.shiftKey) this.redo(); else this.undo(); } else if (key === 'y' && !e.shiftKey) { e.preventDefault(); this.redo(); } else if (key === 's' && !e.shiftKey && cur.tool.state) { e.preventDefault(); this.saveProject(); } else if (key === 'o' && !e.shiftKey && cur.tool.state && !cur.readOnly) {
+      if (key === 'z') { e.preventDefault(); if (e.shiftKey) this.redo(); else this.undo(); } else if (key === 'y' && !e.shiftKey) { e.preventDefault(); this.redo(); } else if (key === 's' && !e.shiftKey && cur.tool.state && this.persist) { e.preventDefault(); this.saveProject(); } else if (key === 'o' && !e.shiftKey && cur.tool.state && !cur.readOnly && this.persist) {
         e.preventDefault();
         cur.el.querySelector('input[data-input=project]').click();
       }

@@ -608,7 +608,8 @@ function mount(el, ctx) {
   q('[data-act=export-json]').onclick = () => {
     const d = doc();
     const params = Object.fromEntries(info.params.map((p, i) => [p.name, d.values[i]]));
-    download(`${baseName()}-params.json`, JSON.stringify({ generator: d.generator, params, loss: d.result?.loss ?? null }, null, 2), 'application/json');
+    // The program travels with its values: the file alone re-renders the pattern (`filigree render`).
+    download(`${baseName()}-params.json`, JSON.stringify({ generator: d.generator, program: d.program, params, loss: d.result?.loss ?? null }, null, 2), 'application/json');
   };
 
   const generatorsReady = ctx.run('pattern-generators', {}).then((list) => {

@@ -5,14 +5,15 @@
 // (debounced, the previous run cancelled). History, autosave, project files
 // and links come from the document controller (document.js).
 //
-// The view is layered so a brush drag never re-lays out or redraws it all:
-// a base canvas (source or result, at source resolution, scaled by CSS),
-// a mask canvas fed from one ImageData (only the brushed rectangle is put
-// back), a stroke canvas (the stroke being drawn is extended segment by
-// segment), and the pixel grid as a CSS background. Pointer moves are
-// gathered and painted once per animation frame.
+// The picture is a CanvasView (canvas-view.js), so a brush drag never re-lays
+// out or redraws it all: the base layer holds the source or the result at
+// its own resolution (scaled by CSS); the mask overlay and the stroke layer
+// cover only the visible part at screen resolution, and each animation frame
+// repaints just the rectangle the brush or the new stroke segment touched.
+// The pixel grid is a CSS background.
 import { acceptFiles, putRgba, hex } from './file-input.js';
 import { radioGroup } from './radio-group.js';
+import { CanvasView } from './canvas-view.js';
 import { download } from './project.js';
 
 const ASSETS = new URL('../assets/pixel/', import.meta.url);
@@ -20,8 +21,6 @@ const EXAMPLES = ['fish', 'trunk'];
 const DIRECTIONS = ['up', 'up-right', 'right', 'down-right', 'down', 'down-left', 'left', 'up-left'];
 const RUN_DELAY_MS = 120;
 const MAX_SIDE = 4096;
-// The stroke layer's backing store is capped (a 4096² source at ×4 would be 1 GB).
-const MAX_STROKE_PIXELS = 16e6;
 const MASK_RGBA = [127, 209, 199, 90];
 
 /** Parameter controls, generated into the side panel. Keys are the core's PixelParams fields. */
@@ -71,11 +70,6 @@ const html = `
         <span class="status muted" data-testid="pixel-status" aria-live="polite"></span>
       </div>
       <div class="viewport checker" data-testid="pixel-viewport">
-        <div class="layers">
-          <canvas class="base" aria-hidden="true"></canvas>
-          <canvas class="mask-layer" aria-hidden="true" hidden></canvas>
-          <canvas class="view" data-testid="pixel-canvas" aria-label="pixel art: draw strokes or paint the mask here"></canvas>
-        </div>
         <div class="empty muted">Load an example, or drop a source image here.</div>
       </div>
       <dl class="stats" data-testid="pixel-stats"></dl>
@@ -188,17 +182,10 @@ const pixelState = {
 function mount(el, ctx) {
   el.innerHTML = html;
   const q = (s) => el.querySelector(s);
-  const layersEl = q('.layers');
-  const baseC = q('canvas.base');
-  const maskC = q('canvas.mask-layer');
-  const strokeC = q('canvas.view');
-  const baseCtx = baseC.getContext('2d');
-  const maskCtx = maskC.getContext('2d');
-  const strokeCtx = strokeC.getContext('2d');
   const statusEl = q('[data-testid=pixel-status]');
 
   // Derived, not saved: decoded images, the last result, view settings.
-  const view = { zoom: 4, mode: 'stroke', brush: 3, showResult: true, showMask: false, showStrokes: true, showArrows: false };
+  const view = { mode: 'stroke', brush: 3, showResult: true, showMask: false, showStrokes: true, showArrows: false };
   let sourceImg = null; // {width, height} of the decoded source
   let sourceBitmap = null;
   let sourceOf = null; // the source bytes sourceImg was decoded from
@@ -209,12 +196,17 @@ function mount(el, ctx) {
   let running = null; // AbortController of the job in flight
   let runTimer = null;
   let drawing = null; // the stroke or mask edit in progress
-  let maskImage = null; // ImageData of the mask overlay
-  let strokeScale = 1; // stroke-layer pixels per source pixel
-  let frameWanted = false;
-  let dirty = null; // mask rectangle to put back at the next frame
-  let segments = []; // stroke segments to draw at the next frame
-  let rect = null; // the stroke canvas's box, read once per drag
+
+  // The picture: base (source or result), mask overlay, strokes and arrows.
+  const canvas = new CanvasView(q('.viewport'), { integer: true, maxZoom: 32, onPaint: paintStrokes });
+  const stack = canvas.element;
+  stack.classList.add('layers');
+  stack.dataset.testid = 'pixel-canvas';
+  stack.setAttribute('role', 'img');
+  stack.setAttribute('aria-label', 'pixel art: draw strokes or paint the mask here');
+  canvas.overlay.classList.add('mask-layer');
+  canvas.maskRgba = MASK_RGBA;
+  stack.addEventListener('zoom', () => showZoom());
 
   const state = () => ctx.state();
   const status = (text) => { statusEl.textContent = text; };
@@ -366,8 +358,9 @@ function mount(el, ctx) {
       ctx.release(resultBitmap);
       resultBitmap = null;
       q('.stats').replaceChildren();
-      fitZoom();
-      layout();
+      canvas.setImage(sourceBitmap, img.width, img.height);
+      canvas.setMask(state().mask);
+      drawBase();
       q('.empty').hidden = true;
     })().catch((err) => ctx.error(err, { prefix: 'Source image' })).finally(() => {
       if (sourceLoading === job) { sourceLoading = null; loadingFor = null; }
@@ -375,106 +368,86 @@ function mount(el, ctx) {
     sourceLoading = job;
   }
 
-  function fitZoom() {
-    // The whole picture in the window: the viewport's width, and the height left below its top.
-    const vp = q('.viewport');
-    const availW = Math.max(200, vp.clientWidth - 4);
-    const availH = Math.max(160, innerHeight - (vp.getBoundingClientRect().top + scrollY) - 24);
-    view.zoom = Math.max(1, Math.min(16, Math.floor(Math.min(availW / sourceImg.width, availH / sourceImg.height))));
-  }
-
-  /** Sizes and full repaints: only on a new source, a zoom change or a view toggle — never per pointer move. */
-  function layout() {
-    if (!sourceImg) return;
-    const { width: w, height: h } = sourceImg;
-    const z = view.zoom;
-    layersEl.style.width = `${w * z}px`;
-    layersEl.style.height = `${h * z}px`;
-    layersEl.style.setProperty('--cell', `${z}px`);
-    layersEl.classList.toggle('grid', z >= 8);
-    q('[data-testid=zoom]').textContent = `×${z}`;
-    if (baseC.width !== w || baseC.height !== h) { baseC.width = w; baseC.height = h; }
-    strokeScale = Math.min(z * (window.devicePixelRatio || 1), Math.sqrt(MAX_STROKE_PIXELS / (w * h)));
-    const sw = Math.max(1, Math.round(w * strokeScale)), sh = Math.max(1, Math.round(h * strokeScale));
-    if (strokeC.width !== sw || strokeC.height !== sh) { strokeC.width = sw; strokeC.height = sh; }
-    drawBase();
-    drawMaskFull();
-    drawStrokes();
+  function showZoom() {
+    const z = canvas.zoom;
+    q('[data-testid=zoom]').textContent = `×${z >= 1 ? z : Number(z.toFixed(2))}`;
+    stack.style.setProperty('--cell', `${z}px`);
+    stack.classList.toggle('grid', z >= 8);
   }
 
   function drawBase() {
     if (!sourceImg) return;
     const base = view.showResult && resultBitmap ? resultBitmap : sourceBitmap;
-    if (!base) return;
-    baseCtx.clearRect(0, 0, baseC.width, baseC.height);
-    baseCtx.drawImage(base, 0, 0);
+    if (base) canvas.setImage(base, sourceImg.width, sourceImg.height);
   }
 
   function maskVisible() {
     return view.showMask || view.mode !== 'stroke';
   }
 
+  /** The mask overlay: the drag's working copy while painting, else the document's. */
   function drawMaskFull() {
     const m = drawing?.kind === 'mask' ? drawing.mask : state()?.mask;
-    maskC.hidden = !maskVisible();
-    if (!m || !sourceImg || m.width !== sourceImg.width || m.height !== sourceImg.height) return;
-    if (maskC.width !== m.width || maskC.height !== m.height) { maskC.width = m.width; maskC.height = m.height; }
-    if (!maskImage || maskImage.width !== m.width || maskImage.height !== m.height) maskImage = new ImageData(m.width, m.height);
-    const px = new Uint32Array(maskImage.data.buffer);
-    const on = new Uint32Array(new Uint8ClampedArray(MASK_RGBA).buffer)[0];
-    for (let i = 0; i < m.bits.length; i++) px[i] = m.bits[i] ? on : 0;
-    maskCtx.putImageData(maskImage, 0, 0);
+    canvas.showMask = maskVisible();
+    canvas.setMask(m && sourceImg && m.width === sourceImg.width && m.height === sourceImg.height ? m : null);
   }
 
+  /** Repaint the whole stroke layer (strokes, arrows) at the next frame. */
   function drawStrokes() {
+    canvas.invalidate(null, 'strokes');
+  }
+
+  // The stroke layer's painter (CanvasView onPaint): `g` draws in image pixels,
+  // clipped to `r`, the rectangle to repaint.
+  function paintStrokes(g, zoom, r) {
     const doc = state();
-    strokeCtx.setTransform(1, 0, 0, 1, 0, 0);
-    strokeCtx.clearRect(0, 0, strokeC.width, strokeC.height);
     if (!doc || !sourceImg) return;
-    strokeCtx.setTransform(strokeScale, 0, 0, strokeScale, 0, 0);
-    if (view.showArrows && result?.field && result.width === sourceImg.width) drawArrows(result.field, sourceImg.width, sourceImg.height);
+    if (view.showArrows && result?.field && result.width === sourceImg.width) drawArrows(g, result.field, sourceImg.width, sourceImg.height, r);
     if (view.showStrokes) {
-      for (const s of doc.strokes) drawStroke(s, '#ff5db1');
-      if (drawing?.kind === 'stroke') drawStroke(drawing.points, '#ffd166', false);
+      for (const st of doc.strokes) drawStroke(g, st, '#ff5db1');
+      if (drawing?.kind === 'stroke') drawStroke(g, drawing.points, '#ffd166', false);
     }
   }
 
   // Widths are in screen pixels; the layer draws in source pixels.
-  const px = (css) => css / view.zoom;
+  const px = (css) => css / canvas.zoom;
+  const strokeWidth = () => px(Math.max(1.5, canvas.zoom / 3));
 
-  function drawStroke(points, colour, head = true) {
+  function drawStroke(g, points, colour, head = true) {
     if (points.length < 2) return;
-    strokeCtx.strokeStyle = colour;
-    strokeCtx.lineWidth = px(Math.max(1.5, view.zoom / 3));
-    strokeCtx.lineCap = strokeCtx.lineJoin = 'round';
-    strokeCtx.beginPath();
-    points.forEach(([x, y], i) => (i ? strokeCtx.lineTo(x, y) : strokeCtx.moveTo(x, y)));
-    strokeCtx.stroke();
+    g.strokeStyle = colour;
+    g.lineWidth = strokeWidth();
+    g.lineCap = g.lineJoin = 'round';
+    g.beginPath();
+    points.forEach(([x, y], i) => (i ? g.lineTo(x, y) : g.moveTo(x, y)));
+    g.stroke();
     if (!head) return;
     const [x1, y1] = points[points.length - 1];
     const [x0, y0] = points[Math.max(0, points.length - 4)];
-    arrowHead(x0, y0, x1, y1, px(Math.max(6, view.zoom * 1.5)), colour);
+    arrowHead(g, x0, y0, x1, y1, px(Math.max(6, canvas.zoom * 1.5)), colour);
   }
 
-  function arrowHead(x0, y0, x1, y1, size, colour) {
+  function arrowHead(g, x0, y0, x1, y1, size, colour) {
     const a = Math.atan2(y1 - y0, x1 - x0);
-    strokeCtx.fillStyle = colour;
-    strokeCtx.beginPath();
-    strokeCtx.moveTo(x1, y1);
-    strokeCtx.lineTo(x1 - size * Math.cos(a - 0.45), y1 - size * Math.sin(a - 0.45));
-    strokeCtx.lineTo(x1 - size * Math.cos(a + 0.45), y1 - size * Math.sin(a + 0.45));
-    strokeCtx.fill();
+    g.fillStyle = colour;
+    g.beginPath();
+    g.moveTo(x1, y1);
+    g.lineTo(x1 - size * Math.cos(a - 0.45), y1 - size * Math.sin(a - 0.45));
+    g.lineTo(x1 - size * Math.cos(a + 0.45), y1 - size * Math.sin(a + 0.45));
+    g.fill();
   }
 
-  // The diffused field as small arrows, one per cell of `step` pixels inside the mask.
-  function drawArrows(field, w, h) {
-    const z = view.zoom;
+  // The diffused field as small arrows, one per cell of `step` pixels inside the mask (only the cells in `r`).
+  function drawArrows(g, field, w, h, r) {
+    const z = canvas.zoom;
     const step = Math.max(1, Math.ceil(12 / z));
     const mask = state().mask.bits;
-    strokeCtx.strokeStyle = 'rgba(255, 255, 255, 0.85)';
-    strokeCtx.lineWidth = px(1);
-    for (let y = Math.floor(step / 2); y < h; y += step) {
-      for (let x = Math.floor(step / 2); x < w; x += step) {
+    const colour = 'rgba(255, 255, 255, 0.85)';
+    g.strokeStyle = colour;
+    g.lineWidth = px(1);
+    const first = (lo) => Math.floor(step / 2) + Math.max(0, Math.floor((lo - step) / step)) * step;
+    for (let y = first(r.y); y < Math.min(h, r.y + r.h + step); y += step) {
+      for (let x = first(r.x); x < Math.min(w, r.x + r.w + step); x += step) {
         if (!mask[y * w + x]) continue;
         const vx = field[2 * (y * w + x)], vy = field[2 * (y * w + x) + 1];
         const len = Math.hypot(vx, vy);
@@ -482,11 +455,11 @@ function mount(el, ctx) {
         const L = step * 0.42;
         const cx = x + 0.5, cy = y + 0.5;
         const dx = (vx / len) * L, dy = (vy / len) * L;
-        strokeCtx.beginPath();
-        strokeCtx.moveTo(cx - dx, cy - dy);
-        strokeCtx.lineTo(cx + dx, cy + dy);
-        strokeCtx.stroke();
-        arrowHead(cx - dx, cy - dy, cx + dx, cy + dy, Math.max(px(3), L * 0.5), 'rgba(255, 255, 255, 0.85)');
+        g.beginPath();
+        g.moveTo(cx - dx, cy - dy);
+        g.lineTo(cx + dx, cy + dy);
+        g.stroke();
+        arrowHead(g, cx - dx, cy - dy, cx + dx, cy + dy, Math.max(px(3), L * 0.5), colour);
       }
     }
   }
@@ -495,10 +468,10 @@ function mount(el, ctx) {
 
   // Image coordinates of a pointer event, kept inside the image (a drag may leave the canvas).
   const clamp = (v, hi) => Math.max(0, Math.min(hi, v));
-  const toPixel = (e) => [
-    clamp((e.clientX - rect.left) / rect.width * sourceImg.width, sourceImg.width),
-    clamp((e.clientY - rect.top) / rect.height * sourceImg.height, sourceImg.height),
-  ];
+  const toPixel = (e) => {
+    const [x, y] = canvas.toImage(e);
+    return [clamp(x, sourceImg.width), clamp(y, sourceImg.height)];
+  };
 
   function paintAt([fx, fy], on) {
     const m = drawing.mask;
@@ -506,64 +479,31 @@ function mount(el, ctx) {
     const x0 = Math.max(0, Math.floor(fx - r)), x1 = Math.min(m.width - 1, Math.floor(fx + r));
     const y0 = Math.max(0, Math.floor(fy - r)), y1 = Math.min(m.height - 1, Math.floor(fy + r));
     if (x1 < x0 || y1 < y0) return;
-    const pxs = maskImage && new Uint32Array(maskImage.data.buffer);
-    const colour = on ? new Uint32Array(new Uint8ClampedArray(MASK_RGBA).buffer)[0] : 0;
     for (let y = y0; y <= y1; y++) {
       for (let x = x0; x <= x1; x++) {
         if (Math.hypot(x + 0.5 - fx, y + 0.5 - fy) > Math.max(r, 0.5)) continue;
         m.bits[y * m.width + x] = on ? 1 : 0;
-        if (pxs) pxs[y * m.width + x] = colour;
       }
     }
-    dirty = dirty
-      ? { x0: Math.min(dirty.x0, x0), y0: Math.min(dirty.y0, y0), x1: Math.max(dirty.x1, x1), y1: Math.max(dirty.y1, y1) }
-      : { x0, y0, x1, y1 };
-    wantFrame();
+    // The overlay repaints this rectangle at the next frame (coalesced with the other moves of the frame).
+    canvas.maskChanged({ x: x0, y: y0, w: x1 - x0 + 1, h: y1 - y0 + 1 });
   }
 
-  function wantFrame() {
-    if (frameWanted) return;
-    frameWanted = true;
-    requestAnimationFrame(frame);
-  }
-
-  // One paint per frame, whatever the number of pointer events: the mask's
-  // dirty rectangle and the new stroke segments.
-  function frame() {
-    frameWanted = false;
-    if (!ctx.alive()) return;
-    if (dirty && maskImage) {
-      const d = dirty;
-      maskCtx.putImageData(maskImage, 0, 0, d.x0, d.y0, d.x1 - d.x0 + 1, d.y1 - d.y0 + 1);
-    }
-    dirty = null;
-    if (segments.length && view.showStrokes) {
-      strokeCtx.setTransform(strokeScale, 0, 0, strokeScale, 0, 0);
-      strokeCtx.strokeStyle = '#ffd166';
-      strokeCtx.lineWidth = px(Math.max(1.5, view.zoom / 3));
-      strokeCtx.lineCap = strokeCtx.lineJoin = 'round';
-      strokeCtx.beginPath();
-      for (const [a, b] of segments) { strokeCtx.moveTo(a[0], a[1]); strokeCtx.lineTo(b[0], b[1]); }
-      strokeCtx.stroke();
-    }
-    segments = [];
-  }
-
-  strokeC.addEventListener('pointerdown', (e) => {
+  stack.addEventListener('pointerdown', (e) => {
     if (!state() || !sourceImg || e.button > 0 || ctx.readOnly) return;
-    strokeC.setPointerCapture(e.pointerId);
-    rect = strokeC.getBoundingClientRect();
+    stack.setPointerCapture(e.pointerId);
     const p = toPixel(e);
     if (view.mode === 'stroke') {
       drawing = { kind: 'stroke', points: [p] };
     } else {
       const m = state().mask;
       drawing = { kind: 'mask', mask: { width: m.width, height: m.height, bits: m.bits.slice() } };
+      canvas.setMask(drawing.mask);
       paintAt(p, view.mode === 'paint');
     }
   });
 
-  strokeC.addEventListener('pointermove', (e) => {
+  stack.addEventListener('pointermove', (e) => {
     if (!drawing) return;
     const events = e.getCoalescedEvents?.().length ? e.getCoalescedEvents() : [e];
     for (const ev of events) {
@@ -572,8 +512,9 @@ function mount(el, ctx) {
         const last = drawing.points[drawing.points.length - 1];
         if (Math.hypot(p[0] - last[0], p[1] - last[1]) < 0.25) continue;
         drawing.points.push(p);
-        segments.push([last, p]);
-        wantFrame();
+        // Repaint only around the new segment (the layer adds its own margin for the line width).
+        const x = Math.min(last[0], p[0]), y = Math.min(last[1], p[1]);
+        canvas.invalidate({ x, y, w: Math.abs(p[0] - last[0]), h: Math.abs(p[1] - last[1]) }, 'strokes');
       } else {
         paintAt(p, view.mode === 'paint');
       }
@@ -594,8 +535,8 @@ function mount(el, ctx) {
       ctx.commit({ ...state(), mask: d.mask });
     }
   };
-  strokeC.addEventListener('pointerup', endDrawing);
-  strokeC.addEventListener('pointercancel', endDrawing);
+  stack.addEventListener('pointerup', endDrawing);
+  stack.addEventListener('pointercancel', endDrawing);
 
   // ---- controls -----------------------------------------------------------------------------
 
@@ -699,14 +640,19 @@ function mount(el, ctx) {
   const setMode = (mode) => {
     view.mode = mode;
     el.querySelectorAll('[data-mode]').forEach((x) => x.setAttribute('aria-checked', String(x.dataset.mode === mode)));
-    maskC.hidden = !maskVisible();
+    drawMaskFull();
   };
   el.querySelectorAll('[data-mode]').forEach((b) => { b.onclick = () => setMode(b.dataset.mode); });
   const detachRadios = radioGroup(q('[role=radiogroup]'));
   q('[name=brush]').onchange = (e) => { view.brush = Math.max(1, Math.min(32, Number(e.target.value) || 1)); };
-  const zoomBy = (d) => { view.zoom = Math.max(1, Math.min(32, view.zoom + d)); layout(); };
-  q('[data-act=zoom-in]').onclick = () => zoomBy(view.zoom >= 8 ? 2 : 1);
-  q('[data-act=zoom-out]').onclick = () => zoomBy(view.zoom > 8 ? -2 : -1);
+  // Whole steps from ×1 up (×2 steps from ×8); halves below ×1, for sources bigger than the window.
+  const zoomBy = (dir) => {
+    const z = canvas.zoom;
+    const next = z < 1 || (z === 1 && dir < 0) ? (dir > 0 ? Math.min(1, z * 2) : z / 2) : z + dir * (z > 8 || (z === 8 && dir > 0) ? 2 : 1);
+    canvas.setZoom(Math.max(1 / 64, Math.min(32, next)));
+  };
+  q('[data-act=zoom-in]').onclick = () => zoomBy(1);
+  q('[data-act=zoom-out]').onclick = () => zoomBy(-1);
   q('.viewport').addEventListener('wheel', (e) => {
     if (!e.ctrlKey || !sourceImg) return;
     e.preventDefault();
@@ -718,7 +664,7 @@ function mount(el, ctx) {
     q(`[name=${name}]`).onchange = (e) => {
       view[key] = e.target.checked;
       if (key === 'showResult') drawBase();
-      else if (key === 'showMask') maskC.hidden = !maskVisible();
+      else if (key === 'showMask') drawMaskFull();
       else drawStrokes();
     };
   }
@@ -766,6 +712,7 @@ function mount(el, ctx) {
     },
     keys: { s: () => setMode('stroke'), m: () => setMode('paint'), e: () => setMode('erase') },
     unmount() {
+      canvas.destroy();
       detachFiles();
       detachRadios();
       running?.abort();

@@ -592,6 +592,13 @@ impl Parser {
                 }
                 return Ok(Stmt::Call(call));
             }
+            // `union { … }`: a block call without its argument list. Say the fix.
+            if matches!(self.tok(1), Tok::Sym("{")) {
+                return Err(pos.err(format!(
+                    "`{name}` needs its argument list before the block: write `{name}() {{ … }}` \
+                     (or `{name}(fill: \"#000000\") {{ … }}` with arguments)"
+                )));
+            }
         }
         Err(pos.err(format!(
             "expected a statement (let, if, for, return, a call or an assignment) but found {}",
@@ -767,6 +774,19 @@ mod tests {
         assert_eq!(ast.params[0].default, 0.25);
         assert_eq!(ast.fns[0].params, vec!["x".to_string()]);
         assert_eq!(ast.body.len(), 1);
+    }
+
+    #[test]
+    fn a_block_call_without_parentheses_gets_the_fix_suggested() {
+        for name in ["union", "path", "translate"] {
+            let e = parse(&format!(
+                "param a in [0, 1] = 0.5;\n{name} {{\n  circle(a, a, 0.1);\n}}"
+            ))
+            .unwrap_err();
+            let msg = e.to_string();
+            assert!(msg.contains(&format!("write `{name}() {{ … }}`")), "{msg}");
+            assert!(msg.contains("line 2, column 1"), "{msg}");
+        }
     }
 
     #[test]

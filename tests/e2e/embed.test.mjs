@@ -189,6 +189,14 @@ test('interactive embed: an edit changes the result and "Open in Filigree" carri
   const edited = await currentState(frame);
   assert.notEqual(edited, before, 'the edit is in the state');
 
+  // The embed never saves: Ctrl+S and Ctrl+O are not taken over (no project download, no picker).
+  const downloads = [];
+  page.on('download', (d) => downloads.push(d));
+  await frame.click('.embed-bar .name');
+  await page.keyboard.press('Control+s');
+  await page.waitForTimeout(800);
+  assert.equal(downloads.length, 0, 'Ctrl+S downloaded a project inside an embed');
+
   // "Open in Filigree" opens the full app in a new tab with the edited state.
   const link = frame.getByRole('link', { name: /Open in Filigree/ });
   assert.equal(await link.getAttribute('target'), '_blank');

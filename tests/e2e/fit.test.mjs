@@ -63,6 +63,14 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
   const svg = fs.readFileSync(await download.path(), 'utf8');
   assert.match(svg, /^<svg[^>]*xmlns="http:\/\/www.w3.org\/2000\/svg"/);
   assert.ok((svg.match(/<(path|line|circle|rect|polygon)\b/g) || []).length >= 10, 'the SVG has the stripes');
+
+  // Export JSON: the program travels with the fitted values (the file alone re-renders the pattern).
+  const [json] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-json]')]);
+  const exported = JSON.parse(fs.readFileSync(await json.path(), 'utf8'));
+  const doc = await page.evaluate(() => window.filigreeFit.state());
+  assert.equal(exported.program, doc.program);
+  assert.equal(exported.generator, 'stripes');
+  assert.deepEqual(Object.values(exported.params), doc.values);
 });
 
 test('draw a target by hand and fit it; a broken program is reported with its line', async () => {
