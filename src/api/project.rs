@@ -649,8 +649,10 @@ pub fn open_project(text: &str) -> Result<OpenedProject> {
     })
 }
 
+#[cfg(feature = "json")]
 /// The text of a project file, as the page's `projectText` writes it: byte
-/// fields as `{"$bytes": base64}`. For tests and seeds.
+/// fields as `{"$bytes": base64}`. For tests, seeds and fuzzing (feature
+/// `json`; the page writes its own files, so the wasm build leaves it out).
 pub fn project_text(tool: &str, state_version: u32, state: &impl Serialize) -> Result<String> {
     let state = to_value(state).map_err(Error::input)?;
     let doc = Value::Object(vec![
@@ -663,9 +665,11 @@ pub fn project_text(tool: &str, state_version: u32, state: &impl Serialize) -> R
     serde_json::to_string(&Bytes64(&doc)).map_err(|e| Error::input(e.to_string()))
 }
 
+#[cfg(feature = "json")]
 /// Serialises a value with bytes as `{"$bytes": base64}`.
 struct Bytes64<'a>(&'a Value);
 
+#[cfg(feature = "json")]
 impl Serialize for Bytes64<'_> {
     fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         match self.0 {
@@ -693,11 +697,13 @@ impl Serialize for Bytes64<'_> {
     }
 }
 
+#[cfg(feature = "json")]
 /// Any serialisable value as a [`Value`] (bytes stay bytes).
 pub fn to_value(v: &(impl Serialize + ?Sized)) -> std::result::Result<Value, String> {
     v.serialize(value_ser::ValueSerializer).map_err(|e| e.0)
 }
 
+#[cfg(feature = "json")]
 mod value_ser {
     //! A small serde `Serializer` into [`Value`] (bytes stay bytes), so a
     //! typed state can be written as a project file.

@@ -540,6 +540,7 @@ fn refused(text: &str, message: &str) -> Error {
     e
 }
 
+#[cfg(feature = "json")]
 #[test]
 fn a_project_file_opens_checked() {
     let p = open_project(&project("pixel", pixel_doc())).unwrap();
