@@ -40,6 +40,17 @@ pub enum Which {
         #[arg(long)]
         speed_only: bool,
     },
+    /// Step times of every request kind at its largest realistic size
+    /// (render-pattern 2048², fit-eval at grid 1024, pixel 4096² full mask,
+    /// inspect 4096² every colour, fit quick, decode-image of a big PNG).
+    Slices {
+        /// Comma-separated kinds to run (default: all).
+        #[arg(long)]
+        only: Option<String>,
+        /// Accepted for symmetry with other benches; output is always JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Pixel-art texturing: the fish and trunk cases stage by stage, plus a 512² Laplace solve.
     Pixel {
         #[arg(long, default_value_t = 10)]
@@ -74,6 +85,7 @@ pub fn run(w: Which) -> Result<(), String> {
             println!("{out}");
             Ok(())
         }
+        Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
         Which::Pixel { repeats, .. } => {
             println!("{}", pixel_bench(repeats.max(1))?);
             Ok(())
@@ -121,7 +133,7 @@ const PIXEL_FIXTURES: [(&str, &[u8]); 9] = [
     ),
 ];
 
-fn fixture(name: &str) -> Result<&'static [u8], String> {
+pub fn fixture(name: &str) -> Result<&'static [u8], String> {
     PIXEL_FIXTURES
         .iter()
         .find(|f| f.0 == name)

@@ -3,6 +3,7 @@ pub mod fit;
 pub mod fit_bench;
 pub mod inspect;
 pub mod pixel;
+pub mod slices_bench;
 
 use filigree::core::job::{run_to_end, Cancel, Job};
 use filigree::Error;

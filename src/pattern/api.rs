@@ -188,12 +188,17 @@ pub struct RenderResponse {
 
 enum RenderPhase {
     Record(RenderPatternRequest),
-    Raster(Scene, Vec<f64>, usize, usize),
+    Raster(Scene, Vec<f64>, usize, Box<render::Raster>),
     Svg(Scene, Vec<f64>, usize, Rgba8Image),
     Finished,
 }
 
-/// `render-pattern` as a job: record, rasterise, write SVG (one phase per step).
+/// Work units (item evaluations, or samples × channels) of one raster step
+/// of `render-pattern`: a few milliseconds (`filigree bench slices`).
+pub const RENDER_WORK_PER_STEP: u64 = 300_000;
+
+/// `render-pattern` as a job: record; rasterise in bounded steps
+/// ([`render::Raster`], [`RENDER_WORK_PER_STEP`]); write SVG.
 pub struct RenderJob(RenderPhase);
 
 impl Job for RenderJob {
@@ -202,13 +207,19 @@ impl Job for RenderJob {
         match std::mem::replace(&mut self.0, RenderPhase::Finished) {
             RenderPhase::Record(req) => {
                 let (_, scene, fl) = scene_of(&req.program, &req.params)?;
-                self.0 = RenderPhase::Raster(scene, fl, req.size, req.supersample);
-                Ok(Step::Running(Progress::new(0.2, "drawing")))
+                let raster = render::Raster::new(&scene, &fl, req.size, req.supersample)?;
+                let stage = raster.stage();
+                self.0 = RenderPhase::Raster(scene, fl, req.size, Box::new(raster));
+                Ok(Step::Running(Progress::new(0.05, stage)))
             }
-            RenderPhase::Raster(scene, fl, size, ss) => {
-                let img = render::render(&scene, &fl, size, ss)?;
-                self.0 = RenderPhase::Svg(scene, fl, size, img);
-                Ok(Step::Running(Progress::new(0.9, "writing SVG")))
+            RenderPhase::Raster(scene, fl, size, mut raster) => {
+                if raster.run(&scene, RENDER_WORK_PER_STEP) {
+                    self.0 = RenderPhase::Svg(scene, fl, size, raster.into_image());
+                    return Ok(Step::Running(Progress::new(0.95, "writing SVG")));
+                }
+                let p = Progress::new(0.05 + 0.9 * raster.fraction(), raster.stage());
+                self.0 = RenderPhase::Raster(scene, fl, size, raster);
+                Ok(Step::Running(p))
             }
             RenderPhase::Svg(scene, fl, size, img) => Ok(Step::Done(RenderResponse {
                 svg: render::svg(&scene, &fl, size as f64)?,
@@ -595,49 +606,100 @@ pub struct EvalResponse {
     pub losses: Vec<f64>,
 }
 
-/// `fit-eval` as a job: as many points per step as a fit step evaluates
-/// (the objective's deterministic work count against the budget's
-/// `work_per_step`), one point at least: a single loss at grid 1024 is the
-/// smallest unit of work.
+/// Work units of one `fit-eval` step: item evaluations of the fields, and
+/// field values of the loss pass ([`crate::pattern::loss::LossPass`]),
+/// chosen for steps of a few milliseconds (`filigree bench slices`).
+pub const EVAL_WORK_PER_STEP: u64 = 600_000;
+
+/// `fit-eval` as a job: each step spends about [`EVAL_WORK_PER_STEP`]: many
+/// points at a small grid, part of one point's fields at a big one (the
+/// fields of one loss are evaluated a few tiles at a time, see
+/// [`Objective::begin_loss`]), so no step is unbounded.
 pub struct EvalJob {
     obj: Objective,
     points: Vec<Vec<f64>>,
     losses: Vec<f64>,
-    work_per_step: u64,
+    /// The current point's loss is under way ...
+    busy: bool,
+    /// ... and its fields are complete (the loss pass is under way).
+    fields_done: bool,
+    /// Work units per step ([`EVAL_WORK_PER_STEP`]).
+    budget: u64,
 }
 
 impl Job for EvalJob {
     type Output = EvalResponse;
     fn step(&mut self) -> Result<Step<EvalResponse>> {
+        let budget = self.budget;
         let dim = self.obj.scene.rec.float_params.len();
-        let mut work = 0u64;
-        while self.losses.len() < self.points.len() && (work < self.work_per_step || work == 0) {
+        let mut spent = 0u64;
+        while self.losses.len() < self.points.len() && spent < budget {
             let i = self.losses.len();
-            let x = &self.points[i];
-            if x.len() != dim {
-                return Err(Error::input(format!(
-                    "point {i} has {} values; the program has {dim} float parameters",
-                    x.len()
-                ))
-                .at(format!("points.{i}")));
+            if !self.busy {
+                let x = &self.points[i];
+                if x.len() != dim {
+                    return Err(Error::input(format!(
+                        "point {i} has {} values; the program has {dim} float parameters",
+                        x.len()
+                    ))
+                    .at(format!("points.{i}")));
+                }
+                if let Some(j) = x.iter().position(|v| !v.is_finite()) {
+                    return Err(Error::input(format!(
+                        "point {i}: value {j} is not a finite number"
+                    ))
+                    .at(format!("points.{i}")));
+                }
+                spent += 1;
+                match self.obj.begin_loss(x) {
+                    Some(l) => {
+                        self.losses.push(l);
+                        continue;
+                    }
+                    None => self.busy = true,
+                }
             }
-            if let Some(j) = x.iter().position(|v| !v.is_finite()) {
-                return Err(
-                    Error::input(format!("point {i}: value {j} is not a finite number"))
-                        .at(format!("points.{i}")),
-                );
+            if !self.fields_done {
+                let (done, w) = self.obj.loss_tiles(budget - spent.min(budget));
+                spent += w;
+                if !done {
+                    break;
+                }
+                self.fields_done = true;
+                continue;
             }
-            let l = self.obj.loss(x);
-            self.losses.push(l);
-            work += self.obj.last_work.max(1);
+            // The loss pass reads every field value, a bounded part a step.
+            let left = budget - spent.min(budget);
+            spent += left.min(self.obj.loss_size()).max(1);
+            match self
+                .obj
+                .loss_pass(usize::try_from(left).unwrap_or(usize::MAX))
+            {
+                Some(l) => {
+                    self.losses.push(l);
+                    self.busy = false;
+                    self.fields_done = false;
+                }
+                None => break,
+            }
         }
         if self.losses.len() == self.points.len() {
             Ok(Step::Done(EvalResponse {
                 losses: std::mem::take(&mut self.losses),
             }))
         } else {
-            let f = self.losses.len() as f64 / self.points.len() as f64;
-            Ok(Step::Running(Progress::new(f, "evaluating")))
+            let part = if self.busy {
+                0.9 * self.obj.tiles_fraction()
+            } else {
+                0.0
+            };
+            let f = (self.losses.len() as f64 + part) / self.points.len() as f64;
+            let stage = if self.fields_done {
+                "evaluating: loss"
+            } else {
+                "evaluating: fields"
+            };
+            Ok(Step::Running(Progress::new(f, stage)))
         }
     }
 }
@@ -664,7 +726,9 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
         obj: Objective::new(scene, target, opts.loss),
         points: req.extra.points,
         losses: Vec::with_capacity(n),
-        work_per_step: opts.work_per_step,
+        busy: false,
+        fields_done: false,
+        budget: EVAL_WORK_PER_STEP,
     })
 }
 
@@ -773,6 +837,58 @@ mod tests {
         .unwrap_err();
         assert!(e.to_string().contains("no parameter 'radius'"), "{e}");
         assert_eq!(e.field(), Some("params.radius"));
+    }
+
+    /// `fit-eval` spread over many small steps (part of one point's fields
+    /// per step) gives the same losses, bit for bit, as evaluating each
+    /// point in one go with the objective.
+    #[test]
+    fn fit_eval_stepped_gives_the_same_losses_as_one_go() {
+        let src = generator("circles-mix").unwrap().source;
+        let p = parse(src).unwrap();
+        let x0 = float_values(&p, &p.defaults());
+        let points: Vec<Vec<f64>> = (0..4)
+            .map(|k| x0.iter().map(|v| v * (1.0 + 0.03 * k as f64)).collect())
+            .collect();
+        let req = FitEvalRequest {
+            program: src.into(),
+            target_params: Some(BTreeMap::new()),
+            grid: Some(96),
+            extra: EvalPoints {
+                points: points.clone(),
+            },
+            ..Default::default()
+        };
+        // One go: the objective, one whole loss per point.
+        let opts = req.options().unwrap();
+        let (mut img, mut fl) = (None, vec![]);
+        let t = req.target(&p, &mut img, &mut fl).unwrap();
+        let vals = named_values(&p, &req.params).unwrap();
+        let (scene, target) = crate::pattern::fit::prepare(&p, &vals, &t, &opts.loss).unwrap();
+        let mut obj = Objective::new(scene, target, opts.loss);
+        let want: Vec<u64> = points.iter().map(|x| obj.loss(x).to_bits()).collect();
+        for budget in [1, 1000, u64::MAX] {
+            let mut job = start_eval(req.clone()).unwrap();
+            job.budget = budget;
+            let mut steps = 0;
+            let mut last = 0.0;
+            let got = loop {
+                steps += 1;
+                match job.step().unwrap() {
+                    Step::Running(p) => {
+                        assert!(p.fraction >= last && p.fraction < 1.0);
+                        last = p.fraction;
+                    }
+                    Step::Done(r) => break r.losses,
+                }
+            };
+            let got: Vec<u64> = got.iter().map(|l| l.to_bits()).collect();
+            assert_eq!(got, want, "budget {budget}");
+            if budget == 1 {
+                // One tile a step, then the loss pass a row or so a step.
+                assert!(steps >= 4 * (36 + 96), "{steps} steps");
+            }
+        }
     }
 
     #[test]

@@ -198,21 +198,7 @@ pub(crate) fn prepare(
 
 /// Palette index per pixel of the scene drawn with `params` on an `n × n` grid.
 pub fn colour_indices(scene: &Scene, params: &[f64], n: usize) -> Result<Vec<u16>> {
-    if params.len() != scene.rec.float_params.len() {
-        return Err(Error::input(format!(
-            "the program has {} float parameters but {} values were given",
-            scene.rec.float_params.len(),
-            params.len()
-        )));
-    }
-    let mut nodes = vec![];
-    scene.rec.tape.forward(params, &mut nodes);
-    if !scene.shapes_finite(&nodes) {
-        return Err(Error::input(
-            "with these parameter values a shape's coordinates or sizes are not finite numbers \
-             (a division by zero in the program?)",
-        ));
-    }
+    let nodes = super::render::checked_nodes(scene, params)?;
     let mut ev = Evaluator::new(n, 1.0);
     ev.eval(scene, &nodes, false);
     Ok(ev.colour_indices(scene))

@@ -226,36 +226,59 @@ pub fn loss(
         }
         LossKind::Pyramid => {
             for c in 0..channels {
-                let mut level: Vec<f64> =
-                    (0..nn).map(|i| s[c * nn + i] - t.sdf[c * nn + i]).collect();
-                let mut sizes = vec![n];
-                let mut grads: Vec<Vec<f64>> = vec![];
-                loop {
-                    let m = *sizes.last().expect("size");
-                    let k = 1.0 / (channels * m * m) as f64;
-                    total += level.iter().map(|e| e * e).sum::<f64>() * k;
-                    grads.push(level.iter().map(|e| 2.0 * e * k).collect());
-                    if m < 16 || sizes.len() >= 5 {
-                        break;
-                    }
-                    let (next, mm) = down(&level, m);
-                    level = next;
-                    sizes.push(mm);
-                }
-                if let Some(d) = ds.as_deref_mut() {
-                    // Back from the coarsest level: g_{k-1} += downᵀ g_k.
-                    for k in (1..grads.len()).rev() {
-                        let (fine, coarse) = grads.split_at_mut(k);
-                        let mut acc = fine[k - 1].clone();
-                        down_t(&coarse[0], sizes[k - 1], &mut acc);
-                        fine[k - 1] = acc;
-                    }
-                    d[c * nn..(c + 1) * nn].copy_from_slice(&grads[0]);
-                }
+                let lo = c * nn;
+                let d = ds.as_deref_mut().map(|d| &mut d[lo..lo + nn]);
+                pyramid_channel(
+                    &mut total,
+                    &s[lo..lo + nn],
+                    &t.sdf[lo..lo + nn],
+                    n,
+                    channels,
+                    d,
+                );
             }
         }
     }
     total
+}
+
+/// One channel of the pyramid loss: each level's share added to `total`
+/// in turn; with `ds` (this channel's part), dL/dS too.
+fn pyramid_channel(
+    total: &mut f64,
+    s: &[f64],
+    t: &[f64],
+    n: usize,
+    channels: usize,
+    ds: Option<&mut [f64]>,
+) {
+    let mut level: Vec<f64> = s.iter().zip(t).map(|(a, b)| a - b).collect();
+    let mut sizes = vec![n];
+    let mut grads: Vec<Vec<f64>> = vec![];
+    loop {
+        let m = *sizes.last().expect("size");
+        let k = 1.0 / (channels * m * m) as f64;
+        *total += level.iter().map(|e| e * e).sum::<f64>() * k;
+        if ds.is_some() {
+            grads.push(level.iter().map(|e| 2.0 * e * k).collect());
+        }
+        if m < 16 || sizes.len() >= 5 {
+            break;
+        }
+        let (next, mm) = down(&level, m);
+        level = next;
+        sizes.push(mm);
+    }
+    if let Some(d) = ds {
+        // Back from the coarsest level: g_{k-1} += downᵀ g_k.
+        for k in (1..grads.len()).rev() {
+            let (fine, coarse) = grads.split_at_mut(k);
+            let mut acc = fine[k - 1].clone();
+            down_t(&coarse[0], sizes[k - 1], &mut acc);
+            fine[k - 1] = acc;
+        }
+        d.copy_from_slice(&grads[0]);
+    }
 }
 
 /// Clamped neighbour indices and inverse spacings of a central difference.
@@ -314,6 +337,156 @@ fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mu
     sum / (channels * nn) as f64
 }
 
+/// [`loss`] without gradient, in parts of a bounded number of field
+/// values, for a job that must not spend one long slice on the loss of a
+/// big grid. Every sum is taken in the order [`loss`] takes it, so the
+/// result is the same bits.
+#[derive(Debug, Clone, Default)]
+pub struct LossPass {
+    /// 0: the main term; 1: the normal term (`Sdf`); 2: done.
+    phase: u8,
+    /// Where the phase is: a chunk of four values (`Sdf`), a value (`L1`,
+    /// `Image`), a channel (`Pyramid`) or a channel row (normal term).
+    pos: usize,
+    acc: [f64; 4],
+    total: f64,
+    sum: f64,
+}
+
+impl LossPass {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Go on for about `budget` field values (one row or channel at
+    /// least); `Some(loss)` when finished.
+    pub fn run(
+        &mut self,
+        opts: &LossOptions,
+        s: &[f64],
+        t: &Target,
+        t_normals: &[[f64; 2]],
+        budget: usize,
+    ) -> Option<f64> {
+        let n = t.n;
+        let nn = n * n;
+        let channels = s.len() / nn;
+        if channels == 0 {
+            return Some(0.0);
+        }
+        let norm = 1.0 / (channels * nn) as f64;
+        let budget = budget.max(1);
+        match (opts.kind, self.phase) {
+            (_, 2) => {}
+            (LossKind::Sdf, 0) => {
+                let chunks = s.len() / 4;
+                let end = chunks.min(self.pos.saturating_add(budget.div_ceil(4)));
+                for k in self.pos..end {
+                    let (a, b) = (&s[4 * k..4 * k + 4], &t.sdf[4 * k..4 * k + 4]);
+                    for j in 0..4 {
+                        let e = a[j] - b[j];
+                        self.acc[j] += e * e;
+                    }
+                }
+                self.pos = end;
+                if end == chunks {
+                    for (a, b) in s[4 * chunks..].iter().zip(&t.sdf[4 * chunks..]) {
+                        self.acc[0] += (a - b) * (a - b);
+                    }
+                    let acc = self.acc;
+                    self.total += (acc[0] + acc[1] + acc[2] + acc[3]) * norm;
+                    self.phase = if opts.normal_weight != 0.0 { 1 } else { 2 };
+                    self.pos = 0;
+                }
+            }
+            (LossKind::Sdf, _) => {
+                // Rows of every channel, in order; the same arithmetic as
+                // `normal_term` without a gradient.
+                let rows = channels * n;
+                let end = rows.min(self.pos + budget.div_ceil(n));
+                let at = |i: usize| {
+                    let (m, p) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                    (m, p, 1.0 / (p - m).max(1) as f64)
+                };
+                for r in self.pos..end {
+                    let (c, y) = (r / n, r % n);
+                    let o = c * nn;
+                    let f = &s[o..o + nn];
+                    let (ym, yp, ihy) = at(y);
+                    let (row, rm, rp) = (y * n, ym * n, yp * n);
+                    let mut row_sum = 0.0;
+                    for x in 0..n {
+                        let (xm, xp, ihx) = at(x);
+                        let t = t_normals[o + row + x];
+                        if t[0] == 0.0 && t[1] == 0.0 {
+                            continue;
+                        }
+                        let gx = (f[row + xp] - f[row + xm]) * ihx;
+                        let gy = (f[rp + x] - f[rm + x]) * ihy;
+                        let l2 = gx * gx + gy * gy;
+                        if l2 <= 1e-24 {
+                            continue;
+                        }
+                        let il = 1.0 / l2.sqrt();
+                        let (nx, ny) = (gx * il, gy * il);
+                        let dot = nx * t[0] + ny * t[1];
+                        row_sum += 1.0 - dot * dot;
+                    }
+                    self.sum += row_sum;
+                }
+                self.pos = end;
+                if end == rows {
+                    self.total += opts.normal_weight * (self.sum / (channels * nn) as f64);
+                    self.phase = 2;
+                }
+            }
+            (LossKind::L1 | LossKind::Image, _) => {
+                let end = s.len().min(self.pos.saturating_add(budget));
+                let to_px = n as f64 / t.scale;
+                let (sv, tv, tm) = (
+                    &s[self.pos..end],
+                    &t.sdf[self.pos..end],
+                    &t.mask[self.pos..end],
+                );
+                for ((&v, &d), &m) in sv.iter().zip(tv).zip(tm) {
+                    if opts.kind == LossKind::L1 {
+                        let e = v - d;
+                        self.total += e.abs() * norm;
+                    } else {
+                        let a = (0.5 - v * to_px).clamp(0.0, 1.0);
+                        let e = a - m as f64;
+                        self.total += e * e * norm;
+                    }
+                }
+                self.pos = end;
+                if end == s.len() {
+                    self.phase = 2;
+                }
+            }
+            (LossKind::Pyramid, _) => {
+                // Whole channels: each is a pyramid of its own.
+                let end = channels.min(self.pos + budget.div_ceil(nn));
+                for c in self.pos..end {
+                    let lo = c * nn;
+                    pyramid_channel(
+                        &mut self.total,
+                        &s[lo..lo + nn],
+                        &t.sdf[lo..lo + nn],
+                        n,
+                        channels,
+                        None,
+                    );
+                }
+                self.pos = end;
+                if end == channels {
+                    self.phase = 2;
+                }
+            }
+        }
+        (self.phase == 2).then_some(self.total)
+    }
+}
+
 /// A pattern, a target and a loss: evaluates `L(params)` and `∇L`.
 #[derive(Debug, Clone)]
 pub struct Objective {
@@ -332,6 +505,10 @@ pub struct Objective {
     pub evaluations: u64,
     /// Work units of the last evaluation (item evaluations; deterministic).
     pub last_work: u64,
+    /// The next big tile of a loss evaluated in parts.
+    next_tile: usize,
+    /// The loss pass of a loss evaluated in parts, once its fields are done.
+    pass: Option<LossPass>,
 }
 
 impl Objective {
@@ -351,6 +528,8 @@ impl Objective {
             ds: vec![],
             evaluations: 0,
             last_work: 0,
+            next_tile: 0,
+            pass: None,
         }
     }
 
@@ -361,14 +540,88 @@ impl Objective {
 
     /// The loss at `params` (float parameters, declaration order, raw units).
     pub fn loss(&mut self, params: &[f64]) -> f64 {
+        if let Some(l) = self.begin_loss(params) {
+            return l;
+        }
+        while !self.loss_tiles(u64::MAX).0 {}
+        self.end_loss()
+    }
+
+    /// [`Objective::loss`] in parts, for a job that must not block on one
+    /// evaluation at a big grid: `begin_loss`, then `loss_tiles` until it
+    /// says the fields are done, then `end_loss`; the same bits as `loss`.
+    /// `Some(loss)` when there is nothing to evaluate (the parameters make
+    /// a shape non-finite: the loss is infinite).
+    pub fn begin_loss(&mut self, params: &[f64]) -> Option<f64> {
         self.scene.rec.tape.forward(params, &mut self.nodes);
         if !self.scene.shapes_finite(&self.nodes) {
             // The program divides by zero (or worse) at these parameters.
             self.evaluations += 1;
             self.last_work = self.scene.rec.prims.len() as u64 + 1;
-            return f64::INFINITY;
+            return Some(f64::INFINITY);
         }
-        self.eval.eval(&self.scene, &self.nodes, false);
+        self.eval.begin(&self.scene, &self.nodes, false);
+        self.next_tile = 0;
+        self.pass = None;
+        None
+    }
+
+    /// Evaluate big tiles of the fields begun by [`Objective::begin_loss`]
+    /// until about `budget` item evaluations are spent (one tile at
+    /// least). Returns whether the fields are complete and the item
+    /// evaluations spent.
+    pub fn loss_tiles(&mut self, budget: u64) -> (bool, u64) {
+        let before = self.eval.raw_work();
+        let tiles = self.eval.tiles();
+        while self.next_tile < tiles {
+            let t = self.next_tile;
+            self.eval.eval_tiles(&self.scene, false, t..t + 1);
+            self.next_tile += 1;
+            if self.eval.raw_work() - before >= budget {
+                break;
+            }
+        }
+        (self.next_tile >= tiles, self.eval.raw_work() - before + 1)
+    }
+
+    /// Field values the loss pass reads (a work measure).
+    pub fn loss_size(&self) -> u64 {
+        self.eval.s.len() as u64
+    }
+
+    /// The fraction of the fields evaluated so far in the current loss.
+    pub fn tiles_fraction(&self) -> f64 {
+        self.next_tile as f64 / self.eval.tiles().max(1) as f64
+    }
+
+    /// The loss pass of a loss evaluated in parts, once
+    /// [`Objective::loss_tiles`] has completed the fields: about `budget`
+    /// field values per call; `Some(loss)` at the end (the same bits as
+    /// [`Objective::loss`]).
+    pub fn loss_pass(&mut self, budget: usize) -> Option<f64> {
+        let pass = match self.pass.as_mut() {
+            Some(p) => p,
+            None => {
+                self.eval.finish(&self.scene);
+                self.evaluations += 1;
+                self.last_work = self.eval.work;
+                self.pass.insert(LossPass::new())
+            }
+        };
+        let l = pass.run(
+            &self.opts,
+            &self.eval.s,
+            &self.target,
+            &self.target_normals,
+            budget,
+        )?;
+        self.pass = None;
+        Some(if l.is_finite() { l } else { f64::INFINITY })
+    }
+
+    /// The loss once [`Objective::loss_tiles`] has completed the fields.
+    pub fn end_loss(&mut self) -> f64 {
+        self.eval.finish(&self.scene);
         self.evaluations += 1;
         self.last_work = self.eval.work;
         let l = loss(
@@ -481,6 +734,65 @@ mod tests {
                     "{kind:?} param {k}: fd {fd} vs analytic {}",
                     g[k]
                 );
+            }
+        }
+    }
+
+    /// The loss pass in parts of any size gives the bits of the one-go
+    /// loss, for every loss kind and with and without the normal term; so
+    /// does a whole loss evaluated in parts through the objective.
+    #[test]
+    fn loss_in_parts_gives_the_same_bits_as_one_go() {
+        for kind in [
+            LossKind::Sdf,
+            LossKind::L1,
+            LossKind::Pyramid,
+            LossKind::Image,
+        ] {
+            for n in [37, 48] {
+                let mut o = objective(SRC, &[0.22, 0.06, 0.2, 0.015], kind, n);
+                let p = [0.2, 0.045, 0.05, 0.012];
+                let want = o.loss(&p);
+                for nw in [0.05, 0.0] {
+                    let opts = LossOptions {
+                        normal_weight: nw,
+                        ..o.opts
+                    };
+                    let one = loss(&opts, o.fields(), &o.target, &o.target_normals, None);
+                    if nw != 0.0 {
+                        assert_eq!(one.to_bits(), want.to_bits());
+                    }
+                    for budget in [1, 7, 1000, usize::MAX] {
+                        let mut pass = LossPass::new();
+                        let mut calls = 0;
+                        let got = loop {
+                            calls += 1;
+                            if let Some(l) =
+                                pass.run(&opts, o.fields(), &o.target, &o.target_normals, budget)
+                            {
+                                break l;
+                            }
+                        };
+                        assert_eq!(
+                            got.to_bits(),
+                            one.to_bits(),
+                            "{kind:?} n {n} budget {budget}"
+                        );
+                        if budget == 1 && kind != LossKind::Pyramid {
+                            assert!(calls >= n, "{calls}");
+                        }
+                    }
+                }
+                for budget in [1, 500, u64::MAX] {
+                    assert!(o.begin_loss(&p).is_none());
+                    while !o.loss_tiles(budget).0 {}
+                    let got = loop {
+                        if let Some(l) = o.loss_pass(budget as usize) {
+                            break l;
+                        }
+                    };
+                    assert_eq!(got.to_bits(), want.to_bits(), "{kind:?} n {n}");
+                }
             }
         }
     }

@@ -1,6 +1,6 @@
 //! Drawing a pattern: a raster from the same colour fields the loss uses
 //! (so targets made from parameters match the fields exactly), and SVG.
-use super::field::Scene;
+use super::field::{Evaluator, Scene};
 use super::record::{BoolOp, Geom, Rgb};
 use super::sdf::PrimKind;
 use crate::core::error::{Error, Result};
@@ -18,32 +18,109 @@ pub fn render(
     size: usize,
     supersample: usize,
 ) -> Result<Rgba8Image> {
-    let ss = supersample.max(1);
-    let n = match size.checked_mul(ss) {
-        Some(n) if size > 0 && n <= MAX_RENDER_SIDE => n,
-        _ => {
-            return Err(Error::limit(format!(
-                "render size {size} pixels × {ss} samples per side is outside 1..={MAX_RENDER_SIDE} samples; \
-                 lower the size or the supersampling"
-            )))
+    let mut r = Raster::new(scene, params, size, supersample)?;
+    while !r.run(scene, u64::MAX) {}
+    Ok(r.into_image())
+}
+
+/// Where a [`Raster`] is.
+enum RasterPhase {
+    /// Evaluating the colour fields, big tile by big tile; the next tile.
+    Fields(usize),
+    /// Turning fields into pixels; the next output row.
+    Pixels(usize),
+    Done,
+}
+
+/// [`render`] in bounded parts, for a job that must not block: the colour
+/// fields are evaluated a few tiles at a time, then the pixels are made a
+/// few rows at a time. The image is bit for bit that of [`render`].
+pub struct Raster {
+    size: usize,
+    ss: usize,
+    ev: Evaluator,
+    img: Rgba8Image,
+    phase: RasterPhase,
+}
+
+impl Raster {
+    /// Check the arguments and the parameters (a shape whose coordinates
+    /// are not finite is an error) and prepare the evaluation.
+    pub fn new(scene: &Scene, params: &[f64], size: usize, supersample: usize) -> Result<Raster> {
+        let ss = supersample.max(1);
+        let n = match size.checked_mul(ss) {
+            Some(n) if size > 0 && n <= MAX_RENDER_SIDE => n,
+            _ => {
+                return Err(Error::limit(format!(
+                    "render size {size} pixels × {ss} samples per side is outside 1..={MAX_RENDER_SIDE} samples; \
+                     lower the size or the supersampling"
+                )))
+            }
+        };
+        let nodes = checked_nodes(scene, params)?;
+        let mut ev = Evaluator::new(n, 1.0);
+        ev.begin(scene, &nodes, false);
+        Ok(Raster {
+            size,
+            ss,
+            ev,
+            img: Rgba8Image::new(size as u32, size as u32),
+            phase: RasterPhase::Fields(0),
+        })
+    }
+
+    /// Do about `budget` units of work (item evaluations while the fields
+    /// are evaluated, then samples × channels while pixels are made), at
+    /// least one big tile or one row; `true` when the image is finished.
+    pub fn run(&mut self, scene: &Scene, budget: u64) -> bool {
+        let mut spent = 0u64;
+        loop {
+            match self.phase {
+                RasterPhase::Fields(t) => {
+                    let before = self.ev.raw_work();
+                    self.ev.eval_tiles(scene, false, t..t + 1);
+                    spent += self.ev.raw_work() - before + 1;
+                    self.phase = if t + 1 >= self.ev.tiles() {
+                        self.ev.finish(scene);
+                        RasterPhase::Pixels(0)
+                    } else {
+                        RasterPhase::Fields(t + 1)
+                    };
+                }
+                RasterPhase::Pixels(y) => {
+                    self.row(scene, y);
+                    spent += (self.size * self.ss * self.ss * scene.channels.len().max(1)) as u64;
+                    self.phase = if y + 1 >= self.size {
+                        RasterPhase::Done
+                    } else {
+                        RasterPhase::Pixels(y + 1)
+                    };
+                }
+                RasterPhase::Done => return true,
+            }
+            if spent >= budget {
+                return matches!(self.phase, RasterPhase::Done);
+            }
         }
-    };
-    let idx = super::fit::colour_indices(scene, params, n)?;
-    let pal = &scene.rec.colours;
-    let mut img = Rgba8Image::new(size as u32, size as u32);
-    for y in 0..size {
-        for x in 0..size {
+    }
+
+    /// Output row `y`: the average colour of each pixel's samples.
+    fn row(&mut self, scene: &Scene, y: usize) {
+        let (ss, n) = (self.ss, self.ev.n);
+        let pal = &scene.rec.colours;
+        for x in 0..self.size {
             let mut acc = [0u32; 3];
             for sy in 0..ss {
                 for sx in 0..ss {
-                    let c = pal[idx[(y * ss + sy) * n + x * ss + sx] as usize];
+                    let i = (y * ss + sy) * n + x * ss + sx;
+                    let c = pal[self.ev.colour_index(scene, i) as usize];
                     for k in 0..3 {
                         acc[k] += c[k] as u32;
                     }
                 }
             }
             let d = (ss * ss) as u32;
-            img.put(
+            self.img.put(
                 x as u32,
                 y as u32,
                 [
@@ -55,7 +132,49 @@ pub fn render(
             );
         }
     }
-    Ok(img)
+
+    /// How far along, `0..=1`: fields count for three quarters.
+    pub fn fraction(&self) -> f64 {
+        match self.phase {
+            RasterPhase::Fields(t) => 0.75 * t as f64 / self.ev.tiles().max(1) as f64,
+            RasterPhase::Pixels(y) => 0.75 + 0.25 * y as f64 / self.size.max(1) as f64,
+            RasterPhase::Done => 1.0,
+        }
+    }
+
+    /// What the next [`Raster::run`] works on, for progress reports.
+    pub fn stage(&self) -> &'static str {
+        match self.phase {
+            RasterPhase::Fields(_) => "drawing: colour fields",
+            RasterPhase::Pixels(_) | RasterPhase::Done => "drawing: pixels",
+        }
+    }
+
+    /// The finished image (call after [`Raster::run`] returned `true`).
+    pub fn into_image(self) -> Rgba8Image {
+        self.img
+    }
+}
+
+/// The tape's node values at `params`, checked: the right number of
+/// parameters, and every shape's coordinates and sizes finite.
+pub(crate) fn checked_nodes(scene: &Scene, params: &[f64]) -> Result<Vec<f64>> {
+    if params.len() != scene.rec.float_params.len() {
+        return Err(Error::input(format!(
+            "the program has {} float parameters but {} values were given",
+            scene.rec.float_params.len(),
+            params.len()
+        )));
+    }
+    let mut nodes = vec![];
+    scene.rec.tape.forward(params, &mut nodes);
+    if !scene.shapes_finite(&nodes) {
+        return Err(Error::input(
+            "with these parameter values a shape's coordinates or sizes are not finite numbers \
+             (a division by zero in the program?)",
+        ));
+    }
+    Ok(nodes)
 }
 
 fn hex(c: Rgb) -> String {
@@ -260,6 +379,61 @@ pub fn svg(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
 mod tests {
     use super::*;
     use crate::pattern::record::{Program, RecordLimits};
+
+    /// The raster as it was made before it was stepped: every sample's
+    /// colour index at once, then the average of each pixel's samples.
+    fn one_go(scene: &Scene, params: &[f64], size: usize, ss: usize) -> Rgba8Image {
+        let n = size * ss;
+        let idx = crate::pattern::fit::colour_indices(scene, params, n).unwrap();
+        let pal = &scene.rec.colours;
+        let mut img = Rgba8Image::new(size as u32, size as u32);
+        for y in 0..size {
+            for x in 0..size {
+                let mut acc = [0u32; 3];
+                for sy in 0..ss {
+                    for sx in 0..ss {
+                        let c = pal[idx[(y * ss + sy) * n + x * ss + sx] as usize];
+                        for k in 0..3 {
+                            acc[k] += c[k] as u32;
+                        }
+                    }
+                }
+                let d = (ss * ss) as u32;
+                let px = [0, 1, 2].map(|k| ((acc[k] + d / 2) / d) as u8);
+                img.put(x as u32, y as u32, [px[0], px[1], px[2], 255]);
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn stepping_the_raster_gives_the_same_bits_as_one_go() {
+        let p = Program::parse(
+            "background \"#eeeeee\";\nfor i in 0..9 { circle(0.1 * i + 0.05, 0.3 + 0.04 * i, 0.07, fill: \"#aa0000\", stroke: \"#0000aa\", width: 0.01); }\n\
+             segment(0.1, 0.6, 0.9, 0.9, stroke: \"#00aa00\", width: 0.03);\n\
+             path(fill: \"#0000aa\") { move(0.6, 0.6); quad(0.9, 0.6, 0.9, 0.9); line(0.6, 0.9); }\n\
+             difference(fill: \"#00aa00\") { rect(0.3, 0.8, 0.2, 0.15, radius: 0.02, rotation: 0.4); circle(0.3, 0.8, 0.05); }",
+        )
+        .unwrap();
+        let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+        let fl = scene.rec.float_values();
+        for (size, ss) in [(50, 1), (37, 3), (64, 2)] {
+            let want = one_go(&scene, &fl, size, ss);
+            let mut r = Raster::new(&scene, &fl, size, ss).unwrap();
+            let mut runs = 1;
+            let mut last = 0.0;
+            while !r.run(&scene, 1) {
+                runs += 1;
+                assert!(r.fraction() > last && r.fraction() < 1.0);
+                last = r.fraction();
+            }
+            // Budget 1: one big tile or one row per call.
+            let tiles = (size * ss).div_ceil(16).pow(2);
+            assert_eq!(runs, tiles + size, "size {size} ×{ss}");
+            assert_eq!(r.into_image(), want, "size {size} ×{ss}");
+            assert_eq!(render(&scene, &fl, size, ss).unwrap(), want);
+        }
+    }
 
     #[test]
     fn raster_and_svg_of_every_shape_kind() {

@@ -386,6 +386,388 @@ fn border_map(
     m
 }
 
+/// Where a [`ColourMapper`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MapPhase {
+    Palette,
+    Regions,
+    Border,
+    Diff,
+    Far,
+    Paint,
+    Done,
+}
+
+/// [`colour_map`] in bounded steps: each phase (palette, regions, border
+/// colours, difference table, the automatic choice, painting) goes on for
+/// about `budget` pixels (or table entries) per [`ColourMapper::run`]. The
+/// map is the one [`colour_map`] makes, byte for byte.
+pub struct ColourMapper {
+    p: ColourParams,
+    phase: MapPhase,
+    /// What the map will be, once decided.
+    kind: ColourMapKind,
+    pos: usize,
+    seen: std::collections::HashSet<[u8; 4]>,
+    pal: Vec<[u8; 4]>,
+    labs: Vec<[f64; 3]>,
+    // Regions under construction (see [`regions`]; here a label is the
+    // region + 1 and 0 means none).
+    reg: Regions,
+    stack: Vec<usize>,
+    current: Option<(u32, [u8; 4])>,
+    // Border colours under construction (see [`border_colours`]).
+    border: Vec<Option<[u8; 4]>>,
+    stamp: Vec<u32>,
+    counts: Vec<([u8; 4], u32)>,
+    /// Offset inside the current region (border colours, the `far` test).
+    k: usize,
+    diff: HashMap<[u8; 4], [u8; 4]>,
+    map: Rgba8Image,
+}
+
+impl ColourMapper {
+    pub fn new(src: &Rgba8Image, p: &ColourParams) -> ColourMapper {
+        let (phase, kind) = match p.strategy {
+            ColourStrategy::Hsv => (MapPhase::Paint, ColourMapKind::Hsv),
+            ColourStrategy::Difference => (MapPhase::Palette, ColourMapKind::Difference),
+            ColourStrategy::Border => (MapPhase::Palette, ColourMapKind::Border),
+            // Decided after the `far` test.
+            ColourStrategy::Auto => (MapPhase::Palette, ColourMapKind::Border),
+        };
+        ColourMapper {
+            p: p.clone(),
+            phase,
+            kind,
+            pos: 0,
+            seen: Default::default(),
+            pal: vec![],
+            labs: vec![],
+            reg: Regions {
+                label: vec![],
+                colour: vec![],
+                pixels: vec![],
+                start: vec![0],
+            },
+            stack: vec![],
+            current: None,
+            border: vec![],
+            stamp: vec![],
+            counts: vec![],
+            k: 0,
+            diff: HashMap::new(),
+            map: Rgba8Image::new(src.width, src.height),
+        }
+    }
+
+    /// Go on for about `budget` units of work; `true` when the map is made.
+    pub fn run(&mut self, src: &Rgba8Image, mask: &[bool], budget: usize) -> bool {
+        let budget = budget.max(1);
+        let mut spent = 0usize;
+        let n = src.pixel_count();
+        let (w, h) = (src.width as usize, src.height as usize);
+        while spent < budget {
+            match self.phase {
+                MapPhase::Palette => {
+                    let end = n.min(self.pos + budget - spent);
+                    for i in self.pos..end {
+                        let c = src.at(i);
+                        if c[3] > 0 {
+                            self.seen.insert(c);
+                        }
+                    }
+                    spent += end - self.pos;
+                    self.pos = end;
+                    if end == n {
+                        let mut v: Vec<[u8; 4]> =
+                            std::mem::take(&mut self.seen).into_iter().collect();
+                        v.sort_unstable();
+                        self.pal = v;
+                        self.labs = self.pal.iter().map(|&c| lab(c)).collect();
+                        self.pos = 0;
+                        self.phase = match self.p.strategy {
+                            ColourStrategy::Difference => MapPhase::Diff,
+                            ColourStrategy::Auto
+                                if self
+                                    .pal
+                                    .iter()
+                                    .filter(|c| !self.p.exclude.contains(&rgb(**c)))
+                                    .count()
+                                    <= 1 =>
+                            {
+                                self.kind = ColourMapKind::Hsv;
+                                MapPhase::Paint
+                            }
+                            _ => {
+                                // Labels are region + 1 here (0 = none): a zeroed
+                                // allocation costs nothing until touched.
+                                self.reg.label = vec![0; n];
+                                self.reg.pixels = Vec::with_capacity(n);
+                                MapPhase::Regions
+                            }
+                        };
+                    }
+                }
+                MapPhase::Regions => {
+                    // `regions`, resumable between any two pixels (labels + 1).
+                    let reg = &mut self.reg;
+                    if let Some((r, c)) = self.current {
+                        while spent < budget {
+                            let Some(i) = self.stack.pop() else { break };
+                            reg.pixels.push(i as u32);
+                            let (x, y) = (i % w, i / w);
+                            let mut visit = |j: usize| {
+                                if reg.label[j] == 0 && src.at(j) == c {
+                                    reg.label[j] = r + 1;
+                                    self.stack.push(j);
+                                }
+                            };
+                            if x > 0 {
+                                visit(i - 1);
+                            }
+                            if x + 1 < w {
+                                visit(i + 1);
+                            }
+                            if y > 0 {
+                                visit(i - w);
+                            }
+                            if y + 1 < h {
+                                visit(i + w);
+                            }
+                            spent += 1;
+                        }
+                        if !self.stack.is_empty() {
+                            continue;
+                        }
+                        reg.start.push(reg.pixels.len() as u32);
+                        self.current = None;
+                    }
+                    while self.pos < n && spent < budget {
+                        let seed = self.pos;
+                        if reg.label[seed] == 0 && src.at(seed)[3] != 0 {
+                            break;
+                        }
+                        self.pos += 1;
+                        spent += 1;
+                    }
+                    if self.pos == n {
+                        self.pos = 0;
+                        self.stamp = vec![0u32; n];
+                        self.phase = MapPhase::Border;
+                    } else if spent < budget {
+                        let seed = self.pos;
+                        let r = reg.colour.len() as u32;
+                        let c = src.at(seed);
+                        reg.colour.push(c);
+                        reg.label[seed] = r + 1;
+                        self.stack.push(seed);
+                        self.current = Some((r, c));
+                        self.pos += 1;
+                        spent += 1;
+                    }
+                }
+                MapPhase::Border => {
+                    // `border_colours`, resumable inside a region.
+                    let reg = &self.reg;
+                    let r = self.pos;
+                    if r == reg.colour.len() {
+                        self.stamp = vec![];
+                        self.pos = 0;
+                        self.phase = MapPhase::Diff;
+                        continue;
+                    }
+                    let own = &reg.pixels[reg.start[r] as usize..reg.start[r + 1] as usize];
+                    while self.k < own.len() && spent < budget {
+                        let i = own[self.k] as usize;
+                        let (x, y) = (i % w, i / w);
+                        let mut nb = [usize::MAX; 4];
+                        if x > 0 {
+                            nb[0] = i - 1;
+                        }
+                        if x + 1 < w {
+                            nb[1] = i + 1;
+                        }
+                        if y > 0 {
+                            nb[2] = i - w;
+                        }
+                        if y + 1 < h {
+                            nb[3] = i + w;
+                        }
+                        for j in nb {
+                            if j == usize::MAX
+                                || reg.label[j] == r as u32 + 1
+                                || self.stamp[j] == r as u32 + 1
+                            {
+                                continue;
+                            }
+                            self.stamp[j] = r as u32 + 1;
+                            let c = src.at(j);
+                            if c[3] == 0 || self.p.exclude.contains(&rgb(c)) {
+                                continue;
+                            }
+                            match self.counts.iter_mut().find(|e| e.0 == c) {
+                                Some(e) => e.1 += 1,
+                                None => self.counts.push((c, 1)),
+                            }
+                        }
+                        self.k += 1;
+                        spent += 1;
+                    }
+                    if self.k < own.len() {
+                        continue;
+                    }
+                    let own_lab = lab(reg.colour[r]);
+                    let best = self
+                        .counts
+                        .iter()
+                        .map(|&(c, n)| (n, lab_distance(own_lab, lab(c)), c))
+                        .min_by(|a, b| b.0.cmp(&a.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
+                    self.border.push(best.map(|b| b.2));
+                    self.counts.clear();
+                    self.k = 0;
+                    self.pos += 1;
+                    spent += 1;
+                }
+                MapPhase::Diff => {
+                    // `difference_table`, a colour (one row of distances) at a time.
+                    let pal = &self.pal;
+                    while self.pos < pal.len() && spent < budget {
+                        let i = self.pos;
+                        let mut best: Option<(f64, usize)> = None;
+                        for (j, &o) in pal.iter().enumerate() {
+                            if j == i || self.p.exclude.contains(&rgb(o)) {
+                                continue;
+                            }
+                            let d = lab_distance(self.labs[i], self.labs[j]);
+                            if best.is_none_or(|(bd, _)| d < bd) {
+                                best = Some((d, j));
+                            }
+                        }
+                        self.diff
+                            .insert(pal[i], best.map_or(pal[i], |(_, j)| pal[j]));
+                        self.pos += 1;
+                        spent += pal.len().max(1);
+                    }
+                    if self.pos == pal.len() {
+                        self.pos = 0;
+                        self.phase = if self.p.strategy == ColourStrategy::Auto {
+                            MapPhase::Far
+                        } else {
+                            MapPhase::Paint
+                        };
+                    }
+                }
+                MapPhase::Far => {
+                    // Would the shared-border map move a region that can
+                    // receive elements by `d_max` or more?
+                    let reg = &self.reg;
+                    let r = self.pos;
+                    if r == reg.colour.len() {
+                        self.pos = 0;
+                        self.phase = MapPhase::Paint;
+                        continue;
+                    }
+                    let own = reg.colour[r];
+                    let px = &reg.pixels[reg.start[r] as usize..reg.start[r + 1] as usize];
+                    let mut hit = false;
+                    if !self.p.exclude.contains(&rgb(own)) {
+                        while self.k < px.len() && spent < budget {
+                            if mask[px[self.k] as usize] {
+                                hit = true;
+                                break;
+                            }
+                            self.k += 1;
+                            spent += 1;
+                        }
+                        if !hit && self.k < px.len() {
+                            continue;
+                        }
+                    }
+                    spent += 1;
+                    self.k = 0;
+                    self.pos += 1;
+                    if hit {
+                        let to = self.border[r].unwrap_or(self.diff[&own]);
+                        if lab_distance(lab(own), lab(to)) >= self.p.d_max {
+                            self.kind = ColourMapKind::Difference;
+                            self.pos = 0;
+                            self.phase = MapPhase::Paint;
+                        }
+                    }
+                }
+                MapPhase::Paint => {
+                    let end = n.min(self.pos + budget - spent);
+                    let out = &mut self.map.data[4 * self.pos..4 * end];
+                    let inp = &src.data[4 * self.pos..4 * end];
+                    match self.kind {
+                        ColourMapKind::Hsv => {
+                            for (o, c) in out.chunks_exact_mut(4).zip(inp.chunks_exact(4)) {
+                                let c = [c[0], c[1], c[2], c[3]];
+                                o.copy_from_slice(&if c[3] > 0 {
+                                    hsv_shift(c, self.p.hsv)
+                                } else {
+                                    c
+                                });
+                            }
+                        }
+                        ColourMapKind::Difference => {
+                            for (o, c) in out.chunks_exact_mut(4).zip(inp.chunks_exact(4)) {
+                                let c = [c[0], c[1], c[2], c[3]];
+                                o.copy_from_slice(&if c[3] > 0 { self.diff[&c] } else { c });
+                            }
+                        }
+                        ColourMapKind::Border => {
+                            let label = &self.reg.label[self.pos..end];
+                            for (o, &l) in out.chunks_exact_mut(4).zip(label) {
+                                if l != 0 {
+                                    let r = l as usize - 1;
+                                    let c = self.border[r]
+                                        .unwrap_or_else(|| self.diff[&self.reg.colour[r]]);
+                                    o.copy_from_slice(&c);
+                                }
+                            }
+                        }
+                    }
+                    spent += end - self.pos;
+                    self.pos = end;
+                    if end == n {
+                        self.phase = MapPhase::Done;
+                    }
+                }
+                MapPhase::Done => return true,
+            }
+        }
+        self.phase == MapPhase::Done
+    }
+
+    /// How far along, `0..=1` (by phase, then position in it).
+    pub fn fraction(&self) -> f64 {
+        let k = match self.phase {
+            MapPhase::Palette => 0,
+            MapPhase::Regions => 1,
+            MapPhase::Border => 2,
+            MapPhase::Diff => 3,
+            MapPhase::Far => 4,
+            MapPhase::Paint => 5,
+            MapPhase::Done => return 1.0,
+        };
+        let total = match self.phase {
+            MapPhase::Border | MapPhase::Far => self.reg.colour.len(),
+            MapPhase::Diff => self.pal.len(),
+            _ => self.map.pixel_count(),
+        };
+        (k as f64 + (self.pos as f64 / total.max(1) as f64).min(1.0)) / 6.0
+    }
+
+    /// The finished map (after [`ColourMapper::run`] returned `true`).
+    pub fn finish(self) -> ColourMap {
+        ColourMap {
+            map: self.map,
+            kind: self.kind,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -555,5 +937,68 @@ mod tests {
             colour_map(&far, &[false; 4], &params(ColourStrategy::Auto)).kind,
             ColourMapKind::Border
         );
+    }
+
+    /// The stepped colour map equals the one-go map byte for byte, for
+    /// every strategy, on the thesis images (and one scaled up, so regions
+    /// span many steps), whatever the budget.
+    #[test]
+    fn stepping_the_colour_map_gives_the_same_bytes_as_one_go() {
+        use crate::raster::{decode, Limits};
+        let fish = decode(
+            include_bytes!("../../assets/pixel/fish.png"),
+            Limits::default(),
+        )
+        .unwrap();
+        let trunk = decode(
+            include_bytes!("../../assets/pixel/trunk_unpatterned.png"),
+            Limits::default(),
+        )
+        .unwrap();
+        let mut big = Rgba8Image::new(fish.width * 3, fish.height * 3);
+        for y in 0..big.height {
+            for x in 0..big.width {
+                big.put(x, y, fish.get(x / 3, y / 3));
+            }
+        }
+        for img in [&fish, &trunk, &big] {
+            // A mask over part of the image only.
+            let mask: Vec<bool> = (0..img.pixel_count()).map(|i| i % 7 < 3).collect();
+            for strategy in [
+                ColourStrategy::Auto,
+                ColourStrategy::Border,
+                ColourStrategy::Difference,
+                ColourStrategy::Hsv,
+            ] {
+                for d_max in [50.0, 1.0] {
+                    let p = ColourParams {
+                        strategy,
+                        hsv: [20.0, 5.0, -30.0],
+                        exclude: vec![[0, 0, 0]],
+                        d_max,
+                    };
+                    let want = colour_map(img, &mask, &p);
+                    for budget in [1, 37, 5000, usize::MAX] {
+                        let mut m = ColourMapper::new(img, &p);
+                        let mut runs = 1;
+                        let mut last = 0.0;
+                        while !m.run(img, &mask, budget) {
+                            runs += 1;
+                            assert!(m.fraction() >= last && m.fraction() < 1.0);
+                            last = m.fraction();
+                        }
+                        if budget == 1 {
+                            assert!(runs >= img.pixel_count(), "{runs}");
+                        }
+                        let got = m.finish();
+                        assert_eq!(got.kind, want.kind, "{strategy:?} d_max {d_max}");
+                        assert!(
+                            got.map == want.map,
+                            "{strategy:?} d_max {d_max} budget {budget}: the maps differ"
+                        );
+                    }
+                }
+            }
+        }
     }
 }

@@ -170,13 +170,11 @@ impl Stage {
     }
 }
 
-/// Pixel tests per positions step and pixel visits per solver step: each
-/// well under 5 ms on a laptop, and in wasm.
-const POSITION_BUDGET: usize = 1_000_000;
-const SOLVER_BUDGET: usize = 1_000_000;
-/// Pixel visits per placement step and pixels per colour-counting step.
-const PLACEMENT_BUDGET: usize = 1_000_000;
-const COUNT_BUDGET: usize = 1 << 20;
+/// Work per step: pixel tests of the positions search, pixel visits of the
+/// solver and of the placement, pixels of the colour map and the colour
+/// count. At 4096² with a full mask a step of any stage stays around
+/// 5–15 ms (`filigree bench slices`); the output never depends on it.
+pub const STEP_BUDGET: usize = 200_000;
 
 /// The whole method as a resumable [`Job`]: positions (several steps on big
 /// masks), colour map (one step), orientation (annotation, then solver
@@ -191,17 +189,22 @@ pub struct PixelJob {
     sampler: Option<position::PositionSampler>,
     positions: Vec<(i32, i32)>,
     colour_map: Option<colour::ColourMap>,
+    mapper: Option<colour::ColourMapper>,
     annotated: usize,
     solver: Option<laplace::FieldSolver>,
     field: Vec<[f32; 2]>,
     solve: Option<SolveStats>,
     placer: Option<placement::Placer>,
+    /// The placer's copy of the source is complete.
+    copied: bool,
     /// The placed image and element count once placement is done, while
     /// its colours (and, with HSV, the source's) are counted.
     placed: Option<(Rgba8Image, usize)>,
     counter: Option<ColourCounter>,
     colours_before: Option<usize>,
     colours_after: Option<usize>,
+    /// Work per step ([`STEP_BUDGET`]).
+    budget: usize,
 }
 
 impl PixelJob {
@@ -276,19 +279,29 @@ impl PixelJob {
             sampler: Some(sampler),
             positions: vec![],
             colour_map: None,
+            mapper: None,
             annotated: 0,
             solver: None,
             field: vec![],
             solve: None,
             placer: None,
+            copied: false,
             placed: None,
             counter: None,
             colours_before,
             colours_after: None,
+            budget: STEP_BUDGET,
         })
     }
 
     /// The stage the next [`Job::step`] works on.
+    /// The same job with `budget` units of work per step instead of
+    /// [`STEP_BUDGET`] (for tests that check the steps do not matter).
+    pub fn with_budget(mut self, budget: usize) -> Self {
+        self.budget = budget.max(1);
+        self
+    }
+
     pub fn stage(&self) -> Stage {
         self.stage
     }
@@ -313,7 +326,7 @@ impl Job for PixelJob {
                     .sampler
                     .as_mut()
                     .expect("sampler until positions are done");
-                if s.run(&self.mask, POSITION_BUDGET) {
+                if s.run(&self.mask, self.budget) {
                     self.positions = self.sampler.take().expect("present").into_positions();
                     self.stage = Stage::ColourMap;
                     return Ok(self.progress(0.25));
@@ -322,15 +335,22 @@ impl Job for PixelJob {
                 Ok(self.progress(0.25 * f))
             }
             Stage::ColourMap => {
-                let p = colour::ColourParams {
-                    strategy: self.params.colour,
-                    hsv: self.params.hsv,
-                    exclude: self.params.exclude.clone(),
-                    d_max: self.params.d_max,
-                };
-                self.colour_map = Some(colour::colour_map(&self.source, &self.mask, &p));
-                self.stage = Stage::Orientation;
-                Ok(self.progress(0.35))
+                let mapper = self.mapper.get_or_insert_with(|| {
+                    let p = colour::ColourParams {
+                        strategy: self.params.colour,
+                        hsv: self.params.hsv,
+                        exclude: self.params.exclude.clone(),
+                        d_max: self.params.d_max,
+                    };
+                    colour::ColourMapper::new(&self.source, &p)
+                });
+                if mapper.run(&self.source, &self.mask, self.budget) {
+                    self.colour_map = self.mapper.take().map(colour::ColourMapper::finish);
+                    self.stage = Stage::Orientation;
+                    return Ok(self.progress(0.35));
+                }
+                let f = 0.25 + 0.1 * mapper.fraction();
+                Ok(self.progress(f))
             }
             Stage::Orientation => {
                 let (w, h) = (self.source.width, self.source.height);
@@ -353,7 +373,7 @@ impl Job for PixelJob {
                         Ok(self.progress(0.36))
                     }
                     Some(solver) => {
-                        if solver.run(SOLVER_BUDGET) {
+                        if solver.run(self.budget) {
                             self.solve = Some(solver.stats());
                             self.field = self.solver.take().expect("running").into_field();
                             self.stage = Stage::Placement;
@@ -373,6 +393,13 @@ impl Job for PixelJob {
                     let placer = self
                         .placer
                         .get_or_insert_with(|| placement::Placer::new(&self.source));
+                    if !self.copied {
+                        // The output starts as the source: copied in parts
+                        // (64 MB at 4096²), copying is cheap per pixel.
+                        self.copied =
+                            placer.copy_source(&self.source, self.budget.saturating_mul(16));
+                        return Ok(self.progress(0.9));
+                    }
                     let inputs = placement::PlaceInputs {
                         mask: &self.mask,
                         sheet: &self.sheet,
@@ -382,7 +409,7 @@ impl Job for PixelJob {
                         mode: self.params.element_colour,
                         default: self.params.default_direction,
                     };
-                    if placer.run(&inputs, PLACEMENT_BUDGET) {
+                    if placer.run(&inputs, self.budget) {
                         self.placed = self.placer.take().map(placement::Placer::finish);
                     }
                     let f = self
@@ -396,14 +423,14 @@ impl Job for PixelJob {
                 let (image, _) = self.placed.as_ref().expect("placed");
                 let counter = self.counter.get_or_insert_with(ColourCounter::new);
                 if self.colours_after.is_none() {
-                    if counter.run(image, 0, COUNT_BUDGET, usize::MAX) {
+                    if counter.run(image, 0, self.budget, usize::MAX) {
                         self.colours_after = Some(counter.count());
                         self.counter = None;
                     }
                     return Ok(self.progress(0.99));
                 }
                 if self.colours_before.is_none() {
-                    if counter.run(&self.source, 0, COUNT_BUDGET, usize::MAX) {
+                    if counter.run(&self.source, 0, self.budget, usize::MAX) {
                         self.colours_before = Some(counter.count());
                         self.counter = None;
                     }
@@ -442,6 +469,92 @@ pub fn texture(inputs: PixelInputs, params: PixelParams) -> Result<PixelOutput> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fish case scaled up `k` times (source, mask, sheet, strokes).
+    fn fish(k: u32) -> PixelInputs {
+        use crate::raster::{decode, Limits};
+        let img = |b: &[u8]| decode(b, Limits::default()).unwrap();
+        let up = |m: &Rgba8Image| {
+            let mut out = Rgba8Image::new(m.width * k, m.height * k);
+            for y in 0..out.height {
+                for x in 0..out.width {
+                    out.put(x, y, m.get(x / k, y / k));
+                }
+            }
+            out
+        };
+        #[derive(serde::Deserialize)]
+        struct Strokes {
+            strokes: Vec<Stroke>,
+        }
+        let s: Strokes =
+            serde_json::from_slice(include_bytes!("../../assets/pixel/fish_strokes.json")).unwrap();
+        PixelInputs {
+            source: up(&img(include_bytes!("../../assets/pixel/fish.png"))),
+            mask: up(&img(include_bytes!(
+                "../../assets/pixel/fish_body_boundary.png"
+            ))),
+            elements: Elements::Sheet(img(include_bytes!("../../assets/pixel/fish_scale.png"))),
+            strokes: s
+                .strokes
+                .into_iter()
+                .map(|st| {
+                    st.into_iter()
+                        .map(|p| [p[0] * k as f32, p[1] * k as f32])
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+
+    /// The whole job with small steps (every stage spread over many) gives
+    /// the same bytes as with the default budget and with one that does
+    /// each stage in one go.
+    #[test]
+    fn stepping_the_whole_job_gives_the_same_bytes_whatever_the_budget() {
+        for colour in [ColourStrategy::Auto, ColourStrategy::Hsv] {
+            let params = PixelParams {
+                positions: PositionStrategy::Packed,
+                partial: true,
+                colour,
+                seed: 7,
+                ..Default::default()
+            };
+            let mut outs = vec![];
+            for budget in [2_000, STEP_BUDGET, usize::MAX] {
+                let job = PixelJob::new(fish(3), params.clone())
+                    .unwrap()
+                    .with_budget(budget);
+                let mut steps = 0;
+                let mut job = job;
+                let out = loop {
+                    steps += 1;
+                    if let Step::Done(out) = job.step().unwrap() {
+                        break out;
+                    }
+                };
+                outs.push((steps, out));
+            }
+            assert!(
+                outs[0].0 > outs[2].0 + 100,
+                "{} vs {} steps",
+                outs[0].0,
+                outs[2].0
+            );
+            for (_, o) in &outs[1..] {
+                let a = &outs[0].1;
+                assert!(o.image == a.image && o.colour_map == a.colour_map);
+                assert_eq!(o.positions, a.positions);
+                assert_eq!(o.stats, a.stats);
+                assert!(o
+                    .field
+                    .iter()
+                    .zip(&a.field)
+                    .all(|(p, q)| p[0].to_bits() == q[0].to_bits()
+                        && p[1].to_bits() == q[1].to_bits()));
+            }
+        }
+    }
 
     #[test]
     fn params_defaults_and_json_names() {

@@ -57,6 +57,7 @@ pub fn place(
     default: Direction8,
 ) -> (Rgba8Image, usize) {
     let mut p = Placer::new(source);
+    while !p.copy_source(source, usize::MAX / 2) {}
     let inputs = PlaceInputs {
         mask,
         sheet,
@@ -85,6 +86,8 @@ pub struct PlaceInputs<'a> {
 /// elements, about `budget` pixel visits' worth, in position order.
 pub struct Placer {
     out: Rgba8Image,
+    /// Pixels of the source copied into `out` so far.
+    copied: usize,
     next: usize,
     placed: usize,
     pixels: Vec<usize>,
@@ -92,15 +95,29 @@ pub struct Placer {
 }
 
 impl Placer {
-    /// Start from a copy of `source`.
+    /// Start from a copy of `source`, made by [`Placer::copy_source`]
+    /// (a bounded part per call) before the first [`Placer::run`].
     pub fn new(source: &Rgba8Image) -> Placer {
         Placer {
-            out: source.clone(),
+            // Zeroed pages cost nothing until the copy touches them.
+            out: Rgba8Image::new(source.width, source.height),
+            copied: 0,
             next: 0,
             placed: 0,
             pixels: Vec::new(),
             tally: Vec::new(),
         }
+    }
+
+    /// Copy about `budget` more pixels of `source` (the one given to
+    /// [`Placer::new`]); `true` when the copy is complete.
+    pub fn copy_source(&mut self, source: &Rgba8Image, budget: usize) -> bool {
+        let n = self.out.pixel_count();
+        let end = n.min(self.copied.saturating_add(budget.max(1)));
+        self.out.data[4 * self.copied..4 * end]
+            .copy_from_slice(&source.data[4 * self.copied..4 * end]);
+        self.copied = end;
+        end == n
     }
 
     /// Fraction of the positions drawn.
@@ -111,6 +128,7 @@ impl Placer {
     /// Draw elements until about `budget` pixels were visited; `true` when
     /// every position is done.
     pub fn run(&mut self, inp: &PlaceInputs, budget: usize) -> bool {
+        debug_assert_eq!(self.copied, self.out.pixel_count(), "copy_source first");
         let (w, h) = (self.out.width as i32, self.out.height as i32);
         let side = inp.sheet.side as i32;
         // Averaging the field and drawing the sprite visit 2·side² pixels.

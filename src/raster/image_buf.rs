@@ -173,41 +173,59 @@ impl Rgba8Image {
     /// source box (alpha-weighted so transparent pixels do not darken edges).
     /// Images already small enough are returned unchanged.
     pub fn thumbnail(&self, max_side: u32) -> Rgba8Image {
+        match self.thumbnail_size(max_side) {
+            None => self.clone(),
+            Some((tw, th)) => {
+                let mut out = Rgba8Image::new(tw, th);
+                for ty in 0..th {
+                    self.thumbnail_row(&mut out, ty);
+                }
+                out
+            }
+        }
+    }
+
+    /// The size of [`Rgba8Image::thumbnail`]'s result, or `None` when it is
+    /// the image itself (already small enough).
+    pub fn thumbnail_size(&self, max_side: u32) -> Option<(u32, u32)> {
         let max_side = max_side.clamp(1, limits::MAX_THUMBNAIL_SIDE);
         let long = self.width.max(self.height);
         if long <= max_side || long == 0 {
-            return self.clone();
+            return None;
         }
         let tw = ((self.width as u64 * max_side as u64) / long as u64).max(1) as u32;
         let th = ((self.height as u64 * max_side as u64) / long as u64).max(1) as u32;
-        let mut out = Rgba8Image::new(tw, th);
-        for ty in 0..th {
-            let y0 = (ty as u64 * self.height as u64 / th as u64) as u32;
-            let y1 = (((ty + 1) as u64 * self.height as u64 / th as u64) as u32).max(y0 + 1);
-            for tx in 0..tw {
-                let x0 = (tx as u64 * self.width as u64 / tw as u64) as u32;
-                let x1 = (((tx + 1) as u64 * self.width as u64 / tw as u64) as u32).max(x0 + 1);
-                let (mut r, mut g, mut b, mut a, mut n) = (0u64, 0u64, 0u64, 0u64, 0u64);
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        let p = self.get(x, y);
-                        let pa = p[3] as u64;
-                        r += p[0] as u64 * pa;
-                        g += p[1] as u64 * pa;
-                        b += p[2] as u64 * pa;
-                        a += pa;
-                        n += 1;
-                    }
+        Some((tw, th))
+    }
+
+    /// Row `ty` of a thumbnail `out` sized by [`Rgba8Image::thumbnail_size`]
+    /// (so a job can make a thumbnail a few rows at a time).
+    pub fn thumbnail_row(&self, out: &mut Rgba8Image, ty: u32) {
+        let (tw, th) = (out.width, out.height);
+        let y0 = (ty as u64 * self.height as u64 / th as u64) as u32;
+        let y1 = (((ty + 1) as u64 * self.height as u64 / th as u64) as u32).max(y0 + 1);
+        for tx in 0..tw {
+            let x0 = (tx as u64 * self.width as u64 / tw as u64) as u32;
+            let x1 = (((tx + 1) as u64 * self.width as u64 / tw as u64) as u32).max(x0 + 1);
+            let (mut r, mut g, mut b, mut a, mut n) = (0u64, 0u64, 0u64, 0u64, 0u64);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let p = self.get(x, y);
+                    let pa = p[3] as u64;
+                    r += p[0] as u64 * pa;
+                    g += p[1] as u64 * pa;
+                    b += p[2] as u64 * pa;
+                    a += pa;
+                    n += 1;
                 }
-                // Alpha-weighted mean colour; fully transparent boxes stay transparent.
-                let px = match (r.checked_div(a), g.checked_div(a), b.checked_div(a)) {
-                    (Some(r), Some(g), Some(b)) => [r as u8, g as u8, b as u8, (a / n) as u8],
-                    _ => [0, 0, 0, 0],
-                };
-                out.put(tx, ty, px);
             }
+            // Alpha-weighted mean colour; fully transparent boxes stay transparent.
+            let px = match (r.checked_div(a), g.checked_div(a), b.checked_div(a)) {
+                (Some(r), Some(g), Some(b)) => [r as u8, g as u8, b as u8, (a / n) as u8],
+                _ => [0, 0, 0, 0],
+            };
+            out.put(tx, ty, px);
         }
-        out
     }
 }
 

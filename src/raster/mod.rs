@@ -4,6 +4,6 @@ mod palette;
 
 pub use image_buf::{decode, encode_png, Limits, Rgba8Image};
 pub use palette::{
-    check_tolerance, cluster_counts, cluster_palette, colour_counts, count_colours, exact_palette,
-    Cluster, ColourCounter, PaletteEntry,
+    check_tolerance, cluster_counts, cluster_order, cluster_palette, colour_counts, count_colours,
+    exact_palette, Cluster, ColourCounter, Leaders, PaletteEntry, RadixSteps,
 };

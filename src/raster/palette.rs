@@ -70,6 +70,93 @@ fn radix_sort(v: &mut Vec<u32>) {
     }
 }
 
+/// LSD radix sort by a `u32` key (four passes of one byte), resumable
+/// between any two elements so a job can spread a sort of millions over
+/// slices. Stable: equal keys keep their order.
+pub struct RadixSteps<T> {
+    pass: u32,
+    scatter: bool,
+    pos: usize,
+    count: [usize; 257],
+    buf: Vec<T>,
+}
+
+impl<T: Copy + Default> Default for RadixSteps<T> {
+    fn default() -> Self {
+        RadixSteps {
+            pass: 0,
+            scatter: false,
+            pos: 0,
+            count: [0; 257],
+            buf: Vec::new(),
+        }
+    }
+}
+
+impl<T: Copy + Default> RadixSteps<T> {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Go on sorting `v` by `key` for about `budget` elements; `true` when sorted.
+    pub fn run(&mut self, v: &mut Vec<T>, key: impl Fn(&T) -> u32, budget: usize) -> bool {
+        let budget = budget.max(1);
+        let mut spent = 0;
+        while self.pass < 4 && spent < budget {
+            let shift = 8 * self.pass;
+            let byte = |x: &T| ((key(x) >> shift) & 0xff) as usize;
+            let end = v.len().min(self.pos + budget - spent);
+            if !self.scatter {
+                for x in &v[self.pos..end] {
+                    self.count[byte(x) + 1] += 1;
+                }
+            } else {
+                for x in &v[self.pos..end] {
+                    let b = byte(x);
+                    self.buf[self.count[b]] = *x;
+                    self.count[b] += 1;
+                }
+            }
+            spent += end - self.pos + 1;
+            self.pos = end;
+            if end < v.len() {
+                continue;
+            }
+            self.pos = 0;
+            if self.scatter {
+                std::mem::swap(v, &mut self.buf);
+                self.next_pass();
+            } else if self.count.contains(&v.len()) {
+                // Every key has the same byte here: nothing moves.
+                self.next_pass();
+            } else {
+                for i in 0..256 {
+                    self.count[i + 1] += self.count[i];
+                }
+                if self.buf.len() != v.len() {
+                    self.buf = vec![T::default(); v.len()];
+                }
+                self.scatter = true;
+            }
+        }
+        if self.pass == 4 {
+            self.buf = Vec::new();
+        }
+        self.pass == 4
+    }
+
+    fn next_pass(&mut self) {
+        self.pass += 1;
+        self.scatter = false;
+        self.count = [0; 257];
+    }
+
+    /// Passes done, `0..=4` (a quarter each).
+    pub fn fraction(&self) -> f64 {
+        self.pass as f64 / 4.0
+    }
+}
+
 /// Counts the distinct colours of pixels with alpha > `min_alpha`, a slice
 /// of pixels at a time (so a 16 Mpx image never blocks one job step), and
 /// can stop early once more than a limit are seen.
@@ -226,47 +313,88 @@ fn leader_clusters(
     n: usize,
     tolerance: f64,
 ) -> Vec<Cluster> {
-    let tol2 = tolerance * tolerance;
-    let mut clusters: Vec<Cluster> = Vec::new();
-    if n < GRID_FROM {
-        for (rgba, count) in entries {
-            match clusters
-                .iter_mut()
-                .find(|c| rgb_dist2(c.rgba, rgba) <= tol2)
-            {
-                Some(c) => {
-                    c.count += count;
-                    c.members += 1;
+    let mut l = Leaders::new(tolerance, n);
+    for (rgba, count) in entries {
+        l.add(rgba, count);
+    }
+    let mut clusters = l.into_clusters();
+    clusters.sort_by(cluster_order);
+    clusters
+}
+
+/// The order clusters are listed in: falling count, ties by colour.
+pub fn cluster_order(a: &Cluster, b: &Cluster) -> std::cmp::Ordering {
+    b.count.cmp(&a.count).then(a.rgba.cmp(&b.rgba))
+}
+
+/// Greedy leader clustering fed one colour at a time, most frequent first
+/// (see [`cluster_palette`]), so a job can spread it over slices.
+pub struct Leaders {
+    tol2: f64,
+    clusters: Vec<Cluster>,
+    /// Representatives by cube, from [`GRID_FROM`] colours on.
+    grid: Option<Grid>,
+}
+
+impl Leaders {
+    /// Clustering of `n` colours with a tolerance already checked
+    /// ([`check_tolerance`]).
+    pub fn new(tolerance: f64, n: usize) -> Leaders {
+        Leaders {
+            tol2: tolerance * tolerance,
+            clusters: Vec::new(),
+            grid: (n >= GRID_FROM).then(|| Grid::new(tolerance)),
+        }
+    }
+
+    /// The next colour (in falling frequency) and its pixel count. Returns
+    /// the representatives it was compared with (a work measure).
+    pub fn add(&mut self, rgba: [u8; 4], count: u64) -> usize {
+        let tol2 = self.tol2;
+        let (found, work) = match &self.grid {
+            None => {
+                let k = self
+                    .clusters
+                    .iter()
+                    .position(|c| rgb_dist2(c.rgba, rgba) <= tol2);
+                (k, k.map_or(self.clusters.len(), |k| k + 1))
+            }
+            Some(g) => g.first_within(&self.clusters, rgba, tol2),
+        };
+        match found {
+            Some(k) => {
+                let c = &mut self.clusters[k];
+                c.count += count;
+                c.members += 1;
+            }
+            None => {
+                if let Some(g) = &mut self.grid {
+                    g.file(self.clusters.len(), rgba);
                 }
-                None => clusters.push(Cluster {
+                self.clusters.push(Cluster {
                     rgba,
                     count,
                     members: 1,
-                }),
+                });
             }
         }
-    } else {
-        let mut grid = Grid::new(tolerance);
-        for (rgba, count) in entries {
-            match grid.first_within(&clusters, rgba, tol2) {
-                Some(k) => {
-                    let c = &mut clusters[k];
-                    c.count += count;
-                    c.members += 1;
-                }
-                None => {
-                    grid.file(clusters.len(), rgba);
-                    clusters.push(Cluster {
-                        rgba,
-                        count,
-                        members: 1,
-                    });
-                }
-            }
-        }
+        work
     }
-    clusters.sort_by(|a, b| b.count.cmp(&a.count).then(a.rgba.cmp(&b.rgba)));
-    clusters
+
+    /// Clusters so far.
+    pub fn len(&self) -> usize {
+        self.clusters.len()
+    }
+
+    /// Whether no colour was added.
+    pub fn is_empty(&self) -> bool {
+        self.clusters.is_empty()
+    }
+
+    /// The clusters in the order they were made.
+    pub fn into_clusters(self) -> Vec<Cluster> {
+        self.clusters
+    }
 }
 
 /// Cluster representatives filed by cube: `head[cube]` is the newest
@@ -314,20 +442,23 @@ impl Grid {
     }
 
     /// The smallest cluster index whose representative is within the
-    /// tolerance of `c` (exactly the test of the plain scan).
-    fn first_within(&self, clusters: &[Cluster], c: [u8; 4], tol2: f64) -> Option<usize> {
+    /// tolerance of `c` (exactly the test of the plain scan), and how many
+    /// representatives were looked at.
+    fn first_within(&self, clusters: &[Cluster], c: [u8; 4], tol2: f64) -> (Option<usize>, usize) {
         let range = |v: u8| {
             let v = v as f64;
             (self.cell(v - self.reach), self.cell(v + self.reach))
         };
         let (rx, ry, rz) = (range(c[0]), range(c[1]), range(c[2]));
         let mut best: Option<usize> = None;
+        let mut looked = 0;
         for x in rx.0..=rx.1 {
             for y in ry.0..=ry.1 {
                 for z in rz.0..=rz.1 {
                     let mut k = self.head[(x * self.n + y) * self.n + z];
                     while k != 0 {
                         let i = k as usize - 1;
+                        looked += 1;
                         if best.is_none_or(|b| i < b) && rgb_dist2(clusters[i].rgba, c) <= tol2 {
                             best = Some(i);
                         }
@@ -336,7 +467,7 @@ impl Grid {
                 }
             }
         }
-        best
+        (best, looked)
     }
 }
 

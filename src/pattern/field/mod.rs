@@ -250,6 +250,42 @@ mod tests {
         );
     }
 
+    /// An evaluation spread over tile ranges of any size (as a job spreads
+    /// it over slices) gives the same fields, winners and work as one
+    /// `eval` call, also when the evaluator is reused between evaluations.
+    #[test]
+    fn evaluating_in_tile_ranges_gives_the_same_bits_as_one_go() {
+        let sc = scene(SCENE);
+        let mut nodes = vec![];
+        sc.rec.tape.forward(&sc.rec.float_values(), &mut nodes);
+        for n in [37, 64, 100] {
+            let mut one = Evaluator::new(n, 3.0);
+            one.eval(&sc, &nodes, true);
+            let mut parts = Evaluator::new(n, 3.0);
+            for chunk in [1, 2, 5, 1000] {
+                parts.begin(&sc, &nodes, true);
+                let tiles = parts.tiles();
+                assert_eq!(tiles, n.div_ceil(T1).pow(2));
+                let mut t = 0;
+                while t < tiles {
+                    parts.eval_tiles(&sc, true, t..(t + chunk).min(tiles));
+                    t += chunk;
+                }
+                parts.finish(&sc);
+                assert_eq!(parts.work, one.work, "n {n} chunk {chunk}");
+                assert!(
+                    parts
+                        .s
+                        .iter()
+                        .zip(&one.s)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "n {n} chunk {chunk}: fields differ"
+                );
+                assert_eq!(parts.win, one.win, "n {n} chunk {chunk}");
+            }
+        }
+    }
+
     use proptest::prelude::*;
 
     /// A number in `[lo, hi)` written with 3 decimals.

@@ -31,6 +31,10 @@ pub struct Evaluator {
     pub(super) ranges2: Vec<(usize, usize)>,
     pub(super) gcache: GeomCache,
     pub(super) lane_channels: Vec<bool>,
+    /// Culling stamp of the current big tile (counts on across `eval_tiles` calls).
+    tile_id: u32,
+    /// Unweighted item evaluations of the evaluation in progress.
+    raw_work: u64,
 }
 
 impl Evaluator {
@@ -54,6 +58,8 @@ impl Evaluator {
             ranges2: vec![],
             gcache: GeomCache::default(),
             lane_channels: vec![],
+            tile_id: 0,
+            raw_work: 0,
         }
     }
 
@@ -78,27 +84,72 @@ impl Evaluator {
 
     /// Evaluate every channel's field from the tape's node values.
     pub fn eval(&mut self, scene: &Scene, nodes: &[f64], winners: bool) {
+        self.begin(scene, nodes, winners);
+        self.eval_tiles(scene, winners, 0..self.tiles());
+        self.finish(scene);
+    }
+
+    /// Big tiles (`T1 × T1` pixels) of the grid, the unit of
+    /// [`Evaluator::eval_tiles`]: row-major, `n.div_ceil(T1)` per row.
+    pub fn tiles(&self) -> usize {
+        let k = self.n.div_ceil(T1);
+        k * k
+    }
+
+    /// Start an evaluation in parts: [`Evaluator::begin`], then
+    /// [`Evaluator::eval_tiles`] over consecutive ranges covering
+    /// `0..tiles()` in order, then [`Evaluator::finish`]. The fields (and
+    /// `work`) are bit for bit those of one [`Evaluator::eval`] call, so a
+    /// job can spread one evaluation over several slices.
+    pub fn begin(&mut self, scene: &Scene, nodes: &[f64], winners: bool) {
         self.gather(scene, nodes);
         self.gcache.start(scene.rec.shapes.len());
         let n = self.n;
         let nc = scene.channels.len();
+        if self.s.capacity() < nc * n * n {
+            // Every value is written by the evaluation: a fresh zeroed
+            // allocation (pages the system zeroes when first touched) spares
+            // this call from writing up to hundreds of megabytes at once.
+            self.s = vec![0.0; nc * n * n];
+        }
         self.s.resize(nc * n * n, 0.0);
         if winners {
             self.win.resize(nc * n * n, NO_WIN);
         }
+        self.centre_vals.resize(scene.items.len(), 0.0);
+        self.stamp.resize(scene.items.len(), u32::MAX);
+        self.tile_id = 0;
+        self.raw_work = 0;
+    }
+
+    /// Finish an evaluation begun with [`Evaluator::begin`]: sets `work`.
+    pub fn finish(&mut self, scene: &Scene) {
+        // Weighted by the mean item cost so the figure tracks time.
+        self.work = (self.raw_work as f64 * scene.cost) as u64;
+    }
+
+    /// Item evaluations so far in the evaluation begun last (unweighted).
+    pub fn raw_work(&self) -> u64 {
+        self.raw_work
+    }
+
+    /// Evaluate the big tiles `tiles` (see [`Evaluator::tiles`]); the
+    /// ranges of one evaluation must follow each other in order.
+    pub fn eval_tiles(&mut self, scene: &Scene, winners: bool, tiles: std::ops::Range<usize>) {
+        let n = self.n;
         let inv = 1.0 / n as f64;
         // Half diagonals (canvas units) of the two tile levels, a hair larger for rounding.
         let h1 = (T1 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
         let h2 = (T2 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
         let mut work = 0u64;
-        self.centre_vals.resize(scene.items.len(), 0.0);
-        self.stamp.resize(scene.items.len(), u32::MAX);
         let mut chain1 = std::mem::take(&mut self.chain1);
         let mut chain2 = std::mem::take(&mut self.chain2);
         let mut used = std::mem::take(&mut self.used);
-        let mut tile_id = 0u32;
-        for ty in 0..n.div_ceil(T1) {
-            for tx in 0..n.div_ceil(T1) {
+        let mut tile_id = self.tile_id;
+        let per_row = n.div_ceil(T1);
+        {
+            for t in tiles.start..tiles.end.min(per_row * per_row) {
+                let (tx, ty) = (t % per_row, t / per_row);
                 let (x0, y0) = (tx * T1, ty * T1);
                 let pc = [(x0 + T1 / 2) as f64 * inv, (y0 + T1 / 2) as f64 * inv];
                 self.gcache.next();
@@ -195,8 +246,8 @@ impl Evaluator {
         self.chain1 = chain1;
         self.chain2 = chain2;
         self.used = used;
-        // Weighted by the mean item cost so the figure tracks time.
-        self.work = (work as f64 * scene.cost) as u64;
+        self.tile_id = tile_id;
+        self.raw_work += work;
     }
 
     /// Apply a culled chain at one pixel; consecutive same-kind operations
@@ -331,19 +382,24 @@ impl Evaluator {
     /// The palette index at every pixel, by the fields: the colour whose
     /// field is most negative, or the background where none is.
     pub fn colour_indices(&self, scene: &Scene) -> Vec<u16> {
-        let nn = self.n * self.n;
-        (0..nn)
-            .map(|i| {
-                let mut best = (0.0, 0u16);
-                for (c, ch) in scene.channels.iter().enumerate() {
-                    let v = self.s[c * nn + i];
-                    if v < best.0 {
-                        best = (v, ch.colour);
-                    }
-                }
-                best.1
-            })
+        (0..self.n * self.n)
+            .map(|i| self.colour_index(scene, i))
             .collect()
+    }
+
+    /// The palette index at pixel `i` (`y * n + x`), as in
+    /// [`Evaluator::colour_indices`].
+    #[inline]
+    pub fn colour_index(&self, scene: &Scene, i: usize) -> u16 {
+        let nn = self.n * self.n;
+        let mut best = (0.0, 0u16);
+        for (c, ch) in scene.channels.iter().enumerate() {
+            let v = self.s[c * nn + i];
+            if v < best.0 {
+                best = (v, ch.colour);
+            }
+        }
+        best.1
     }
 }
 
