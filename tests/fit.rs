@@ -170,6 +170,33 @@ fn fit_from_a_png_target() {
     }
 }
 
+/// A 256 px image fitted on a 64 grid (the browser's sizes): the fitted
+/// offsets are not shifted. Snapping the image straight onto the grid used
+/// to take the pixel right of and below each cell centre, and every fit came
+/// out about half an image pixel (1/512 of the canvas) off.
+#[test]
+fn an_image_target_is_fitted_without_a_half_pixel_shift() {
+    let p = program("circles-grid");
+    let truth = [0.17, 0.17, 0.12, 0.12, 0.04];
+    let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+    let img = render::render(&scene, &truth, 256, 1).unwrap();
+    let mut o = small_opts(3);
+    o.loss.grid = 64;
+    let r =
+        run_quietly(FitJob::new(&p, &p.defaults(), &TargetSource::Image(&img, 60.0), o).unwrap())
+            .unwrap();
+    for name in ["ox", "oy"] {
+        let k = float_index(&p, name);
+        let err = r.params[k] - 0.12;
+        // Within a quarter of an image pixel; the shift was half a pixel, in one direction.
+        assert!(
+            err.abs() < 0.25 / 256.0 + 0.0005,
+            "{name} {} (error {err})",
+            r.params[k]
+        );
+    }
+}
+
 #[test]
 fn a_target_in_foreign_colours_is_rejected_with_the_palette_named() {
     let p = program("circles-grid");

@@ -3,6 +3,8 @@
 //! corpora, including the minimised inputs of past crashes, are regression
 //! tests without a fuzz run. Fuzzing itself is `cargo +nightly fuzz run
 //! <target>` (see `fuzz/README.md`).
+#[path = "support/app_projects.rs"]
+mod app_projects;
 #[path = "../fuzz/bodies.rs"]
 mod bodies;
 
@@ -104,6 +106,11 @@ fn strokes_corpus_replays() {
 #[test]
 fn requests_corpus_replays() {
     replay("requests");
+}
+
+#[test]
+fn project_corpus_replays() {
+    replay("project");
 }
 
 /// Every request kind has at least one seed in the `requests` corpus.
@@ -375,5 +382,67 @@ fn write_seeds() {
         "pattern-snap",
         json!({"program": grid, "bytes": filigree::raster::encode_png(&rendered_image).unwrap(),
                "size": 8, "tolerance": 40}),
+    );
+    req("defaults.json", "defaults", json!({"tool": "fit"}));
+    let inspect_state = json!({"name": "fish.png", "bytes": file("assets/pixel/fish.png")});
+    req(
+        "check-state.json",
+        "check-state",
+        json!({"tool": "inspect", "version": 1, "state": inspect_state}),
+    );
+    let mut fit_state = app_projects::fit_doc("circles-grid", false);
+    fit_state["result"] = json!({"params": [0.1], "loss": 0.5, "names": ["r"]});
+    req(
+        "check-state-fit.json",
+        "check-state",
+        json!({"tool": "fit", "version": 1, "state": fit_state}),
+    );
+    req(
+        "open-project.json",
+        "open-project",
+        json!({"text": app_projects::project_text("inspect", 1, app_projects::inspect_doc())}),
+    );
+
+    // project: files as the app saves them (the fish and trunk examples,
+    // Fit before and after a fit, Inspect), one saved from the running app,
+    // a format-1 file, and two small broken ones.
+    let text = |name: &str, t: String| put("project", name, t.as_bytes());
+    for ex in ["fish", "trunk"] {
+        text(
+            &format!("pixel-{ex}.filigree.json"),
+            app_projects::project_text("pixel", 1, app_projects::pixel_example(ex)),
+        );
+    }
+    text(
+        "fit-stripes.filigree.json",
+        app_projects::project_text("fit", 1, app_projects::fit_doc("stripes", false)),
+    );
+    let mut fitted = app_projects::fit_doc("honeycomb", false);
+    let values = fitted["values"].clone();
+    fitted["truth"] = values.clone();
+    fitted["result"] = json!({"params": values, "loss": 0.02, "names": ["a"], "evaluations": 9});
+    text(
+        "fit-fitted-no-target.filigree.json",
+        app_projects::project_text("fit", 1, fitted),
+    );
+    text(
+        "inspect.filigree.json",
+        app_projects::project_text("inspect", 1, app_projects::inspect_doc()),
+    );
+    put(
+        "project",
+        "saved-by-app-fish.filigree.json",
+        &file("tests/fixtures/fish.filigree.json"),
+    );
+    let v1 = json!({"format": "filigree-project", "version": 1, "tool": "inspect",
+                    "state": {"name": null, "bytes": null}});
+    text("format-1.filigree.json", v1.to_string());
+    text("not-json.filigree.json", "hello".into());
+    let mut small = app_projects::pixel_example("fish");
+    small["mask"] = json!({"width": 2, "height": 1, "bits": {"$bytes": "AQA="}});
+    small["strokes"] = json!([[[0, 0], [2, 1]]]);
+    text(
+        "pixel-small.filigree.json",
+        app_projects::project_text("pixel", 1, small),
     );
 }

@@ -4,15 +4,21 @@
 // display, and the lifecycle of a mounted panel. A tool adds no glue: it
 // declares its state and its view.
 //
+// The state's schema lives in the core (src/api/project.rs and each tool's
+// src/<tool>/state.rs): every document that comes from outside the page's
+// own edits (an autosave, a project file, a link) is checked there, field by
+// field, with the core's own limits (`check-state`, `open-project`). An
+// older state version is migrated here first (the panel's `migrate`), then
+// checked by the core; the core refuses any version but the current one.
+//
 //   export default {
 //     id: 'pixel', title: 'Pixel',
 //     state: {
 //       version: 1,                         // schema version of the state
 //       async defaults(ctx) → state,        // a fresh document (ctx.coreDefaults() for the core's defaults)
-//       validate(raw) → state,              // throw Error('mask.bits: …') naming the field at fault
-//       migrate(raw, fromVersion) → raw,    // an older schema → the current one (before validate)
+//       migrate(raw, fromVersion) → raw,    // an older schema → the current one (before the core's check)
 //       toShare?(state) → shareState,       // what a link carries (small; throw Error to refuse)
-//       async fromShare?(shareState, ctx) → raw state (then validated),
+//       async fromShare?(shareState, ctx) → raw state (then checked by the core),
 //     },
 //     mount(el, ctx) → view,                // build the DOM once; view = {render, markError?, keys?, unmount?}
 //   }
@@ -33,7 +39,7 @@
 //   ctx.clearError(source?)      hide it; with `source`, only an error raised with that source
 //   ctx.coreDefaults()           the tool's default request(s) from the core
 //   ctx.readOnly, ctx.alive()
-import { Autosave, History, projectText, parseProject, download, withTimeout } from './project.js';
+import { Autosave, History, projectText, download, withTimeout } from './project.js';
 import { encodeShare, decodeShare, ShareTooBig } from './share.js';
 
 export const STORAGE_BLOCKED_NOTE = 'This page cannot save your work here (storage is blocked) — use Save project.';
@@ -71,6 +77,22 @@ function cancelled() {
   e.name = 'JobError';
   e.kind = 'cancelled';
   return e;
+}
+
+/**
+ * Plain data from the core with every `undefined` made `null` (the core's
+ * "none" arrives as `undefined`; documents use `null`). In place.
+ */
+export function nulls(v) {
+  if (Array.isArray(v)) {
+    for (let i = 0; i < v.length; i++) if (v[i] === undefined || (v[i] && typeof v[i] === 'object')) v[i] = nulls(v[i]);
+    return v;
+  }
+  if (v && typeof v === 'object' && !ArrayBuffer.isView(v)) {
+    for (const k of Object.keys(v)) v[k] = nulls(v[k]);
+    return v;
+  }
+  return v === undefined ? null : v;
 }
 
 // ---- core defaults ----------------------------------------------------------------
@@ -157,17 +179,22 @@ export class DocumentController {
     note.textContent = STORAGE_BLOCKED_NOTE;
   }
 
-  /** Migrate and validate `raw` (schema `version`) for `tool`; throws Error with a plain message. */
-  check(tool, raw, version) {
+  /**
+   * Migrate `raw` (schema `version`) for `tool` here, then have the core
+   * check it (`check-state`): resolves with the normalised state, rejects
+   * with an Error (a JobError naming the field at fault) in plain words.
+   */
+  async check(tool, raw, version) {
     const spec = tool.state;
     if (!Number.isInteger(version) || version < 1) throw new Error('the state has no schema version');
-    if (version > spec.version) throw new Error(`it was made by a newer Filigree (${tool.title} state version ${version}); update Filigree to open it`);
     let s = raw;
     if (version < spec.version) {
       if (!spec.migrate) throw new Error(`${tool.title} state version ${version} can no longer be read`);
       s = spec.migrate(s, version);
+      version = spec.version;
     }
-    return spec.validate(s);
+    // Copied, not transferred: `raw` may be a live document.
+    return nulls(await this.pool.run('check-state', { tool: tool.id, version, state: s }, { transfer: [] }));
   }
 
   /** The document of `tool` at first sight: its autosave if valid, else its defaults. */
@@ -177,8 +204,10 @@ export class DocumentController {
     if (saved) {
       try {
         const legacy = saved.format !== AUTOSAVE_FORMAT; // before the controller: the bare state, version 1
-        return this.check(tool, legacy ? saved : saved.state, legacy ? 1 : saved.version);
+        return await this.check(tool, legacy ? saved : saved.state, legacy ? 1 : saved.version);
       } catch (err) {
+        // A crashed or cancelled check says nothing about the autosave: keep it.
+        if (err?.name === 'JobError' && !['invalid-input', 'limit'].includes(err.kind)) throw err;
         ctx.error(new Error(`Your autosaved ${tool.title} work could not be restored (${err.message}); a fresh document was started.`));
       }
     }
@@ -415,18 +444,24 @@ export class DocumentController {
     download(`${base}.filigree.json`, projectText(cur.tool.id, cur.tool.state.version, state), 'application/json');
   }
 
-  /** Open a project file: validated in full before anything changes; the current work stays on failure. */
+  /**
+   * Open a project file: read and checked in full by the core
+   * (`open-project`: envelope, bytes, the tool's state) before anything
+   * changes; the current work stays on failure.
+   */
   async openProjectFile(file) {
     const ctx = this.current?.ctx;
-    let parsed, tool, state;
+    let tool, state;
     try {
       const text = await file.text();
-      parsed = parseProject(text);
-      tool = this.tool(parsed.tool);
-      if (!tool?.state) throw new Error(`it is a project of a tool this Filigree does not have ('${parsed.tool}')`);
-      state = this.check(tool, parsed.state, parsed.stateVersion);
+      const opened = nulls(await this.pool.run('open-project', { text }));
+      tool = this.tool(opened.tool);
+      if (!tool?.state) throw new Error(`it is a project of a tool this Filigree does not have ('${opened.tool}')`);
+      // An older state version comes back unchecked: migrate it, then check it.
+      state = opened.checked ? opened.state : await this.check(tool, opened.state, opened.stateVersion);
     } catch (err) {
-      ctx?.error(new Error(`${file.name} was not opened — ${err.message}. Your work is unchanged.`));
+      const why = String(plainError(err) ?? 'it was cancelled').replace(/\.$/, '');
+      ctx?.error(new Error(`${file.name} was not opened — ${why}. Your work is unchanged.`));
       return false;
     }
     const cur = await this.show(tool.id, { state, source: 'project' });
@@ -446,7 +481,7 @@ export class DocumentController {
     let full;
     try {
       const raw = tool.state.fromShare ? await tool.state.fromShare(state, this.helperCtx(tool)) : state;
-      full = this.check(tool, raw, version ?? tool.state.version);
+      full = await this.check(tool, raw, version ?? tool.state.version);
     } catch (err) {
       const why = String(plainError(err) ?? 'it was cancelled').replace(/([^.])$/, '$1.');
       throw new Error(`This ${source} could not be opened: ${why} Your own work is unchanged.`);

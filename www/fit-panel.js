@@ -111,39 +111,8 @@ const finiteList = (v, field, max = 1000) => {
   return [...v];
 };
 
-/** A fit-state `raw` checked field by field; throws an Error naming the field at fault. */
-export function validateFit(raw) {
-  if (!raw || typeof raw !== 'object' || Array.isArray(raw)) throw invalid('state', 'is not a Fit document');
-  const generator = raw.generator ?? null;
-  if (generator !== null && (typeof generator !== 'string' || generator.length > 100)) throw invalid('generator', 'must be a generator name');
-  if (typeof raw.program !== 'string' || !raw.program.trim() || raw.program.length > 200000) throw invalid('program', 'must be the text of a program (at most 200000 characters)');
-  const values = finiteList(raw.values, 'values');
-  let target = null;
-  if (raw.target != null) {
-    const t = raw.target;
-    if (t.width !== TARGET_SIZE || t.height !== TARGET_SIZE) throw invalid('target', `must be ${TARGET_SIZE}×${TARGET_SIZE} pixels`);
-    if (!(t.rgba instanceof Uint8Array) || t.rgba.length !== TARGET_SIZE * TARGET_SIZE * 4) throw invalid('target.rgba', `must hold ${TARGET_SIZE * TARGET_SIZE * 4} bytes`);
-    target = { width: TARGET_SIZE, height: TARGET_SIZE, rgba: t.rgba };
-  }
-  const truth = raw.truth == null ? null : finiteList(raw.truth, 'truth');
-  if (truth && truth.length !== values.length) throw invalid('truth', `must have one value per parameter (${values.length})`);
-  let result = null;
-  if (raw.result != null) {
-    const r = raw.result;
-    if (typeof r !== 'object') throw invalid('result', 'is not a fit result');
-    const params = finiteList(r.params, 'result.params');
-    if (!Number.isFinite(r.loss) || r.loss < 0) throw invalid('result.loss', 'must be a finite number ≥ 0');
-    if (!Number.isInteger(r.evaluations ?? 0) || (r.evaluations ?? 0) < 0) throw invalid('result.evaluations', 'must be a whole number ≥ 0');
-    const names = r.names == null ? undefined : r.names.map((n) => String(n));
-    result = { params, loss: r.loss, names, evaluations: r.evaluations ?? 0 };
-  }
-  const s = raw.settings;
-  if (!s || typeof s !== 'object') throw invalid('settings', 'are missing');
-  if (!BUDGETS.includes(s.budget)) throw invalid('settings.budget', `must be one of ${BUDGETS.join(', ')}`);
-  if (!LOSSES.includes(s.loss)) throw invalid('settings.loss', `must be one of ${LOSSES.join(', ')}`);
-  if (!Number.isInteger(s.seed) || s.seed < 0 || s.seed > 2 ** 53) throw invalid('settings.seed', 'must be a whole number ≥ 0');
-  return { generator, program: raw.program, values, target, truth, result, settings: { budget: s.budget, loss: s.loss, seed: s.seed } };
-}
+// The state's schema (every field, its rules and messages) is the core's:
+// src/pattern/state.rs, applied by the document controller (`check-state`).
 
 /** A target as palette indices (a hand-drawn one has a few colours, so a link stays small). */
 function indexTarget(t) {
@@ -190,7 +159,6 @@ const fitState = {
     };
     return generatorDoc(ctx.run, g, { settings });
   },
-  validate: validateFit,
   migrate: (raw) => raw,
   fileName: (s) => s.generator || 'pattern',
   // A target made from known values travels as those values (re-rendered on

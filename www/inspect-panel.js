@@ -31,12 +31,7 @@ const html = `
 const inspectState = {
   version: 1,
   defaults: () => ({ name: null, bytes: null }),
-  validate(raw) {
-    if (!raw || typeof raw !== 'object') throw Object.assign(new Error('state is not an Inspect document'), { field: 'state' });
-    const name = raw.name == null ? null : String(raw.name).slice(0, 200);
-    if (raw.bytes != null && !(raw.bytes instanceof Uint8Array)) throw Object.assign(new Error('bytes must be the bytes of an image file'), { field: 'bytes' });
-    return { name, bytes: raw.bytes ?? null };
-  },
+  // The state's schema lives in the core (src/api/project.rs, `check-state`).
   migrate: (raw) => raw,
   fileName: (s) => s.name || 'inspect',
 };

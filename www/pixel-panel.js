@@ -132,80 +132,8 @@ function invalid(field, why) {
   return e;
 }
 
-function checkBytes(v, field, optional = false) {
-  if (v == null && optional) return null;
-  if (!(v instanceof Uint8Array) || v.length === 0) throw invalid(field, 'must be the bytes of an image file');
-  return v;
-}
-
-/** A pixel-state `raw` checked field by field; throws an Error naming the field at fault. */
-export function validatePixel(raw) {
-  if (!raw || typeof raw !== 'object' || Array.isArray(raw)) throw invalid('state', 'is not a Pixel document');
-  const source = checkBytes(raw.source, 'source');
-  const sheet = checkBytes(raw.sheet, 'sheet', true);
-  const sprite = checkBytes(raw.sprite, 'sprite', true);
-  const m = raw.mask;
-  if (!m || typeof m !== 'object') throw invalid('mask', 'is missing');
-  if (!Number.isInteger(m.width) || !Number.isInteger(m.height) || m.width < 1 || m.height < 1 || m.width > MAX_SIDE || m.height > MAX_SIDE) {
-    throw invalid('mask', `must be 1 to ${MAX_SIDE} pixels on each side (found ${m.width}×${m.height})`);
-  }
-  if (!(m.bits instanceof Uint8Array) || m.bits.length !== m.width * m.height) {
-    throw invalid('mask.bits', `must hold ${m.width * m.height} values (${m.width}×${m.height}), found ${m.bits?.length ?? 'none'}`);
-  }
-  const bits = m.bits.some((b) => b > 1) ? m.bits.map((b) => (b ? 1 : 0)) : m.bits;
-  if (!Array.isArray(raw.strokes) || raw.strokes.length > 10000) throw invalid('strokes', 'must be a list of at most 10000 strokes');
-  const strokes = raw.strokes.map((s, i) => {
-    if (!Array.isArray(s) || s.length < 2 || s.length > 100000) throw invalid(`strokes.${i}`, 'must be a list of at least 2 points');
-    return s.map((p, j) => {
-      if (!Array.isArray(p) || p.length !== 2 || !p.every(Number.isFinite)) throw invalid(`strokes.${i}.${j}`, 'must be a point [x, y] of finite numbers');
-      if (p[0] < -1 || p[1] < -1 || p[0] > m.width + 1 || p[1] > m.height + 1) throw invalid(`strokes.${i}.${j}`, `lies outside the ${m.width}×${m.height} image`);
-      return [p[0], p[1]];
-    });
-  });
-  const p = raw.params;
-  if (!p || typeof p !== 'object' || Array.isArray(p)) throw invalid('params', 'are missing');
-  const params = {};
-  for (const [k, v] of Object.entries(p)) {
-    const c = CONTROLS.find((x) => x.key === k);
-    const field = `params.${k}`;
-    if (!c) {
-      const plain = (x) => x === null || ['string', 'number', 'boolean'].includes(typeof x) || (Array.isArray(x) && x.every(plain));
-      if (!plain(v)) throw invalid(field, 'has a value of the wrong kind');
-      params[k] = v;
-    } else if (c.type === 'select') {
-      if (!c.options.includes(v)) throw invalid(field, `must be one of ${c.options.join(', ')}`);
-      params[k] = v;
-    } else if (c.type === 'range') {
-      if (!Number.isFinite(v) || v < c.min || v > c.max) throw invalid(field, `must be a number from ${c.min} to ${c.max}`);
-      params[k] = v;
-    } else if (c.type === 'checkbox') {
-      if (typeof v !== 'boolean') throw invalid(field, 'must be true or false');
-      params[k] = v;
-    } else if (c.type === 'ints') {
-      if (!Array.isArray(v) || v.length !== c.n || !v.every((x) => Number.isInteger(x) && x >= c.min && x <= c.max)) {
-        throw invalid(field, `must be ${c.n} whole numbers from ${c.min} to ${c.max}`);
-      }
-      params[k] = [...v];
-    } else if (c.type === 'colours') {
-      if (!Array.isArray(v) || v.length > 256 || !v.every((rgb) => Array.isArray(rgb) && rgb.length === 3 && rgb.every((x) => Number.isInteger(x) && x >= 0 && x <= 255))) {
-        throw invalid(field, 'must be a list of [r, g, b] colours (0 to 255)');
-      }
-      params[k] = v.map((rgb) => [...rgb]);
-    } else if (c.type === 'seed') {
-      if (!Number.isInteger(v) || v < 0 || v > 2 ** 53) throw invalid(field, 'must be a whole number ≥ 0');
-      params[k] = v;
-    }
-  }
-  for (const c of CONTROLS) if (!(c.key in params)) throw invalid(`params.${c.key}`, 'is missing');
-  const example = raw.example ?? null;
-  if (example !== null && !EXAMPLES.includes(example)) throw invalid('example', `must be one of ${EXAMPLES.join(', ')} or none`);
-  const names = {};
-  for (const k of ['source', 'sheet']) {
-    const n = raw.names?.[k];
-    if (n != null) names[k] = String(n).slice(0, 200);
-  }
-  return { example, source, sheet, sprite, mask: { width: m.width, height: m.height, bits }, strokes, params, names };
-}
+// The state's schema (every field, its rules and messages) is the core's:
+// src/pixel/state.rs, applied by the document controller (`check-state`).
 
 function packBits(bits) {
   const out = new Uint8Array(Math.ceil(bits.length / 8));
@@ -223,7 +151,6 @@ function unpackBits(packed, n) {
 const pixelState = {
   version: 1,
   defaults: (ctx) => exampleDoc('fish', ctx),
-  validate: validatePixel,
   migrate: (raw) => raw,
   fileName: (s) => s.names?.source || 'pixel',
   // A link carries everything but an example's source (named instead) and

@@ -4,6 +4,8 @@
 //
 // State is plain data; byte inputs (images) are Uint8Arrays. IndexedDB stores
 // them as they are; project files encode them as {"$bytes": base64}.
+// Reading a project file (envelope, bytes, the tool's state) is the core's
+// `open-project` (src/api/project.rs), which knows the same format.
 
 const DB_NAME = 'filigree';
 const STORE = 'autosave';
@@ -173,13 +175,6 @@ function toBase64(bytes) {
   return btoa(s);
 }
 
-function fromBase64(b64) {
-  const bin = atob(b64);
-  const out = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; i++) out[i] = bin.charCodeAt(i);
-  return out;
-}
-
 function encode(v) {
   if (v instanceof Uint8Array) return { $bytes: toBase64(v) };
   if (Array.isArray(v)) return v.map(encode);
@@ -187,50 +182,9 @@ function encode(v) {
   return v;
 }
 
-function decode(v, depth = 0) {
-  if (depth > 64) throw new Error('the project is nested too deeply');
-  if (Array.isArray(v)) return v.map((x) => decode(x, depth + 1));
-  if (v && typeof v === 'object') {
-    if (typeof v.$bytes === 'string') {
-      try { return fromBase64(v.$bytes); } catch { throw new Error('the project holds image data that is not valid base64'); }
-    }
-    return Object.fromEntries(Object.entries(v).map(([k, x]) => [k, decode(x, depth + 1)]));
-  }
-  return v;
-}
-
 /** The text of a project file for `tool` whose state (schema `stateVersion`) is `state`. */
 export function projectText(tool, stateVersion, state) {
   return JSON.stringify({ format: PROJECT_FORMAT, version: PROJECT_VERSION, tool, stateVersion, state: encode(state) });
-}
-
-/**
- * Parse a project file's text: {tool, stateVersion, state}. Throws an Error
- * saying what is wrong; the caller still validates `state` with the tool.
- */
-export function parseProject(text) {
-  let doc;
-  try {
-    doc = JSON.parse(text);
-  } catch (err) {
-    throw new Error(`not a Filigree project: the file is not valid JSON (${err.message})`);
-  }
-  if (!doc || typeof doc !== 'object' || doc.format !== PROJECT_FORMAT) {
-    throw new Error('not a Filigree project: "format" is missing or different');
-  }
-  if (!Number.isInteger(doc.version) || doc.version < 1) throw new Error('not a Filigree project: "version" is missing');
-  if (doc.version > PROJECT_VERSION) throw new Error(`this project was saved by a newer Filigree (file format ${doc.version}); update Filigree to open it`);
-  if (typeof doc.tool !== 'string' || !doc.tool) throw new Error('not a Filigree project: "tool" is missing');
-  const stateVersion = doc.version === 1 ? 1 : doc.stateVersion;
-  if (!Number.isInteger(stateVersion) || stateVersion < 1) throw new Error('not a Filigree project: "stateVersion" is missing');
-  if (!doc.state || typeof doc.state !== 'object') throw new Error('not a Filigree project: "state" is missing');
-  let state;
-  try {
-    state = decode(doc.state);
-  } catch (err) {
-    throw new Error(`not a Filigree project: ${err.message}`);
-  }
-  return { tool: doc.tool, stateVersion, state };
 }
 
 /** Offer `data` (string, bytes or Blob) as a download named `name`. */

@@ -19,6 +19,7 @@
 //! "pattern-info: `program` must be text (got null)", with
 //! [`Error::field`] = `program`.
 pub mod inspect;
+pub mod project;
 
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Step};
@@ -60,6 +61,8 @@ pub const KINDS: &[&str] = &[
     "pattern-generators",
     "pattern-snap",
     "defaults",
+    "check-state",
+    "open-project",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -77,6 +80,8 @@ pub enum Response {
     Generators(&'static [crate::pattern::generators::Generator]),
     Snap(pattern::SnapResponse),
     Defaults(Box<Defaults>),
+    State(Box<project::ToolState>),
+    Project(Box<project::OpenedProject>),
     /// `null`.
     Nothing,
 }
@@ -136,6 +141,8 @@ pub enum DefaultRequest {
     Info(pattern::PatternInfoRequest),
     Snap(pattern::PatternSnapRequest),
     Defaults(DefaultsRequest),
+    CheckState(project::CheckStateRequest),
+    OpenProject(project::OpenProjectRequest),
     Nothing,
 }
 
@@ -164,6 +171,8 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "pattern-info" => D::Info(Default::default()),
         "pattern-snap" => D::Snap(Default::default()),
         "defaults" => D::Defaults(Default::default()),
+        "check-state" => D::CheckState(Default::default()),
+        "open-project" => D::OpenProject(Default::default()),
         "pattern-generators" => D::Nothing,
         other => return Err(unknown_kind(other).at("tool")),
     };
@@ -227,6 +236,20 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
             boxed(crate::core::job::OneShot::new(move || Ok(d)), |d| {
                 Response::Defaults(Box::new(d))
             })
+        }
+        "check-state" => {
+            let req: project::CheckStateRequest = request(kind, payload)?;
+            boxed(
+                crate::core::job::OneShot::new(move || project::run_check_state(&req)),
+                |s| Response::State(Box::new(s)),
+            )
+        }
+        "open-project" => {
+            let req: project::OpenProjectRequest = request(kind, payload)?;
+            boxed(
+                crate::core::job::OneShot::new(move || project::open_project(&req.text)),
+                |p| Response::Project(Box::new(p)),
+            )
         }
         #[cfg(feature = "test-hooks")]
         "debug-abort" => boxed(DebugAbort::new(request(kind, payload)?), |()| {

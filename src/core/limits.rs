@@ -123,6 +123,21 @@ pub const MAX_NESTING: usize = 160;
 /// (size × samples per side).
 pub const MAX_RENDER_SIDE: usize = 4096;
 
+// ------------------------------------------------ project files, states --
+
+/// Largest project file (`open-project` text), in bytes: a Pixel project
+/// with a 4096² mask (21 MiB of base64), its source, sheet and 200,000
+/// stroke points fits with room to spare.
+pub const MAX_PROJECT_BYTES: usize = 128 * 1024 * 1024;
+
+/// Most values (numbers, texts, lists, objects, byte strings) in one tool
+/// state or project file: 200,000 stroke points take 600,000.
+pub const MAX_STATE_VALUES: usize = 2_000_000;
+
+/// Deepest nesting of lists and objects in a tool state or project file
+/// (a real state is 5 deep).
+pub const MAX_STATE_DEPTH: usize = 64;
+
 // -------------------------------------------------------------- requests --
 // The ranges of the numbers a person types or a panel sends (tolerance,
 // render size, GA population, shards, Pixel margins, ...) are the other half

@@ -63,5 +63,6 @@ pub mod optim;
 pub mod record;
 pub mod render;
 pub(crate) mod sdf;
+pub mod state;
 pub(crate) mod tape;
 pub mod target;

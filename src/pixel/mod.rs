@@ -19,6 +19,7 @@ pub mod laplace;
 pub mod orientation;
 pub mod placement;
 pub mod position;
+pub mod state;
 
 pub use colour::{ColourMapKind, ColourStrategy};
 pub use inputs::{Direction8, ElementSheet};

@@ -205,6 +205,8 @@ test('a corrupt project file is refused before anything is autosaved; the work s
     [write('mask.filigree.json', JSON.stringify(broken)), /mask\.filigree\.json was not opened — mask\.bits must hold 16384 values \(128×128\), found 3/],
     [write('future.filigree.json', JSON.stringify({ ...good, version: 99 })), /saved by a newer Filigree/],
     [write('strokes.filigree.json', JSON.stringify({ ...good, state: { ...good.state, strokes: [[[1, 2], [3, 'x']]] } })), /strokes\.0\.1 must be a point/],
+    // The core checks the state with its own request limits (src/pixel/state.rs).
+    [write('dmax.filigree.json', JSON.stringify({ ...good, state: { ...good.state, params: { ...good.state.params, d_max: 2000 } } })), /dmax\.filigree\.json was not opened — params\.d_max must be a number from 0 to 1000\. Your work is unchanged\.$/],
   ];
   let runs = await waitForPixel(page);
   for (const [file, message] of files) {
@@ -233,6 +235,33 @@ test('a corrupt project file is refused before anything is autosaved; the work s
   await page.waitForTimeout(700);
   await page.reload();
   await page.waitForFunction(() => window.filigreePixel?.state()?.strokes.length === 4);
+  fs.rmSync(dir, { recursive: true, force: true });
+});
+
+test('a Fit project saved by the app opens again through the core; a bad setting is named', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await pickGenerator(page, 'stripes');
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  const want = await page.evaluate(() => window.filigreeFit.state());
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
+  const saved = JSON.parse(fs.readFileSync(await download.path(), 'utf8'));
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'filigree-fit-'));
+  const bad = path.join(dir, 'budget.filigree.json');
+  fs.writeFileSync(bad, JSON.stringify({ ...saved, state: { ...saved.state, settings: { ...saved.state.settings, budget: 'slow' } } }));
+  await page.setInputFiles('input[data-input=project]', bad);
+  await page.waitForFunction(() => /settings\.budget must be one of quick, paper/.test(document.querySelector('[data-testid=doc-error]').textContent));
+  // Another generator, then the saved file: the same document comes back.
+  await pickGenerator(page, 'circles-grid');
+  const good = path.join(dir, 'stripes.filigree.json');
+  fs.copyFileSync(await download.path(), good);
+  await page.setInputFiles('input[data-input=project]', good);
+  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'stripes');
+  const got = await page.evaluate(() => window.filigreeFit.state());
+  assert.deepEqual({ ...got, target: null }, { ...want, target: null });
+  assert.deepEqual(got.target.rgba, want.target.rgba);
+  assert.equal(got.result, null, 'a missing result is null, as the panel keeps it');
+  assert.equal(await page.isHidden(ERROR), true);
   fs.rmSync(dir, { recursive: true, force: true });
 });
 
