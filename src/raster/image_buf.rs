@@ -276,7 +276,7 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
 
 /// Pixels a [`Decoding`] step of a job decodes: a few milliseconds
 /// (`filigree bench slices`).
-pub const DECODE_PIXELS_PER_STEP: usize = 250_000;
+pub const DECODE_PIXELS_PER_STEP: usize = 131_072;
 
 /// [`decode`] in bounded parts, for a job that must not block: a
 /// non-interlaced PNG is decoded a few rows a [`Decoding::step`] (with the
