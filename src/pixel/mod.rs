@@ -653,16 +653,16 @@ mod tests {
         }
     }
 
-    /// The output as comparable bits.
-    fn bits(o: &PixelOutput) -> (Vec<u8>, Vec<(i32, i32)>, String, Vec<u32>) {
-        (
-            o.image.data.clone(),
-            o.positions.clone(),
-            format!("{:?} {:?}", o.stats, o.colour_map),
-            o.field
-                .iter()
-                .flat_map(|p| [p[0].to_bits(), p[1].to_bits()])
-                .collect(),
+    /// The whole output as comparable text (floats as their bits).
+    fn bits(o: &PixelOutput) -> String {
+        let field: Vec<[u32; 2]> = o
+            .field
+            .iter()
+            .map(|p| [p[0].to_bits(), p[1].to_bits()])
+            .collect();
+        format!(
+            "{:?} {:?} {:?} {:?} {:?}",
+            o.image.data, o.positions, o.stats, o.colour_map, field
         )
     }
 

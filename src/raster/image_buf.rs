@@ -733,11 +733,12 @@ mod tests {
         let mut v = 3u8;
         for (w, h) in passes {
             for _ in 0..h {
-                raw.push(0);
-                for _ in 0..w {
+                // Filter type 0, then the row's samples.
+                let row = std::iter::once(0).chain((0..w).map(|_| {
                     v = v.wrapping_mul(37).wrapping_add(11);
-                    raw.push(v);
-                }
+                    v
+                }));
+                raw.extend(row.collect::<Vec<u8>>());
             }
         }
         let (mut a, mut b) = (1u32, 0u32);
