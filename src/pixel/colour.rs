@@ -146,6 +146,7 @@ pub struct Regions {
     pub start: Vec<u32>,
 }
 
+#[cfg(test)] // the one-go reference that ColourMapper is checked against
 /// Label contiguous colour regions with 4-connectivity: in pixel art a
 /// diagonal touch does not join two areas of flat colour.
 pub fn regions(img: &Rgba8Image) -> Regions {
@@ -195,6 +196,7 @@ pub fn regions(img: &Rgba8Image) -> Regions {
     }
 }
 
+#[cfg(test)] // the one-go reference that ColourMapper is checked against
 /// Palette of an image: distinct colours of non-transparent pixels, sorted.
 fn palette(img: &Rgba8Image) -> Vec<[u8; 4]> {
     let mut seen: HashMap<[u8; 4], ()> = HashMap::new();
@@ -230,6 +232,7 @@ pub fn difference_table(pal: &[[u8; 4]], exclude: &[[u8; 3]]) -> HashMap<[u8; 4]
     out
 }
 
+#[cfg(test)] // the one-go reference that ColourMapper is checked against
 /// The shared-border colour of every region: the most frequent colour among
 /// the distinct pixels 4-adjacent to it (transparent and excluded colours
 /// skipped). Ties go to the colour nearer the region's own in CIELAB, then to
@@ -295,6 +298,7 @@ pub struct ColourMap {
     pub kind: ColourMapKind,
 }
 
+#[cfg(test)] // the one-go reference that ColourMapper is checked against
 /// Build the colour map for `src` (Section 3.2). `mask` limits which regions
 /// the automatic choice inspects: only regions that can receive elements
 /// matter for how stark the result looks.
@@ -366,6 +370,7 @@ pub fn colour_map(src: &Rgba8Image, mask: &[bool], p: &ColourParams) -> ColourMa
     ColourMap { map, kind }
 }
 
+#[cfg(test)] // the one-go reference that ColourMapper is checked against
 /// Paint every region with its border colour. A region bordered only by
 /// transparent or excluded pixels (e.g. a one-colour sprite inside a black
 /// outline) falls back to its colour-difference colour, which is still a
