@@ -289,7 +289,21 @@ fn bad_numbers_are_rejected_with_the_flag_named() {
                 "--grid",
                 "2",
             ],
-            "--grid: `grid` must be in 8..=1024 (got 2)",
+            "--grid: `grid` must be in 8..=256 (got 2)",
+        ),
+        // A fit's loss grid stops at 256: one gradient per step stays short
+        // (at 1024 one took 300 ms in the worker).
+        (
+            vec![
+                "fit",
+                "--program",
+                "circles-grid",
+                "--target",
+                fish,
+                "--grid",
+                "1024",
+            ],
+            "--grid: `grid` must be in 8..=256 (got 1024)",
         ),
         (
             vec![

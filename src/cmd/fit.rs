@@ -34,7 +34,7 @@ pub struct FitArgs {
     /// genetic (default, ga) | random | nelder-mead (nm)
     #[arg(long)]
     init: Option<String>,
-    /// Loss grid side in pixels, 8..=1024 (default: 64 for quick, 128 for paper).
+    /// Loss grid side in pixels, 8..=256 (default: 64 for quick, 128 for paper).
     #[arg(long)]
     grid: Option<usize>,
     /// Field units in the loss: pixels (default) | canvas.

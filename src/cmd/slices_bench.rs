@@ -257,8 +257,8 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         ));
     }
     if want("fit") {
-        // The target's preparation at the biggest grid: a 1024² image
-        // target, a tiny search after it.
+        // The target's preparation and the evaluations at a fit's biggest
+        // grid (256): a 1024² image target, a short search after it.
         let program = prog("circles-mix")?;
         let mut render = start_render(RenderPatternRequest {
             program: program.clone(),
@@ -278,7 +278,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
                 height: image.height,
                 rgba: image.rgba,
             }),
-            grid: Some(1024),
+            grid: Some(filigree::core::request_limits::FIT_GRID.1),
             population: Some(4),
             generations: Some(1),
             candidates: Some(1),
@@ -287,7 +287,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         };
         rows.push(report(
             "fit",
-            "circles-mix, grid 1024, 1024² image target, 4 + 2 evaluations",
+            "circles-mix, grid 256, 1024² image target, 4 + 2 evaluations",
             time_job(|| start_fit(&req))?,
         ));
     }

@@ -391,7 +391,7 @@ pub struct FitRequestOf<X> {
     pub units: SdfUnits,
     /// Seed of every random choice (1).
     pub seed: u64,
-    /// Loss grid side, 8..=1024 (the budget's: 64 quick, 128 paper).
+    /// Loss grid side: `fit` 8..=256, `fit-eval` 8..=1024 (the budget's: 64 quick, 128 paper).
     pub grid: Option<usize>,
     /// Overrides of the budget.
     pub population: Option<usize>,
@@ -603,6 +603,9 @@ impl Job for FitRequestJob {
 pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
     let p = parse(&req.program)?;
     let vals = named_values(&p, &req.params)?;
+    if let Some(g) = req.grid {
+        lim::int_in("grid", g, lim::FIT_GRID)?;
+    }
     let opts = req.options()?;
     let t = req.target_data(&p)?;
     let job = FitJob::start(&p, &vals, t, opts).map_err(|e| e.at("program"))?;
