@@ -42,6 +42,7 @@ function mount(el, ctx) {
   const result = q('.result');
   let controller = null;
   let shown = null; // the bytes on screen
+  let unsaved = null; // a file inspected before the document had loaded: committed once it has
 
   const show = (sel, on) => { q(sel).hidden = !on; };
 
@@ -56,7 +57,9 @@ function mount(el, ctx) {
       const r = await ctx.run('inspect', { bytes: bytes.slice() }, { signal: ctrl.signal });
       render(name, r);
       shown = bytes;
-      if (commit) ctx.commit({ name, bytes });
+      // Before the document has loaded (the first seconds), a commit is refused:
+      // keep the file and commit it at the first render instead of losing it.
+      if (commit && !ctx.commit({ name, bytes })) unsaved = { name, bytes };
     } catch (err) {
       if (err.kind === 'cancelled') return;
       // Keep the last good result on screen; say what is wrong with this file.
@@ -100,6 +103,11 @@ function mount(el, ctx) {
 
   return {
     render(s) {
+      if (unsaved) {
+        const u = unsaved;
+        unsaved = null;
+        if (u.bytes === shown && ctx.commit(u)) return;
+      }
       if (!s?.bytes) {
         shown = null;
         result.hidden = true;
