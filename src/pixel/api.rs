@@ -3,11 +3,13 @@
 //! request's `Default` (and [`PixelParams`]'s); every error names the field
 //! at fault ([`Error::at`]): `source`, `mask`, `sheet`, `sprite`,
 //! `strokes`, `params.<name>`.
-use super::{inputs, orientation, ElementSheet, Elements, PixelJob, PixelParams, Stroke};
+use super::{
+    inputs, orientation, ElementSheet, Elements, PixelJob, PixelOutput, PixelParams, Stroke,
+};
 use crate::core::error::{Error, Result};
-use crate::core::job::{Job, OneShot};
+use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::request_limits as lim;
-use crate::raster::{decode, Limits, Rgba8Image};
+use crate::raster::{decode, Decoding, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP};
 use serde::{Deserialize, Serialize};
 
 /// A mask as the browser edits it: one byte per pixel, non-zero = textured.
@@ -117,12 +119,12 @@ pub fn check_params(p: &PixelParams) -> Result<()> {
     Ok(())
 }
 
-/// Check a `pixel` request and start its job.
-pub fn start_pixel(req: PixelRequest) -> Result<PixelJob> {
+/// Check a `pixel` request and start its job. Only the cheap checks run
+/// here; the images are decoded in the job's first steps (a PNG a few rows
+/// a step, see [`Decoding`]) and the checks that need their pixels follow,
+/// with the same errors and fields.
+pub fn start_pixel(req: PixelRequest) -> Result<PixelRequestJob> {
     check_params(&req.params)?;
-    let source = decode(&req.source, Limits::default()).map_err(|e| e.at("source"))?;
-    // The mask's bits are what `to_image` + `mask_from_image` give (inside
-    // = non-zero); the checks that read every pixel run in the job's steps.
     let m = &req.mask;
     if m.bits.len() as u64 != m.width as u64 * m.height as u64 {
         return Err(Error::input(format!(
@@ -133,26 +135,9 @@ pub fn start_pixel(req: PixelRequest) -> Result<PixelJob> {
         ))
         .at("mask"));
     }
-    if (source.width, source.height) != (m.width, m.height) {
-        return Err(Error::input(format!(
-            "the mask is {}×{} pixels but the source image is {}×{}; they must be the same size",
-            m.width, m.height, source.width, source.height
-        ))
-        .at("mask"));
-    }
-    let mask: Vec<bool> = m.bits.iter().map(|&b| b != 0).collect();
-    let elements = match (req.sheet, req.sprite) {
-        (Some(b), None) => {
-            let img = decode(&b, Limits::default()).map_err(|e| e.at("sheet"))?;
-            ElementSheet::from_sheet(&img).map_err(|e| e.at("sheet"))?;
-            Elements::Sheet(img)
-        }
-        (None, Some(b)) => {
-            let img = decode(&b, Limits::default()).map_err(|e| e.at("sprite"))?;
-            ElementSheet::from_sprite(&img, req.params.sprite_direction)
-                .map_err(|e| e.at("sprite"))?;
-            Elements::Sprite(img)
-        }
+    let (elements, sprite) = match (req.sheet, req.sprite) {
+        (Some(b), None) => (b, false),
+        (None, Some(b)) => (b, true),
         (Some(_), Some(_)) => {
             return Err(
                 Error::input("give either an element sheet or a single sprite, not both")
@@ -165,15 +150,127 @@ pub fn start_pixel(req: PixelRequest) -> Result<PixelJob> {
             )
         }
     };
-    orientation::check_strokes(source.width, source.height, &req.strokes)
-        .map_err(|e| e.at("strokes"))?;
-    PixelJob::start(source, mask, elements, req.strokes, req.params).map_err(|e| {
-        if e.field().is_some() {
-            e
-        } else {
-            e.at("params")
-        }
+    Ok(PixelRequestJob {
+        reading: Some(Reading {
+            source: Decoding::new(req.source, Limits::default()),
+            source_img: None,
+            elements: Decoding::new(elements, Limits::default()),
+            sprite,
+            mask: req.mask,
+            strokes: req.strokes,
+            params: req.params,
+        }),
+        job: None,
     })
+}
+
+/// A `pixel` request as a job: its images decoded in bounded steps, then
+/// the [`PixelJob`].
+pub struct PixelRequestJob {
+    reading: Option<Reading>,
+    job: Option<PixelJob>,
+}
+
+/// What a `pixel` request holds while its images are being decoded.
+struct Reading {
+    source: Decoding,
+    source_img: Option<Rgba8Image>,
+    /// The element sheet or the sprite.
+    elements: Decoding,
+    sprite: bool,
+    mask: MaskBits,
+    strokes: Vec<Stroke>,
+    params: PixelParams,
+}
+
+/// Share of a `pixel` job's progress spent decoding its images.
+const READING: f64 = 0.05;
+
+impl Reading {
+    /// Decode a bounded part more; the started [`PixelJob`] once both
+    /// images are read and checked.
+    fn step(&mut self) -> Result<Option<PixelJob>> {
+        if self.source_img.is_none() {
+            self.source_img = self
+                .source
+                .step(DECODE_PIXELS_PER_STEP)
+                .map_err(|e| e.at("source"))?;
+            return Ok(None);
+        }
+        let field = if self.sprite { "sprite" } else { "sheet" };
+        let Some(img) = self
+            .elements
+            .step(DECODE_PIXELS_PER_STEP)
+            .map_err(|e| e.at(field))?
+        else {
+            return Ok(None);
+        };
+        let source = self.source_img.take().expect("decoded above");
+        let m = &self.mask;
+        if (source.width, source.height) != (m.width, m.height) {
+            return Err(Error::input(format!(
+                "the mask is {}×{} pixels but the source image is {}×{}; they must be the same size",
+                m.width, m.height, source.width, source.height
+            ))
+            .at("mask"));
+        }
+        let elements = if self.sprite {
+            ElementSheet::from_sprite(&img, self.params.sprite_direction).map_err(|e| e.at(field))?;
+            Elements::Sprite(img)
+        } else {
+            ElementSheet::from_sheet(&img).map_err(|e| e.at(field))?;
+            Elements::Sheet(img)
+        };
+        orientation::check_strokes(source.width, source.height, &self.strokes)
+            .map_err(|e| e.at("strokes"))?;
+        let mask: Vec<bool> = std::mem::take(&mut self.mask.bits)
+            .into_iter()
+            .map(|b| b != 0)
+            .collect();
+        let strokes = std::mem::take(&mut self.strokes);
+        let params = self.params.clone();
+        PixelJob::start(source, mask, elements, strokes, params)
+            .map(Some)
+            .map_err(|e| if e.field().is_some() { e } else { e.at("params") })
+    }
+
+    fn fraction(&self) -> f64 {
+        if self.source_img.is_none() {
+            0.8 * self.source.fraction()
+        } else {
+            0.8 + 0.2 * self.elements.fraction()
+        }
+    }
+}
+
+impl Job for PixelRequestJob {
+    type Output = PixelOutput;
+    fn step(&mut self) -> Result<Step<PixelOutput>> {
+        if let Some(r) = &mut self.reading {
+            let started = r.step()?;
+            let f = READING * r.fraction();
+            if let Some(job) = started {
+                self.reading = None;
+                self.job = Some(job);
+                return Ok(Step::Running(Progress::new(READING, "checking the inputs")));
+            }
+            return Ok(Step::Running(Progress::new(f, "reading pixels")));
+        }
+        let job = self
+            .job
+            .as_mut()
+            .ok_or_else(|| Error::input("this job has already finished"))?;
+        Ok(match job.step()? {
+            Step::Running(p) => Step::Running(Progress::new(
+                READING + (1.0 - READING) * p.fraction,
+                p.stage,
+            )),
+            Step::Done(out) => {
+                self.job = None;
+                Step::Done(out)
+            }
+        })
+    }
 }
 
 /// The result of a `pixel` job. `field` has `2·width·height` numbers (x, y

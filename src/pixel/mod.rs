@@ -747,6 +747,69 @@ mod tests {
         assert_eq!(e.field(), Some("params"));
     }
 
+    /// A `pixel` request from encoded files: `start_pixel` decodes
+    /// nothing (a corrupt file is refused by the first step, naming its
+    /// field), the images are read a bounded part a step, and the result is
+    /// the bytes of [`PixelJob::new`] on the decoded images.
+    #[test]
+    fn a_request_decodes_its_images_in_steps() {
+        use super::api::{start_pixel, MaskBits, PixelRequest};
+        use crate::raster::{encode_png, DECODE_PIXELS_PER_STEP};
+        let inputs = fish(8);
+        let params = PixelParams {
+            seed: 5,
+            ..Default::default()
+        };
+        let want = bits(&texture(inputs.clone(), params.clone()).unwrap());
+        let Elements::Sheet(sheet) = &inputs.elements else {
+            unreachable!()
+        };
+        let req = PixelRequest {
+            source: encode_png(&inputs.source).unwrap(),
+            mask: MaskBits::of_image(&inputs.mask),
+            sheet: Some(encode_png(sheet).unwrap()),
+            sprite: None,
+            strokes: inputs.strokes.clone(),
+            params,
+        };
+        let mut job = start_pixel(req.clone()).unwrap();
+        let mut reading = 0;
+        let out = loop {
+            match job.step().unwrap() {
+                Step::Running(p) if p.stage == "reading pixels" => reading += 1,
+                Step::Running(_) => {}
+                Step::Done(out) => break out,
+            }
+        };
+        assert_eq!(bits(&out), want);
+        let rows = inputs.source.pixel_count() / DECODE_PIXELS_PER_STEP;
+        assert!(rows >= 2 && reading >= rows, "{reading} reading steps");
+
+        let fails = |req: PixelRequest, field: &str, says: &str| {
+            let job = start_pixel(req).expect("nothing is decoded at the start");
+            let e = run_quietly(job).unwrap_err();
+            assert_eq!(e.field(), Some(field), "{e}");
+            assert!(e.to_string().contains(says), "{e}");
+        };
+        let mut bad = req.clone();
+        bad.source.truncate(bad.source.len() / 2);
+        fails(bad, "source", "");
+        let mut bad = req.clone();
+        bad.sheet = Some(b"not an image".to_vec());
+        fails(bad, "sheet", "");
+        let mut bad = req.clone();
+        bad.mask = MaskBits {
+            width: 3,
+            height: 2,
+            bits: vec![1; 6],
+        };
+        fails(bad, "mask", "must be the same size");
+        let mut bad = req;
+        bad.sheet = None;
+        bad.sprite = Some(encode_png(&Rgba8Image::new(5, 3)).unwrap());
+        fails(bad, "sprite", "");
+    }
+
     #[test]
     fn params_defaults_and_json_names() {
         let p: PixelParams = serde_json::from_str("{}").unwrap();
