@@ -26,6 +26,7 @@ pub mod optim;
 pub mod pattern;
 pub mod pixel;
 pub mod raster;
+pub mod tangle;
 
 #[cfg(feature = "web")]
 pub mod web;

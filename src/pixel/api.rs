@@ -215,7 +215,8 @@ impl Reading {
             .at("mask"));
         }
         let elements = if self.sprite {
-            ElementSheet::from_sprite(&img, self.params.sprite_direction).map_err(|e| e.at(field))?;
+            ElementSheet::from_sprite(&img, self.params.sprite_direction)
+                .map_err(|e| e.at(field))?;
             Elements::Sprite(img)
         } else {
             ElementSheet::from_sheet(&img).map_err(|e| e.at(field))?;
@@ -231,7 +232,13 @@ impl Reading {
         let params = self.params.clone();
         PixelJob::start(source, mask, elements, strokes, params)
             .map(Some)
-            .map_err(|e| if e.field().is_some() { e } else { e.at("params") })
+            .map_err(|e| {
+                if e.field().is_some() {
+                    e
+                } else {
+                    e.at("params")
+                }
+            })
     }
 
     fn fraction(&self) -> f64 {
