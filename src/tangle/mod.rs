@@ -7,6 +7,10 @@
 //! Rules of a [`ast::Grammar`] rewrite the non-terminal shapes of the
 //! lowest group id, one group per expansion step.
 pub mod ast;
+pub mod expand;
+pub mod export;
+pub mod letters;
+pub mod ops;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;
