@@ -6,8 +6,10 @@
 //! holes, [`crate::geom::polygon::Polygon`]) and an orientation `d`.
 //! Rules of a [`ast::Grammar`] rewrite the non-terminal shapes of the
 //! lowest group id, one group per expansion step.
+pub mod api;
 pub mod ast;
 pub mod expand;
+pub mod examples;
 pub mod export;
 pub mod letters;
 pub mod ops;
