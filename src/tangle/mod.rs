@@ -13,6 +13,7 @@ pub mod examples;
 pub mod export;
 pub mod letters;
 pub mod ops;
+pub mod grammar;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;
