@@ -14,6 +14,7 @@ pub mod export;
 pub mod letters;
 pub mod ops;
 pub mod grammar;
+pub mod place;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;
