@@ -25,8 +25,8 @@ use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Step};
 use crate::pattern::api as pattern;
 use crate::pixel::api as pixel;
-use crate::tangle::api as tangle;
 use crate::raster::Rgba8Image;
+use crate::tangle::api as tangle;
 use serde::{Deserialize, Deserializer, Serialize};
 
 /// An image as it crosses the boundary undecoded: straight RGBA bytes

@@ -27,7 +27,10 @@ pub fn perlin(p: DVec2, seed: u64) -> f64 {
 
 /// A 2-D displacement: two independent noises.
 pub fn displacement(p: DVec2, seed: u64) -> DVec2 {
-    DVec2::new(perlin(p, seed), perlin(p + DVec2::new(31.416, 47.853), seed ^ 0x9e37_79b9))
+    DVec2::new(
+        perlin(p, seed),
+        perlin(p + DVec2::new(31.416, 47.853), seed ^ 0x9e37_79b9),
+    )
 }
 
 fn hash(x: u64, y: u64, seed: u64) -> u64 {

@@ -84,7 +84,10 @@ impl RingBuilder {
     /// A cubic Bézier from the current point.
     pub fn cubic_to(&mut self, c1: DVec2, c2: DVec2, p: DVec2) {
         let (a, c1, c2, p) = (self.last(), self.map(c1), self.map(c2), self.map(p));
-        let dev = (a - 2.0 * c1 + c2).length().max((c1 - 2.0 * c2 + p).length()) * 0.75;
+        let dev = (a - 2.0 * c1 + c2)
+            .length()
+            .max((c1 - 2.0 * c2 + p).length())
+            * 0.75;
         let n = self.pieces(dev);
         for i in 1..=n {
             let t = i as f64 / n as f64;
@@ -293,7 +296,10 @@ mod tests {
         </svg>"#;
         let rings = document_rings(svg, 0.01).unwrap();
         assert_eq!(rings.len(), 3);
-        let (lo, hi) = Polygon { rings: vec![rings[0].clone()] }.bbox();
+        let (lo, hi) = Polygon {
+            rings: vec![rings[0].clone()],
+        }
+        .bbox();
         assert_eq!((lo, hi), (DVec2::new(100.0, 0.0), DVec2::new(120.0, 10.0)));
         let a = area(vec![rings[1].clone()]);
         assert!((a - std::f64::consts::PI * 100.0).abs() < 1.0, "{a}");

@@ -7,7 +7,7 @@
 //! and the user's edits in order (re-expand step N; set step N's
 //! parameters). The core replays them, so the page keeps no tangle state of
 //! its own and the same request gives the same bytes anywhere.
-use super::ast::{CurveDef, Def, DefKind, Grammar, Op, Param, StartShape};
+use super::ast::{CurveDef, Def, DefKind, Grammar, Param, StartShape};
 use super::expand::{Ending, Expansion, Progress as Advance, Settings};
 use super::{export, grammar, Shape};
 use crate::core::error::{Error, Result};
@@ -272,7 +272,8 @@ fn start_shapes(req: &TangleRequest, g: &Grammar) -> Result<Vec<(Polygon, String
             "start.rings",
         )?)),
         Some(StartRequest::Svg { svg }) => Ok(one(polys(
-            crate::geom::svg::document_rings(svg, CURVE_TOLERANCE).map_err(|e| e.at("start.svg"))?,
+            crate::geom::svg::document_rings(svg, CURVE_TOLERANCE)
+                .map_err(|e| e.at("start.svg"))?,
             "start.svg",
         )?)),
         Some(StartRequest::Text { text, height }) => Ok(one(polys(
@@ -348,10 +349,14 @@ fn motifs(g: &Grammar) -> HashMap<String, Polygon> {
         }
         let poly = match curve {
             CurveDef::Circle => Some(Polygon::circle(DVec2::ZERO, 1.0, 32)),
-            CurveDef::Ngon(n) => Some(Polygon::circle(DVec2::ZERO, 1.0, (*n as usize).clamp(3, 64))),
+            CurveDef::Ngon(n) => Some(Polygon::circle(
+                DVec2::ZERO,
+                1.0,
+                (*n as usize).clamp(3, 64),
+            )),
             CurveDef::Polyline(pts) => Polygon::new(vec![pts.clone()])
                 .and_then(|v| v.into_iter().next())
-                .and_then(|p| unit(&p)),
+                .and_then(|p| super::place::normalise_motif(&p)),
             _ => None,
         };
         if let Some(p) = poly {
@@ -359,19 +364,6 @@ fn motifs(g: &Grammar) -> HashMap<String, Polygon> {
         }
     }
     m
-}
-
-/// A shape centred on its centroid and scaled into the unit disc.
-fn unit(p: &Polygon) -> Option<Polygon> {
-    let c = p.centroid();
-    let r = p.rings.iter().flatten().map(|q| q.distance(c)).fold(0.0, f64::max);
-    (r > 1e-9).then(|| Polygon {
-        rings: p
-            .rings
-            .iter()
-            .map(|ring| ring.iter().map(|q| (*q - c) / r).collect())
-            .collect(),
-    })
 }
 
 /// A `tangle` request as a job: the expansion a bounded part a step, then
@@ -424,7 +416,11 @@ impl TangleJob {
                     Error::input(format!(
                         "{} has no parameter '{name}' (it has: {})",
                         op.name(),
-                        op.params().iter().map(|p| p.name).collect::<Vec<_>>().join(", ")
+                        op.params()
+                            .iter()
+                            .map(|p| p.name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     ))
                     .at(format!("{field}.params"))
                 })?;

@@ -370,7 +370,12 @@ impl Expansion {
         let poly: &Polygon = &s.poly;
         let step = self.settings.resolution;
         let wob = self.wobble(p.first_group);
-        let mut rng = Rng::new(hash(&[self.settings.seed, s.group as u64, s.id as u64, 0x5a]));
+        let mut rng = Rng::new(hash(&[
+            self.settings.seed,
+            s.group as u64,
+            s.id as u64,
+            0x5a,
+        ]));
         Ok(match &p.op {
             // Grouping and decoration keep the geometry (handled in finish_step).
             Op::Ungroup | Op::Regroup { .. } | Op::Fill { .. } | Op::Invert => {
@@ -387,7 +392,9 @@ impl Expansion {
                     .get(curve)
                     .cloned()
                     .unwrap_or(CurveDef::Line);
-                vec![ops::regular_split(poly, s.dir, &c, offsets, *dual, step, &wob)]
+                vec![ops::regular_split(
+                    poly, s.dir, &c, offsets, *dual, step, &wob,
+                )]
             }
             Op::Outline { distance } => ops::outline(poly, *distance, step, &wob).into(),
             Op::Streamline { .. } => {
@@ -395,8 +402,16 @@ impl Expansion {
                     "streamlineSplit is not available in this build yet",
                 ))
             }
-            Op::Place { .. } => {
-                return Err(Error::input("place is not available in this build yet"))
+            Op::Place {
+                size,
+                distance,
+                shape,
+            } => {
+                let motif = self.resolved.motifs.get(shape).ok_or_else(|| {
+                    Error::input(format!("place: there is no shape called '{shape}'"))
+                })?;
+                let p = super::place::place(poly, motif, *size, *distance, &mut rng);
+                vec![p.placed, p.remainder]
             }
             Op::Stipple {
                 kind,
@@ -430,7 +445,8 @@ impl Expansion {
         self.next_step += 1;
         let rule: &Rule = &self.grammar.rules[p.rule];
         let outputs_tags: Vec<String> = rule.outputs.clone();
-        let tag_of = |slot: usize| outputs_tags[slot.min(outputs_tags.len().saturating_sub(1))].clone();
+        let tag_of =
+            |slot: usize| outputs_tags[slot.min(outputs_tags.len().saturating_sub(1))].clone();
         let mut outputs = vec![];
         for &i in &p.inputs {
             self.records[i as usize].died = Some(id);
@@ -451,7 +467,11 @@ impl Expansion {
                 if let Some(c) = counters.get_mut(g_slot) {
                     *c += 1;
                 }
-                let mut ink = if slot == 0 { parent.ink } else { Ink::default() };
+                let mut ink = if slot == 0 {
+                    parent.ink
+                } else {
+                    Ink::default()
+                };
                 match &p.op {
                     Op::Fill { tone } => ink.fill = *tone as f32,
                     Op::Invert => {
@@ -470,7 +490,11 @@ impl Expansion {
                     tag,
                     group,
                     id: id_in_group,
-                    poly: if same { parent.poly.clone() } else { Arc::new(poly) },
+                    poly: if same {
+                        parent.poly.clone()
+                    } else {
+                        Arc::new(poly)
+                    },
                     dir: parent.dir,
                     ink,
                 };
@@ -606,7 +630,10 @@ mod tests {
             rules,
             ..Default::default()
         };
-        let start = vec![(Polygon::rect(DVec2::ZERO, DVec2::new(90.0, 90.0)), "a".to_string())];
+        let start = vec![(
+            Polygon::rect(DVec2::ZERO, DVec2::new(90.0, 90.0)),
+            "a".to_string(),
+        )];
         let mut x = Expansion::new(g, start, HashMap::new(), s).unwrap();
         x.run().unwrap();
         x
@@ -647,15 +674,30 @@ mod tests {
         for (k, &o) in regroup.outputs.iter().enumerate() {
             let parent = &x.records[regroup.inputs[k] as usize].shape;
             let s = &x.records[o as usize].shape;
-            assert_eq!(s.group, 2 + parent.id % 2, "new groups start after the largest id");
+            assert_eq!(
+                s.group,
+                2 + parent.id % 2,
+                "new groups start after the largest id"
+            );
         }
         // Chessboard: in a 3×3 grid, even shape ids alternate.
-        let g: Vec<u32> = regroup.outputs.iter().map(|&o| x.records[o as usize].shape.group).collect();
+        let g: Vec<u32> = regroup
+            .outputs
+            .iter()
+            .map(|&o| x.records[o as usize].shape.group)
+            .collect();
         assert_eq!(g, [2, 3, 2, 3, 2, 3, 2, 3, 2]);
-        let ids: Vec<u32> = regroup.outputs.iter().map(|&o| x.records[o as usize].shape.id).collect();
+        let ids: Vec<u32> = regroup
+            .outputs
+            .iter()
+            .map(|&o| x.records[o as usize].shape.id)
+            .collect();
         assert_eq!(ids, [0, 0, 1, 1, 2, 2, 3, 3, 4]);
 
-        let x = run(vec![rule(grid(2.0), "a", &["q"]), rule(Op::Ungroup, "q", &["u"])], settings());
+        let x = run(
+            vec![rule(grid(2.0), "a", &["q"]), rule(Op::Ungroup, "q", &["u"])],
+            settings(),
+        );
         let groups: Vec<u32> = finals(&x).iter().map(|r| r.shape.group).collect();
         assert_eq!(groups, [2, 3, 4, 5]);
         assert!(finals(&x).iter().all(|r| r.shape.id == 0));
@@ -685,10 +727,19 @@ mod tests {
         let groups: Vec<u32> = x.steps.iter().map(|s| s.group).collect();
         assert!(groups.windows(2).all(|w| w[0] < w[1]), "{groups:?}");
         let chosen: Vec<usize> = x.steps.iter().skip(2).map(|s| s.rule).collect();
-        assert!(chosen.contains(&2) && chosen.contains(&3), "both rules drawn: {chosen:?}");
+        assert!(
+            chosen.contains(&2) && chosen.contains(&3),
+            "both rules drawn: {chosen:?}"
+        );
         let again = run(rules(), settings());
         assert_eq!(again.steps, x.steps);
-        let other = run(rules(), Settings { seed: 6, ..settings() });
+        let other = run(
+            rules(),
+            Settings {
+                seed: 6,
+                ..settings()
+            },
+        );
         assert_ne!(
             other.steps.iter().map(|s| s.rule).collect::<Vec<_>>(),
             x.steps.iter().map(|s| s.rule).collect::<Vec<_>>()
@@ -721,7 +772,13 @@ mod tests {
     #[test]
     fn budgets_stop_a_runaway_grammar_with_a_clear_message() {
         let forever = || vec![rule(Op::Ungroup, "a", &["a"])];
-        let x = run(forever(), Settings { max_steps: 50, ..settings() });
+        let x = run(
+            forever(),
+            Settings {
+                max_steps: 50,
+                ..settings()
+            },
+        );
         let Some(Ending::Stopped(m)) = &x.ending else {
             panic!("{:?}", x.ending)
         };
@@ -729,12 +786,25 @@ mod tests {
         assert_eq!(x.steps.len(), 50);
 
         let split_forever = vec![rule(grid(18.0), "a", &["a"])];
-        let x = run(split_forever, Settings { max_shapes: 100, ..settings() });
+        let x = run(
+            split_forever,
+            Settings {
+                max_shapes: 100,
+                ..settings()
+            },
+        );
         let Some(Ending::Stopped(m)) = &x.ending else {
             panic!("{:?}", x.ending)
         };
-        assert!(m.contains("shape budget of 100") && m.contains("324 shapes"), "{m}");
-        assert_eq!(x.live(), 1, "the step that would pass the budget is not applied");
+        assert!(
+            m.contains("shape budget of 100") && m.contains("324 shapes"),
+            "{m}"
+        );
+        assert_eq!(
+            x.live(),
+            1,
+            "the step that would pass the budget is not applied"
+        );
     }
 
     /// Re-expanding a step removes exactly its dependent steps' shapes and
@@ -757,7 +827,8 @@ mod tests {
         let g = x.steps[target].group;
         assert_eq!(x.dependents(target), vec![target]);
         assert_eq!(x.dependents(0).len(), 6);
-        x.reexpand(target, Some(Op::Outline { distance: 12.0 })).unwrap();
+        x.reexpand(target, Some(Op::Outline { distance: 12.0 }))
+            .unwrap();
         assert_eq!(x.steps.len(), 5);
         x.run().unwrap();
         assert_eq!(x.steps.len(), 6);
@@ -774,7 +845,11 @@ mod tests {
                 .filter(|(gr, _)| {
                     x.steps
                         .iter()
-                        .find(|s| s.outputs.iter().any(|&o| x.records[o as usize].shape.group == *gr))
+                        .find(|s| {
+                            s.outputs
+                                .iter()
+                                .any(|&o| x.records[o as usize].shape.group == *gr)
+                        })
                         .is_some_and(|s| s.group != g)
                 })
                 .cloned()
@@ -789,7 +864,11 @@ mod tests {
         let shape = last.outputs[0] as usize;
         let s = x.step_of(shape).unwrap();
         assert_eq!(s, 5);
-        assert_eq!(x.parent_step(s), Some(1), "the ungroup made the outline's input");
+        assert_eq!(
+            x.parent_step(s),
+            Some(1),
+            "the ungroup made the outline's input"
+        );
         assert_eq!(x.parent_step(1), Some(0));
         assert_eq!(x.parent_step(0), None);
     }

@@ -136,7 +136,9 @@ pub fn raster(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Rgba8I
     let height = (size.y * scale).ceil().clamp(1.0, MAX_PNG_SIDE as f64) as u32;
     let mut pm = Pixmap::new(width, height)
         .ok_or_else(|| Error::limit(format!("a {width}×{height} image cannot be made")))?;
-    pm.fill(tiny_skia::Color::from_rgba8(PAPER[0], PAPER[1], PAPER[2], 255));
+    pm.fill(tiny_skia::Color::from_rgba8(
+        PAPER[0], PAPER[1], PAPER[2], 255,
+    ));
     let t = Transform::from_row(
         scale as f32,
         0.0,
@@ -222,11 +224,18 @@ mod tests {
 
     #[test]
     fn png_draws_black_lines_on_white_paper() {
-        let a = shape(Polygon::rect(DVec2::ZERO, DVec2::splat(100.0)), Ink::default());
+        let a = shape(
+            Polygon::rect(DVec2::ZERO, DVec2::splat(100.0)),
+            Ink::default(),
+        );
         let img = raster(&[&a], 208, 2.0).unwrap();
         assert_eq!(img.width, 208);
         let (w, h) = (img.width, img.height);
-        assert_eq!(img.get(w / 2, h / 2), [255, 255, 255, 255], "inside is paper");
+        assert_eq!(
+            img.get(w / 2, h / 2),
+            [255, 255, 255, 255],
+            "inside is paper"
+        );
         // The outline at x = 0 is 2 units + 1 px of padding in: (2+2)·2 px.
         let edge = img.get(8, h / 2);
         assert!(edge[0] < 80, "the line is inked: {edge:?}");

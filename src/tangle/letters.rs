@@ -112,9 +112,16 @@ mod tests {
         let rings = text_rings("AO", 100.0).unwrap();
         let polys = Polygon::new(rings).unwrap();
         assert_eq!(polys.len(), 2, "one polygon per letter");
-        assert!(polys.iter().all(|p| p.rings.len() == 2), "A and O have a hole each");
+        assert!(
+            polys.iter().all(|p| p.rings.len() == 2),
+            "A and O have a hole each"
+        );
         let (lo, hi) = polys[0].bbox();
-        assert!((hi.y - lo.y - 100.0).abs() < 2.0, "cap height: {}", hi.y - lo.y);
+        assert!(
+            (hi.y - lo.y - 100.0).abs() < 2.0,
+            "cap height: {}",
+            hi.y - lo.y
+        );
         assert!(lo.y.abs() < 2.0, "top at the origin: {}", lo.y);
         assert!(polys[1].bbox().0.x > polys[0].bbox().0.x, "left to right");
     }

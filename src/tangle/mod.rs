@@ -8,12 +8,12 @@
 //! lowest group id, one group per expansion step.
 pub mod api;
 pub mod ast;
-pub mod expand;
 pub mod examples;
+pub mod expand;
 pub mod export;
+pub mod grammar;
 pub mod letters;
 pub mod ops;
-pub mod grammar;
 pub mod place;
 
 use crate::geom::polygon::Polygon;

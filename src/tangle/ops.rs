@@ -66,7 +66,10 @@ fn curve_points(curve: &CurveDef, x0: f64, x1: f64, step: f64) -> Vec<DVec2> {
         }
         CurveDef::Wave { amplitude, period } => {
             let p = period.max(1e-3);
-            periodic(&|x: f64| amplitude * (std::f64::consts::TAU * x / p).sin(), p)
+            periodic(
+                &|x: f64| amplitude * (std::f64::consts::TAU * x / p).sin(),
+                p,
+            )
         }
         CurveDef::Arc { bulge } => {
             let h = bulge * w;
@@ -101,7 +104,11 @@ fn stretch(pts: &[DVec2], x0: f64, x1: f64) -> Vec<DVec2> {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
             (a.min(p.x), b.max(p.x))
         });
-    let s = if hi - lo > 1e-9 { (x1 - x0) / (hi - lo) } else { 1.0 };
+    let s = if hi - lo > 1e-9 {
+        (x1 - x0) / (hi - lo)
+    } else {
+        1.0
+    };
     let my = pts.iter().map(|p| p.y).sum::<f64>() / pts.len() as f64;
     let mut out: Vec<DVec2> = pts
         .iter()
@@ -319,19 +326,47 @@ mod tests {
 
     #[test]
     fn a_dual_split_of_a_square_is_a_grid_in_reading_order() {
-        let p = regular_split(&square(100.0), DVec2::Y, &CurveDef::Line, &[25.0], true, 2.0, &NONE);
+        let p = regular_split(
+            &square(100.0),
+            DVec2::Y,
+            &CurveDef::Line,
+            &[25.0],
+            true,
+            2.0,
+            &NONE,
+        );
         assert_eq!(p.len(), 16);
         assert!((areas(&p) - 10_000.0).abs() < 1e-6);
         // Reading order: rows along the orientation (y), then across (x).
         let c: Vec<DVec2> = p.iter().map(Polygon::centroid).collect();
-        assert!((c[0] - DVec2::new(12.5, 12.5)).length() < 1e-6, "{:?}", c[0]);
-        assert!((c[1] - DVec2::new(37.5, 12.5)).length() < 1e-6, "{:?}", c[1]);
-        assert!((c[4] - DVec2::new(12.5, 37.5)).length() < 1e-6, "{:?}", c[4]);
+        assert!(
+            (c[0] - DVec2::new(12.5, 12.5)).length() < 1e-6,
+            "{:?}",
+            c[0]
+        );
+        assert!(
+            (c[1] - DVec2::new(37.5, 12.5)).length() < 1e-6,
+            "{:?}",
+            c[1]
+        );
+        assert!(
+            (c[4] - DVec2::new(12.5, 37.5)).length() < 1e-6,
+            "{:?}",
+            c[4]
+        );
     }
 
     #[test]
     fn offsets_are_cycled() {
-        let p = regular_split(&square(100.0), DVec2::Y, &CurveDef::Line, &[10.0, 30.0], false, 2.0, &NONE);
+        let p = regular_split(
+            &square(100.0),
+            DVec2::Y,
+            &CurveDef::Line,
+            &[10.0, 30.0],
+            false,
+            2.0,
+            &NONE,
+        );
         let h: Vec<f64> = p.iter().map(|q| q.area() / 100.0).collect();
         assert_eq!(h.len(), 6);
         for (got, want) in h.iter().zip([10.0, 30.0, 10.0, 30.0, 10.0, 10.0]) {
@@ -356,14 +391,32 @@ mod tests {
                 period: 30.0,
             },
             CurveDef::Arc { bulge: 0.2 },
-            CurveDef::Polyline(vec![DVec2::ZERO, DVec2::new(1.0, 0.5), DVec2::new(2.0, 0.0)]),
+            CurveDef::Polyline(vec![
+                DVec2::ZERO,
+                DVec2::new(1.0, 0.5),
+                DVec2::new(2.0, 0.0),
+            ]),
         ] {
             let parent = Polygon::circle(DVec2::splat(50.0), 50.0, 64);
-            let p = regular_split(&parent, DVec2::new(1.0, 1.0), &curve, &[12.0], true, 2.0, &w);
+            let p = regular_split(
+                &parent,
+                DVec2::new(1.0, 1.0),
+                &curve,
+                &[12.0],
+                true,
+                2.0,
+                &w,
+            );
             assert!(p.len() > 10, "{curve:?}: {}", p.len());
-            assert!((areas(&p) - parent.area()).abs() < 1e-3 * parent.area(), "{curve:?}");
+            assert!(
+                (areas(&p) - parent.area()).abs() < 1e-3 * parent.area(),
+                "{curve:?}"
+            );
             let union = areas(&Polygon::union_all(&p));
-            assert!((union - areas(&p)).abs() < 1e-3 * parent.area(), "{curve:?} overlaps");
+            assert!(
+                (union - areas(&p)).abs() < 1e-3 * parent.area(),
+                "{curve:?} overlaps"
+            );
         }
     }
 
@@ -394,7 +447,11 @@ mod tests {
         for kind in [StippleKind::Dots, StippleKind::Dashes, StippleKind::Curves] {
             let m = stipple(&parent, kind, 8.0, 2.0, &mut rng);
             assert!(m.len() > 20, "{kind:?}");
-            let outside: f64 = m.iter().flat_map(|q| q.difference(&parent)).map(|q| q.area()).sum();
+            let outside: f64 = m
+                .iter()
+                .flat_map(|q| q.difference(&parent))
+                .map(|q| q.area())
+                .sum();
             assert!(outside < 1e-6);
         }
         let huge = Polygon::rect(DVec2::ZERO, DVec2::splat(1e6));

@@ -650,7 +650,14 @@ mod tests {
 
     /// An L: a 100×100 square without its top-right 60×60 quarter.
     fn ell() -> Polygon {
-        let pts = [(0., 0.), (100., 0.), (100., 40.), (40., 40.), (40., 100.), (0., 100.)];
+        let pts = [
+            (0., 0.),
+            (100., 0.),
+            (100., 40.),
+            (40., 40.),
+            (40., 100.),
+            (0., 100.),
+        ];
         Polygon::new(vec![pts.iter().map(|&(x, y)| DVec2::new(x, y)).collect()])
             .unwrap()
             .remove(0)
@@ -709,7 +716,10 @@ mod tests {
             })
             .collect();
         for (i, &(c, r)) in discs.iter().enumerate() {
-            assert!(r <= s / 2.0 + 1e-9 && r >= MIN_SCALE * s / 2.0 - 1e-9, "radius {r}");
+            assert!(
+                r <= s / 2.0 + 1e-9 && r >= MIN_SCALE * s / 2.0 - 1e-9,
+                "radius {r}"
+            );
             assert!(region.boundary_distance(c) - r >= d / 2.0 - 1e-6);
             for &(c2, r2) in &discs[i + 1..] {
                 assert!(c.distance(c2) - r - r2 >= d - 1e-6);
@@ -717,7 +727,11 @@ mod tests {
         }
         // Most shapes are full size: shrinking is the exception.
         let full = discs.iter().filter(|&&(_, r)| r > 0.99 * s / 2.0).count();
-        assert!(full * 2 > discs.len(), "{full} of {} full size", discs.len());
+        assert!(
+            full * 2 > discs.len(),
+            "{full} of {} full size",
+            discs.len()
+        );
     }
 
     #[test]
@@ -769,7 +783,11 @@ mod tests {
         check_valid(&l, &p);
         let arm = |f: &dyn Fn(DVec2) -> bool| p.placed.iter().filter(|q| f(q.centroid())).count();
         let (right, top) = (arm(&|v| v.x > 50.0), arm(&|v| v.y > 50.0));
-        assert!(right > 5 && top > 5, "{right} right, {top} top of {}", p.placed.len());
+        assert!(
+            right > 5 && top > 5,
+            "{right} right, {top} top of {}",
+            p.placed.len()
+        );
     }
 
     #[test]
@@ -874,8 +892,18 @@ mod tests {
     #[allow(clippy::disallowed_methods)] // a native, hand-run measurement
     fn bench_placement() {
         let cases = [
-            ("rect 800x600 s20 d25", rect(0.0, 0.0, 800.0, 600.0), 20.0, 25.0),
-            ("ring 400 wide s20 d25", ring(DVec2::ZERO, 100.0, 200.0), 20.0, 25.0),
+            (
+                "rect 800x600 s20 d25",
+                rect(0.0, 0.0, 800.0, 600.0),
+                20.0,
+                25.0,
+            ),
+            (
+                "ring 400 wide s20 d25",
+                ring(DVec2::ZERO, 100.0, 200.0),
+                20.0,
+                25.0,
+            ),
             ("rect 800x600 s4 d2", rect(0.0, 0.0, 800.0, 600.0), 4.0, 2.0),
         ];
         for (name, region, s, d) in cases {
