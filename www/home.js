@@ -4,6 +4,8 @@
 //   const home = mountHome(el, app, tools);  …  home.unmount();
 // Previews are cancelled on unmount; a failed preview leaves its card usable.
 
+import { drawThumbnail } from './tangle-draw.js';
+
 const ASSETS = new URL('../assets/', import.meta.url);
 
 const CARDS = {
@@ -21,6 +23,11 @@ const CARDS = {
     blurb: 'Inspect an image: its size and palette, the colours Fit and Pixel work with.',
     alt: 'The fish sprite and its palette as read by the core',
     preview: previewInspect,
+  },
+  tangle: {
+    blurb: 'Grow pen-and-ink tangles from a grammar, step by step; select any step and redo or retune it.',
+    alt: "The paper's leaf grammar grown by the core",
+    preview: previewTangle,
   },
 };
 
@@ -81,6 +88,17 @@ async function previewInspect(pool, box, signal) {
   facts.className = 'home-facts';
   facts.textContent = `${r.width}×${r.height} px · ${r.colour_count} colours`;
   box.replaceChildren(canvas, ul, facts);
+}
+
+// The Tangle panel's first grammar (the paper's leaf), grown a little.
+async function previewTangle(pool, box, signal) {
+  const [leaf] = await pool.run('tangle-examples', {}, { signal });
+  const r = await pool.run('tangle', { grammar: leaf.grammar, max_steps: 400, max_shapes: 4000 }, { signal });
+  const canvas = document.createElement('canvas');
+  canvas.width = 320;
+  canvas.height = 240;
+  drawThumbnail(canvas, r);
+  box.replaceChildren(canvas);
 }
 
 export function mountHome(el, { pool }, tools) {

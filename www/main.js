@@ -7,10 +7,11 @@ import { hasShare } from './share.js';
 import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
+import tangleTool from './tangle-panel.js';
 import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 import { mountHome } from './home.js';
 
-const TOOLS = [pixelTool, fitTool, inspectTool];
+const TOOLS = [pixelTool, fitTool, inspectTool, tangleTool];
 
 const $ = (sel) => document.querySelector(sel);
 

@@ -466,6 +466,11 @@ pub const TOOLS: &[ToolSchema] = &[
         version: crate::pattern::state::STATE_VERSION,
     },
     ToolSchema {
+        id: "tangle",
+        title: "Tangle",
+        version: crate::tangle::state::STATE_VERSION,
+    },
+    ToolSchema {
         id: "inspect",
         title: "Inspect image",
         version: inspect_state::STATE_VERSION,
@@ -483,6 +488,7 @@ pub fn tool(id: &str) -> Option<&'static ToolSchema> {
 pub enum ToolState {
     Pixel(Box<crate::pixel::state::PixelState>),
     Fit(Box<crate::pattern::state::FitState>),
+    Tangle(Box<crate::tangle::state::TangleState>),
     Inspect(inspect_state::InspectState),
 }
 
@@ -499,6 +505,7 @@ pub fn check_state(tool_id: &str, version: u64, state: &Value) -> Result<ToolSta
     Ok(match t.id {
         "pixel" => ToolState::Pixel(Box::new(crate::pixel::state::check(state)?)),
         "fit" => ToolState::Fit(Box::new(crate::pattern::state::check(state)?)),
+        "tangle" => ToolState::Tangle(Box::new(crate::tangle::state::check(state)?)),
         _ => ToolState::Inspect(inspect_state::check(state)?),
     })
 }

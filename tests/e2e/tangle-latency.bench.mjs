@@ -1,0 +1,136 @@
+// Responsiveness of the Tangle panel (issue 10 item 9). Not a pass/fail test:
+// prints JSON with medians (and p90) in ms, headless Chromium at 1280×800.
+//
+//   node tests/e2e/tangle-latency.bench.mjs [root]
+//
+// - village: the time to grow it (request → answer shown), then step-slider
+//   moves: from the input event to the end of the next animation frame (the
+//   panel's repaint: Path2D batches for the step + fills and strokes), and the
+//   panel's own paint work (`paint`, of which `batches` rebuilds the Path2Ds).
+//   A pan frame (the last picture moved as a bitmap) is measured the same way.
+// - leaf: a parameter edit on a step (an outline distance): from the slider's
+//   change to the regrown tangle painted (round trip; a released slider runs
+//   at once, no debounce), and the worker's part (`run`).
+// The floor line is an empty animation frame measured in the same run.
+import { launch } from './harness.mjs';
+
+const root = process.argv[2];
+const env = await launch(root ? { root } : {});
+const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
+const p90 = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length * 0.9)]; };
+const round = (x) => Math.round(x * 10) / 10;
+const summary = (xs) => ({ median: round(median(xs)), p90: round(p90(xs)), n: xs.length });
+
+const page = await env.newPage({ path: '#tool=tangle' });
+const runs = () => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
+async function waitForResult(prev) {
+  await page.waitForFunction((p) => Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > p
+    && !window.filigreeTangle.pending(), prev, { timeout: 300000 });
+}
+await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+
+const frameFloor = await page.evaluate(async () => {
+  const out = [];
+  for (let i = 0; i < 20; i++) {
+    const t0 = performance.now();
+    await new Promise((r) => requestAnimationFrame(() => r()));
+    out.push(performance.now() - t0);
+  }
+  return out;
+});
+
+// ---- village: grow, then slider moves and pans
+let n = await runs();
+const t0 = Date.now();
+await page.click('[data-example=village]');
+await waitForResult(n);
+const growMs = Date.now() - t0;
+const village = await page.evaluate(async () => {
+  const t = window.filigreeTangle;
+  const r = t.result();
+  const slider = document.querySelector('[data-testid=tangle-step]');
+  const steps = r.steps.length;
+  const moves = [], paints = [], batches = [];
+  const frame = () => new Promise((res) => requestAnimationFrame(() => res()));
+  await frame();
+  for (let i = 0; i < 24; i++) {
+    const k = Math.round(steps * (i % 2 ? 0.5 + i / 60 : 1 - i / 60));
+    const start = performance.now();
+    slider.value = String(k);
+    slider.dispatchEvent(new Event('input', { bubbles: true }));
+    await frame();
+    moves.push(performance.now() - start);
+    paints.push(t.timing().paint);
+    batches.push(t.timing().batches);
+  }
+  // Back to the end: the final tangle, then pan frames (the bitmap of the last paint, moved).
+  slider.value = String(steps);
+  slider.dispatchEvent(new Event('input', { bubbles: true }));
+  await frame();
+  const c = document.querySelector('[data-testid=tangle-canvas]');
+  const b = c.getBoundingClientRect();
+  const pans = [];
+  c.dispatchEvent(new PointerEvent('pointerdown', { pointerId: 7, clientX: b.left + 100, clientY: b.top + 100, bubbles: true }));
+  for (let i = 1; i <= 20; i++) {
+    const start = performance.now();
+    c.dispatchEvent(new PointerEvent('pointermove', { pointerId: 7, clientX: b.left + 100 + 5 * i, clientY: b.top + 100 + 3 * i, bubbles: true }));
+    await frame();
+    pans.push(performance.now() - start);
+  }
+  c.dispatchEvent(new PointerEvent('pointerup', { pointerId: 7, clientX: b.left + 200, clientY: b.top + 160, bubbles: true }));
+  await new Promise((r) => setTimeout(r, 300));
+  return {
+    steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.length,
+    worker_ms: Math.round(t.timing().run), moves, paints, batches, pans, sharp_paint: t.timing().paint,
+  };
+});
+
+// ---- leaf: a parameter edit round trip
+n = await runs();
+await page.click('[data-example=leaf]');
+await waitForResult(n);
+const edits = [];
+for (let i = 0; i < 6; i++) {
+  // Select a (small) outline step and move its distance.
+  const target = await page.evaluate(() => {
+    const t = window.filigreeTangle;
+    const r = t.result();
+    const steps = r.steps.map((s, k) => [s, k]).filter(([s]) => s.operator === 'outline').sort((a, b) => a[0].inputs.length - b[0].inputs.length);
+    return steps[0][1];
+  });
+  await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigreeTangle.state(), selected: sel }), target);
+  await page.waitForSelector('[data-testid=tangle-param-distance]');
+  n = await runs();
+  const sent = await page.evaluate((v) => {
+    const i = document.querySelector('[data-testid=tangle-param-distance]');
+    const t = performance.now();
+    i.value = String(v);
+    i.dispatchEvent(new Event('input', { bubbles: true }));
+    i.dispatchEvent(new Event('change', { bubbles: true }));
+    return t;
+  }, 3 + i);
+  await waitForResult(n);
+  const r = await page.evaluate(async (s) => {
+    await new Promise((res) => requestAnimationFrame(() => res()));
+    const t = window.filigreeTangle;
+    return { total: performance.now() - s, run: t.timing().run, paint: t.timing().paint };
+  }, sent);
+  edits.push(r);
+}
+const leafShapes = await page.evaluate(() => window.filigreeTangle.result().stats.shapes);
+
+console.log(JSON.stringify({
+  frame_floor_ms: summary(frameFloor),
+  village: {
+    grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
+    shapes_in_history: village.all_shapes,
+    slider_move_to_frame_ms: summary(village.moves), slider_paint_ms: summary(village.paints), slider_batches_ms: summary(village.batches),
+    pan_frame_ms: summary(village.pans), sharp_repaint_ms: round(village.sharp_paint),
+  },
+  leaf: {
+    final_shapes: leafShapes,
+    param_edit_round_trip_ms: summary(edits.map((e) => e.total)),
+    param_edit_worker_ms: summary(edits.map((e) => e.run)), repaint_ms: summary(edits.map((e) => e.paint)),
+  },
+}, null, 1));
+await env.close();

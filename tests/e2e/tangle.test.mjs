@@ -1,0 +1,234 @@
+// The Tangle panel (issue 10 item 10): the paper's Fig. 9 leaf grammar grown
+// in a worker, the step slider through its history, selecting a step by
+// clicking a shape (and walking back), re-expanding it, editing one step's
+// outline distance with only that part of the picture redone, and the SVG
+// export (parsed, one <path> per final shape, the same bytes as the native
+// CLI: tests/golden/tangle-leaf-seed1.svg, written by
+// `filigree tangle --grammar assets/tangle/leaf.tangle --seed 1 --out …`).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import { launch } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+const runs = (page) => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
+
+/** Wait until the panel has shown one more answer than `previous` and nothing is due. */
+async function waitForResult(page, previous, timeout = 60000) {
+  await page.waitForFunction((prev) => {
+    const el = document.querySelector('[data-testid=tangle-status]');
+    return Number(el.dataset.runs || 0) > prev && !window.filigreeTangle.pending();
+  }, previous, { timeout });
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  return runs(page);
+}
+
+const count = (page) => page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.count));
+
+/** The canvas's pixels (RGBA) as a plain array, after the next paint. */
+async function pixels(page) {
+  return page.evaluate(async () => {
+    window.filigreeTangle.paintNow();
+    const c = document.querySelector('[data-testid=tangle-canvas]');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    return { width: c.width, height: c.height, data: Array.from(d) };
+  });
+}
+
+/** Pixels that differ where `mask` is set (inside) and where it is not (outside). */
+function diff(a, b, mask) {
+  let inside = 0, outside = 0;
+  for (let p = 0; p < a.width * a.height; p++) {
+    const o = 4 * p;
+    if (a.data[o] === b.data[o] && a.data[o + 1] === b.data[o + 1] && a.data[o + 2] === b.data[o + 2]) continue;
+    if (mask[p]) inside++;
+    else outside++;
+  }
+  return { inside, outside };
+}
+
+const maskOf = (page) => page.evaluate(() => Array.from(window.filigreeTangle.selectedMask()));
+const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+const selected = (page) => page.evaluate(() => window.filigreeTangle.state().selected);
+const operator = (page) => page.$eval('[data-testid=tangle-selected]', (e) => e.dataset.operator);
+
+/** A final shape (not a mark) made by a step running `operator`, with a point where a click picks it. */
+async function shapeOf(page, operator) {
+  return page.evaluate((op) => {
+    const t = window.filigreeTangle;
+    const r = t.result();
+    const cands = r.shapes.map((s, i) => [s, i])
+      .filter(([s]) => s.died === -1 && s.born >= 0 && !s.mark && r.steps[s.born].operator === op)
+      .map(([, i]) => i);
+    for (const i of cands.slice(0, 60)) {
+      const p = t.pointIn(i);
+      if (p) return { i, born: r.shapes[i].born, point: p };
+    }
+    return null;
+  }, operator);
+}
+
+async function clickCanvas(page, [x, y]) {
+  const box = await page.locator('[data-testid=tangle-canvas]').boundingBox();
+  await page.mouse.click(box.x + x, box.y + y);
+}
+
+test('tangle: grow the leaf, walk its history, select, re-expand and edit a step, export the same SVG as the CLI', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  // The picker lists the shipped grammars, the paper's leaf first.
+  const names = await page.$$eval('[data-testid=tangle-examples] [data-example]', (bs) => bs.map((b) => b.dataset.example));
+  assert.equal(names[0], 'leaf');
+  assert.ok(names.includes('village'), names.join());
+
+  let n = await runs(page);
+  await page.click('[data-example=leaf]');
+  n = await waitForResult(page, n);
+  await page.click('[data-act=generate]');
+  n = await waitForResult(page, n);
+  const doc = await page.evaluate(() => window.filigreeTangle.state());
+  assert.equal(doc.example, 'leaf');
+  assert.deepEqual(doc.edits, []);
+  const r = await page.evaluate(() => ({ steps: window.filigreeTangle.result().steps.length, stats: window.filigreeTangle.result().stats }));
+  assert.ok(r.steps > 10, `${r.steps} steps`);
+  const final = await count(page);
+  assert.equal(final, r.stats.shapes, 'the count shown at the last step is the final shape count');
+
+  // Drag the step slider back and forth: the shown count follows.
+  const s = await page.locator('[data-testid=tangle-step]').boundingBox();
+  const y = s.y + s.height / 2;
+  await page.mouse.move(s.x + s.width - 2, y);
+  await page.mouse.down();
+  await page.mouse.move(s.x + s.width * 0.05, y, { steps: 8 });
+  const early = await count(page);
+  const earlyStep = await page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.step));
+  await page.mouse.move(s.x + s.width * 0.5, y, { steps: 4 });
+  const mid = await count(page);
+  await page.mouse.move(s.x + s.width + 20, y, { steps: 8 });
+  await page.mouse.up();
+  assert.ok(earlyStep < r.steps / 4, `early step ${earlyStep}`);
+  assert.ok(early < final && early !== mid, `counts ${early}, ${mid}, ${final}`);
+  assert.equal(await count(page), final, 'back at the end: the final count again');
+  assert.match(await page.textContent('[data-testid=tangle-count]'), new RegExp(`${final.toLocaleString('en')} shapes`));
+
+  // Click a stippled shape: its step (stippling) is selected.
+  const stippled = await shapeOf(page, 'stippling');
+  assert.ok(stippled, 'a stippled shape can be clicked');
+  await clickCanvas(page, stippled.point);
+  await page.waitForFunction((b) => window.filigreeTangle.state().selected === b, stippled.born);
+  assert.equal(await operator(page), 'stippling');
+  assert.ok(await page.$('[data-testid=tangle-param-spacing]'), 'the step\'s parameters have sliders');
+  await frames(page);
+
+  // Re-expand it: a new random draw of that step only. The history changes, and the
+  // picture changes only inside the step's input shapes.
+  const mask1 = await maskOf(page);
+  const before1 = await pixels(page);
+  const hashPoints = () => page.evaluate(() => {
+    let h = 0;
+    for (const v of window.filigreeTangle.result().points) h = (Math.imul(h, 31) + Math.round(v * 100)) | 0;
+    return h;
+  });
+  const pointsBefore = await hashPoints();
+  await page.click('[data-act=reexpand]');
+  n = await waitForResult(page, n);
+  const after1 = await pixels(page);
+  const ed = await page.evaluate(() => window.filigreeTangle.state());
+  assert.deepEqual(ed.edits, [{ step: stippled.born, params: {} }]);
+  assert.equal(await operator(page), 'stippling', 'the re-expanded step stays selected');
+  assert.notEqual(await hashPoints(), pointsBefore, 'a new draw');
+  const d1 = diff(before1, after1, mask1);
+  assert.ok(d1.inside > 50, `the stippling changed (${d1.inside} pixels)`);
+  assert.equal(d1.outside, 0, 'nothing changed outside the step\'s shapes');
+
+  // Click the same shape twice: the second click walks back to the step that made its input.
+  await clickCanvas(page, stippled.point);
+  await frames(page);
+  const again = await selected(page);
+  assert.equal(await operator(page), 'stippling');
+  await clickCanvas(page, stippled.point);
+  const parent = await page.evaluate((s) => {
+    const r = window.filigreeTangle.result();
+    return r.shapes[r.steps[s].inputs[0]].born;
+  }, again);
+  assert.ok(parent >= 0 && parent !== again);
+  await page.waitForFunction((p) => window.filigreeTangle.state().selected === p, parent);
+  assert.equal(await operator(page), 'outline');
+  await frames(page);
+
+  // Edit that outline's distance: only its shapes are redone.
+  const mask2 = await maskOf(page);
+  const before2 = await pixels(page);
+  const old = Number(await page.$eval('[data-testid=tangle-param-distance]', (i) => i.value));
+  const next = old + 4;
+  await page.$eval('[data-testid=tangle-param-distance]', (i, v) => {
+    i.value = String(v);
+    i.dispatchEvent(new Event('input', { bubbles: true }));
+    i.dispatchEvent(new Event('change', { bubbles: true }));
+  }, next);
+  n = await waitForResult(page, n);
+  const after2 = await pixels(page);
+  const ed2 = await page.evaluate(() => window.filigreeTangle.state());
+  assert.equal(ed2.edits.length, 2);
+  assert.equal(ed2.edits[1].step, parent);
+  assert.ok(Math.abs(ed2.edits[1].params.distance - next) < 0.5, JSON.stringify(ed2.edits[1]));
+  const newStep = await page.evaluate((sel) => window.filigreeTangle.result().steps[sel], ed2.selected);
+  assert.equal(newStep.operator, 'outline', 'the regrown step stays selected');
+  assert.ok(Math.abs(newStep.params[0].value - ed2.edits[1].params.distance) < 1e-9, 'the regrown step has the new distance');
+  const d2 = diff(before2, after2, mask2);
+  assert.ok(d2.inside > 50, `the outline changed (${d2.inside} pixels)`);
+  assert.equal(d2.outside, 0, 'nothing changed outside the edited step\'s shapes');
+  const total = before2.width * before2.height;
+  assert.ok(mask2.reduce((a, b) => a + b, 0) < total * 0.8, 'the step covers only part of the picture');
+
+  // Undo goes back to the re-expanded document, and its picture.
+  await page.click('[data-act=undo]');
+  n = await waitForResult(page, n);
+  assert.equal((await page.evaluate(() => window.filigreeTangle.state())).edits.length, 1);
+
+  // Export: the SVG parses, one <path> per final shape the page shows.
+  const shown = await count(page);
+  const svg = await page.evaluate(() => window.filigreeTangle.exportSvg());
+  const parsed = await page.evaluate((text) => {
+    const d = new DOMParser().parseFromString(text, 'image/svg+xml');
+    return { error: !!d.querySelector('parsererror'), paths: d.querySelectorAll('path').length, root: d.documentElement.nodeName };
+  }, svg);
+  assert.deepEqual(parsed, { error: false, paths: shown, root: 'svg' });
+
+  // The button downloads it.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('[data-act=export-svg]')]);
+  assert.match(download.suggestedFilename(), /^leaf-seed1\.svg$/);
+
+  // A fresh leaf at seed 1: the same bytes as the native CLI.
+  await page.click('[data-example=leaf]');
+  n = await waitForResult(page, n);
+  const fresh = await page.evaluate(() => window.filigreeTangle.exportSvg());
+  const golden = fs.readFileSync(new URL('../golden/tangle-leaf-seed1.svg', import.meta.url), 'utf8');
+  assert.equal(fresh.length, golden.length, 'SVG length equals the native golden');
+  assert.ok(fresh === golden, 'the browser\'s SVG is byte for byte the native CLI\'s');
+});
+
+test('tangle: a grammar error is marked in the editor at its line; a typed word is a start', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  let n = await runs(page);
+  const text = await page.evaluate(() => window.filigreeTangle.state().grammar);
+  const bad = text.replace('outline(25) : big_poly -> [in, out]', 'outline(25 : big_poly -> [in, out]');
+  assert.notEqual(bad, text);
+  await page.fill('[data-testid=tangle-grammar]', bad);
+  await page.click('[data-act=generate]');
+  await page.waitForSelector('[data-testid=doc-error]:not([hidden])', { timeout: 30000 });
+  const err = await page.textContent('[data-testid=doc-error]');
+  assert.match(err, /line 10/, err);
+  // Back to the shipped grammar, started from a typed word.
+  await page.click('[data-example=leaf]');
+  n = await waitForResult(page, n);
+  await page.selectOption('[name=start-kind]', 'text');
+  n = await waitForResult(page, n);
+  const st = await page.evaluate(() => window.filigreeTangle.state().start);
+  assert.deepEqual(st, { kind: 'text', text: 'Tangle', height: 300 });
+  assert.ok(await count(page) > 50);
+});

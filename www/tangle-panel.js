@@ -1,0 +1,989 @@
+// "Tangle": pen-and-ink tangle drawings grown from group grammars (MISSION
+// T9, the paper's §6 "User control" and Fig. 13). Pick a shipped grammar or
+// edit one, choose where it starts (the grammar's own start, a rectangle, a
+// typed word, an SVG file, a polygon drawn on the canvas), and the core grows
+// the tangle in a worker. A step slider walks the history; clicking a shape
+// selects the step that made it (clicking again walks further back), whose
+// parameters can then be edited or which can be re-expanded with a new
+// random draw.
+//
+// The document IS the request: grammar, start, seed, ink settings and the
+// user's edits in order ({step, params}); the core replays the edits, so the
+// page keeps no tangle state of its own and undo is just the previous
+// document. History, autosave, project files and links come from the
+// document controller (document.js); the schema is src/tangle/state.rs.
+//
+// Drawing (tangle-draw.js): one Path2D per ink style for the shown step,
+// rebuilt only when the step or the answer changes; during a pan or zoom the
+// last full picture is moved as a bitmap and redrawn sharp once the gesture
+// pauses, so 18k shapes stay smooth.
+import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
+import { download } from './project.js';
+import { prepareTangle, paintBatches, drawThumbnail } from './tangle-draw.js';
+
+const RUN_DELAY_MS = 120;
+const TYPING_DELAY_MS = 600;
+const SHARP_DELAY_MS = 120;
+const THUMB = { width: 96, height: 72 };
+// A thumbnail grows only this far (its grammar runs once, cached for the page's life).
+const THUMB_REQUEST = { max_steps: 400, max_shapes: 2500, resolution: 4 };
+const START_KINDS = [
+  ['grammar', "the grammar's start"],
+  ['rect', 'a rectangle'],
+  ['text', 'a typed word'],
+  ['svg', 'an SVG file'],
+  ['polygon', 'a polygon drawn here'],
+];
+const HIGHLIGHT = 'rgba(255, 122, 0, 0.38)';
+const HIGHLIGHT_LINE = '#e06000';
+
+// Shipped grammars and their thumbnails: fetched and drawn once per page.
+let examplesPromise = null;
+const examples = (run) => (examplesPromise ??= run('tangle-examples', {}).catch((e) => { examplesPromise = null; throw e; }));
+const thumbnails = new Map(); // name → canvas
+
+const html = `
+  <div class="tangle-layout">
+    <section class="card tangle-stage" aria-label="Tangle drawing">
+      <div class="toolbar" role="toolbar" aria-label="Tangle">
+        <span class="group">
+          <button type="button" class="primary" data-act="generate" title="Grow the tangle from the grammar (Ctrl+Enter in the editor)">Generate</button>
+          <button type="button" data-act="cancel" disabled>Cancel</button>
+        </span>
+        <span class="group">
+          <label class="inline">Seed <input type="number" name="seed" min="0" step="1" data-field="seed" data-testid="tangle-seed"></label>
+          <button type="button" data-act="new-seed" title="New seed" aria-label="New seed">⟳</button>
+        </span>
+        <span class="group">
+          <button type="button" data-act="zoom-out" aria-label="Zoom out">−</button>
+          <button type="button" data-act="zoom-fit" title="Fit the drawing">Fit</button>
+          <button type="button" data-act="zoom-in" aria-label="Zoom in">+</button>
+        </span>
+      </div>
+      <div class="tangle-viewport" data-testid="tangle-viewport">
+        <canvas data-testid="tangle-canvas" role="img" aria-label="tangle drawing: click a shape to select the step that made it; drag to pan, wheel to zoom"></canvas>
+        <div class="tangle-draw-bar" hidden>
+          <span>Click to add points (<span data-testid="tangle-draw-count">0</span>)</span>
+          <button type="button" class="primary" data-act="draw-finish">Use this polygon</button>
+          <button type="button" data-act="draw-cancel">Cancel</button>
+        </div>
+      </div>
+      <div class="tangle-steps">
+        <button type="button" data-act="play" aria-label="Play the growth" title="Play / pause">▶</button>
+        <input type="range" name="step" min="0" max="0" value="0" step="1" aria-label="Step in the history" data-testid="tangle-step">
+        <output class="tangle-count" data-testid="tangle-count" aria-live="polite">—</output>
+      </div>
+      <div class="status muted" data-testid="tangle-status" aria-live="polite"></div>
+    </section>
+    <aside class="card tangle-side">
+      <h3>Selected step</h3>
+      <div class="tangle-selected muted" data-testid="tangle-selected">Click a shape to select the step that made it; click it again to go further back.</div>
+      <form class="tangle-params" data-testid="tangle-params"></form>
+      <div class="row-buttons">
+        <button type="button" data-act="reexpand" disabled title="Undo this step and everything grown from it, and expand it again with a new random draw">Re-expand</button>
+        <button type="button" data-act="select-back" disabled title="The step that made this step's shapes">◂ Earlier step</button>
+        <button type="button" data-act="select-none" disabled>Deselect</button>
+      </div>
+      <h3>Grammar</h3>
+      <ul class="tangle-examples" data-testid="tangle-examples" aria-label="Shipped grammars"></ul>
+      <details class="tangle-program" open>
+        <summary>Grammar text</summary>
+        <div class="tangle-editor"></div>
+      </details>
+      <h3>Start from</h3>
+      <div class="tangle-start">
+        <select name="start-kind" data-field="start" aria-label="Start from"></select>
+        <span class="tangle-start-rect" hidden>
+          <label class="inline">w <input type="number" name="start-width" min="1" max="1000000" value="800" data-field="start.width"></label>
+          <label class="inline">h <input type="number" name="start-height" min="1" max="1000000" value="600" data-field="start.height"></label>
+        </span>
+        <span class="tangle-start-text" hidden>
+          <input type="text" name="start-text" maxlength="200" value="Tangle" aria-label="Word" data-field="start.text">
+          <label class="inline">height <input type="number" name="start-text-height" min="1" max="1000000" value="300"></label>
+        </span>
+        <span class="tangle-start-svg" hidden>
+          <input type="file" accept=".svg,image/svg+xml" name="start-svg" aria-label="SVG file" data-field="start.svg">
+        </span>
+        <span class="tangle-start-polygon" hidden>
+          <button type="button" data-act="draw-start">Draw a polygon</button>
+        </span>
+      </div>
+      <h3>Ink</h3>
+      <div class="tangle-ink">
+        <label>Wobble <input type="range" name="wobble" min="0" max="10" step="0.1" data-field="wobble"><output></output></label>
+        <label>Pen width <input type="range" name="stroke_width" min="0" max="6" step="0.1" data-field="stroke_width"><output></output></label>
+      </div>
+      <h3>Export</h3>
+      <div class="row-buttons">
+        <button type="button" data-act="export-svg">Export SVG</button>
+        <label class="inline">PNG <select name="png-width"><option>800</option><option selected>1600</option><option>3200</option></select> px</label>
+        <button type="button" data-act="export-png">Export PNG</button>
+      </div>
+    </aside>
+  </div>`;
+
+// ---- the state ---------------------------------------------------------------------
+// Schema (every field, its rules and messages): src/tangle/state.rs, applied by the
+// document controller (`check-state`).
+
+function invalid(field, why) {
+  const e = new Error(`${field} ${why}`);
+  e.field = field;
+  return e;
+}
+
+/** The `tangle` request of document `s` (the core's defaults for the rest). */
+export const requestOf = (s) => ({
+  grammar: s.grammar, start: s.start, seed: s.seed, wobble: s.wobble, stroke_width: s.stroke_width, edits: s.edits,
+});
+
+const tangleState = {
+  version: 1,
+  async defaults(ctx) {
+    const [list, d] = await Promise.all([examples(ctx.run), ctx.coreDefaults()]);
+    const ex = list.find((e) => e.name === 'leaf') || list[0];
+    return {
+      example: ex.name, grammar: ex.grammar, seed: d.seed, start: null,
+      wobble: d.wobble, stroke_width: d.stroke_width, edits: [], selected: null,
+    };
+  },
+  migrate: (raw) => raw,
+  fileName: (s) => s.example || 'tangle',
+  // A shipped grammar travels by name.
+  toShare(s) {
+    return { ...s, grammar: s.example ? null : s.grammar };
+  },
+  async fromShare(x, ctx) {
+    if (!x || typeof x !== 'object' || Array.isArray(x)) throw invalid('state', 'is not a Tangle document');
+    if (x.grammar == null && x.example != null) {
+      const ex = (await examples(ctx.run)).find((e) => e.name === x.example);
+      if (!ex) throw invalid('example', 'is not a shipped grammar');
+      return { ...x, grammar: ex.grammar };
+    }
+    return x;
+  },
+};
+
+// ---- the view ----------------------------------------------------------------------
+
+function mount(el, ctx) {
+  el.innerHTML = html;
+  preloadCodeEditor();
+  const q = (s) => el.querySelector(s);
+  const canvas = q('[data-testid=tangle-canvas]');
+  const g = canvas.getContext('2d');
+  const viewport = q('.tangle-viewport');
+  const slider = q('[name=step]');
+  const statusEl = q('[data-testid=tangle-status]');
+  const status = (t) => { statusEl.textContent = t; };
+  const state = () => ctx.state();
+
+  // Derived, not saved: the last answer, the shown step, the view transform.
+  let T = null; // prepareTangle(answer) of the current (or last good) document
+  let shownFor = null; // the document T answers
+  let k = 0; // shown step
+  let running = null;
+  let runTimer = null;
+  let typingTimer = null;
+  let refit = true;
+  const view = { s: 1, tx: 0, ty: 0 };
+  let dpr = 1;
+  let frame = 0;
+  let sharpTimer = null;
+  const snap = document.createElement('canvas');
+  let snapView = null;
+  let hl = null; // {sel, k, path, box}
+  let lastPick = -1;
+  let drag = null; // a parameter drag: {key, base, step, predicted, group}
+  let pendingGroup = null; // after an edit: re-find the selected step by its group
+  let pendingKey = null;
+  let drawing = null; // the start polygon being drawn: [[x, y], ...]
+  let playing = 0;
+  const timing = { paint: 0, batches: 0, run: 0 };
+
+  // ---- the grammar editor ------------------------------------------------------------
+
+  let editor = null;
+  const editorReady = createCodeEditor(q('.tangle-editor'), {
+    language: 'tangle', label: 'tangle grammar',
+    attributes: { 'data-testid': 'tangle-grammar', 'data-field': 'grammar' },
+    onChange: () => {
+      ctx.clearTimeout(typingTimer);
+      typingTimer = ctx.setTimeout(applyEditor, TYPING_DELAY_MS);
+    },
+  }).then((ed) => {
+    editor = ed;
+    if (state()) ed.setValue(state().grammar);
+    ed.getValue && q('.tangle-editor').addEventListener('keydown', (e) => {
+      if (e.key === 'Enter' && (e.ctrlKey || e.metaKey)) { e.preventDefault(); generate(); }
+    });
+    return ed;
+  });
+
+  /** Commit the editor's text when it differs from the document's grammar. */
+  function applyEditor() {
+    ctx.clearTimeout(typingTimer);
+    typingTimer = null;
+    const doc = state();
+    if (!editor || !doc) return false;
+    const text = editor.getValue();
+    if (text === doc.grammar) return false;
+    refit = true;
+    ctx.commit({ ...doc, grammar: text, example: null, edits: [], selected: null }, { coalesce: 'grammar-typing' });
+    return true;
+  }
+
+  function generate() {
+    if (!applyEditor()) run();
+  }
+
+  // ---- running the core -------------------------------------------------------------
+
+  function scheduleRun() {
+    ctx.clearTimeout(runTimer);
+    runTimer = ctx.setTimeout(() => { runTimer = null; run(); }, RUN_DELAY_MS);
+  }
+
+  async function run() {
+    const doc = state();
+    if (!doc) return;
+    ctx.clearTimeout(runTimer);
+    runTimer = null;
+    running?.abort();
+    const ctrl = new AbortController();
+    running = ctrl;
+    q('[data-act=cancel]').disabled = false;
+    status('growing…');
+    const t0 = performance.now();
+    try {
+      const r = await ctx.run('tangle', requestOf(doc), {
+        signal: ctrl.signal,
+        onProgress: (p) => {
+          if (running !== ctrl) return;
+          status(`growing: ${p.figure != null ? `${Math.round(p.figure).toLocaleString('en')} shapes` : p.stage}`);
+        },
+      });
+      if (running !== ctrl) return;
+      const t1 = performance.now();
+      T = prepareTangle(r);
+      shownFor = doc;
+      hl = null;
+      lastPick = -1;
+      timing.run = performance.now() - t0;
+      timing.prepare = performance.now() - t1;
+      slider.max = String(T.steps);
+      setStep(T.steps, false);
+      if (refit) { refit = false; fitView(); }
+      ctx.clearError('run');
+      const why = r.stopped ? ` — stopped: ${r.stopped}` : '';
+      status(`${r.stats.steps.toLocaleString('en')} steps, ${r.stats.shapes.toLocaleString('en')} shapes, ${r.stats.vertices.toLocaleString('en')} vertices in ${Math.round(timing.run)} ms${why}`);
+      statusEl.dataset.runs = String(Number(statusEl.dataset.runs || 0) + 1);
+      resolveSelection();
+      showSelected();
+      paint();
+      loadThumbnails();
+    } catch (err) {
+      if (running !== ctrl) return;
+      status(err?.kind === 'cancelled' ? 'cancelled' : 'the tangle could not grow (see above)');
+      if (err?.kind !== 'cancelled') ctx.error(err, { prefix: 'Tangle', source: 'run' });
+    } finally {
+      if (running === ctrl) {
+        running = null;
+        q('[data-act=cancel]').disabled = true;
+      }
+    }
+  }
+
+  /** After an edit, the edited step was regrown at a new position: select it there. */
+  function resolveSelection() {
+    if (pendingGroup === null || !T) return;
+    const group = pendingGroup, key = pendingKey;
+    pendingGroup = pendingKey = null;
+    const pos = T.r.steps.findIndex((s) => s.group === group);
+    const doc = state();
+    if (pos >= 0 && doc && doc.selected !== pos) ctx.commit({ ...doc, selected: pos }, { coalesce: key });
+  }
+
+  // ---- the view transform and painting ------------------------------------------------
+
+  function resize() {
+    dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(viewport.clientWidth * dpr));
+    const h = Math.max(1, Math.round(viewport.clientHeight * dpr));
+    if (canvas.width !== w || canvas.height !== h) {
+      canvas.width = w;
+      canvas.height = h;
+      if (refit || !T) fitView(); else paint();
+    }
+  }
+  const ro = new ResizeObserver(() => resize());
+  ro.observe(viewport);
+
+  /** The drawing's extent: the answer's bounds, or a default sheet before any answer. */
+  const extent = () => (T && T.n ? T.r.bounds : [0, 0, 800, 600]);
+
+  function fitView() {
+    const [x0, y0, x1, y1] = extent();
+    const w = viewport.clientWidth || 1, h = viewport.clientHeight || 1;
+    const s = Math.min((w - 16) / Math.max(1e-6, x1 - x0), (h - 16) / Math.max(1e-6, y1 - y0));
+    view.s = Number.isFinite(s) && s > 0 ? s : 1;
+    view.tx = (w - view.s * (x1 - x0)) / 2 - view.s * x0;
+    view.ty = (h - view.s * (y1 - y0)) / 2 - view.s * y0;
+    paint();
+  }
+
+  const toWorld = (cx, cy) => [(cx - view.tx) / view.s, (cy - view.ty) / view.s];
+  const toCss = (x, y) => [x * view.s + view.tx, y * view.s + view.ty];
+
+  /** Repaint sharp at the next frame. */
+  function paint() {
+    if (frame) return;
+    frame = requestAnimationFrame(() => { frame = 0; paintNow(); });
+  }
+
+  function paintNow() {
+    const t0 = performance.now();
+    g.setTransform(1, 0, 0, 1, 0, 0);
+    g.fillStyle = '#fff';
+    g.fillRect(0, 0, canvas.width, canvas.height);
+    const doc = state();
+    if (T && T.n) {
+      g.setTransform(dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty);
+      const tb = performance.now();
+      const b = T.batches(k);
+      timing.batches = performance.now() - tb;
+      const sw = doc?.stroke_width ?? 1;
+      paintBatches(g, b, sw > 0 ? Math.max(sw, 0.5 / view.s) : 0);
+      paintHighlight();
+    }
+    paintDrawing();
+    g.setTransform(1, 0, 0, 1, 0, 0);
+    // Kept for quick pans and zooms.
+    if (snap.width !== canvas.width || snap.height !== canvas.height) { snap.width = canvas.width; snap.height = canvas.height; }
+    snap.getContext('2d').drawImage(canvas, 0, 0);
+    snapView = { ...view };
+    timing.paint = performance.now() - t0;
+  }
+
+  /** During a pan or zoom: move the last picture, and redraw it sharp when the gesture pauses. */
+  function quickPaint() {
+    if (!snapView) { paint(); return; }
+    cancelAnimationFrame(frame);
+    frame = requestAnimationFrame(() => {
+      frame = 0;
+      const r = view.s / snapView.s;
+      g.setTransform(1, 0, 0, 1, 0, 0);
+      g.fillStyle = '#fff';
+      g.fillRect(0, 0, canvas.width, canvas.height);
+      g.setTransform(r, 0, 0, r, dpr * (view.tx - snapView.tx * r), dpr * (view.ty - snapView.ty * r));
+      g.drawImage(snap, 0, 0);
+      g.setTransform(1, 0, 0, 1, 0, 0);
+    });
+    ctx.clearTimeout(sharpTimer);
+    sharpTimer = ctx.setTimeout(() => { sharpTimer = null; paint(); }, SHARP_DELAY_MS);
+  }
+
+  function selectedStep() {
+    const s = state()?.selected;
+    return T && s != null && s < T.steps && shownFor && sameRequest(shownFor, state()) ? s : null;
+  }
+
+  function paintHighlight() {
+    const sel = selectedStep();
+    if (sel === null) return;
+    if (!hl || hl.sel !== sel || hl.k !== k) {
+      // The step's inputs while it has not run yet, else what it grew (still shown at step k).
+      const step = T.r.steps[sel];
+      const list = k <= sel ? step.inputs : [...T.subtree(sel)].filter((i) => T.visible(i, k));
+      const path = new Path2D();
+      for (const i of list) path.addPath(T.path(i));
+      hl = { sel, k, path, box: T.bounds(step.inputs) };
+    }
+    g.fillStyle = HIGHLIGHT;
+    g.fill(hl.path, 'evenodd');
+    if (hl.box) {
+      g.strokeStyle = HIGHLIGHT_LINE;
+      g.lineWidth = 1.5 / view.s;
+      g.setLineDash([4 / view.s, 3 / view.s]);
+      const [x0, y0, x1, y1] = hl.box;
+      g.strokeRect(x0, y0, x1 - x0, y1 - y0);
+      g.setLineDash([]);
+    }
+  }
+
+  function paintDrawing() {
+    if (!drawing) return;
+    g.setTransform(dpr, 0, 0, dpr, 0, 0);
+    g.strokeStyle = HIGHLIGHT_LINE;
+    g.fillStyle = HIGHLIGHT_LINE;
+    g.lineWidth = 2;
+    g.beginPath();
+    drawing.forEach(([x, y], i) => {
+      const [cx, cy] = toCss(x, y);
+      if (i) g.lineTo(cx, cy); else g.moveTo(cx, cy);
+    });
+    if (drawing.length > 2) g.closePath();
+    g.stroke();
+    for (const [x, y] of drawing) {
+      const [cx, cy] = toCss(x, y);
+      g.fillRect(cx - 3, cy - 3, 6, 6);
+    }
+  }
+
+  // ---- the step slider and play ---------------------------------------------------------
+
+  function setStep(v, draw = true) {
+    k = Math.max(0, Math.min(T ? T.steps : 0, Math.round(v)));
+    slider.value = String(k);
+    const n = T ? T.count(k) : 0;
+    const out = q('[data-testid=tangle-count]');
+    out.textContent = T ? `step ${k.toLocaleString('en')} / ${T.steps.toLocaleString('en')} · ${n.toLocaleString('en')} shapes` : '—';
+    out.dataset.count = String(n);
+    out.dataset.step = String(k);
+    if (draw) paint();
+  }
+  slider.addEventListener('input', () => { stopPlay(); setStep(Number(slider.value)); });
+
+  const playBtn = q('[data-act=play]');
+  function stopPlay() {
+    if (!playing) return;
+    cancelAnimationFrame(playing);
+    playing = 0;
+    playBtn.textContent = '▶';
+    playBtn.setAttribute('aria-label', 'Play the growth');
+  }
+  function play() {
+    if (!T || !T.steps) return;
+    if (k >= T.steps) setStep(0, false);
+    playBtn.textContent = '❚❚';
+    playBtn.setAttribute('aria-label', 'Pause');
+    const per = Math.max(1, Math.round(T.steps / 180)); // about three seconds at 60 frames a second
+    const tick = () => {
+      if (!T || k >= T.steps) { stopPlay(); return; }
+      setStep(k + per);
+      playing = requestAnimationFrame(tick);
+    };
+    playing = requestAnimationFrame(tick);
+  }
+  playBtn.onclick = () => (playing ? stopPlay() : play());
+
+  // ---- selection and edits ---------------------------------------------------------------
+
+  const sameRequest = (a, b) => a.grammar === b.grammar && a.start === b.start && a.seed === b.seed
+    && a.wobble === b.wobble && a.edits === b.edits;
+
+  function select(next, opts = { coalesce: 'tangle-select' }) {
+    const doc = state();
+    if (!doc || doc.selected === next) return;
+    ctx.commit({ ...doc, selected: next }, opts);
+  }
+
+  /** The step before `s`: the one that made its shapes (null: they are start shapes). */
+  function parentStep(s) {
+    const first = T.r.steps[s]?.inputs[0];
+    if (first === undefined) return null;
+    const b = T.born[first];
+    return b >= 0 ? b : null;
+  }
+
+  function pickAt(cx, cy) {
+    if (!T) return;
+    const [x, y] = toWorld(cx, cy);
+    const i = T.pick(x, y, k, g);
+    const sel = selectedStep();
+    if (i < 0) { lastPick = -1; return; }
+    let next;
+    if (i === lastPick && sel !== null) {
+      next = parentStep(sel);
+      if (next === null) { status('this is the first step that made these shapes'); next = sel; }
+    } else {
+      next = T.born[i] >= 0 ? T.born[i] : null;
+      if (next === null) status('a start shape: no step made it');
+    }
+    lastPick = i;
+    select(next);
+  }
+
+  /** Append edit {step: sel, params} (a drag replaces its own edit) and re-run. */
+  function edit(sel, params, key) {
+    const doc = state();
+    if (!doc || !T) return;
+    if (!drag || drag.key !== key) {
+      drag = {
+        key, base: doc.edits, step: sel, group: T.r.steps[sel].group,
+        // The regrown step lands after the steps it does not touch.
+        predicted: T.steps - T.dependents(sel).length,
+      };
+    }
+    const edits = [...drag.base, { step: drag.step, params }];
+    pendingGroup = drag.group;
+    pendingKey = key;
+    ctx.commit({ ...doc, edits, selected: drag.predicted }, { coalesce: key });
+  }
+
+  let editNo = 0;
+  function reexpand() {
+    const sel = selectedStep();
+    if (sel === null) return;
+    drag = null;
+    edit(sel, {}, `tangle-reexpand-${++editNo}`);
+    ctx.seal();
+    drag = null;
+  }
+
+  function showSelected() {
+    const sel = selectedStep();
+    const box = q('[data-testid=tangle-selected]');
+    const form = q('[data-testid=tangle-params]');
+    for (const a of ['reexpand', 'select-back', 'select-none']) q(`[data-act=${a}]`).disabled = sel === null;
+    if (sel === null) {
+      box.textContent = 'Click a shape to select the step that made it; click it again to go further back.';
+      box.classList.add('muted');
+      delete box.dataset.step;
+      form.replaceChildren();
+      return;
+    }
+    const st = T.r.steps[sel];
+    box.classList.remove('muted');
+    box.dataset.step = String(sel);
+    box.dataset.operator = st.operator;
+    const tag = T.r.tags[st.tag] ?? st.tag;
+    box.innerHTML = '';
+    const b = document.createElement('b');
+    b.textContent = `Step ${sel + 1} of ${T.steps}: ${st.operator}`;
+    const facts = document.createElement('span');
+    facts.className = 'muted';
+    facts.textContent = ` — rule on line ${st.line}, tag ${tag}, group ${st.group}, ${st.inputs.length} in → ${st.outputs.length} out`;
+    box.append(b, facts);
+    if (drag) return; // keep the slider being dragged
+    form.dataset.step = String(sel);
+    form.replaceChildren(...st.params.map((p) => paramRow(sel, p)));
+    if (!st.params.length) {
+      const none = document.createElement('p');
+      none.className = 'muted';
+      none.textContent = `${st.operator} has no parameters; Re-expand draws its rule again.`;
+      form.append(none);
+    }
+  }
+
+  let dragNo = 0;
+  function paramRow(sel, p) {
+    const row = document.createElement('label');
+    row.className = 'tangle-param';
+    row.dataset.param = p.name;
+    const name = document.createElement('span');
+    name.textContent = p.name;
+    const input = document.createElement('input');
+    input.type = 'range';
+    input.min = String(p.min);
+    input.max = String(Math.max(p.max, p.value));
+    input.step = p.integer ? '1' : String((p.max - p.min) / 400);
+    input.value = String(p.value);
+    input.dataset.testid = `tangle-param-${p.name}`;
+    input.setAttribute('aria-label', `${p.name} of step ${sel + 1}`);
+    const out = document.createElement('output');
+    const show = (v) => { out.textContent = p.integer ? String(v) : v.toFixed(2).replace(/\.?0+$/, ''); };
+    show(p.value);
+    let key = null;
+    input.oninput = () => {
+      const v = p.integer ? Math.round(Number(input.value)) : Number(input.value);
+      show(v);
+      key ??= `tangle-param-${sel}-${p.name}-${++dragNo}`;
+      edit(sel, { [p.name]: v }, key);
+    };
+    input.onchange = () => {
+      ctx.seal();
+      key = null;
+      drag = null;
+      if (runTimer !== null) run(); // released: no need to wait for more moves
+      else if (shownFor === state()) showSelected();
+    };
+    row.append(name, input, out);
+    return row;
+  }
+
+  q('[data-act=reexpand]').onclick = reexpand;
+  q('[data-act=select-back]').onclick = () => {
+    const sel = selectedStep();
+    if (sel === null) return;
+    const p = parentStep(sel);
+    if (p === null) status('this is the first step that made these shapes');
+    else select(p);
+  };
+  q('[data-act=select-none]').onclick = () => { lastPick = -1; select(null); };
+
+  // ---- pointer: pan, zoom, pick, draw ---------------------------------------------------
+
+  const pointers = new Map();
+  let gesture = null;
+  const local = (e) => {
+    const r = canvas.getBoundingClientRect();
+    return [e.clientX - r.left, e.clientY - r.top];
+  };
+  canvas.addEventListener('pointerdown', (e) => {
+    if (e.button > 0) return;
+    canvas.setPointerCapture(e.pointerId);
+    pointers.set(e.pointerId, local(e));
+    if (pointers.size === 2) {
+      const [a, b] = [...pointers.values()];
+      gesture = { pinch: Math.hypot(a[0] - b[0], a[1] - b[1]), s: view.s, moved: true };
+    } else gesture = { start: local(e), tx: view.tx, ty: view.ty, moved: false };
+  });
+  canvas.addEventListener('pointermove', (e) => {
+    if (!pointers.has(e.pointerId) || !gesture) return;
+    pointers.set(e.pointerId, local(e));
+    if (gesture.pinch && pointers.size === 2) {
+      const [a, b] = [...pointers.values()];
+      const d = Math.hypot(a[0] - b[0], a[1] - b[1]);
+      zoomAt((a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (gesture.s * d) / gesture.pinch / view.s);
+      return;
+    }
+    if (!gesture.start) return;
+    const [x, y] = local(e);
+    const dx = x - gesture.start[0], dy = y - gesture.start[1];
+    if (!gesture.moved && Math.hypot(dx, dy) < 4) return;
+    gesture.moved = true;
+    view.tx = gesture.tx + dx;
+    view.ty = gesture.ty + dy;
+    quickPaint();
+  });
+  const up = (e) => {
+    if (!pointers.has(e.pointerId)) return;
+    pointers.delete(e.pointerId);
+    const gst = gesture;
+    if (pointers.size) return;
+    gesture = null;
+    if (!gst || gst.moved || e.type === 'pointercancel') return;
+    const [x, y] = local(e);
+    if (drawing) { addDrawPoint(x, y); return; }
+    pickAt(x, y);
+  };
+  canvas.addEventListener('pointerup', up);
+  canvas.addEventListener('pointercancel', up);
+  canvas.addEventListener('dblclick', (e) => { if (drawing) { e.preventDefault(); finishDrawing(); } });
+  canvas.addEventListener('wheel', (e) => {
+    e.preventDefault();
+    const [x, y] = local(e);
+    zoomAt(x, y, Math.exp(-e.deltaY * (e.deltaMode === 1 ? 0.05 : 0.0015)));
+  }, { passive: false });
+
+  function zoomAt(cx, cy, f) {
+    const s = Math.max(1e-4, Math.min(1e4, view.s * f));
+    const [wx, wy] = toWorld(cx, cy);
+    view.s = s;
+    view.tx = cx - wx * s;
+    view.ty = cy - wy * s;
+    quickPaint();
+  }
+  const zoomCentre = (f) => zoomAt(viewport.clientWidth / 2, viewport.clientHeight / 2, f);
+  q('[data-act=zoom-in]').onclick = () => zoomCentre(1.5);
+  q('[data-act=zoom-out]').onclick = () => zoomCentre(1 / 1.5);
+  q('[data-act=zoom-fit]').onclick = () => fitView();
+
+  // ---- start shapes ----------------------------------------------------------------------
+
+  const kindSel = q('[name=start-kind]');
+  for (const [v, label] of START_KINDS) kindSel.append(new Option(label, v));
+  const startKind = (s) => s?.start?.kind ?? 'grammar';
+  function showStartRows(kind) {
+    for (const [v] of START_KINDS) {
+      const row = q(`.tangle-start-${v}`);
+      if (row) row.hidden = v !== kind;
+    }
+  }
+  function setStart(start) {
+    const doc = state();
+    if (!doc) return;
+    refit = true;
+    lastPick = -1;
+    ctx.commit({ ...doc, start, edits: [], selected: null });
+  }
+  const num = (name, lo, hi, d) => {
+    const v = Number(q(`[name=${name}]`).value);
+    return Number.isFinite(v) ? Math.max(lo, Math.min(hi, v)) : d;
+  };
+  const rectStart = () => ({ kind: 'rect', width: num('start-width', 1, 1e6, 800), height: num('start-height', 1, 1e6, 600) });
+  const textStart = () => ({ kind: 'text', text: q('[name=start-text]').value.trim() || 'Tangle', height: num('start-text-height', 1, 1e6, 300) });
+  kindSel.onchange = () => {
+    const kind = kindSel.value;
+    showStartRows(kind);
+    if (kind === 'grammar') setStart(null);
+    else if (kind === 'rect') setStart(rectStart());
+    else if (kind === 'text') setStart(textStart());
+    else if (kind === 'svg') q('[name=start-svg]').click();
+    else if (kind === 'polygon') beginDrawing();
+  };
+  for (const n of ['start-width', 'start-height']) q(`[name=${n}]`).onchange = () => setStart(rectStart());
+  for (const n of ['start-text', 'start-text-height']) q(`[name=${n}]`).onchange = () => setStart(textStart());
+  q('[name=start-svg]').onchange = async (e) => {
+    const file = e.target.files[0];
+    e.target.value = '';
+    if (!file) return;
+    const svg = await file.text();
+    setStart({ kind: 'svg', svg });
+  };
+  q('[data-act=draw-start]').onclick = () => beginDrawing();
+
+  function beginDrawing() {
+    drawing = [];
+    stopPlay();
+    q('.tangle-draw-bar').hidden = false;
+    q('[data-testid=tangle-draw-count]').textContent = '0';
+    status('drawing a start polygon: click to add points, double-click or "Use this polygon" to finish');
+    paint();
+  }
+  function addDrawPoint(cx, cy) {
+    const [x, y] = toWorld(cx, cy);
+    drawing.push([Math.round(x * 100) / 100, Math.round(y * 100) / 100]);
+    q('[data-testid=tangle-draw-count]').textContent = String(drawing.length);
+    paint();
+  }
+  function finishDrawing() {
+    const pts = drawing;
+    endDrawing();
+    // A double-click adds its point twice.
+    const clean = pts.filter((p, i) => i === 0 || p[0] !== pts[i - 1][0] || p[1] !== pts[i - 1][1]);
+    if (clean.length < 3) { status('a polygon needs at least 3 points'); return; }
+    setStart({ kind: 'polygon', points: clean });
+  }
+  function endDrawing() {
+    drawing = null;
+    q('.tangle-draw-bar').hidden = true;
+    paint();
+  }
+  q('[data-act=draw-finish]').onclick = finishDrawing;
+  q('[data-act=draw-cancel]').onclick = () => { endDrawing(); kindSel.value = startKind(state()); showStartRows(kindSel.value); };
+
+  // ---- grammar picker ------------------------------------------------------------------
+
+  const list = q('[data-testid=tangle-examples]');
+  examples(ctx.run).then((exs) => {
+    if (!ctx.alive()) return;
+    list.replaceChildren(...exs.map((ex) => {
+      const li = document.createElement('li');
+      const b = document.createElement('button');
+      b.type = 'button';
+      b.className = 'tangle-example';
+      b.dataset.example = ex.name;
+      b.title = ex.about;
+      const c = document.createElement('canvas');
+      c.width = THUMB.width;
+      c.height = THUMB.height;
+      c.setAttribute('aria-hidden', 'true');
+      const name = document.createElement('span');
+      name.textContent = ex.name;
+      b.append(c, name);
+      b.onclick = () => loadExample(ex);
+      li.append(b);
+      const cached = thumbnails.get(ex.name);
+      if (cached) c.getContext('2d').drawImage(cached, 0, 0);
+      return li;
+    }));
+    markExample(state());
+  }).catch((err) => ctx.error(err, { prefix: 'The shipped grammars' }));
+
+  function markExample(s) {
+    for (const b of list.querySelectorAll('[data-example]')) b.setAttribute('aria-pressed', String(b.dataset.example === s?.example));
+  }
+
+  function loadExample(ex) {
+    const doc = state();
+    if (!doc) return;
+    refit = true;
+    lastPick = -1;
+    ctx.clearTimeout(typingTimer);
+    ctx.commit({ ...doc, example: ex.name, grammar: ex.grammar, start: null, edits: [], selected: null });
+  }
+
+  // One at a time, after the main drawing, each at low settings; kept for the page's life.
+  let thumbsBusy = false;
+  async function loadThumbnails() {
+    if (thumbsBusy) return;
+    thumbsBusy = true;
+    try {
+      for (const ex of await examples(ctx.run)) {
+        if (thumbnails.has(ex.name) || !ctx.alive()) continue;
+        let r;
+        try {
+          r = await ctx.run('tangle', { grammar: ex.grammar, seed: 1, ...THUMB_REQUEST });
+        } catch (err) {
+          if (err?.kind === 'cancelled') throw err;
+          // This grammar cannot grow here (its card says so); the others still get theirs.
+          const b = list.querySelector(`[data-example="${CSS.escape(ex.name)}"]`);
+          if (b) b.title = `${ex.about} (no preview: ${err?.message || err})`;
+          continue;
+        }
+        const c = document.createElement('canvas');
+        c.width = THUMB.width;
+        c.height = THUMB.height;
+        drawThumbnail(c, r);
+        thumbnails.set(ex.name, c);
+        const target = list.querySelector(`[data-example="${CSS.escape(ex.name)}"] canvas`);
+        target?.getContext('2d').drawImage(c, 0, 0);
+      }
+      list.dataset.thumbnails = 'ready';
+    } catch (err) {
+      if (err?.kind !== 'cancelled') console.warn('tangle thumbnails:', err?.message || err);
+    } finally {
+      thumbsBusy = false;
+    }
+  }
+
+  // ---- seed, ink, toolbar ----------------------------------------------------------------
+
+  const setSeed = (v) => {
+    const doc = state();
+    if (!doc || !Number.isFinite(v)) return;
+    ctx.commit({ ...doc, seed: Math.max(0, Math.round(v)), edits: [], selected: null });
+  };
+  q('[name=seed]').onchange = (e) => setSeed(Number(e.target.value));
+  q('[data-act=new-seed]').onclick = () => setSeed((state()?.seed ?? 0) + 1);
+  for (const name of ['wobble', 'stroke_width']) {
+    const input = q(`[name=${name}]`);
+    input.oninput = () => {
+      const doc = state();
+      if (doc) ctx.commit({ ...doc, [name]: Number(input.value) }, { coalesce: `tangle-${name}` });
+    };
+    input.onchange = () => ctx.seal();
+  }
+  q('[data-act=generate]').onclick = generate;
+  q('[data-act=cancel]').onclick = () => { running?.abort(); ctx.clearTimeout(runTimer); runTimer = null; };
+
+  // ---- export --------------------------------------------------------------------------
+
+  async function exportAs(format) {
+    const doc = state();
+    if (!doc) return null;
+    const pngWidth = Number(q('[name=png-width]').value) || 1600;
+    status(`exporting ${format.toUpperCase()}…`);
+    try {
+      const r = await ctx.run('tangle', { ...requestOf(doc), export: format, png_width: pngWidth });
+      status(`exported ${format.toUpperCase()}: ${r.stats.shapes.toLocaleString('en')} shapes`);
+      return r;
+    } catch (err) {
+      ctx.error(err, { prefix: `Export ${format.toUpperCase()}` });
+      status('');
+      return null;
+    }
+  }
+  const base = () => state()?.example || 'tangle';
+  q('[data-act=export-svg]').onclick = async () => {
+    const r = await exportAs('svg');
+    if (r) download(`${base()}-seed${state().seed}.svg`, new Blob([r.svg], { type: 'image/svg+xml' }));
+  };
+  q('[data-act=export-png]').onclick = async () => {
+    const r = await exportAs('png');
+    if (r) download(`${base()}-seed${state().seed}.png`, new Blob([r.png], { type: 'image/png' }));
+  };
+
+  // For tests and the console.
+  const hooks = {
+    state,
+    result: () => T?.r ?? null,
+    pending: () => runTimer !== null || running !== null || typingTimer !== null,
+    timing: () => ({ ...timing }),
+    step: () => k,
+    view: () => ({ ...view, dpr }),
+    /** The selected step's input shapes' bounds in canvas pixels, or null. */
+    selectedBox() {
+      const sel = selectedStep();
+      const b = sel !== null && T.bounds(T.r.steps[sel].inputs);
+      if (!b) return null;
+      const [x0, y0] = toCss(b[0], b[1]), [x1, y1] = toCss(b[2], b[3]);
+      return [x0 * dpr, y0 * dpr, x1 * dpr, y1 * dpr];
+    },
+    /**
+     * Where the selected step's input shapes cover the canvas (grown by `grow` CSS px),
+     * one byte a canvas pixel (1: covered), or null: the only part an edit of it may redraw.
+     */
+    selectedMask(grow = 3) {
+      const sel = selectedStep();
+      if (sel === null) return null;
+      const m = document.createElement('canvas');
+      m.width = canvas.width;
+      m.height = canvas.height;
+      const mg = m.getContext('2d');
+      mg.setTransform(dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty);
+      mg.fillStyle = mg.strokeStyle = '#000';
+      mg.lineWidth = (2 * grow) / view.s + (state().stroke_width || 0);
+      mg.lineJoin = 'round';
+      for (const i of T.r.steps[sel].inputs) {
+        mg.fill(T.path(i), 'nonzero');
+        mg.stroke(T.path(i));
+      }
+      const d = mg.getImageData(0, 0, m.width, m.height).data;
+      const out = new Uint8Array(m.width * m.height);
+      for (let i = 0; i < out.length; i++) out[i] = d[4 * i + 3] > 0 ? 1 : 0;
+      return out;
+    },
+    /** A point (CSS px from the canvas's corner) where a click picks shape i at the shown step, or null. */
+    pointIn(i) {
+      const b = 4 * i;
+      for (let n = 2; n <= 32; n *= 2) {
+        for (let a = 1; a < n; a++) {
+          for (let c = 1; c < n; c++) {
+            const x = T.box[b] + ((T.box[b + 2] - T.box[b]) * a) / n, y = T.box[b + 1] + ((T.box[b + 3] - T.box[b + 1]) * c) / n;
+            const [cx, cy] = toCss(x, y);
+            if (cx < 2 || cy < 2 || cx > viewport.clientWidth - 2 || cy > viewport.clientHeight - 2) continue;
+            const [wx, wy] = toWorld(cx, cy);
+            if (T.pick(wx, wy, k, g) === i) return [cx, cy];
+          }
+        }
+      }
+      return null;
+    },
+    exportSvg: async () => (await exportAs('svg'))?.svg ?? null,
+    paintNow,
+  };
+  window.filigreeTangle = hooks;
+
+  return {
+    render(s, prev) {
+      if (!s) return;
+      if (editor && editor.getValue() !== s.grammar && typingTimer === null) editor.setValue(s.grammar);
+      if (editor && (!prev || prev.grammar !== s.grammar)) editor.clearError();
+      q('[name=seed]').value = String(s.seed);
+      for (const name of ['wobble', 'stroke_width']) {
+        const input = q(`[name=${name}]`);
+        if (Number(input.value) !== s[name]) input.value = String(s[name]);
+        input.nextElementSibling.textContent = String(s[name]);
+      }
+      if (!drawing) {
+        kindSel.value = startKind(s);
+        showStartRows(kindSel.value);
+      }
+      if (s.start?.kind === 'rect') { q('[name=start-width]').value = String(s.start.width); q('[name=start-height]').value = String(s.start.height); }
+      if (s.start?.kind === 'text') { q('[name=start-text]').value = s.start.text; q('[name=start-text-height]').value = String(s.start.height); }
+      markExample(s);
+      if (!prev || !sameRequest(s, prev)) {
+        if (!prev || prev.grammar !== s.grammar || prev.start !== s.start) refit = true;
+        scheduleRun();
+      } else if (prev.stroke_width !== s.stroke_width) paint();
+      if (!prev || prev.selected !== s.selected || !sameRequest(s, prev)) {
+        hl = null;
+        if (shownFor && sameRequest(shownFor, s)) showSelected();
+        paint();
+      }
+    },
+    markError(err) {
+      if (err.field !== 'grammar' && err.kind !== 'syntax') return;
+      q('details.tangle-program').open = true;
+      const m = /line (\d+), column (\d+)/.exec(err.message || '');
+      const at = Number.isInteger(err.line) ? [err.line, err.column ?? 1] : m && [Number(m[1]), Number(m[2])];
+      if (at) editorReady.then((ed) => ctx.alive() && ed.markError(at[0], at[1], err.message));
+    },
+    keys: {
+      g: () => generate(),
+      r: () => reexpand(),
+    },
+    unmount() {
+      ro.disconnect();
+      stopPlay();
+      cancelAnimationFrame(frame);
+      running?.abort();
+      if (window.filigreeTangle === hooks) delete window.filigreeTangle;
+    },
+  };
+}
+
+export default { id: 'tangle', title: 'Tangle', state: tangleState, mount };
