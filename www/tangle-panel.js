@@ -527,7 +527,6 @@ function mount(el, ctx) {
     if (sel === null) return;
     drag = null;
     edit(sel, {}, `tangle-reexpand-${++editNo}`);
-    ctx.seal();
     drag = null;
   }
 
