@@ -202,7 +202,12 @@ impl Expansion {
                 }
             };
             let t = x.tag(&tag);
-            let poly = poly.resampled(x.settings.resolution);
+            // Sampled finely only where it will wobble.
+            let poly = if x.settings.wobble > 0.0 {
+                poly.resampled(x.settings.resolution)
+            } else {
+                poly
+            };
             x.add(
                 Shape {
                     tag: t,
