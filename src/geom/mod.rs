@@ -17,6 +17,7 @@
 //! `n = (p − q)/d`.
 pub mod bezier;
 pub mod distance_transform;
+pub mod mvc;
 pub mod polygon;
 pub mod primitives;
 pub mod winding;

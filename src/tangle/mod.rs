@@ -7,6 +7,7 @@
 //! Rules of a [`ast::Grammar`] rewrite the non-terminal shapes of the
 //! lowest group id, one group per expansion step.
 pub mod ast;
+pub mod streamline;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;
