@@ -50,29 +50,27 @@ pub fn mean_value_weights(rings: &[Vec<DVec2>], p: DVec2, out: &mut Vec<f64>) {
         return;
     }
     out.resize(total, 0.0);
-    // Size of the configuration, for the relative snapping tolerances.
-    let scale = rings
-        .iter()
-        .flatten()
-        .map(|q| (*q - p).abs().max_element())
-        .fold(0.0f64, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let eps = SNAP * scale;
-
     // Pass 1: distances r_i (kept in `out` until overwritten by the
-    // weights, one sqrt per point), snapping to a vertex.
-    let mut k = 0;
+    // weights, one sqrt per point), the configuration's size (for the
+    // relative tolerances) and the nearest vertex.
+    let (mut scale, mut nearest, mut k) = (f64::MIN_POSITIVE, (f64::INFINITY, 0), 0);
     for ring in rings {
         for &q in ring {
             let r = (q - p).length();
-            if r <= eps {
-                out.iter_mut().for_each(|w| *w = 0.0);
-                out[k] = 1.0;
-                return;
+            scale = scale.max(r);
+            if r < nearest.0 {
+                nearest = (r, k);
             }
             out[k] = r;
             k += 1;
         }
+    }
+    let eps = SNAP * scale;
+    if !(nearest.0 > eps) {
+        // On a vertex (or a non-finite input): that vertex.
+        out.iter_mut().for_each(|w| *w = 0.0);
+        out[nearest.1] = 1.0;
+        return;
     }
 
     // Pass 2: on an edge, the edge's linear interpolation; else the
@@ -136,17 +134,8 @@ pub fn mean_value_weights(rings: &[Vec<DVec2>], p: DVec2, out: &mut Vec<f64>) {
         return;
     }
     // Degenerate: the nearest vertex takes it all.
-    let nearest = rings
-        .iter()
-        .flatten()
-        .enumerate()
-        .min_by(|a, b| {
-            a.1.distance_squared(p)
-                .total_cmp(&b.1.distance_squared(p))
-        })
-        .map_or(0, |(k, _)| k);
     out.iter_mut().for_each(|w| *w = 0.0);
-    out[nearest] = 1.0;
+    out[nearest.1] = 1.0;
 }
 
 /// `Σ w_i values_i` (weights from [`mean_value_weights`], one value per
