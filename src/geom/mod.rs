@@ -22,6 +22,7 @@
 pub mod bezier;
 pub mod distance_transform;
 pub mod noise;
+pub mod mvc;
 pub mod polygon;
 pub mod primitives;
 pub mod svg;

@@ -402,10 +402,8 @@ impl Expansion {
                 )]
             }
             Op::Outline { distance } => ops::outline(poly, *distance, step, &wob).into(),
-            Op::Streamline { .. } => {
-                return Err(Error::input(
-                    "streamlineSplit is not available in this build yet",
-                ))
+            Op::Streamline { kind, offset } => {
+                vec![super::streamline::streamline_split(poly, *kind, *offset)]
             }
             Op::Place {
                 size,
