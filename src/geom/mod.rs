@@ -21,8 +21,8 @@
 //! `n = (p − q)/d`.
 pub mod bezier;
 pub mod distance_transform;
-pub mod noise;
 pub mod mvc;
+pub mod noise;
 pub mod polygon;
 pub mod primitives;
 pub mod svg;
