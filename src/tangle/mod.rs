@@ -16,6 +16,7 @@ pub mod letters;
 pub mod ops;
 pub mod place;
 pub mod state;
+pub mod streamline;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;
