@@ -28,29 +28,34 @@ async function waitForResult(page, previous, timeout = 60000) {
 
 const count = (page) => page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.count));
 
-/** The canvas's pixels (RGBA) as a plain array, after the next paint. */
-async function pixels(page) {
-  return page.evaluate(async () => {
-    window.filigreeTangle.paintNow();
-    const c = document.querySelector('[data-testid=tangle-canvas]');
-    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-    return { width: c.width, height: c.height, data: Array.from(d) };
-  });
-}
+/**
+ * Keep the canvas's pixels and the selected step's input mask (in the page: a picture is
+ * millions of numbers), to compare with the picture after the next change.
+ */
+const snapshot = (page) => page.evaluate(() => {
+  const t = window.filigreeTangle;
+  t.paintNow();
+  const c = document.querySelector('[data-testid=tangle-canvas]');
+  window.tangleBefore = { data: c.getContext('2d').getImageData(0, 0, c.width, c.height).data, mask: t.selectedMask() };
+  return { width: c.width, height: c.height, covered: window.tangleBefore.mask.reduce((a, b) => a + b, 0) };
+});
 
-/** Pixels that differ where `mask` is set (inside) and where it is not (outside). */
-function diff(a, b, mask) {
+/** Pixels that changed since the snapshot inside the snapshot's mask and outside it. */
+const changes = (page) => page.evaluate(() => {
+  window.filigreeTangle.paintNow();
+  const c = document.querySelector('[data-testid=tangle-canvas]');
+  const a = window.tangleBefore.data, m = window.tangleBefore.mask;
+  const b = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
   let inside = 0, outside = 0;
-  for (let p = 0; p < a.width * a.height; p++) {
+  for (let p = 0; p < m.length; p++) {
     const o = 4 * p;
-    if (a.data[o] === b.data[o] && a.data[o + 1] === b.data[o + 1] && a.data[o + 2] === b.data[o + 2]) continue;
-    if (mask[p]) inside++;
+    if (a[o] === b[o] && a[o + 1] === b[o + 1] && a[o + 2] === b[o + 2]) continue;
+    if (m[p]) inside++;
     else outside++;
   }
   return { inside, outside };
-}
+});
 
-const maskOf = (page) => page.evaluate(() => Array.from(window.filigreeTangle.selectedMask()));
 const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 const selected = (page) => page.evaluate(() => window.filigreeTangle.state().selected);
 const operator = (page) => page.$eval('[data-testid=tangle-selected]', (e) => e.dataset.operator);
@@ -134,8 +139,7 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   await frames(page);
 
   // Edit that outline's distance: only its shapes are redone.
-  const mask2 = await maskOf(page);
-  const before2 = await pixels(page);
+  const snap2 = await snapshot(page);
   const old = Number(await page.$eval('[data-testid=tangle-param-distance]', (i) => i.value));
   const next = old + 4;
   await page.$eval('[data-testid=tangle-param-distance]', (i, v) => {
@@ -144,7 +148,6 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
     i.dispatchEvent(new Event('change', { bubbles: true }));
   }, next);
   n = await waitForResult(page, n);
-  const after2 = await pixels(page);
   const ed2 = await page.evaluate(() => window.filigreeTangle.state());
   assert.equal(ed2.edits.length, 1);
   assert.equal(ed2.edits[0].step, parent);
@@ -152,10 +155,10 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   const newStep = await page.evaluate((sel) => window.filigreeTangle.result().steps[sel], ed2.selected);
   assert.equal(newStep.operator, 'outline', 'the regrown step stays selected');
   assert.ok(Math.abs(newStep.params[0].value - ed2.edits[0].params.distance) < 1e-9, 'the regrown step has the new distance');
-  const d2 = diff(before2, after2, mask2);
+  const d2 = await changes(page);
   assert.ok(d2.inside > 50, `the outline changed (${d2.inside} pixels)`);
   assert.equal(d2.outside, 0, 'nothing changed outside the edited step\'s shapes');
-  assert.ok(mask2.reduce((a, b) => a + b, 0) < before2.width * before2.height * 0.8, 'the step covers only part of the picture');
+  assert.ok(snap2.covered < snap2.width * snap2.height * 0.8, 'the step covers only part of the picture');
 
   // Re-expand the step that made a ring (ung_quads: two rules match it, outline or split):
   // each re-expansion is a new random draw of that step only; the picture changes only
@@ -168,15 +171,13 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   let changed = 0;
   for (let tries = 1; tries <= 6 && !changed; tries++) {
     await frames(page);
-    const mask = await maskOf(page);
-    const before = await pixels(page);
+    await snapshot(page);
     await page.click('[data-act=reexpand]');
     n = await waitForResult(page, n);
-    const after = await pixels(page);
     const st = await page.evaluate(() => window.filigreeTangle.state());
     assert.equal(st.edits.length, 1 + tries);
     assert.deepEqual(st.edits.at(-1).params, {});
-    const d = diff(before, after, mask);
+    const d = await changes(page);
     assert.equal(d.outside, 0, `re-expansion ${tries} changed nothing outside the step's shapes`);
     if (d.inside > 50) changed = tries;
   }
