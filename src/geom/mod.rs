@@ -17,8 +17,10 @@
 //! `n = (p − q)/d`.
 pub mod bezier;
 pub mod distance_transform;
+pub mod noise;
 pub mod polygon;
 pub mod primitives;
+pub mod svg;
 pub mod winding;
 
 /// A point or vector.
