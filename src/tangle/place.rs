@@ -60,7 +60,8 @@ use std::collections::BinaryHeap;
 pub const MAX_PLACEMENTS: usize = 2000;
 
 /// Raster cells along the longer side of the region at most (so the raster
-/// has at most `MAX_RASTER²` cells whatever the region's size).
+/// has at most `(MAX_RASTER + 2)²` cells, border included, whatever the
+/// region's size).
 pub const MAX_RASTER: usize = 512;
 
 /// Raster cells per sample spacing `s + d` (when the cap allows).
