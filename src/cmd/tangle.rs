@@ -10,6 +10,15 @@ pub struct Args {
     /// Grammar file (rules `op(params) : tag -> [tags]`, see assets/tangle/).
     #[arg(long)]
     grammar: PathBuf,
+    /// Start from every closed shape of an SVG file (nested shapes become holes).
+    #[arg(long, value_name = "SVG", conflicts_with_all = ["text", "rect"])]
+    start: Option<PathBuf>,
+    /// Start from the letter outlines of a typed word.
+    #[arg(long, value_name = "WORD", conflicts_with = "rect")]
+    text: Option<String>,
+    /// Capital height of --text letters, drawing units (default 400).
+    #[arg(long)]
+    text_height: Option<f64>,
     /// Start from a rectangle WIDTHxHEIGHT (drawing units) instead of the grammar's start.
     #[arg(long, value_name = "WxH")]
     rect: Option<String>,
@@ -47,6 +56,13 @@ pub fn run(a: Args) -> Result<(), String> {
         ("grammar", a.grammar.display().to_string()),
         ("max_steps", "--steps".into()),
         ("start", "--rect".into()),
+        (
+            "start.svg",
+            a.start
+                .as_ref()
+                .map_or("--start".into(), |p| p.display().to_string()),
+        ),
+        ("start.text", "--text".into()),
     ];
     let mut o = Map::new();
     put(&mut o, "seed", "--seed", a.seed)?;
@@ -59,6 +75,19 @@ pub fn run(a: Args) -> Result<(), String> {
     let text = super::read_file(&a.grammar)?;
     req.grammar = String::from_utf8(text)
         .map_err(|_| format!("{}: the grammar is not UTF-8 text", a.grammar.display()))?;
+    if let Some(path) = &a.start {
+        let svg = String::from_utf8(super::read_file(path)?)
+            .map_err(|_| format!("{}: the SVG file is not UTF-8 text", path.display()))?;
+        req.start = Some(StartRequest::Svg { svg });
+    }
+    if let Some(text) = &a.text {
+        req.start = Some(StartRequest::Text {
+            text: text.clone(),
+            height: a
+                .text_height
+                .unwrap_or(filigree::tangle::api::LETTER_HEIGHT),
+        });
+    }
     if let Some(r) = &a.rect {
         let (w, h) = r
             .split_once(['x', 'X', '×'])

@@ -225,7 +225,9 @@ fn cut_lines(
 pub fn outline(poly: &Polygon, distance: f64, step: f64, wobble: &Wobble) -> [Vec<Polygon>; 2] {
     let mut inner: Vec<Polygon> = poly.inset(distance);
     if wobble.amplitude > 0.0 {
-        // Keep the wobble inside the ring so the inner shapes stay inside.
+        // Keep the wobble inside the ring so the inner shapes stay inside:
+        // a displacement is at most √2 × 1.01 × amplitude (two noises,
+        // each within ±1.01), under 0.6 × distance with this cap.
         let w = Wobble {
             amplitude: wobble.amplitude.min(0.4 * distance),
             ..*wobble
@@ -233,7 +235,6 @@ pub fn outline(poly: &Polygon, distance: f64, step: f64, wobble: &Wobble) -> [Ve
         inner = inner
             .iter()
             .flat_map(|p| p.resampled(step).map_points(|q| w.at(q)))
-            .flat_map(|p| p.intersect(poly))
             .collect();
     }
     let ring = poly.difference_all(&inner);
