@@ -5,7 +5,7 @@
 //!
 //! 1. **Poisson disc centres by dart throwing** inside the region: darts
 //!    land uniformly on the region's raster (below), a dart is kept when it
-//!    lies in the region, at least `d/2 + MIN_SCALE·s/2` from its boundary
+//!    lies in the region, at least `e + MIN_SCALE·s/2` from its boundary
 //!    and at least `s + d` from every kept centre. At most
 //!    [`MAX_DARTS`] darts, stopping after [`MAX_MISSES`] misses in a row or
 //!    at [`MAX_PLACEMENTS`] centres.
@@ -24,7 +24,7 @@
 //! 3. **The motif at each centre**, scaled to diameter `s`, unrotated (the
 //!    motif's own orientation is kept; a rule that wants rotation rotates
 //!    the motif), shrunk until it fits: its bounding disc (the motif lies
-//!    in the unit disc) keeps `d/2` from the region's boundary, measured
+//!    in the unit disc) keeps `e` from the region's boundary, measured
 //!    exactly with [`Polygon::boundary_distance`].
 //! 4. **Shrinking until nothing overlaps**: while two placed shapes'
 //!    bounding discs are closer than `d`, the larger of the pair is scaled
@@ -32,17 +32,18 @@
 //!    most. Centres too close for even two minimum-size shapes (possible
 //!    after relaxation) drop the later one first, and any pair still
 //!    offending after the rounds drops its later shape, so the result holds
-//!    by construction: placed shapes lie inside the region, keep `d/2` from
+//!    by construction: placed shapes lie inside the region, keep `e` from
 //!    its boundary and `d` from each other (on their bounding discs, so
 //!    the polygons themselves keep at least that).
 //!
 //! Parameters: `s` (size) is a placed shape's diameter — the diameter of
 //! the disc it is scaled into; `d` (distance) is the desired gap between
-//! two placed shapes, so full-size centres are `s + d` apart, and a shape
-//! keeps `d/2` from the region's edge (so shapes in two neighbouring
-//! regions also end up `d` apart, and `place` after a split into cells
-//! `s + d` wide puts one full-size shape in each: the paper's regular
-//! patterns, Fig. 7). Shapes that would be smaller than
+//! two placed shapes, so full-size centres are `s + d` apart; a shape
+//! keeps `e = min(d/2, s/10)` from the region's edge. (Not `d/2`: the
+//! paper's own Fig. 9 grammar places blobs of `s = 20` with `d = 25` in
+//! the 25-wide ring of an `outline(25)`, which only works if the edge
+//! margin is small; `s/10` keeps shapes off the edge line.) Shapes that
+//! would be smaller than
 //! [`MIN_SCALE`]` · s` are dropped rather than placed as specks.
 //!
 //! Degenerate input (an empty or sliver region, a non-finite or
@@ -190,6 +191,8 @@ struct Params {
     min_radius: f64,
     /// Desired gap `d`.
     gap: f64,
+    /// Gap kept from the region's edge, `min(d/2, s/10)`.
+    edge: f64,
     /// Poisson radius `s + d`.
     spacing: f64,
 }
@@ -230,6 +233,7 @@ impl Params {
             radius: size * 0.5,
             min_radius: MIN_SCALE * size * 0.5,
             gap: distance,
+            edge: (0.5 * distance).min(0.1 * size),
             spacing,
         })
     }
@@ -388,7 +392,7 @@ fn dart_throw(region: &Polygon, raster: &Raster, params: &Params, rng: &mut Rng)
     let (lo, hi) = region.bbox();
     let mut grid = PointGrid::new(lo, hi, params.spacing);
     let spacing2 = params.spacing * params.spacing;
-    let margin = params.gap * 0.5 + params.min_radius;
+    let margin = params.edge + params.min_radius;
     let mut centres: Vec<DVec2> = vec![];
     let mut misses = 0;
     for _ in 0..MAX_DARTS {
@@ -551,7 +555,7 @@ fn lloyd(region: &Polygon, raster: &Raster, centres: &mut [DVec2]) {
 }
 
 /// Steps 3 and 4: each centre's bounding disc `(centre, radius)`, shrunk
-/// to keep `d/2` from the boundary and `d` from the other discs.
+/// to keep `e` from the boundary and `d` from the other discs.
 fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2, f64)> {
     let gap = params.gap;
     // Step 3: fit inside, exactly (the motif lies in its bounding disc).
@@ -559,7 +563,7 @@ fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2
         .iter()
         .filter(|&&c| region.contains(c))
         .map(|&c| {
-            let room = region.boundary_distance(c) - gap * 0.5;
+            let room = region.boundary_distance(c) - params.edge;
             (c, params.radius.min(room))
         })
         .filter(|&(_, r)| r >= params.min_radius && r.is_finite())
@@ -703,8 +707,20 @@ mod tests {
         check_valid(&region, &p);
     }
 
+    /// The paper's Fig. 9 places blobs of 20 with gaps of 25 in the
+    /// 25-wide ring an `outline(25)` leaves: they must fit across it.
     #[test]
-    fn the_gap_d_is_kept_between_shapes_and_half_of_it_from_the_edge() {
+    fn fig_9_blobs_fit_in_the_outline_ring() {
+        let outer = rect(0.0, 0.0, 800.0, 600.0);
+        let ring = outer.difference(&rect(25.0, 25.0, 775.0, 575.0)).remove(0);
+        let p = place(&ring, &disc(), 20.0, 25.0, &mut Rng::new(1));
+        // About one blob per 45 units of the ring's 2,700-unit midline.
+        assert!(p.placed.len() > 40, "{} placed", p.placed.len());
+        check_valid(&ring, &p);
+    }
+
+    #[test]
+    fn the_gap_d_is_kept_between_shapes_and_a_margin_from_the_edge() {
         let region = rect(0.0, 0.0, 300.0, 200.0);
         let (s, d) = (16.0, 12.0);
         let p = place(&region, &disc(), s, d, &mut Rng::new(5));
@@ -723,7 +739,7 @@ mod tests {
                 r <= s / 2.0 + 1e-9 && r >= MIN_SCALE * s / 2.0 - 1e-9,
                 "radius {r}"
             );
-            assert!(region.boundary_distance(c) - r >= d / 2.0 - 1e-6);
+            assert!(region.boundary_distance(c) - r >= (d / 2.0).min(s / 10.0) - 1e-6);
             for &(c2, r2) in &discs[i + 1..] {
                 assert!(c.distance(c2) - r - r2 >= d - 1e-6);
             }
