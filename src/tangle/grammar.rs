@@ -34,6 +34,7 @@ use super::ast::{
 };
 use crate::core::error::{Error, Result};
 use glam::DVec2;
+use std::collections::HashMap;
 use std::fmt::Write as _;
 
 /// Longest grammar text, in bytes.
@@ -284,12 +285,12 @@ fn lex_line(text: &str, line: usize) -> Result<Vec<Token<'_>>> {
                 let s = &text[byte(start)..byte(i)];
                 let v: f64 = s
                     .parse()
-                    .map_err(|_| syntax(line, col, format!("'{s}' is not a number")))?;
+                    .map_err(|_| syntax(line, col, format!("'{}' is not a number", shown(s))))?;
                 if !v.is_finite() {
                     return Err(syntax(
                         line,
                         col,
-                        format!("the number '{s}' is too large: numbers must be finite"),
+                        format!("the number '{}' is too large: numbers must be finite", shown(s)),
                     ));
                 }
                 Tok::Num(v)
@@ -360,7 +361,7 @@ fn lex_number(chars: &[(usize, char)], mut i: usize, line: usize) -> Result<usiz
         while at(j).is_some_and(|c| is_name_char(c) || c == '.' || c == '+' || c == '-') {
             j += 1;
         }
-        chars[start..j].iter().map(|c| c.1).collect::<String>()
+        shown(&chars[start..j].iter().map(|c| c.1).collect::<String>())
     };
     if matches!(at(i), Some('+' | '-')) {
         i += 1;
@@ -388,7 +389,7 @@ fn lex_number(chars: &[(usize, char)], mut i: usize, line: usize) -> Result<usiz
                 format!(
                     "'{}' needs digits after the decimal point: write {}0",
                     word_end(start),
-                    chars[start..i].iter().map(|c| c.1).collect::<String>()
+                    shown(&chars[start..i].iter().map(|c| c.1).collect::<String>())
                 ),
             ));
         }
@@ -515,7 +516,7 @@ impl<'t, 'a> Cursor<'t, 'a> {
     fn found(&self) -> String {
         match self.peek_tok() {
             None => "the end of the line".into(),
-            Some(Tok::Ident(n)) => format!("'{n}'"),
+            Some(Tok::Ident(n)) => format!("'{}'", shown(n)),
             Some(Tok::Num(v)) => format!("the number {v}"),
             Some(Tok::Str(..)) => "a string".into(),
             Some(Tok::Sym(c)) => format!("'{c}'"),
@@ -693,23 +694,18 @@ struct Ref {
 struct Parser {
     g: Grammar,
     refs: Vec<Ref>,
+    /// Definition names → their index in `g.defs`.
+    names: HashMap<String, usize>,
 }
 
 impl Parser {
     fn statement(&mut self, cur: &mut Cursor) -> Result<()> {
         let first = cur.peek().expect("a statement has tokens");
-        let second = cur.toks.get(1).map(|t| &t.tok);
-        match (&first.tok, second) {
-            (Tok::Ident(kw @ ("curve" | "shape")), Some(Tok::Ident(_))) => {
-                let kind = if *kw == "curve" {
-                    DefKind::Curve
-                } else {
-                    DefKind::Shape
-                };
-                self.definition(cur, kind)
-            }
-            (Tok::Ident("start"), s) if s != Some(&Tok::Sym('(')) => self.start(cur),
-            (Tok::Ident(_), _) => self.rule(cur),
+        match &first.tok {
+            Tok::Ident("curve") => self.definition(cur, DefKind::Curve),
+            Tok::Ident("shape") => self.definition(cur, DefKind::Shape),
+            Tok::Ident("start") => self.start(cur),
+            Tok::Ident(_) => self.rule(cur),
             _ => Err(cur.err(format!(
                 "a line starts with a rule such as outline(25) : big_poly -> [in, out], or with 'curve', 'shape' or 'start'; found {}",
                 cur.found()
@@ -728,7 +724,10 @@ impl Parser {
             };
             return Err(cur.err_at(
                 col,
-                format!("unknown operator '{name}': {hint}the operators are {OPERATOR_LIST}"),
+                format!(
+                    "unknown operator '{}': {hint}the operators are {OPERATOR_LIST}",
+                    shown(name)
+                ),
             ));
         };
         if self.g.rules.len() >= MAX_RULES {
@@ -756,7 +755,8 @@ impl Parser {
         if cur.peek_tok() != Some(&Tok::Arrow) {
             return Err(cur.err(format!(
                 "expected '->' and the output tags after '{tag}', found {}: write {name}(...) : {tag} -> [out]",
-                cur.found()
+                cur.found(),
+                tag = shown(&tag)
             )));
         }
         cur.next();
@@ -970,10 +970,20 @@ impl Parser {
 
     fn definition(&mut self, cur: &mut Cursor, kind: DefKind) -> Result<()> {
         cur.next();
-        let (name, name_col) = cur.ident().expect("checked by statement");
         let kw = match kind {
             DefKind::Curve => "curve",
             DefKind::Shape => "shape",
+        };
+        let Some((name, name_col)) = cur.ident() else {
+            return Err(cur.err(format!(
+                "expected the {kw}'s name after '{kw}', found {}: write {}",
+                cur.found(),
+                if kind == DefKind::Curve {
+                    "curve teeth = zigzag(5, 20)"
+                } else {
+                    "shape hex = ngon(6)"
+                }
+            )));
         };
         if name == BUILTIN_CURVE || name == BUILTIN_SHAPE {
             return Err(cur.err_at(
@@ -981,12 +991,13 @@ impl Parser {
                 format!("'{name}' is built in: give your {kw} another name"),
             ));
         }
-        if let Some(d) = self.g.defs.iter().find(|d| d.name == name) {
+        if let Some(&i) = self.names.get(name) {
             return Err(cur.err_at(
                 name_col,
                 format!(
-                    "'{name}' is already defined on line {}: give this {kw} another name",
-                    d.line
+                    "'{}' is already defined on line {}: give this {kw} another name",
+                    shown(name),
+                    self.g.defs[i].line
                 ),
             ));
         }
@@ -1022,7 +1033,7 @@ impl Parser {
             };
             return Err(cur.err_at(
                 ctor_col,
-                format!("unknown {kw} '{ctor}': {hint}{ctor_usage}"),
+                format!("unknown {kw} '{}': {hint}{ctor_usage}", shown(ctor)),
             ));
         }
         let args = if cur.peek_tok() == Some(&Tok::Sym('(')) {
@@ -1093,6 +1104,7 @@ impl Parser {
             _ => CurveDef::Svg(svg_arg(&args, cur)?),
         };
         cur.end(&format!("the {kw} definition"))?;
+        self.names.insert(name.to_string(), self.g.defs.len());
         self.g.defs.push(Def {
             name: name.to_string(),
             kind,
@@ -1117,7 +1129,10 @@ impl Parser {
                 Some(s) => format!("did you mean {s}? "),
                 None => String::new(),
             };
-            return Err(cur.err_at(col, format!("unknown start shape '{ctor}': {hint}{usage}")));
+            return Err(cur.err_at(
+                col,
+                format!("unknown start shape '{}': {hint}{usage}", shown(ctor)),
+            ));
         }
         if cur.peek_tok() != Some(&Tok::Sym('(')) {
             return Err(cur.err(format!(
@@ -1200,7 +1215,7 @@ impl Parser {
     }
 
     fn finish(self) -> Result<Grammar> {
-        let Parser { g, refs } = self;
+        let Parser { g, refs, names } = self;
         for r in &refs {
             let builtin = match r.kind {
                 DefKind::Curve => BUILTIN_CURVE,
@@ -1213,7 +1228,7 @@ impl Parser {
             if r.name == builtin {
                 continue;
             }
-            match g.defs.iter().find(|d| d.name == r.name) {
+            match names.get(&r.name).map(|&i| &g.defs[i]) {
                 Some(d) if d.kind == r.kind => {}
                 Some(d) => {
                     return Err(syntax(
@@ -1221,7 +1236,9 @@ impl Parser {
                         r.col,
                         format!(
                             "'{}' (line {}) is a {other}, and {} needs a {kw}: define a {kw} and use its name",
-                            r.name, d.line, r.op
+                            shown(&r.name),
+                            d.line,
+                            r.op
                         ),
                     ))
                 }
@@ -1238,15 +1255,15 @@ impl Parser {
                         None => String::new(),
                     };
                     let example = match r.kind {
-                        DefKind::Curve => format!("curve {} = zigzag(5, 20)", r.name),
-                        DefKind::Shape => format!("shape {} = ngon(6)", r.name),
+                        DefKind::Curve => format!("curve {} = zigzag(5, 20)", shown(&r.name)),
+                        DefKind::Shape => format!("shape {} = ngon(6)", shown(&r.name)),
                     };
                     return Err(syntax(
                         r.line,
                         r.col,
                         format!(
                             "unknown {kw} '{}': {hint}use {builtin} or define it on a line of its own, as in {example}",
-                            r.name
+                            shown(&r.name)
                         ),
                     ));
                 }
@@ -1396,7 +1413,8 @@ fn bind<'x, 'a>(
                         };
                         let first: Vec<&str> = slots.iter().map(|s| s[0]).collect();
                         format!(
-                            "{callee} has no parameter '{k}': {hint}its parameters are {}",
+                            "{callee} has no parameter '{}': {hint}its parameters are {}",
+                            shown(k),
                             first.join(", ")
                         )
                     };
@@ -1504,7 +1522,8 @@ fn choose<T: Copy>(
             Err(cur.err_at(
                 a.col,
                 format!(
-                    "unknown {what} '{n}': {hint}it is one of {}",
+                    "unknown {what} '{}': {hint}it is one of {}",
+                    shown(n),
                     names.join(", ")
                 ),
             ))
@@ -1605,14 +1624,27 @@ fn one_tag(cur: &mut Cursor, what: &str) -> Result<String> {
         let mut j = cur.i;
         while let Some(Token {
             tok: Tok::Ident(w), ..
-        }) = cur.toks.get(j)
+        }) = cur.toks.get(j).filter(|_| words.len() <= 8)
         {
             words.push(w);
             j += 1;
         }
-        return Err(cur.err(format!("tags are one word: write {}", words.join("_"))));
+        let joined = words.join("_");
+        return Err(cur.err(if words.len() <= 8 {
+            format!("tags are one word: write {}", shown(&joined))
+        } else {
+            "tags are one word: join the words with '_'".to_string()
+        }));
     }
     Ok(t.to_string())
+}
+
+/// `s` cut to 40 characters for a message.
+fn shown(s: &str) -> String {
+    match s.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s.to_string(),
+    }
 }
 
 /// The closest of `names` to `word` when it is close enough to be a typo
@@ -2166,6 +2198,18 @@ mod tests {
             23,
             "polygon needs at least 3 points",
         ),
+        (
+            "curve = line\nfill() : a -> b",
+            1,
+            7,
+            "expected the curve's name after 'curve'",
+        ),
+        (
+            "start\nfill() : a -> b",
+            1,
+            6,
+            "expected a shape after 'start'",
+        ),
         // a grammar without rules
         ("", 1, 1, "the grammar has no rules"),
         (
@@ -2487,6 +2531,20 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn messages_quote_at_most_a_few_words_of_the_input() {
+        let long = "x".repeat(100_000);
+        for text in [
+            format!("{long}(1) : a -> b"),
+            format!("outline(1) : a -> b\nregularSplit({long}, 3) : a -> b"),
+            format!("outline({}.) : a -> b", "1".repeat(100_000)),
+            format!("outline(1) : a b {} -> c", "w ".repeat(50_000)),
+        ] {
+            let e = parse(&text).unwrap_err();
+            assert!(e.to_string().len() < 400, "{}", &e.to_string()[..400]);
         }
     }
 
