@@ -33,6 +33,7 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("strokes", strokes),
     ("requests", requests),
     ("project", project),
+    ("tangle_grammar", tangle_grammar),
 ];
 
 fn finite_svg(svg: &str, what: &str) {
@@ -293,5 +294,87 @@ pub fn project(data: &[u8]) {
     assert_eq!(
         reopened.state, opened.state,
         "open → save → open changed the state"
+    );
+}
+
+/// A tangle grammar text (`filigree::tangle::grammar::parse`), read as the
+/// editor hands it over (invalid UTF-8 replaced). An error must point
+/// inside the text; a grammar must hold only what the parser promises
+/// (rules within `MAX_RULES` with valid output counts, known curve and
+/// shape names, finite parameters that `Op::with_param` keeps as they are),
+/// and what `to_text` writes must read back to the same grammar.
+pub fn tangle_grammar(data: &[u8]) {
+    use filigree::tangle::ast::{CurveDef, DefKind, Grammar, Op};
+    use filigree::tangle::grammar::{parse, to_text, MAX_RULES};
+    let text = String::from_utf8_lossy(data);
+    let g = match parse(&text) {
+        Ok(g) => g,
+        Err(e) => {
+            if let Some((line, column)) = e.position() {
+                let chars = text.split('\n').nth(line - 1).map(|l| l.chars().count());
+                assert!(
+                    chars.is_some_and(|n| column >= 1 && column <= n + 1),
+                    "{e}: the position is outside the text"
+                );
+            }
+            return;
+        }
+    };
+    assert!(!g.rules.is_empty() && g.rules.len() <= MAX_RULES);
+    let defined =
+        |name: &str, kind: DefKind| g.defs.iter().any(|d| d.name == name && d.kind == kind);
+    for d in &g.defs {
+        match &d.curve {
+            CurveDef::Polyline(p) => assert!(p.iter().all(|p| p.is_finite())),
+            CurveDef::Zigzag { amplitude, period } | CurveDef::Wave { amplitude, period } => {
+                assert!(amplitude.is_finite() && period.is_finite())
+            }
+            CurveDef::Arc { bulge } => assert!(bulge.is_finite()),
+            _ => {}
+        }
+    }
+    for r in &g.rules {
+        let outputs = match r.op {
+            Op::Outline { .. }
+            | Op::Place { .. }
+            | Op::Fill { .. }
+            | Op::Stipple { .. }
+            | Op::Invert => 2,
+            _ => 1,
+        };
+        assert!((1..=outputs).contains(&r.outputs.len()), "{r:?}");
+        match &r.op {
+            Op::Split { curve, offsets, .. } => {
+                assert!(curve == "line" || defined(curve, DefKind::Curve), "{r:?}");
+                assert!(!offsets.is_empty());
+            }
+            Op::Place { shape, .. } => {
+                assert!(shape == "circle" || defined(shape, DefKind::Shape), "{r:?}")
+            }
+            _ => {}
+        }
+        for p in r.op.params() {
+            assert!(p.value.is_finite(), "{r:?}");
+            assert_eq!(
+                r.op.with_param(p.name, p.value).as_ref(),
+                Some(&r.op),
+                "{}",
+                p.name
+            );
+        }
+    }
+    let strip = |mut g: Grammar| {
+        g.defs.iter_mut().for_each(|d| d.line = 0);
+        g.start.iter_mut().for_each(|s| s.line = 0);
+        g.rules.iter_mut().for_each(|r| (r.line, r.column) = (0, 0));
+        g
+    };
+    let written = to_text(&g);
+    let again = parse(&written)
+        .unwrap_or_else(|e| panic!("to_text wrote what parse refuses: {e}\n{written}"));
+    assert_eq!(
+        strip(again),
+        strip(g),
+        "to_text → parse changed the grammar"
     );
 }

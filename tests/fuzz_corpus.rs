@@ -113,6 +113,11 @@ fn project_corpus_replays() {
     replay("project");
 }
 
+#[test]
+fn tangle_grammar_corpus_replays() {
+    replay("tangle_grammar");
+}
+
 /// Every request kind has at least one seed in the `requests` corpus.
 #[test]
 fn requests_corpus_covers_every_kind() {
