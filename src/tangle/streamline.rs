@@ -317,7 +317,7 @@ impl Field {
     fn dir(&mut self, p: DVec2) -> Option<DVec2> {
         let v = self.raw(p);
         let r = v.length();
-        if !(r > 1e-9) {
+        if r.is_nan() || r <= 1e-9 {
             return None;
         }
         if !self.doubled {
@@ -413,8 +413,8 @@ impl<'a> Boundary<'a> {
         for &(a, b) in &edges {
             let (y0, y1) = (a.y.min(b.y), a.y.max(b.y));
             let j0 = ((y0 - grid.lo.y) / grid.cell - 0.5).floor().max(0.0) as usize;
-            let j1 = (((y1 - grid.lo.y) / grid.cell - 0.5).ceil().max(0.0) as usize)
-                .min(grid.ny - 1);
+            let j1 =
+                (((y1 - grid.lo.y) / grid.cell - 0.5).ceil().max(0.0) as usize).min(grid.ny - 1);
             for j in j0..=j1 {
                 let y = grid.lo.y + (j as f64 + 0.5) * grid.cell;
                 if (a.y > y) != (b.y > y) {
@@ -493,7 +493,6 @@ impl<'a> Boundary<'a> {
         }
         best
     }
-
 }
 
 /// Distance from `p` to the nearest edge of closed rings.
@@ -594,9 +593,7 @@ impl<'a> Tracer<'a> {
                 if normal != DVec2::ZERO {
                     for side in [normal, -normal] {
                         let seed = p + side * o;
-                        if self.boundary.contains(seed)
-                            && !self.any_within(seed, D_SEED * o)
-                        {
+                        if self.boundary.contains(seed) && !self.any_within(seed, D_SEED * o) {
                             self.trace(seed, 0.5 * o);
                         }
                     }
@@ -804,7 +801,10 @@ mod tests {
         let a = parent.area();
         assert!((sum - a).abs() <= 1e-3 * a, "area {sum} vs parent {a}");
         let union: f64 = Polygon::union_all(pieces).iter().map(Polygon::area).sum();
-        assert!((union - sum).abs() <= 1e-3 * a, "overlap: union {union} vs sum {sum}");
+        assert!(
+            (union - sum).abs() <= 1e-3 * a,
+            "overlap: union {union} vs sum {sum}"
+        );
     }
 
     #[test]
@@ -819,7 +819,11 @@ mod tests {
         for (k, shape) in shapes.iter().enumerate() {
             for kind in [StreamKind::Smooth, StreamKind::Strip, StreamKind::Circular] {
                 let pieces = streamline_split(shape, kind, 20.0);
-                assert!(pieces.len() >= 3, "shape {k} {kind:?}: {} pieces", pieces.len());
+                assert!(
+                    pieces.len() >= 3,
+                    "shape {k} {kind:?}: {} pieces",
+                    pieces.len()
+                );
                 assert_tiles(shape, &pieces);
             }
         }
@@ -835,9 +839,18 @@ mod tests {
         let pieces = disc.slice(&cuts);
         assert_tiles(&disc, &pieces);
         let rings: Vec<&Polygon> = pieces.iter().filter(|p| p.rings.len() == 2).collect();
-        assert!(rings.len() >= 3, "{} rings of {} pieces", rings.len(), pieces.len());
+        assert!(
+            rings.len() >= 3,
+            "{} rings of {} pieces",
+            rings.len(),
+            pieces.len()
+        );
         for p in &pieces {
-            assert!(p.centroid().distance(c) < 5.0, "piece centred at {}", p.centroid());
+            assert!(
+                p.centroid().distance(c) < 5.0,
+                "piece centred at {}",
+                p.centroid()
+            );
         }
         // Concentric: each ring's inner and outer boundaries are circles
         // about the centre (radii vary by less than a fifth of the offset).
@@ -861,7 +874,12 @@ mod tests {
             .iter()
             .filter(|p| p.rings.len() == 2 && p.centroid().distance(centre) < 5.0)
             .collect();
-        assert!(nested.len() >= 3, "{} nested rings of {}", nested.len(), pieces.len());
+        assert!(
+            nested.len() >= 3,
+            "{} nested rings of {}",
+            nested.len(),
+            pieces.len()
+        );
         // And a piece holds the centre itself.
         assert!(pieces.iter().any(|p| p.contains(centre)));
     }
@@ -877,11 +895,19 @@ mod tests {
         let core = pieces
             .iter()
             .filter(|p| p.rings.len() == 1 && p.contains(p.centroid()))
-            .min_by(|a, b| a.centroid().distance(at).total_cmp(&b.centroid().distance(at)))
+            .min_by(|a, b| {
+                a.centroid()
+                    .distance(at)
+                    .total_cmp(&b.centroid().distance(at))
+            })
             .unwrap();
         let d = core.centroid().distance(at);
         assert!(d < 25.0, "core piece at {} ({d} from P′)", core.centroid());
-        assert!(core.area() < 0.08 * sq.area(), "core piece area {}", core.area());
+        assert!(
+            core.area() < 0.08 * sq.area(),
+            "core piece area {}",
+            core.area()
+        );
         let rings = pieces
             .iter()
             .filter(|p| p.rings.len() == 2 && p.centroid().distance(at) < 30.0)
@@ -988,84 +1014,6 @@ mod tests {
             prop_assert!((sum - p.area()).abs() <= 1e-3 * p.area().max(1.0), "{sum} vs {}", p.area());
             let union: f64 = Polygon::union_all(&pieces).iter().map(Polygon::area).sum();
             prop_assert!((union - sum).abs() <= 1e-3 * sum.max(1.0), "overlap: {union} vs {sum}");
-        }
-    }
-}
-
-#[cfg(test)]
-mod dump {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn dump_svgs() {
-        let v = DVec2::new;
-        let shapes = [
-            ("sq", Polygon::rect(v(0.0, 0.0), v(200.0, 200.0))),
-            ("disc", Polygon::circle(v(0.0, 0.0), 100.0, 200)),
-            ("l", Polygon { rings: vec![vec![v(0.0, 0.0), v(300.0, 0.0), v(300.0, 120.0), v(120.0, 120.0), v(120.0, 300.0), v(0.0, 300.0)]] }),
-            ("hole", Polygon::new(vec![Polygon::rect(v(0.0, 0.0), v(200.0, 200.0)).rings[0].clone(), Polygon::circle(v(70.0, 110.0), 30.0, 48).rings[0].clone()]).unwrap().remove(0)),
-            ("rect", Polygon::rect(v(0.0, 0.0), v(400.0, 100.0))),
-            ("big", Polygon::rect(v(0.0, 0.0), v(400.0, 400.0))),
-        ];
-        for (name, s) in &shapes {
-            for kind in [StreamKind::Smooth, StreamKind::Strip, StreamKind::Circular] {
-                let at = if *name == "sq" { Some(v(60.0, 140.0)) } else { None };
-                let cuts = streamline_cuts_at(s, kind, if *name == "big" { 10.0 } else { 20.0 }, at);
-                let (lo, hi) = s.bbox();
-                let mut svg = format!("<svg xmlns='http://www.w3.org/2000/svg' viewBox='{} {} {} {}' width='600'><rect x='-1000' y='-1000' width='3000' height='3000' fill='white'/>", lo.x - 10.0, lo.y - 10.0, hi.x - lo.x + 20.0, hi.y - lo.y + 20.0);
-                for (k, piece) in s.slice(&cuts).iter().enumerate() {
-                    svg += &format!("<path fill-rule='evenodd' fill='hsl({},70%,80%)' stroke='black' stroke-width='0.3' d='", (k * 67) % 360);
-                    for r in &piece.rings {
-                        svg += "M";
-                        for p in r { svg += &format!("{},{} ", p.x, p.y); }
-                        svg += "Z ";
-                    }
-                    svg += "'/>";
-                }
-                for c in &cuts {
-                    svg += "<polyline fill='none' stroke='red' stroke-width='0.4' points='";
-                    for p in c { svg += &format!("{},{} ", p.x, p.y); }
-                    svg += "'/>";
-                }
-                svg += "</svg>";
-                std::fs::write(format!("/tmp/sl_{name}_{kind:?}.svg"), svg).unwrap();
-                eprintln!("{name} {kind:?}: {} cuts, {} pieces", cuts.len(), s.slice(&cuts).len());
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod timing {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn time_big_square() {
-        let sq = Polygon::rect(DVec2::ZERO, DVec2::splat(400.0));
-        for kind in [StreamKind::Smooth, StreamKind::Strip, StreamKind::Circular] {
-            let mut best = (f64::MAX, f64::MAX);
-            for _ in 0..5 {
-                let t = std::time::Instant::now();
-                let cuts = streamline_cuts(&sq, kind, 10.0);
-                let a = t.elapsed().as_secs_f64();
-                let pieces = sq.slice(&cuts);
-                let b = t.elapsed().as_secs_f64();
-                best = (best.0.min(a), best.1.min(b));
-                std::hint::black_box(pieces);
-            }
-            eprintln!("{kind:?}: cuts {:.2} ms, +slice {:.2} ms", best.0 * 1e3, best.1 * 1e3);
-            let t = std::time::Instant::now();
-            let c = sq.centroid();
-            let mut field = Field::new(&sq, kind, 10.0, c).unwrap();
-            let a = t.elapsed().as_secs_f64();
-            for j in 0..field.ny { for i in 0..field.nx { field.node(i, j); } }
-            let b = t.elapsed().as_secs_f64();
-            let nodes = field.nx * field.ny;
-            let mut tr = Tracer::new(&sq, field, 10.0);
-            let c2 = t.elapsed().as_secs_f64();
-            tr.run(kind, c);
-            let d = t.elapsed().as_secs_f64();
-            eprintln!("  field new {:.2} all {nodes} nodes {:.2} tracer new {:.2} run {:.2}; steps {} lines {} pts {}", a*1e3, (b-a)*1e3, (c2-b)*1e3, (d-c2)*1e3, tr.steps, tr.lines.len(), tr.pts.len());
         }
     }
 }
