@@ -34,6 +34,7 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("requests", requests),
     ("project", project),
     ("tangle_grammar", tangle_grammar),
+    ("tangle_start", tangle_start),
 ];
 
 fn finite_svg(svg: &str, what: &str) {
@@ -377,4 +378,57 @@ pub fn tangle_grammar(data: &[u8]) {
         strip(g),
         "to_text → parse changed the grammar"
     );
+}
+
+/// Vector start shapes as the page and the CLI hand them to the core: the
+/// bytes as text read as an SVG document, as SVG path data and as a typed
+/// word; what parses must be finite rings within the point limit, and a
+/// tangle grown from it (small budgets) must keep its area.
+pub fn tangle_start(data: &[u8]) {
+    use filigree::geom::polygon::Polygon;
+    use filigree::geom::svg::{document_rings, path_rings, MAX_POINTS};
+    let text = String::from_utf8_lossy(data);
+    let mut sources = vec![];
+    if let Ok(r) = document_rings(&text, 0.05) {
+        sources.push(r);
+    }
+    if let Ok(r) = path_rings(&text, 0.05) {
+        sources.push(r);
+    }
+    if let Ok(r) = filigree::tangle::letters::text_rings(&text, 50.0) {
+        sources.push(r);
+    }
+    for rings in sources {
+        let n: usize = rings.iter().map(Vec::len).sum();
+        assert!(n <= MAX_POINTS, "{n} points");
+        assert!(
+            rings.iter().flatten().all(|p| p.is_finite()),
+            "non-finite point"
+        );
+        let Some(polys) = Polygon::new(rings.clone()) else {
+            continue;
+        };
+        let area: f64 = polys.iter().map(Polygon::area).sum();
+        assert!(area.is_finite());
+        let req = filigree::tangle::api::TangleRequest {
+            grammar: "regularSplit(line, 20, 1) : a -> [b]\noutline(3) : b -> [c, d]\n".into(),
+            start: Some(filigree::tangle::api::StartRequest::Rings {
+                rings: rings
+                    .iter()
+                    .map(|r| r.iter().map(|p| [p.x, p.y]).collect())
+                    .collect(),
+            }),
+            max_steps: 20,
+            max_shapes: 400,
+            ..Default::default()
+        };
+        let Ok(job) = filigree::tangle::api::start_tangle(req) else {
+            continue;
+        };
+        let Ok(r) = filigree::core::job::run_quietly(job) else {
+            continue;
+        };
+        assert!(r.points.iter().all(|v| v.is_finite()));
+        assert!(r.stats.shapes <= 400);
+    }
 }
