@@ -607,7 +607,39 @@ enum OpenStage {
     Read(json::Reader),
     /// The file is read: check it.
     Check(Value),
+    /// Checked: the document's values freed a bounded number a step (the
+    /// points of 200,000 stroke points are as many allocations).
+    Free(Vec<Drain>, Box<OpenedProject>),
     Over,
+}
+
+/// A list or object being freed.
+enum Drain {
+    List(std::vec::IntoIter<Value>),
+    Object(std::vec::IntoIter<(String, Value)>),
+}
+
+/// Values freed in one step of [`OpenStage::Free`].
+const FREE_PER_STEP: usize = 50_000;
+
+/// Free up to `n` values of the stack; whether all are freed.
+fn free_some(stack: &mut Vec<Drain>, n: usize) -> bool {
+    for _ in 0..n {
+        let next = match stack.last_mut() {
+            None => return true,
+            Some(Drain::List(it)) => it.next(),
+            Some(Drain::Object(it)) => it.next().map(|(_, v)| v),
+        };
+        match next {
+            None => {
+                stack.pop();
+            }
+            Some(Value::List(l)) => stack.push(Drain::List(l.into_iter())),
+            Some(Value::Object(o)) => stack.push(Drain::Object(o.into_iter())),
+            Some(v) => drop(v),
+        }
+    }
+    stack.is_empty()
 }
 
 impl<'a> OpenProjectJob<'a> {
@@ -670,14 +702,32 @@ impl crate::core::job::Job for OpenProjectJob<'_> {
                     )))
                 }
             },
-            OpenStage::Check(doc) => check_project(doc).map(Step::Done),
+            OpenStage::Check(mut doc) => {
+                let out = check_project(&mut doc)?;
+                self.stage =
+                    OpenStage::Free(vec![Drain::List(vec![doc].into_iter())], Box::new(out));
+                Ok(Step::Running(Progress::new(
+                    0.95,
+                    "freeing the file's data",
+                )))
+            }
+            OpenStage::Free(mut stack, out) => {
+                if free_some(&mut stack, FREE_PER_STEP) {
+                    return Ok(Step::Done(*out));
+                }
+                self.stage = OpenStage::Free(stack, out);
+                Ok(Step::Running(Progress::new(
+                    0.95,
+                    "freeing the file's data",
+                )))
+            }
             OpenStage::Over => Err(Error::input("this job has already finished")),
         }
     }
 }
 
 /// Check a project file's envelope and its state.
-fn check_project(mut doc: Value) -> Result<OpenedProject> {
+fn check_project(doc: &mut Value) -> Result<OpenedProject> {
     let nope = not_a_project;
     if doc.get("format").and_then(Value::as_text) != Some(PROJECT_FORMAT) {
         return Err(nope("\"format\" is missing or different"));
@@ -727,7 +777,7 @@ fn check_project(mut doc: Value) -> Result<OpenedProject> {
         )
     } else {
         // Moved out of the document, not copied.
-        let state = match &mut doc {
+        let state = match doc {
             Value::Object(kv) => kv
                 .iter_mut()
                 .find(|(k, _)| k == "state")

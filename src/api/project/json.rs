@@ -107,8 +107,9 @@ enum Mode {
     Key,
     /// After a key: `:`.
     Colon,
-    /// Inside a string (a key or a value); its bytes so far.
-    Str { key: bool, buf: Vec<u8> },
+    /// Inside a string (a key or a value): its text so far, and the
+    /// look-ahead for its end (see [`Reader::string`]).
+    Str { key: bool, buf: String, end: Ahead },
     /// Inside a number that started at byte `start`.
     Number { start: usize, at: Num },
     /// Decoding the base64 of a `$bytes` object.
@@ -117,6 +118,15 @@ enum Mode {
     Trailing(Box<Value>),
     /// An error was returned or the value was handed out.
     Over,
+}
+
+/// How far a string's look-ahead for its closing quote has come.
+#[derive(Clone, Copy)]
+enum Ahead {
+    /// Scanned to this byte.
+    At(usize),
+    /// Done: the string's raw bytes end at or before this one.
+    Found,
 }
 
 /// The reader's state between steps (the text is passed to every step).
@@ -360,7 +370,8 @@ impl Reader {
                             self.pos += 1;
                             self.mode = Mode::Str {
                                 key: true,
-                                buf: vec![],
+                                buf: String::new(),
+                                end: Ahead::At(self.pos),
                             };
                         }
                         Peek::Byte(_) => {
@@ -405,7 +416,7 @@ impl Reader {
                         }
                     }
                 }
-                Mode::Str { key, buf } => self.string(b, key, buf, &mut fuel)?,
+                Mode::Str { key, buf, end } => self.string(text, key, buf, end, &mut fuel)?,
                 Mode::Number { start, at } => self.number(text, start, at, &mut fuel)?,
                 Mode::Bytes(d) => self.base64(d, &mut fuel)?,
                 Mode::Trailing(v) => match self.ws(b, &mut fuel) {
@@ -460,7 +471,8 @@ impl Reader {
                 self.pos += 1;
                 self.mode = Mode::Str {
                     key: false,
-                    buf: vec![],
+                    buf: String::new(),
+                    end: Ahead::At(self.pos),
                 };
                 Ok(())
             }
@@ -483,48 +495,91 @@ impl Reader {
         }
     }
 
-    /// Inside a string: copy up to `fuel` bytes, stopping at its end, an
-    /// escape or a control character.
-    fn string(&mut self, b: &[u8], key: bool, mut buf: Vec<u8>, fuel: &mut usize) -> Result<()> {
-        let lim = b.len().min(self.pos.saturating_add(*fuel));
+    /// Inside a string. First a look-ahead for its closing quote (half
+    /// of a unit a byte), so its text is allocated once at its final size
+    /// (a 22 MB base64 string is not grown by copying); then its text is
+    /// copied up to `fuel` bytes a step, stopping at its end, an escape or a
+    /// control character.
+    fn string(
+        &mut self,
+        text: &str,
+        key: bool,
+        mut buf: String,
+        mut end: Ahead,
+        fuel: &mut usize,
+    ) -> Result<()> {
+        let b = text.as_bytes();
+        if let Ahead::At(from) = end {
+            let lim = b.len().min(from.saturating_add(fuel.saturating_mul(2)));
+            let mut at = from;
+            while at < lim {
+                match b[at] {
+                    b'\\' => at += 2,
+                    b'"' => break,
+                    c if c < 0x20 => break,
+                    _ => at += 1,
+                }
+            }
+            *fuel = fuel.saturating_sub((at.min(lim) - from).div_ceil(2));
+            if at < lim || lim == b.len() {
+                // Escapes only shorten the text.
+                buf.reserve(at.min(b.len()) - self.pos);
+                end = Ahead::Found;
+            } else {
+                *fuel = 0;
+                self.mode = Mode::Str {
+                    key,
+                    buf,
+                    end: Ahead::At(at),
+                };
+                return Ok(());
+            }
+            if *fuel == 0 {
+                self.mode = Mode::Str { key, buf, end };
+                return Ok(());
+            }
+        }
+        let mut lim = b.len().min(self.pos.saturating_add(*fuel));
         let run = &b[self.pos..lim];
         let stop = run
             .iter()
             .position(|&c| c == b'"' || c == b'\\' || c < 0x20);
         let Some(i) = stop else {
-            buf.extend_from_slice(run);
-            *fuel -= run.len();
-            self.pos = lim;
             if lim == b.len() {
-                return Err(self.syntax("end of file inside a string", self.pos));
+                return Err(self.syntax("end of file inside a string", lim));
             }
-            self.mode = Mode::Str { key, buf };
+            // Stop at a character boundary (at least one character on).
+            while !text.is_char_boundary(lim) {
+                lim += 1;
+            }
+            buf.push_str(&text[self.pos..lim]);
+            *fuel = fuel.saturating_sub(lim - self.pos);
+            self.pos = lim;
+            self.mode = Mode::Str { key, buf, end };
             return Ok(());
         };
-        buf.extend_from_slice(&run[..i]);
+        // `"`, `\` and control characters are ASCII: a character boundary.
+        buf.push_str(&text[self.pos..self.pos + i]);
         *fuel = fuel.saturating_sub(i + 1);
         self.pos += i;
         match b[self.pos] {
             b'"' => {
                 self.pos += 1;
-                // The text is UTF-8 and escapes add whole characters.
-                let s = String::from_utf8(buf)
-                    .map_err(|_| self.syntax("a string that is not UTF-8", self.pos))?;
                 if key {
                     if let Some(Frame::Object { key, .. }) = self.stack.last_mut() {
-                        *key = Some(s);
+                        *key = Some(buf);
                     }
                     self.mode = Mode::Colon;
                 } else {
                     *fuel = fuel.saturating_sub(VALUE_COST);
                     self.count()?;
-                    self.complete(Value::Text(s));
+                    self.complete(Value::Text(buf));
                 }
                 Ok(())
             }
             b'\\' => {
                 self.escape(b, &mut buf)?;
-                self.mode = Mode::Str { key, buf };
+                self.mode = Mode::Str { key, buf, end };
                 Ok(())
             }
             _ => Err(self.syntax(
@@ -537,7 +592,7 @@ impl Reader {
     /// The escape whose `\` is at `pos`, as serde_json reads it: the
     /// characters are `" \ / b f n r t` and `u` with four hex digits; a
     /// surrogate must be a high one followed by `\u` and a low one.
-    fn escape(&mut self, b: &[u8], buf: &mut Vec<u8>) -> Result<()> {
+    fn escape(&mut self, b: &[u8], buf: &mut String) -> Result<()> {
         let at = self.pos;
         let eof = |r: &Self| r.syntax("end of file inside a string", b.len());
         let c = *b.get(at + 1).ok_or_else(|| eof(self))?;
@@ -555,7 +610,7 @@ impl Reader {
             _ => return Err(self.syntax("an unknown escape in a string", at)),
         };
         if c != b'u' {
-            buf.push(simple);
+            buf.push(simple as char);
             return Ok(());
         }
         let hex = |r: &Self, from: usize| -> Result<u16> {
@@ -593,7 +648,7 @@ impl Reader {
             n => char::from_u32(n as u32),
         };
         let ch = ch.ok_or_else(|| self.syntax("an invalid \\u escape", at))?;
-        buf.extend_from_slice(ch.encode_utf8(&mut [0; 4]).as_bytes());
+        buf.push(ch);
         Ok(())
     }
 
