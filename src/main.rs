@@ -29,6 +29,8 @@ enum Command {
     Render(cmd::fit::RenderArgs),
     /// Texture pixel art with oriented elements in the image's own palette.
     Pixel(Box<cmd::pixel::Args>),
+    /// Grow a pen-and-ink tangle from a group grammar, to SVG or PNG.
+    Tangle(Box<cmd::tangle::Args>),
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -63,6 +65,7 @@ fn main() -> ExitCode {
         Command::Fit(a) => cmd::fit::run_fit(a),
         Command::Render(a) => cmd::fit::run_render(a),
         Command::Pixel(a) => cmd::pixel::run(*a),
+        Command::Tangle(a) => cmd::tangle::run(*a),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

@@ -26,6 +26,7 @@ use crate::core::job::{Job, Step};
 use crate::pattern::api as pattern;
 use crate::pixel::api as pixel;
 use crate::raster::Rgba8Image;
+use crate::tangle::api as tangle;
 use serde::{Deserialize, Deserializer, Serialize};
 
 /// An image as it crosses the boundary undecoded: straight RGBA bytes
@@ -63,6 +64,8 @@ pub const KINDS: &[&str] = &[
     "defaults",
     "check-state",
     "open-project",
+    "tangle",
+    "tangle-examples",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -82,6 +85,8 @@ pub enum Response {
     Defaults(Box<Defaults>),
     State(Box<project::ToolState>),
     Project(Box<project::OpenedProject>),
+    Tangle(Box<tangle::TangleResponse>),
+    TangleExamples(&'static [crate::tangle::examples::Example]),
     /// `null`.
     Nothing,
 }
@@ -143,6 +148,7 @@ pub enum DefaultRequest {
     Defaults(DefaultsRequest),
     CheckState(project::CheckStateRequest),
     OpenProject(project::OpenProjectRequest),
+    Tangle(Box<tangle::TangleRequest>),
     Nothing,
 }
 
@@ -173,7 +179,8 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "defaults" => D::Defaults(Default::default()),
         "check-state" => D::CheckState(Default::default()),
         "open-project" => D::OpenProject(Default::default()),
-        "pattern-generators" => D::Nothing,
+        "pattern-generators" | "tangle-examples" => D::Nothing,
+        "tangle" => D::Tangle(Default::default()),
         other => return Err(unknown_kind(other).at("tool")),
     };
     let budgets = matches!(tool, "fit" | "fit-eval").then(pattern::budgets);
@@ -222,6 +229,16 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
             pattern::start_info(request(kind, payload)?)?,
             Response::Info,
         ),
+        "tangle" => boxed(tangle::start_tangle(request(kind, payload)?)?, |r| {
+            Response::Tangle(Box::new(r))
+        }),
+        "tangle-examples" => {
+            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+            boxed(
+                crate::core::job::OneShot::new(|| Ok(crate::tangle::examples::EXAMPLES)),
+                Response::TangleExamples,
+            )
+        }
         "pattern-generators" => {
             serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
             boxed(pattern::start_generators(), Response::Generators)

@@ -51,6 +51,19 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Tangle: every shipped grammar expanded (rules, steps, shapes, vertices,
+    /// seconds) beside the paper's Table 1, and a shapely/GEOS baseline run
+    /// in the same process when Python has shapely.
+    Tangle {
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Comma-separated grammar names, or `baseline` (default: all).
+        #[arg(long)]
+        only: Option<String>,
+        /// Accepted for symmetry with other benches; output is always JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Pixel-art texturing: the fish and trunk cases stage by stage, plus a 512² Laplace solve.
     Pixel {
         #[arg(long, default_value_t = 10)]
@@ -86,6 +99,7 @@ pub fn run(w: Which) -> Result<(), String> {
             Ok(())
         }
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
+        Which::Tangle { repeats, only, .. } => super::tangle_bench::run(repeats, only.as_deref()),
         Which::Pixel { repeats, .. } => {
             println!("{}", pixel_bench(repeats.max(1))?);
             Ok(())

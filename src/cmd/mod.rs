@@ -4,6 +4,8 @@ pub mod fit_bench;
 pub mod inspect;
 pub mod pixel;
 pub mod slices_bench;
+pub mod tangle;
+pub mod tangle_bench;
 
 use filigree::core::job::{run_to_end, Cancel, Job};
 use filigree::Error;

@@ -3,7 +3,11 @@
 //! ([`bezier`]), winding numbers ([`winding`]) and the exact Euclidean
 //! distance transform of a raster mask ([`distance_transform`]).
 //!
-//! Plain `[f64; 2]` points ([`Vec2`]): the functions are small scalar
+//! Tangle's building blocks work on glam `DVec2`: polygons with holes and
+//! their booleans, slices and insets through `i_overlay` ([`polygon`]),
+//! outlines from SVG and font glyphs ([`svg`]), Perlin noise ([`noise`]).
+//!
+//! The Fit kernels use plain `[f64; 2]` points ([`Vec2`]): small scalar
 //! kernels that callers (Fit's field evaluator) inline into lane loops, and
 //! keeping their arithmetic exactly as written keeps results bit-identical
 //! natively and in wasm. Coordinates are whatever the caller uses (Fit: the
@@ -17,8 +21,10 @@
 //! `n = (p − q)/d`.
 pub mod bezier;
 pub mod distance_transform;
+pub mod noise;
 pub mod polygon;
 pub mod primitives;
+pub mod svg;
 pub mod winding;
 
 /// A point or vector.

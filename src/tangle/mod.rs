@@ -6,7 +6,15 @@
 //! holes, [`crate::geom::polygon::Polygon`]) and an orientation `d`.
 //! Rules of a [`ast::Grammar`] rewrite the non-terminal shapes of the
 //! lowest group id, one group per expansion step.
+pub mod api;
 pub mod ast;
+pub mod examples;
+pub mod expand;
+pub mod export;
+pub mod grammar;
+pub mod letters;
+pub mod ops;
+pub mod place;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;

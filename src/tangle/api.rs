@@ -1,0 +1,552 @@
+//! Tangle's request as typed data, shared by `filigree tangle` and the
+//! browser worker (`tangle`). Defaults are defined once: the request's
+//! `Default`. Errors name the field at fault: `grammar` (a syntax error
+//! with line and column), `start`, `edits.N`, `seed`, `max_steps`, ...
+//!
+//! A request carries the whole document: the grammar, the start, the seed
+//! and the user's edits in order (re-expand step N; set step N's
+//! parameters). The core replays them, so the page keeps no tangle state of
+//! its own and the same request gives the same bytes anywhere.
+use super::ast::{CurveDef, Def, DefKind, Grammar, Param, StartShape};
+use super::expand::{Ending, Expansion, Progress as Advance, Settings};
+use super::{export, grammar, Shape};
+use crate::core::error::{Error, Result};
+use crate::core::job::{Job, Progress, Step};
+use crate::core::request_limits as lim;
+use crate::geom::polygon::Polygon;
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
+
+/// Start shapes given by the request instead of the grammar's `start`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum StartRequest {
+    /// A `width`×`height` rectangle at the origin.
+    Rect { width: f64, height: f64 },
+    /// A polygon (closed).
+    Polygon { points: Vec<[f64; 2]> },
+    /// Rings (outer rings and holes, even-odd), e.g. drawn by the user.
+    Rings { rings: Vec<Vec<[f64; 2]>> },
+    /// Every closed shape of an SVG document (its text).
+    Svg { svg: String },
+    /// Letter outlines of a word, capitals `height` units tall.
+    Text { text: String, height: f64 },
+}
+
+/// Flattening tolerance of curves in start shapes, drawing units.
+const CURVE_TOLERANCE: f64 = 0.05;
+
+/// Capital height of `start text("...")` letters, drawing units.
+pub const LETTER_HEIGHT: f64 = 400.0;
+
+/// A user's edit, replayed in order after the expansion.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Edit {
+    /// Position of the step in the history (0-based) when the edit was made.
+    pub step: usize,
+    /// Parameters to set on that step's operator (`Op::params` names);
+    /// empty: re-expand the step with a new random choice.
+    pub params: BTreeMap<String, f64>,
+}
+
+/// What to export with the answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExportFormat {
+    #[default]
+    None,
+    Svg,
+    Png,
+}
+
+/// `tangle` / `filigree tangle`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TangleRequest {
+    /// The grammar text.
+    pub grammar: String,
+    /// Start shapes; `None`: the grammar's `start` lines (or an 800×600
+    /// rectangle when it has none). Tagged with the grammar's first start
+    /// tag, or the first rule's tag.
+    pub start: Option<StartRequest>,
+    pub seed: u64,
+    /// Step budget.
+    pub max_steps: usize,
+    /// Shape budget (live shapes).
+    pub max_shapes: usize,
+    /// Polyline sampling of wobbly curves, drawing units (4: ten points per
+    /// wobble wavelength; the paper sampled at 2, which doubles the
+    /// vertices and the time for no visible difference at print sizes).
+    pub resolution: f64,
+    /// Hand-drawn wobble amplitude (0: none) and wavelength.
+    pub wobble: f64,
+    pub wavelength: f64,
+    pub edits: Vec<Edit>,
+    /// Export the final tangle as SVG or PNG with the answer.
+    pub export: ExportFormat,
+    /// Pen width for exports, drawing units.
+    pub stroke_width: f64,
+    /// PNG width in pixels.
+    pub png_width: u32,
+}
+
+impl Default for TangleRequest {
+    fn default() -> Self {
+        TangleRequest {
+            grammar: String::new(),
+            start: None,
+            seed: 1,
+            max_steps: 5_000,
+            max_shapes: 50_000,
+            resolution: 4.0,
+            wobble: 1.0,
+            wavelength: 40.0,
+            edits: vec![],
+            export: ExportFormat::None,
+            stroke_width: 1.0,
+            png_width: 1600,
+        }
+    }
+}
+
+/// Hard limits on a request's settings.
+pub const MAX_STEPS: usize = 100_000;
+pub const MAX_SHAPES: usize = 250_000;
+pub const MAX_EDITS: usize = 1_000;
+pub const MAX_START_POINTS: usize = 200_000;
+
+/// One shape of the answer. Points are in [`TangleResponse::points`]:
+/// this shape's rings follow each other from point `first`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ShapeOut {
+    pub tag: u32,
+    pub group: u32,
+    pub id: u32,
+    /// Position of the step that made it (-1: a start shape).
+    pub born: i64,
+    /// Position of the step that consumed it (-1: in the final tangle).
+    pub died: i64,
+    pub first: u32,
+    /// Points per ring (the first ring is the outer one).
+    pub rings: Vec<u32>,
+    pub fill: f32,
+    pub white_lines: bool,
+    pub mark: bool,
+}
+
+/// One step of the answer's history.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StepOut {
+    /// Index of the rule in the grammar and its line.
+    pub rule: usize,
+    pub line: usize,
+    pub operator: &'static str,
+    /// The parameters used.
+    pub params: Vec<Param>,
+    /// The tag and group it expanded.
+    pub tag: u32,
+    pub group: u32,
+    /// Indices into `shapes`.
+    pub inputs: Vec<u32>,
+    pub outputs: Vec<u32>,
+}
+
+/// Figures of the final tangle.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TangleStats {
+    pub rules: usize,
+    pub steps: usize,
+    /// Shapes in the final tangle and their vertices.
+    pub shapes: usize,
+    pub vertices: usize,
+}
+
+/// The answer of `tangle`: every shape ever made (with the steps that made
+/// and consumed it, so any step can be shown) and the history.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TangleResponse {
+    pub tags: Vec<String>,
+    pub shapes: Vec<ShapeOut>,
+    /// x, y of every shape's rings, in order.
+    pub points: Vec<f32>,
+    pub steps: Vec<StepOut>,
+    /// `[x0, y0, x1, y1]` of all shapes.
+    pub bounds: [f64; 4],
+    /// `null` when complete, or why a budget stopped it.
+    pub stopped: Option<String>,
+    pub stats: TangleStats,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub svg: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none", with = "opt_bytes")]
+    pub png: Option<Vec<u8>>,
+}
+
+mod opt_bytes {
+    pub fn serialize<S: serde::Serializer>(v: &Option<Vec<u8>>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(b) => serde_bytes::serialize(b, s),
+            None => s.serialize_none(),
+        }
+    }
+}
+
+/// Check the request's settings and parse its grammar.
+fn check(req: &TangleRequest) -> Result<(Grammar, Settings)> {
+    lim::int_in("max_steps", req.max_steps, (1, MAX_STEPS))?;
+    lim::int_in("max_shapes", req.max_shapes, (1, MAX_SHAPES))?;
+    lim::finite_in("resolution", req.resolution, (0.25, 100.0))?;
+    lim::finite_in("wobble", req.wobble, (0.0, 50.0))?;
+    lim::finite_in("wavelength", req.wavelength, (1.0, 10_000.0))?;
+    lim::finite_in("stroke_width", req.stroke_width, (0.0, 100.0))?;
+    lim::int_in("png_width", req.png_width, (1, export::MAX_PNG_SIDE))?;
+    if req.edits.len() > MAX_EDITS {
+        return Err(Error::limit(format!(
+            "{} edits; a tangle keeps at most {MAX_EDITS} (the edit limit)",
+            req.edits.len()
+        ))
+        .at("edits"));
+    }
+    let g = grammar::parse(&req.grammar).map_err(|e| e.at("grammar"))?;
+    Ok((
+        g,
+        Settings {
+            seed: req.seed,
+            max_steps: req.max_steps,
+            max_shapes: req.max_shapes,
+            resolution: req.resolution,
+            wobble: req.wobble,
+            wavelength: req.wavelength,
+        },
+    ))
+}
+
+/// The start shapes (polygon, tag).
+fn start_shapes(req: &TangleRequest, g: &Grammar) -> Result<Vec<(Polygon, String)>> {
+    let tag = g
+        .start
+        .first()
+        .map(|s| s.tag.clone())
+        .or_else(|| g.rules.first().map(|r| r.tag.clone()))
+        .unwrap_or_default();
+    let pt = |p: &[f64; 2]| DVec2::new(p[0], p[1]);
+    let polys = |rings: Vec<Vec<DVec2>>, field: &str| -> Result<Vec<Polygon>> {
+        let n: usize = rings.iter().map(Vec::len).sum();
+        if n > MAX_START_POINTS {
+            return Err(Error::limit(format!(
+                "the start shapes have {n} points; at most {MAX_START_POINTS} (the start point limit)"
+            ))
+            .at(field.to_string()));
+        }
+        let v = Polygon::new(rings).ok_or_else(|| {
+            Error::input(format!(
+                "start shape points must be finite numbers within ±{}",
+                crate::geom::polygon::MAX_COORD
+            ))
+            .at(field.to_string())
+        })?;
+        if v.is_empty() {
+            return Err(Error::input("the start shape has no area").at(field.to_string()));
+        }
+        Ok(v)
+    };
+    let rect = |w: f64, h: f64, field: &str| -> Result<Polygon> {
+        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= 1e6) {
+            return Err(Error::input(format!(
+                "a start rectangle is between 0 and 1000000 units a side (got {w}×{h})"
+            ))
+            .at(field.to_string()));
+        }
+        Ok(Polygon::rect(DVec2::ZERO, DVec2::new(w, h)))
+    };
+    let one = |p: Vec<Polygon>| p.into_iter().map(|q| (q, tag.clone())).collect::<Vec<_>>();
+    match &req.start {
+        Some(StartRequest::Rect { width, height }) => {
+            Ok(vec![(rect(*width, *height, "start")?, tag.clone())])
+        }
+        Some(StartRequest::Polygon { points }) => Ok(one(polys(
+            vec![points.iter().map(pt).collect()],
+            "start.points",
+        )?)),
+        Some(StartRequest::Rings { rings }) => Ok(one(polys(
+            rings.iter().map(|r| r.iter().map(pt).collect()).collect(),
+            "start.rings",
+        )?)),
+        Some(StartRequest::Svg { svg }) => Ok(one(polys(
+            crate::geom::svg::document_rings(svg, CURVE_TOLERANCE)
+                .map_err(|e| e.at("start.svg"))?,
+            "start.svg",
+        )?)),
+        Some(StartRequest::Text { text, height }) => Ok(one(polys(
+            super::letters::text_rings(text, *height).map_err(|e| e.at("start.text"))?,
+            "start.text",
+        )?)),
+        None if g.start.is_empty() => Ok(vec![(rect(800.0, 600.0, "start")?, tag.clone())]),
+        None => {
+            let mut out = vec![];
+            for s in &g.start {
+                let field = "grammar";
+                let made = match &s.shape {
+                    StartShape::Rect { width, height } => vec![rect(*width, *height, field)?],
+                    StartShape::Circle { radius } => {
+                        let n = (std::f64::consts::TAU * radius / 2.0).clamp(16.0, 4096.0);
+                        vec![Polygon::circle(DVec2::splat(*radius), *radius, n as usize)]
+                    }
+                    StartShape::Polygon(pts) => polys(vec![pts.clone()], field)?,
+                    StartShape::Svg(d) => polys(
+                        crate::geom::svg::path_rings(d, CURVE_TOLERANCE)
+                            .map_err(|e| at_line(e, s.line))?,
+                        field,
+                    )?,
+                    StartShape::Text(t) => polys(
+                        super::letters::text_rings(t, LETTER_HEIGHT)
+                            .map_err(|e| at_line(e, s.line))?,
+                        field,
+                    )?,
+                };
+                out.extend(made.into_iter().map(|p| (p, s.tag.clone())));
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// `curve c = svg("...")` and `shape s = svg("...")` as polylines.
+fn flatten_svg_defs(g: &mut Grammar) -> Result<()> {
+    for d in &mut g.defs {
+        if let CurveDef::Svg(path) = &d.curve {
+            let rings = crate::geom::svg::path_rings(path, CURVE_TOLERANCE)
+                .map_err(|e| at_line(e, d.line))?;
+            let Some(first) = rings.into_iter().next() else {
+                return Err(at_line(Error::input("the SVG path has no points"), d.line));
+            };
+            d.curve = CurveDef::Polyline(first);
+        }
+    }
+    Ok(())
+}
+
+/// An error about a grammar line, as a syntax error there.
+fn at_line(e: Error, line: usize) -> Error {
+    Error::Syntax {
+        line,
+        column: 1,
+        message: e.to_string(),
+    }
+    .at("grammar")
+}
+
+/// The motifs `place` can use: `circle` and the grammar's shapes, each
+/// normalised to the unit disc.
+fn motifs(g: &Grammar) -> HashMap<String, Polygon> {
+    let mut m = HashMap::new();
+    m.insert("circle".to_string(), Polygon::circle(DVec2::ZERO, 1.0, 32));
+    for Def {
+        name, kind, curve, ..
+    } in &g.defs
+    {
+        if *kind != DefKind::Shape {
+            continue;
+        }
+        let poly = match curve {
+            CurveDef::Circle => Some(Polygon::circle(DVec2::ZERO, 1.0, 32)),
+            CurveDef::Ngon(n) => Some(Polygon::circle(
+                DVec2::ZERO,
+                1.0,
+                (*n as usize).clamp(3, 64),
+            )),
+            CurveDef::Polyline(pts) => Polygon::new(vec![pts.clone()])
+                .and_then(|v| v.into_iter().next())
+                .and_then(|p| super::place::normalise_motif(&p)),
+            _ => None,
+        };
+        if let Some(p) = poly {
+            m.insert(name.clone(), p);
+        }
+    }
+    m
+}
+
+/// A `tangle` request as a job: the expansion a bounded part a step, then
+/// each edit, then the answer.
+pub struct TangleJob {
+    x: Expansion,
+    edits: std::vec::IntoIter<Edit>,
+    edit_no: usize,
+    req: TangleRequest,
+}
+
+/// Check a `tangle` request and set its expansion up.
+pub fn start_tangle(req: TangleRequest) -> Result<TangleJob> {
+    let (mut g, settings) = check(&req)?;
+    flatten_svg_defs(&mut g)?;
+    let start = start_shapes(&req, &g)?;
+    let m = motifs(&g);
+    let x = Expansion::new(g, start, m, settings)?;
+    Ok(TangleJob {
+        x,
+        edits: req.edits.clone().into_iter(),
+        edit_no: 0,
+        req,
+    })
+}
+
+impl TangleJob {
+    /// Apply the next edit; `false` when none is left.
+    fn next_edit(&mut self) -> Result<bool> {
+        let Some(e) = self.edits.next() else {
+            return Ok(false);
+        };
+        let field = format!("edits.{}", self.edit_no);
+        self.edit_no += 1;
+        let Some(step) = self.x.steps.get(e.step) else {
+            return Err(Error::input(format!(
+                "edit {} is for step {}, but the tangle has {} steps",
+                self.edit_no,
+                e.step + 1,
+                self.x.steps.len()
+            ))
+            .at(field));
+        };
+        let op = if e.params.is_empty() {
+            None
+        } else {
+            let mut op = step.op.clone();
+            for (name, v) in &e.params {
+                op = op.with_param(name, *v).ok_or_else(|| {
+                    Error::input(format!(
+                        "{} has no parameter '{name}' (it has: {})",
+                        op.name(),
+                        op.params()
+                            .iter()
+                            .map(|p| p.name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                    .at(format!("{field}.params"))
+                })?;
+            }
+            Some(op)
+        };
+        self.x.reexpand(e.step, op).map_err(|e| e.at(field))?;
+        Ok(true)
+    }
+}
+
+impl Job for TangleJob {
+    type Output = TangleResponse;
+    fn step(&mut self) -> Result<Step<TangleResponse>> {
+        // A slice: expansion work until ~a few ms of shapes are done.
+        for _ in 0..4 {
+            match self.x.work()? {
+                Advance::Working | Advance::Stepped(_) => {}
+                Advance::Ended => {
+                    if self.next_edit()? {
+                        continue;
+                    }
+                    return Ok(Step::Done(respond(&self.x, &self.req)?));
+                }
+            }
+        }
+        let f = (self.x.steps.len() as f64 / self.req.max_steps as f64).min(0.99);
+        Ok(Step::Running(
+            Progress::new(f, "expanding").with_figure(self.x.live() as f64),
+        ))
+    }
+}
+
+/// The answer for an expansion.
+pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
+    let pos: HashMap<u32, usize> = x.steps.iter().enumerate().map(|(k, s)| (s.id, k)).collect();
+    let step_pos = |id: Option<u32>| id.and_then(|i| pos.get(&i)).map_or(-1, |&k| k as i64);
+    let mut index = vec![u32::MAX; x.records.len()];
+    let mut shapes = vec![];
+    let mut points = vec![];
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for (i, r) in x.records.iter().enumerate() {
+        if x.is_removed(i) {
+            continue;
+        }
+        index[i] = shapes.len() as u32;
+        let s = &r.shape;
+        let first = (points.len() / 2) as u32;
+        for p in s.poly.rings.iter().flatten() {
+            points.push(p.x as f32);
+            points.push(p.y as f32);
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        shapes.push(ShapeOut {
+            tag: s.tag,
+            group: s.group,
+            id: s.id,
+            born: step_pos(r.born),
+            died: step_pos(r.died),
+            first,
+            rings: s.poly.rings.iter().map(|r| r.len() as u32).collect(),
+            fill: s.ink.fill,
+            white_lines: s.ink.white_lines,
+            mark: s.ink.mark,
+        });
+    }
+    let steps = x
+        .steps
+        .iter()
+        .map(|s| {
+            let rule = &x.grammar().rules[s.rule];
+            StepOut {
+                rule: s.rule,
+                line: rule.line,
+                operator: s.op.name(),
+                params: s.op.params(),
+                tag: x.records[s.inputs[0] as usize].shape.tag,
+                group: s.group,
+                inputs: s.inputs.iter().map(|&i| index[i as usize]).collect(),
+                outputs: s.outputs.iter().map(|&i| index[i as usize]).collect(),
+            }
+        })
+        .collect();
+    let finals: Vec<&Shape> = final_shapes(x);
+    let stats = TangleStats {
+        rules: x.grammar().rules.len(),
+        steps: x.steps.len(),
+        shapes: finals.len(),
+        vertices: finals.iter().map(|s| s.poly.vertices()).sum(),
+    };
+    let (svg, png) = match req.export {
+        ExportFormat::None => (None, None),
+        ExportFormat::Svg => (Some(export::svg(&finals, req.stroke_width)), None),
+        ExportFormat::Png => (
+            None,
+            Some(export::png(&finals, req.png_width, req.stroke_width)?),
+        ),
+    };
+    if !lo.is_finite() {
+        (lo, hi) = (DVec2::ZERO, DVec2::ZERO);
+    }
+    Ok(TangleResponse {
+        tags: x.tags.clone(),
+        shapes,
+        points,
+        steps,
+        bounds: [lo.x, lo.y, hi.x, hi.y],
+        stopped: match &x.ending {
+            Some(Ending::Stopped(m)) => Some(m.clone()),
+            _ => None,
+        },
+        stats,
+        svg,
+        png,
+    })
+}
+
+/// The shapes of the final tangle, in the order they were made.
+pub fn final_shapes(x: &Expansion) -> Vec<&Shape> {
+    x.records
+        .iter()
+        .enumerate()
+        .filter(|(i, r)| r.died.is_none() && !x.is_removed(*i))
+        .map(|(_, r)| &r.shape)
+        .collect()
+}

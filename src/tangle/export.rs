@@ -1,0 +1,244 @@
+//! Pen-and-ink output of a tangle: SVG (one `<path>` per shape, even-odd
+//! fill so holes stay holes) and PNG (anti-aliased with tiny-skia: black
+//! strokes on paper white, stroke width a setting).
+use super::Shape;
+use crate::core::error::{Error, Result};
+use crate::geom::polygon::Polygon;
+use crate::raster::{encode_png, Rgba8Image};
+use glam::DVec2;
+use std::fmt::Write;
+
+/// Paper colour.
+const PAPER: [u8; 3] = [255, 255, 255];
+
+/// The largest PNG side we render.
+pub const MAX_PNG_SIDE: u32 = 8192;
+
+/// Grey of a fill tone (0 = paper, 1 = black).
+fn grey(tone: f32) -> u8 {
+    (255.0 * (1.0 - tone.clamp(0.0, 1.0))).round() as u8
+}
+
+/// The bounding box of shapes, padded by `pad`.
+pub fn bounds(shapes: &[&Shape], pad: f64) -> (DVec2, DVec2) {
+    let mut lo = DVec2::splat(f64::INFINITY);
+    let mut hi = DVec2::splat(f64::NEG_INFINITY);
+    for s in shapes {
+        let (a, b) = s.poly.bbox();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    if !lo.is_finite() || !hi.is_finite() {
+        return (DVec2::ZERO, DVec2::splat(1.0));
+    }
+    (lo - DVec2::splat(pad), hi + DVec2::splat(pad))
+}
+
+fn path_data(poly: &Polygon, out: &mut String) {
+    for ring in &poly.rings {
+        for (k, p) in ring.iter().enumerate() {
+            let _ = write!(
+                out,
+                "{}{} {}",
+                if k == 0 { "M" } else { " L" },
+                num(p.x),
+                num(p.y)
+            );
+        }
+        out.push_str(" Z ");
+    }
+}
+
+/// A coordinate with 2 decimals, no trailing zeros.
+fn num(v: f64) -> String {
+    let s = format!("{:.2}", v);
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".into()
+    } else {
+        s.to_string()
+    }
+}
+
+/// The tangle as an SVG document (y down, drawing units).
+pub fn svg(shapes: &[&Shape], stroke_width: f64) -> String {
+    let (lo, hi) = bounds(shapes, stroke_width.max(0.0) + 2.0);
+    let size = hi - lo;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="{} {} {} {}" width="{}" height="{}">"#,
+        num(lo.x),
+        num(lo.y),
+        num(size.x),
+        num(size.y),
+        num(size.x),
+        num(size.y)
+    );
+    let _ = writeln!(
+        out,
+        r#"<rect x="{}" y="{}" width="{}" height="{}" fill="rgb({},{},{})"/>"#,
+        num(lo.x),
+        num(lo.y),
+        num(size.x),
+        num(size.y),
+        PAPER[0],
+        PAPER[1],
+        PAPER[2]
+    );
+    let sw = num(stroke_width.max(0.0));
+    for s in shapes {
+        let mut d = String::new();
+        path_data(&s.poly, &mut d);
+        let fill = if s.ink.mark {
+            "#000".to_string()
+        } else if s.ink.fill > 0.0 {
+            let g = grey(s.ink.fill);
+            format!("rgb({g},{g},{g})")
+        } else {
+            "none".to_string()
+        };
+        let stroke = if s.ink.mark {
+            "none"
+        } else if s.ink.white_lines {
+            "#fff"
+        } else {
+            "#000"
+        };
+        let _ = writeln!(
+            out,
+            r#"<path d="{}" fill="{fill}" fill-rule="evenodd" stroke="{stroke}" stroke-width="{sw}" stroke-linejoin="round"/>"#,
+            d.trim_end()
+        );
+    }
+    out.push_str("</svg>\n");
+    out
+}
+
+/// The tangle as a PNG `width` pixels wide (height to scale).
+pub fn png(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Vec<u8>> {
+    let img = raster(shapes, width, stroke_width)?;
+    encode_png(&img)
+}
+
+/// The tangle rasterised: white paper, black ink, anti-aliased.
+pub fn raster(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Rgba8Image> {
+    use tiny_skia::{FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
+    let (lo, hi) = bounds(shapes, stroke_width.max(0.0) + 2.0);
+    let size = hi - lo;
+    if !(1..=MAX_PNG_SIDE).contains(&width) {
+        return Err(Error::limit(format!(
+            "a PNG is 1 to {MAX_PNG_SIDE} pixels wide (asked for {width})"
+        ))
+        .at("png_width"));
+    }
+    let scale = width as f64 / size.x.max(1e-9);
+    let height = (size.y * scale).ceil().clamp(1.0, MAX_PNG_SIDE as f64) as u32;
+    let mut pm = Pixmap::new(width, height)
+        .ok_or_else(|| Error::limit(format!("a {width}×{height} image cannot be made")))?;
+    pm.fill(tiny_skia::Color::from_rgba8(
+        PAPER[0], PAPER[1], PAPER[2], 255,
+    ));
+    let t = Transform::from_row(
+        scale as f32,
+        0.0,
+        0.0,
+        scale as f32,
+        (-lo.x * scale) as f32,
+        (-lo.y * scale) as f32,
+    );
+    let stroke = Stroke {
+        width: stroke_width.max(0.0) as f32,
+        line_join: tiny_skia::LineJoin::Round,
+        ..Default::default()
+    };
+    for s in shapes {
+        let mut pb = PathBuilder::new();
+        for ring in &s.poly.rings {
+            for (k, p) in ring.iter().enumerate() {
+                if k == 0 {
+                    pb.move_to(p.x as f32, p.y as f32);
+                } else {
+                    pb.line_to(p.x as f32, p.y as f32);
+                }
+            }
+            pb.close();
+        }
+        let Some(path) = pb.finish() else { continue };
+        let mut paint = Paint {
+            anti_alias: true,
+            ..Default::default()
+        };
+        if s.ink.mark || s.ink.fill > 0.0 {
+            let g = if s.ink.mark { 0 } else { grey(s.ink.fill) };
+            paint.set_color_rgba8(g, g, g, 255);
+            pm.fill_path(&path, &paint, FillRule::EvenOdd, t, None);
+        }
+        if !s.ink.mark && stroke.width > 0.0 {
+            let g = if s.ink.white_lines { 255 } else { 0 };
+            paint.set_color_rgba8(g, g, g, 255);
+            pm.stroke_path(&path, &paint, &stroke, t, None);
+        }
+    }
+    // Everything is opaque over the paper, so premultiplied = straight.
+    Rgba8Image::from_raw(width, height, pm.take())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tangle::Ink;
+    use std::sync::Arc;
+
+    fn shape(poly: Polygon, ink: Ink) -> Shape {
+        Shape {
+            tag: 0,
+            group: 0,
+            id: 0,
+            poly: Arc::new(poly),
+            dir: DVec2::Y,
+            ink,
+        }
+    }
+
+    #[test]
+    fn svg_has_one_path_per_shape_with_even_odd_holes() {
+        let ring = Polygon::rect(DVec2::ZERO, DVec2::splat(10.0))
+            .difference(&Polygon::rect(DVec2::splat(3.0), DVec2::splat(6.0)))
+            .remove(0);
+        let a = shape(ring, Ink::default());
+        let b = shape(
+            Polygon::circle(DVec2::splat(20.0), 2.0, 8),
+            Ink {
+                mark: true,
+                ..Default::default()
+            },
+        );
+        let s = svg(&[&a, &b], 1.0);
+        assert_eq!(s.matches("<path ").count(), 2);
+        assert_eq!(s.matches(r#"fill-rule="evenodd""#).count(), 2);
+        // The ring's path has two subpaths (outer + hole).
+        let first = s.lines().find(|l| l.starts_with("<path")).unwrap();
+        assert_eq!(first.matches('M').count(), 2, "{first}");
+    }
+
+    #[test]
+    fn png_draws_black_lines_on_white_paper() {
+        let a = shape(
+            Polygon::rect(DVec2::ZERO, DVec2::splat(100.0)),
+            Ink::default(),
+        );
+        let img = raster(&[&a], 208, 2.0).unwrap();
+        assert_eq!(img.width, 208);
+        let (w, h) = (img.width, img.height);
+        assert_eq!(
+            img.get(w / 2, h / 2),
+            [255, 255, 255, 255],
+            "inside is paper"
+        );
+        // The outline at x = 0 is 2 units + 1 px of padding in: (2+2)·2 px.
+        let edge = img.get(8, h / 2);
+        assert!(edge[0] < 80, "the line is inked: {edge:?}");
+        assert!(raster(&[&a], 0, 1.0).is_err());
+    }
+}
