@@ -17,7 +17,9 @@
 //!   [`limits::MAX_PROJECT_BYTES`]), its envelope checked
 //!   (`format`, `version`, `tool`, `stateVersion`, `state`), byte fields
 //!   stored as `{"$bytes": base64}` decoded, and the state checked when it
-//!   has the tool's current schema version (`checked: true`).
+//!   has the tool's current schema version (`checked: true`). A stepped
+//!   job ([`OpenProjectJob`]): the text is read a slice at a time by the
+//!   resumable [`json::Reader`], then checked, then freed.
 //!
 //! Older state versions: the page's `migrate` hook (a panel's `state`
 //! declaration) turns an older state into the current schema, and the page
