@@ -1,4 +1,5 @@
-//! Seeded 2-D Perlin gradient noise (Perlin 2002's quintic fade), for
+//! Seeded 2-D Perlin gradient noise (Perlin 2002's quintic fade, 32
+//! gradient directions), for
 //! hand-drawn wobble (Tangle's perturbation). No tables: the gradient at a
 //! lattice point is a hash of the point and the seed, so any seed is free
 //! and the result is the same natively and in wasm.
@@ -13,9 +14,9 @@ pub fn perlin(p: DVec2, seed: u64) -> f64 {
     let (ix, iy) = ((x0 % 4_294_967_296.0) as i64, (y0 % 4_294_967_296.0) as i64);
     let g = |dx: i64, dy: i64| -> f64 {
         let h = hash(ix.wrapping_add(dx) as u64, iy.wrapping_add(dy) as u64, seed);
-        let a = (h >> 11) as f64 * (std::f64::consts::TAU / (1u64 << 53) as f64);
+        let [gx, gy] = GRADIENTS[(h >> 59) as usize];
         let (ox, oy) = (fx - dx as f64, fy - dy as f64);
-        a.cos() * ox + a.sin() * oy
+        gx * ox + gy * oy
     };
     let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
     let (u, v) = (fade(fx), fade(fy));
@@ -24,6 +25,37 @@ pub fn perlin(p: DVec2, seed: u64) -> f64 {
     // Gradient noise in 2-D peaks at √½; scale to about ±1.
     (a + v * (b - a)) * std::f64::consts::SQRT_2
 }
+
+/// 32 unit gradients evenly around the circle (no trigonometry per call,
+/// and the same bits on every platform).
+const GRADIENTS: [[f64; 2]; 32] = {
+    let mut g = [[0.0; 2]; 32];
+    let mut i = 0;
+    while i < 32 {
+        // cos and sin of i·2π/32 from a quarter table.
+        let q = [
+            1.0,
+            0.980_785_280_403_230_4,
+            0.923_879_532_511_286_7,
+            0.831_469_612_302_545_2,
+            0.707_106_781_186_547_6,
+            0.555_570_233_019_602_2,
+            0.382_683_432_365_089_8,
+            0.195_090_322_016_128_3,
+            0.0,
+        ];
+        let k = i % 8;
+        let (c, s) = (q[k], q[8 - k]);
+        g[i] = match i / 8 {
+            0 => [c, s],
+            1 => [-s, c],
+            2 => [-c, -s],
+            _ => [s, -c],
+        };
+        i += 1;
+    }
+    g
+};
 
 /// A 2-D displacement: two independent noises.
 pub fn displacement(p: DVec2, seed: u64) -> DVec2 {

@@ -402,10 +402,13 @@ impl Expansion {
                 )]
             }
             Op::Outline { distance } => ops::outline(poly, *distance, step, &wob).into(),
-            Op::Streamline { .. } => {
-                return Err(Error::input(
-                    "streamlineSplit is not available in this build yet",
-                ))
+            Op::Streamline { kind, offset } => {
+                let cuts: Vec<Vec<DVec2>> =
+                    super::streamline::streamline_cuts(poly, *kind, *offset)
+                        .into_iter()
+                        .map(|line| line.into_iter().map(|p| wob.at(p)).collect())
+                        .collect();
+                vec![poly.slice(&cuts)]
             }
             Op::Place {
                 size,

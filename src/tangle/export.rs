@@ -37,26 +37,42 @@ pub fn bounds(shapes: &[&Shape], pad: f64) -> (DVec2, DVec2) {
 fn path_data(poly: &Polygon, out: &mut String) {
     for ring in &poly.rings {
         for (k, p) in ring.iter().enumerate() {
-            let _ = write!(
-                out,
-                "{}{} {}",
-                if k == 0 { "M" } else { " L" },
-                num(p.x),
-                num(p.y)
-            );
+            out.push_str(if k == 0 { "M" } else { " L" });
+            write_num(out, p.x);
+            out.push(' ');
+            write_num(out, p.y);
         }
         out.push_str(" Z ");
     }
 }
 
-/// A coordinate with 2 decimals, no trailing zeros.
+/// A coordinate with 2 decimals, no trailing zeros (written by hand: the
+/// float formatter was a sixth of a large tangle's time).
 fn num(v: f64) -> String {
-    let s = format!("{:.2}", v);
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" {
-        "0".into()
-    } else {
-        s.to_string()
+    let mut s = String::new();
+    write_num(&mut s, v);
+    s
+}
+
+fn write_num(out: &mut String, v: f64) {
+    let c = (v * 100.0).round();
+    if !c.is_finite() || c.abs() >= 9.0e15 {
+        let _ = write!(out, "{v}");
+        return;
+    }
+    let c = c as i64;
+    if c < 0 {
+        out.push('-');
+    }
+    let a = c.unsigned_abs();
+    let _ = write!(out, "{}", a / 100);
+    let f = a % 100;
+    if f != 0 {
+        if f % 10 == 0 {
+            let _ = write!(out, ".{}", f / 10);
+        } else {
+            let _ = write!(out, ".{f:02}");
+        }
     }
 }
 
@@ -220,6 +236,22 @@ mod tests {
         // The ring's path has two subpaths (outer + hole).
         let first = s.lines().find(|l| l.starts_with("<path")).unwrap();
         assert_eq!(first.matches('M').count(), 2, "{first}");
+    }
+
+    #[test]
+    fn numbers_have_two_decimals_at_most() {
+        for (v, want) in [
+            (0.0, "0"),
+            (-0.001, "0"),
+            (1.5, "1.5"),
+            (-2.25, "-2.25"),
+            (3.105, "3.11"),
+            (10.0, "10"),
+            (-0.07, "-0.07"),
+            (123456.789, "123456.79"),
+        ] {
+            assert_eq!(num(v), want, "{v}");
+        }
     }
 
     #[test]

@@ -15,6 +15,7 @@ pub mod grammar;
 pub mod letters;
 pub mod ops;
 pub mod place;
+pub mod streamline;
 
 use crate::geom::polygon::Polygon;
 use glam::DVec2;

@@ -60,7 +60,8 @@ use std::collections::BinaryHeap;
 pub const MAX_PLACEMENTS: usize = 2000;
 
 /// Raster cells along the longer side of the region at most (so the raster
-/// has at most `MAX_RASTER²` cells whatever the region's size).
+/// has at most `(MAX_RASTER + 2)²` cells, border included, whatever the
+/// region's size).
 pub const MAX_RASTER: usize = 512;
 
 /// Raster cells per sample spacing `s + d` (when the cap allows).
@@ -99,7 +100,7 @@ pub struct Placement {
 /// is at distance 1: the form [`place`] expects. `None` for an empty,
 /// zero-area or non-finite polygon.
 pub fn normalise_motif(p: &Polygon) -> Option<Polygon> {
-    if p.rings.is_empty() || !(p.area() >= SLIVER_AREA) {
+    if !solid(p) {
         return None;
     }
     let c = p.centroid();
@@ -174,6 +175,11 @@ pub fn place(
     Placement { placed, remainder }
 }
 
+/// Finite points and at least a sliver's area.
+fn solid(p: &Polygon) -> bool {
+    p.rings.iter().flatten().all(|v| v.is_finite()) && p.area() >= SLIVER_AREA
+}
+
 /// Checked parameters.
 struct Params {
     /// The motif inside the unit disc.
@@ -190,13 +196,9 @@ struct Params {
 
 impl Params {
     fn new(region: &Polygon, motif: &Polygon, size: f64, distance: f64) -> Option<Params> {
-        if region.rings.is_empty()
-            || !(region.area() >= SLIVER_AREA)
-            || !(size.is_finite() && size > 0.0)
-            || !(distance.is_finite() && distance >= 0.0)
-            || motif.rings.is_empty()
-            || !(motif.area() >= SLIVER_AREA)
-        {
+        let size_ok = size.is_finite() && size > 0.0;
+        let gap_ok = distance.is_finite() && distance >= 0.0;
+        if !(solid(region) && solid(motif) && size_ok && gap_ok) {
             return None;
         }
         let reach = motif
@@ -261,26 +263,28 @@ impl Raster {
         if !(cell.is_finite() && cell > 0.0) {
             return empty;
         }
-        let dims = |len: f64| ((len / cell).ceil() as usize).clamp(1, MAX_RASTER);
+        // The region's cells plus a border of outside cells all round, so
+        // that a cell's 8 neighbours need no bounds checks.
+        let dims = |len: f64| ((len / cell).ceil() as usize).clamp(1, MAX_RASTER) + 2;
         let (w, h) = (dims(hi.x - lo.x), dims(hi.y - lo.y));
+        let origin = lo - DVec2::splat(cell);
         // Crossings of each row's centre line, edge by edge (each edge
         // only visits the rows it spans).
         let mut rows: Vec<Vec<f64>> = vec![vec![]; h];
+        let inner = |v: f64, n: usize| v.clamp(1.0, (n - 1) as f64) as usize;
         for ring in &region.rings {
             let n = ring.len();
             for i in 0..n {
                 let (a, b) = (ring[i], ring[(i + n - 1) % n]);
                 let (y0, y1) = (a.y.min(b.y), a.y.max(b.y));
-                // Rows whose centre y is in [y0, y1).
-                // One row more each side against rounding; the test below
-                // decides.
-                let first = ((y0 - lo.y) / cell - 1.5).ceil().max(0.0);
-                let last = ((y1 - lo.y) / cell + 0.5).ceil().min(h as f64);
-                let (first, last) = (first as usize, last.max(0.0) as usize);
+                // Rows whose centre y is in [y0, y1), one more each side
+                // against rounding (the exact test below decides).
+                let first = inner(((y0 - origin.y) / cell - 1.5).ceil(), h);
+                let last = inner(((y1 - origin.y) / cell + 0.5).ceil(), h);
                 for (row, xs) in rows.iter_mut().enumerate().take(last).skip(first) {
-                    let y = lo.y + (row as f64 + 0.5) * cell;
-                    // The exact test `contains` makes, so a cell centre is
-                    // inside here exactly when `contains` says so.
+                    let y = origin.y + (row as f64 + 0.5) * cell;
+                    // The test `contains` makes, so a cell centre is inside
+                    // here exactly when `contains` says so.
                     if (a.y > y) != (b.y > y) {
                         xs.push((b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x);
                     }
@@ -291,17 +295,17 @@ impl Raster {
         for (row, xs) in rows.iter_mut().enumerate() {
             xs.sort_by(f64::total_cmp);
             for pair in xs.chunks_exact(2) {
-                // Centres x with pair[0] <= x < pair[1].
-                let first = ((pair[0] - lo.x) / cell - 0.5).ceil().max(0.0);
-                let last = ((pair[1] - lo.x) / cell - 0.5).ceil().min(w as f64);
-                for i in first as usize..last.max(0.0) as usize {
+                // Centres x with pair[0] <= x < pair[1], border excluded.
+                let first = inner(((pair[0] - origin.x) / cell - 0.5).ceil(), w);
+                let last = inner(((pair[1] - origin.x) / cell - 0.5).ceil(), w);
+                for i in first..last {
                     inside[row * w + i] = true;
                 }
             }
         }
         let inside_cells = (0..w * h).filter(|&i| inside[i]).collect();
         Raster {
-            origin: lo,
+            origin,
             cell,
             w,
             h,
@@ -420,9 +424,7 @@ fn geodesic_cells(raster: &Raster, centres: &[DVec2]) -> Vec<u32> {
     let n = raster.w * raster.h;
     let mut dist = vec![f64::INFINITY; n];
     let mut label = vec![NO_SITE; n];
-    // Non-negative f64 order equals their bit patterns' order; the index
-    // breaks ties, so the result does not depend on the heap's internals.
-    let mut heap: BinaryHeap<Reverse<(u64, usize)>> = BinaryHeap::new();
+    let mut heap: BinaryHeap<Reverse<u64>> = BinaryHeap::new();
     for (k, &c) in centres.iter().enumerate() {
         let Some(idx) = raster.index(c) else { continue };
         if !raster.inside[idx] {
@@ -432,53 +434,52 @@ fn geodesic_cells(raster: &Raster, centres: &[DVec2]) -> Vec<u32> {
         if d < dist[idx] {
             dist[idx] = d;
             label[idx] = k as u32;
-            heap.push(Reverse((d.to_bits(), idx)));
+            heap.push(Reverse(dist_key(d) << 32 | idx as u64));
         }
     }
-    let (w, h) = (raster.w as isize, raster.h as isize);
+    let w = raster.w;
     let diag = raster.cell * std::f64::consts::SQRT_2;
-    while let Some(Reverse((bits, idx))) = heap.pop() {
-        let d = f64::from_bits(bits);
-        if d > dist[idx] {
-            continue;
+    let inside = &raster.inside;
+    while let Some(Reverse(key)) = heap.pop() {
+        let idx = (key & 0xFFFF_FFFF) as usize;
+        if key >> 32 != dist_key(dist[idx]) {
+            continue; // superseded by a shorter path
         }
-        let (x, y) = ((idx % raster.w) as isize, (idx / raster.w) as isize);
-        let at = |xx: isize, yy: isize| -> Option<usize> {
-            let i = (yy * w + xx) as usize;
-            (xx >= 0 && yy >= 0 && xx < w && yy < h && raster.inside[i]).then_some(i)
-        };
-        for (dx, dy) in [
-            (1, 0),
-            (-1, 0),
-            (0, 1),
-            (0, -1),
-            (1, 1),
-            (1, -1),
-            (-1, 1),
-            (-1, -1),
-        ] {
-            let Some(j) = at(x + dx, y + dy) else {
-                continue;
-            };
-            let step = if dx != 0 && dy != 0 {
-                // No corner cutting: a diagonal step needs both of the
-                // cells it passes between.
-                if at(x + dx, y).is_none() || at(x, y + dy).is_none() {
-                    continue;
-                }
-                diag
-            } else {
-                raster.cell
-            };
+        let d = dist[idx];
+        let site = label[idx];
+        // Inside cells are never on the border, so all 8 neighbours exist.
+        let (e, wst, n, s) = (idx + 1, idx - 1, idx + w, idx - w);
+        let orth = [e, wst, n, s].map(|j| inside[j]);
+        let mut relax = |j: usize, step: f64| {
             let nd = d + step;
             if nd < dist[j] {
                 dist[j] = nd;
-                label[j] = label[idx];
-                heap.push(Reverse((nd.to_bits(), j)));
+                label[j] = site;
+                heap.push(Reverse(dist_key(nd) << 32 | j as u64));
+            }
+        };
+        for (k, &j) in [e, wst, n, s].iter().enumerate() {
+            if orth[k] {
+                relax(j, raster.cell);
+            }
+        }
+        // No corner cutting: a diagonal step needs both cells it passes
+        // between.
+        for (dx, dy, j) in [(0, 2, n + 1), (0, 3, s + 1), (1, 2, n - 1), (1, 3, s - 1)] {
+            if orth[dx] && orth[dy] && inside[j] {
+                relax(j, diag);
             }
         }
     }
     label
+}
+
+/// A distance's heap key: its `f32` bit pattern (monotone for
+/// non-negative values), so that key and cell index share one `u64`.
+/// Ties within `f32` precision go to the lower cell index, the same on
+/// every platform.
+fn dist_key(d: f64) -> u64 {
+    (d as f32).to_bits() as u64
 }
 
 /// Step 2: Lloyd relaxation of the geodesic centroidal Voronoi diagram.
@@ -632,6 +633,8 @@ fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::rng::Rng;
+    use proptest::prelude::*;
 
     fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
         Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1))
@@ -854,6 +857,16 @@ mod tests {
             assert!(p.placed.is_empty(), "s {s} d {d}");
             assert_eq!(p.remainder, vec![region.clone()]);
         }
+        let nan = Polygon {
+            rings: vec![vec![DVec2::ZERO, DVec2::new(f64::NAN, 1.0), DVec2::ONE]],
+        };
+        assert!(place(&nan, &disc(), 5.0, 1.0, &mut Rng::new(1))
+            .placed
+            .is_empty());
+        assert!(place(&region, &nan, 5.0, 1.0, &mut Rng::new(1))
+            .placed
+            .is_empty());
+        assert!(normalise_motif(&nan).is_none());
         let p = place(&Polygon::default(), &disc(), 5.0, 1.0, &mut Rng::new(1));
         assert!(p.placed.is_empty() && p.remainder.is_empty());
         let p = place(&region, &Polygon::default(), 5.0, 1.0, &mut Rng::new(1));
@@ -883,6 +896,27 @@ mod tests {
         let region = rect(0.0, 0.0, 200.0, 200.0);
         let big = Polygon::circle(DVec2::ZERO, 7.0, 16);
         check_valid(&region, &place(&region, &big, 20.0, 5.0, &mut Rng::new(4)));
+    }
+
+    fn arb_region() -> impl Strategy<Value = Polygon> {
+        proptest::collection::vec((0.0f64..120.0, 0.0f64..120.0), 3..10).prop_filter_map(
+            "degenerate",
+            |pts| {
+                let ring = pts.into_iter().map(|(x, y)| DVec2::new(x, y)).collect();
+                Polygon::new(vec![ring])?.into_iter().next()
+            },
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        /// Any polygon, any size and gap: inside, disjoint, area conserved.
+        #[test]
+        fn any_region_gets_a_valid_placement(region in arb_region(),
+            s in 2.0f64..30.0, d in 0.0f64..15.0, seed in 0u64..1000) {
+            let p = place(&region, &disc(), s, d, &mut Rng::new(seed));
+            check_valid(&region, &p);
+        }
     }
 
     /// Timings for the report (run by hand:
