@@ -249,14 +249,62 @@ pub fn run_request(kind: &str, payload: &[u8]) {
     }
 }
 
+/// Whether two values are the same, numbers bit for bit (`-0` is not `0`).
+fn same_value(a: &filigree::api::project::Value, b: &filigree::api::project::Value) -> bool {
+    use filigree::api::project::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => x.to_bits() == y.to_bits(),
+        (Value::List(x), Value::List(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same_value(a, b))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .zip(y)
+                    .all(|((ka, a), (kb, b))| ka == kb && same_value(a, b))
+        }
+        _ => a == b,
+    }
+}
+
+/// How reading a project text failed: a limit (its message), bad base64,
+/// or a syntax error.
+fn read_failure(e: &filigree::Error) -> String {
+    use filigree::api::project::json::NOT_BASE64;
+    match e.kind() {
+        "limit" => e.to_string(),
+        _ if e.to_string() == NOT_BASE64 => "base64".into(),
+        _ => "syntax".into(),
+    }
+}
+
 /// A project file as the page hands it to the core: the bytes read as text
 /// the way the page's `file.text()` does (invalid UTF-8 replaced), sent as
 /// an `open-project` request through the registry. What opens must be a
 /// checked state that the core's own requests accept, and opening it again
 /// after saving it (as the page saves) must give the very same state.
+///
+/// First, the stepped JSON reader `open-project` uses, with a tiny fuel a
+/// step (1 to 8, from the input's length: it stops in the middle of every
+/// token), must read the text exactly as serde_json reads it in one go: the
+/// same value, numbers bit for bit, or the same failure.
 pub fn project(data: &[u8]) {
+    use filigree::api::project::json::{read_at_once, read_stepped};
     use filigree::api::project::{open_project, project_text, ProjectState, ToolState};
     let text = String::from_utf8_lossy(data);
+    let fuel = 1 + data.len() % 8;
+    match (read_at_once(&text), read_stepped(&text, fuel)) {
+        (Ok(a), Ok(b)) => assert!(
+            same_value(&a, &b),
+            "the stepped reader (fuel {fuel}) read another value: {b:?}, serde_json: {a:?}"
+        ),
+        (Err(a), Err(b)) => assert_eq!(
+            read_failure(&a),
+            read_failure(&b),
+            "the readers fail differently: serde_json {a}; stepped (fuel {fuel}) {b}"
+        ),
+        (a, b) => panic!("the readers disagree: serde_json {a:?}; stepped (fuel {fuel}) {b:?}"),
+    }
     let payload = serde_json::to_vec(&serde_json::json!({ "text": text })).unwrap();
     let mut de = serde_json::Deserializer::from_slice(&payload);
     let Ok(job) = filigree::api::start("open-project", &mut de) else {
