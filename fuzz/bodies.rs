@@ -33,6 +33,8 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("strokes", strokes),
     ("requests", requests),
     ("project", project),
+    ("tangle_grammar", tangle_grammar),
+    ("tangle_start", tangle_start),
 ];
 
 fn finite_svg(svg: &str, what: &str) {
@@ -247,14 +249,62 @@ pub fn run_request(kind: &str, payload: &[u8]) {
     }
 }
 
+/// Whether two values are the same, numbers bit for bit (`-0` is not `0`).
+fn same_value(a: &filigree::api::project::Value, b: &filigree::api::project::Value) -> bool {
+    use filigree::api::project::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => x.to_bits() == y.to_bits(),
+        (Value::List(x), Value::List(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same_value(a, b))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .zip(y)
+                    .all(|((ka, a), (kb, b))| ka == kb && same_value(a, b))
+        }
+        _ => a == b,
+    }
+}
+
+/// How reading a project text failed: a limit (its message), bad base64,
+/// or a syntax error.
+fn read_failure(e: &filigree::Error) -> String {
+    use filigree::api::project::json::NOT_BASE64;
+    match e.kind() {
+        "limit" => e.to_string(),
+        _ if e.to_string() == NOT_BASE64 => "base64".into(),
+        _ => "syntax".into(),
+    }
+}
+
 /// A project file as the page hands it to the core: the bytes read as text
 /// the way the page's `file.text()` does (invalid UTF-8 replaced), sent as
 /// an `open-project` request through the registry. What opens must be a
 /// checked state that the core's own requests accept, and opening it again
 /// after saving it (as the page saves) must give the very same state.
+///
+/// First, the stepped JSON reader `open-project` uses, with a tiny fuel a
+/// step (1 to 8, from the input's length: it stops in the middle of every
+/// token), must read the text exactly as serde_json reads it in one go: the
+/// same value, numbers bit for bit, or the same failure.
 pub fn project(data: &[u8]) {
+    use filigree::api::project::json::{read_at_once, read_stepped};
     use filigree::api::project::{open_project, project_text, ProjectState, ToolState};
     let text = String::from_utf8_lossy(data);
+    let fuel = 1 + data.len() % 8;
+    match (read_at_once(&text), read_stepped(&text, fuel)) {
+        (Ok(a), Ok(b)) => assert!(
+            same_value(&a, &b),
+            "the stepped reader (fuel {fuel}) read another value: {b:?}, serde_json: {a:?}"
+        ),
+        (Err(a), Err(b)) => assert_eq!(
+            read_failure(&a),
+            read_failure(&b),
+            "the readers fail differently: serde_json {a}; stepped (fuel {fuel}) {b}"
+        ),
+        (a, b) => panic!("the readers disagree: serde_json {a:?}; stepped (fuel {fuel}) {b:?}"),
+    }
     let payload = serde_json::to_vec(&serde_json::json!({ "text": text })).unwrap();
     let mut de = serde_json::Deserializer::from_slice(&payload);
     let Ok(job) = filigree::api::start("open-project", &mut de) else {
@@ -294,4 +344,139 @@ pub fn project(data: &[u8]) {
         reopened.state, opened.state,
         "open → save → open changed the state"
     );
+}
+
+/// A tangle grammar text (`filigree::tangle::grammar::parse`), read as the
+/// editor hands it over (invalid UTF-8 replaced). An error must point
+/// inside the text; a grammar must hold only what the parser promises
+/// (rules within `MAX_RULES` with valid output counts, known curve and
+/// shape names, finite parameters that `Op::with_param` keeps as they are),
+/// and what `to_text` writes must read back to the same grammar.
+pub fn tangle_grammar(data: &[u8]) {
+    use filigree::tangle::ast::{CurveDef, DefKind, Grammar, Op};
+    use filigree::tangle::grammar::{parse, to_text, MAX_RULES};
+    let text = String::from_utf8_lossy(data);
+    let g = match parse(&text) {
+        Ok(g) => g,
+        Err(e) => {
+            if let Some((line, column)) = e.position() {
+                let chars = text.split('\n').nth(line - 1).map(|l| l.chars().count());
+                assert!(
+                    chars.is_some_and(|n| column >= 1 && column <= n + 1),
+                    "{e}: the position is outside the text"
+                );
+            }
+            return;
+        }
+    };
+    assert!(!g.rules.is_empty() && g.rules.len() <= MAX_RULES);
+    let defined =
+        |name: &str, kind: DefKind| g.defs.iter().any(|d| d.name == name && d.kind == kind);
+    for d in &g.defs {
+        match &d.curve {
+            CurveDef::Polyline(p) => assert!(p.iter().all(|p| p.is_finite())),
+            CurveDef::Zigzag { amplitude, period } | CurveDef::Wave { amplitude, period } => {
+                assert!(amplitude.is_finite() && period.is_finite())
+            }
+            CurveDef::Arc { bulge } => assert!(bulge.is_finite()),
+            _ => {}
+        }
+    }
+    for r in &g.rules {
+        let outputs = match r.op {
+            Op::Outline { .. }
+            | Op::Place { .. }
+            | Op::Fill { .. }
+            | Op::Stipple { .. }
+            | Op::Invert => 2,
+            _ => 1,
+        };
+        assert!((1..=outputs).contains(&r.outputs.len()), "{r:?}");
+        match &r.op {
+            Op::Split { curve, offsets, .. } => {
+                assert!(curve == "line" || defined(curve, DefKind::Curve), "{r:?}");
+                assert!(!offsets.is_empty());
+            }
+            Op::Place { shape, .. } => {
+                assert!(shape == "circle" || defined(shape, DefKind::Shape), "{r:?}")
+            }
+            _ => {}
+        }
+        for p in r.op.params() {
+            assert!(p.value.is_finite(), "{r:?}");
+            assert_eq!(
+                r.op.with_param(p.name, p.value).as_ref(),
+                Some(&r.op),
+                "{}",
+                p.name
+            );
+        }
+    }
+    let strip = |mut g: Grammar| {
+        g.defs.iter_mut().for_each(|d| d.line = 0);
+        g.start.iter_mut().for_each(|s| s.line = 0);
+        g.rules.iter_mut().for_each(|r| (r.line, r.column) = (0, 0));
+        g
+    };
+    let written = to_text(&g);
+    let again = parse(&written)
+        .unwrap_or_else(|e| panic!("to_text wrote what parse refuses: {e}\n{written}"));
+    assert_eq!(
+        strip(again),
+        strip(g),
+        "to_text → parse changed the grammar"
+    );
+}
+
+/// Vector start shapes as the page and the CLI hand them to the core: the
+/// bytes as text read as an SVG document, as SVG path data and as a typed
+/// word; what parses must be finite rings within the point limit, and a
+/// tangle grown from it (small budgets) must keep its area.
+pub fn tangle_start(data: &[u8]) {
+    use filigree::geom::polygon::Polygon;
+    use filigree::geom::svg::{document_rings, path_rings, MAX_POINTS};
+    let text = String::from_utf8_lossy(data);
+    let mut sources = vec![];
+    if let Ok(r) = document_rings(&text, 0.05) {
+        sources.push(r);
+    }
+    if let Ok(r) = path_rings(&text, 0.05) {
+        sources.push(r);
+    }
+    if let Ok(r) = filigree::tangle::letters::text_rings(&text, 50.0) {
+        sources.push(r);
+    }
+    for rings in sources {
+        let n: usize = rings.iter().map(Vec::len).sum();
+        assert!(n <= MAX_POINTS, "{n} points");
+        assert!(
+            rings.iter().flatten().all(|p| p.is_finite()),
+            "non-finite point"
+        );
+        let Some(polys) = Polygon::new(rings.clone()) else {
+            continue;
+        };
+        let area: f64 = polys.iter().map(Polygon::area).sum();
+        assert!(area.is_finite());
+        let req = filigree::tangle::api::TangleRequest {
+            grammar: "regularSplit(line, 20, 1) : a -> [b]\noutline(3) : b -> [c, d]\n".into(),
+            start: Some(filigree::tangle::api::StartRequest::Rings {
+                rings: rings
+                    .iter()
+                    .map(|r| r.iter().map(|p| [p.x, p.y]).collect())
+                    .collect(),
+            }),
+            max_steps: 20,
+            max_shapes: 400,
+            ..Default::default()
+        };
+        let Ok(job) = filigree::tangle::api::start_tangle(req) else {
+            continue;
+        };
+        let Ok(r) = filigree::core::job::run_quietly(job) else {
+            continue;
+        };
+        assert!(r.points.iter().all(|v| v.is_finite()));
+        assert!(r.stats.shapes <= 400);
+    }
 }

@@ -113,6 +113,16 @@ fn project_corpus_replays() {
     replay("project");
 }
 
+#[test]
+fn tangle_grammar_corpus_replays() {
+    replay("tangle_grammar");
+}
+
+#[test]
+fn tangle_start_corpus_replays() {
+    replay("tangle_start");
+}
+
 /// Every request kind has at least one seed in the `requests` corpus.
 #[test]
 fn requests_corpus_covers_every_kind() {

@@ -75,3 +75,97 @@ fn a_file_saved_by_the_app_opens() {
     // The app's file is the same document the example builder makes.
     assert_eq!(got, norm(&pixel_example("fish")));
 }
+
+/// A pixel project with a `side`² mask (`side`² bytes, as base64 in the file).
+fn big_pixel_project(side: usize) -> String {
+    let mut doc = pixel_example("fish");
+    doc["mask"] = serde_json::json!({
+        "width": side, "height": side,
+        "bits": bytes(&(0..side * side).map(|i| (i % 3 == 0) as u8).collect::<Vec<_>>()),
+    });
+    project_text("pixel", 1, doc)
+}
+
+/// `open-project` as the worker runs it (the registry's job): a big file
+/// is read over many steps, not in one, with progress that only grows, and
+/// the answer is the one `open_project` gives.
+#[test]
+fn a_big_project_opens_over_many_steps() {
+    use filigree::api::Response;
+    use filigree::core::job::Step;
+    let text = big_pixel_project(2048);
+    assert!(text.len() > 5_000_000, "{} bytes", text.len());
+    let payload = serde_json::json!({ "text": text }).to_string();
+    let mut job = filigree::api::start(
+        "open-project",
+        &mut serde_json::Deserializer::from_str(&payload),
+    )
+    .unwrap();
+    let mut fractions = vec![];
+    let out = loop {
+        match job.step().unwrap() {
+            Step::Running(p) => fractions.push(p.fraction),
+            Step::Done(out) => break out,
+        }
+    };
+    // At most READ_FUEL bytes of text a reading step: 5.6 MB take 6 or more.
+    let reading = (text.len() / project::READ_FUEL).max(1);
+    assert!(fractions.len() > reading, "{} steps", fractions.len());
+    assert!(fractions.windows(2).all(|w| w[0] <= w[1]), "{fractions:?}");
+    let Response::Project(p) = out else {
+        panic!("not a project")
+    };
+    assert_eq!(*p, project::open_project(&text).unwrap());
+    let ProjectState::Checked(filigree::api::project::ToolState::Pixel(s)) = &p.state else {
+        panic!("unchecked")
+    };
+    assert_eq!((s.mask.width, s.mask.bits.len()), (2048, 2048 * 2048));
+    assert_eq!(
+        s.mask.bits.iter().filter(|&&b| b == 1).count(),
+        2048 * 2048 / 3 + 1
+    );
+}
+
+/// A cancel between two steps of reading stops `open-project`.
+#[test]
+fn opening_a_project_can_be_cancelled_between_steps() {
+    use filigree::core::job::{run_to_end, Cancel};
+    let text = big_pixel_project(2048);
+    let cancel = Cancel::new();
+    let mut steps = 0;
+    let r = run_to_end(
+        project::start_open_project(project::OpenProjectRequest { text }),
+        &cancel,
+        |_| {
+            steps += 1;
+            if steps == 2 {
+                cancel.cancel();
+            }
+        },
+    );
+    assert_eq!(r, Err(filigree::Error::Cancelled));
+    assert_eq!(steps, 2);
+}
+
+/// A file that is not JSON is refused with what is wrong and where.
+#[test]
+fn a_broken_project_file_says_where() {
+    let e = project::open_project("{\"format\": \"filigree-project\",\n  \"version\": 2,,\n}")
+        .unwrap_err();
+    assert_eq!(e.kind(), "invalid-input");
+    assert_eq!(
+        e.to_string(),
+        "not a Filigree project: the file is not valid JSON (a key that is not a string at line 2 column 16)"
+    );
+    let mut text = big_pixel_project(64);
+    let at = text.find("\"state\":{").unwrap() + 9;
+    text.insert_str(at, "\"x\": [1, 2 3], ");
+    let e = project::open_project(&text).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "not a Filigree project: the file is not valid JSON (expected `,` or `]` in a list at line 1 column {})",
+            at + 12
+        )
+    );
+}

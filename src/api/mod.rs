@@ -263,10 +263,9 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         }
         "open-project" => {
             let req: project::OpenProjectRequest = request(kind, payload)?;
-            boxed(
-                crate::core::job::OneShot::new(move || project::open_project(&req.text)),
-                |p| Response::Project(Box::new(p)),
-            )
+            boxed(project::start_open_project(req), |p| {
+                Response::Project(Box::new(p))
+            })
         }
         #[cfg(feature = "test-hooks")]
         "debug-abort" => boxed(DebugAbort::new(request(kind, payload)?), |()| {

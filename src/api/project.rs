@@ -17,7 +17,9 @@
 //!   [`limits::MAX_PROJECT_BYTES`]), its envelope checked
 //!   (`format`, `version`, `tool`, `stateVersion`, `state`), byte fields
 //!   stored as `{"$bytes": base64}` decoded, and the state checked when it
-//!   has the tool's current schema version (`checked: true`).
+//!   has the tool's current schema version (`checked: true`). A stepped
+//!   job ([`OpenProjectJob`]): the text is read a slice at a time by the
+//!   resumable [`json::Reader`], then checked, then freed.
 //!
 //! Older state versions: the page's `migrate` hook (a panel's `state`
 //! declaration) turns an older state into the current schema, and the page
@@ -34,9 +36,12 @@ use crate::core::limits;
 use serde::de::{self, DeserializeSeed, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeMap, SerializeSeq};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::borrow::Cow;
 use std::cell::{Cell, RefCell};
 use std::collections::HashMap;
 use std::fmt;
+
+pub mod json;
 
 /// `format` of a project file.
 pub const PROJECT_FORMAT: &str = "filigree-project";
@@ -192,6 +197,22 @@ pub fn invalid(field: &str, why: impl fmt::Display) -> Error {
     Error::input(format!("{field} {why}")).at(field)
 }
 
+/// More than [`limits::MAX_STATE_VALUES`] values in a `what` (`project`, `state`).
+fn too_many(what: &str) -> Error {
+    Error::limit(format!(
+        "the {what} holds more than {} values (the state value limit)",
+        limits::MAX_STATE_VALUES
+    ))
+}
+
+/// Nested deeper than [`limits::MAX_STATE_DEPTH`].
+fn too_deep(what: &str) -> Error {
+    Error::limit(format!(
+        "the {what} is nested too deeply (more than {} levels)",
+        limits::MAX_STATE_DEPTH
+    ))
+}
+
 struct ReadCtx {
     left: Cell<usize>,
     failure: RefCell<Option<Error>>,
@@ -210,11 +231,7 @@ impl ReadCtx {
                 self.left.set(n);
                 Ok(())
             }
-            None => Err(self.fail(Error::limit(format!(
-                "the {} holds more than {} values (the state value limit)",
-                self.what(),
-                limits::MAX_STATE_VALUES
-            )))),
+            None => Err(self.fail(too_many(self.what()))),
         }
     }
     fn what(&self) -> &'static str {
@@ -242,11 +259,7 @@ impl<'de> DeserializeSeed<'de> for Reader<'_> {
 impl Reader<'_> {
     fn inner<E: de::Error>(self) -> std::result::Result<Self, E> {
         if self.depth >= limits::MAX_STATE_DEPTH {
-            return Err(self.ctx.fail(Error::limit(format!(
-                "the {} is nested too deeply (more than {} levels)",
-                self.ctx.what(),
-                limits::MAX_STATE_DEPTH
-            ))));
+            return Err(self.ctx.fail(too_deep(self.ctx.what())));
         }
         Ok(Reader {
             ctx: self.ctx,
@@ -331,9 +344,7 @@ impl<'de> Visitor<'de> for Reader<'_> {
             if let Some(Value::Text(b64)) = index.get("$bytes").map(|&i| &out[i].1) {
                 return match base64_decode(b64) {
                     Some(bytes) => Ok(Value::Bytes(bytes)),
-                    None => Err(self.ctx.fail(Error::input(
-                        "the project holds image data that is not valid base64",
-                    ))),
+                    None => Err(self.ctx.fail(Error::input(json::NOT_BASE64))),
                 };
             }
         }
@@ -576,29 +587,157 @@ pub fn run_check_state(req: &CheckStateRequest) -> Result<ToolState> {
     check_state(&req.tool, req.version, &req.state)
 }
 
-/// `open-project`: parse, check the envelope, decode, check the state.
+/// `open-project`: parse, check the envelope, decode, check the state, to
+/// the end (the stepped [`OpenProjectJob`] run in one go).
 pub fn open_project(text: &str) -> Result<OpenedProject> {
-    let nope = |why: &str| Error::input(format!("not a Filigree project: {why}"));
-    if text.len() > limits::MAX_PROJECT_BYTES {
-        return Err(Error::limit(format!(
-            "not a Filigree project: the file is {} bytes; project files may be at most {} bytes (the project file limit)",
-            text.len(),
-            limits::MAX_PROJECT_BYTES
-        ))
-        .at("text"));
-    }
-    let mut de = serde_json::Deserializer::from_str(text);
-    let doc = match Value::read(&mut de, true) {
-        Ok(doc) => de.end().map(|()| doc).map_err(|e| e.to_string()),
-        Err(e) if e.kind() == "limit" || e.to_string().contains("base64") => {
-            return Err(match e {
-                Error::Limit(m) => Error::limit(format!("not a Filigree project: {m}")),
-                e => nope(&e.to_string()),
-            })
+    crate::core::job::run_quietly(OpenProjectJob::new(Cow::Borrowed(text)))
+}
+
+/// `open-project` as the worker runs it: the text read in slices of
+/// [`READ_FUEL`] ([`json::Reader`]), then the envelope and the state
+/// checked in one more step.
+pub fn start_open_project(req: OpenProjectRequest) -> OpenProjectJob<'static> {
+    OpenProjectJob::new(Cow::Owned(req.text))
+}
+
+/// Fuel of one reading step of `open-project` (see [`json::Reader::step`]):
+/// about 1 MB of text, a few ms (`filigree bench slices --only open-project`).
+pub const READ_FUEL: usize = 1 << 20;
+
+/// The stepped `open-project` request.
+pub struct OpenProjectJob<'a> {
+    text: Cow<'a, str>,
+    stage: OpenStage,
+}
+
+enum OpenStage {
+    /// The size is not checked yet.
+    Start,
+    Read(json::Reader),
+    /// The file is read: check it.
+    Check(Value),
+    /// Checked: the document's values freed a bounded number a step (the
+    /// points of 200,000 stroke points are as many allocations).
+    Free(Vec<Drain>, Box<OpenedProject>),
+    Over,
+}
+
+/// A list or object being freed.
+enum Drain {
+    List(std::vec::IntoIter<Value>),
+    Object(std::vec::IntoIter<(String, Value)>),
+}
+
+/// Values freed in one step of [`OpenStage::Free`].
+const FREE_PER_STEP: usize = 50_000;
+
+/// Free up to `n` values of the stack; whether all are freed.
+fn free_some(stack: &mut Vec<Drain>, n: usize) -> bool {
+    for _ in 0..n {
+        let next = match stack.last_mut() {
+            None => return true,
+            Some(Drain::List(it)) => it.next(),
+            Some(Drain::Object(it)) => it.next().map(|(_, v)| v),
+        };
+        match next {
+            None => {
+                stack.pop();
+            }
+            Some(Value::List(l)) => stack.push(Drain::List(l.into_iter())),
+            Some(Value::Object(o)) => stack.push(Drain::Object(o.into_iter())),
+            Some(v) => drop(v),
         }
-        Err(e) => Err(e.to_string()),
     }
-    .map_err(|e| nope(&format!("the file is not valid JSON ({e})")))?;
+    stack.is_empty()
+}
+
+impl<'a> OpenProjectJob<'a> {
+    pub fn new(text: Cow<'a, str>) -> Self {
+        OpenProjectJob {
+            text,
+            stage: OpenStage::Start,
+        }
+    }
+}
+
+fn not_a_project(why: &str) -> Error {
+    Error::input(format!("not a Filigree project: {why}"))
+}
+
+/// A reading error as `open-project` words it: a limit stays a limit, bad
+/// base64 is said as such, anything else is "not valid JSON (...)".
+fn reading_error(e: Error) -> Error {
+    match e {
+        Error::Limit(m) => Error::limit(format!("not a Filigree project: {m}")),
+        e if e.to_string() == json::NOT_BASE64 => not_a_project(json::NOT_BASE64),
+        e => not_a_project(&format!("the file is not valid JSON ({e})")),
+    }
+}
+
+impl crate::core::job::Job for OpenProjectJob<'_> {
+    type Output = OpenedProject;
+    fn step(&mut self) -> Result<crate::core::job::Step<OpenedProject>> {
+        use crate::core::job::{Progress, Step};
+        match std::mem::replace(&mut self.stage, OpenStage::Over) {
+            OpenStage::Start => {
+                let text = &self.text;
+                if text.len() > limits::MAX_PROJECT_BYTES {
+                    return Err(Error::limit(format!(
+                        "not a Filigree project: the file is {} bytes; project files may be at most {} bytes (the project file limit)",
+                        text.len(),
+                        limits::MAX_PROJECT_BYTES
+                    ))
+                    .at("text"));
+                }
+                self.stage = OpenStage::Read(json::Reader::new());
+                Ok(Step::Running(Progress::new(
+                    0.0,
+                    "reading the project file",
+                )))
+            }
+            OpenStage::Read(mut r) => match r.step(&self.text, READ_FUEL).map_err(reading_error)? {
+                Some(doc) => {
+                    // The text is not needed any more.
+                    self.text = Cow::Borrowed("");
+                    self.stage = OpenStage::Check(doc);
+                    Ok(Step::Running(Progress::new(0.9, "checking the project")))
+                }
+                None => {
+                    let done = r.position() as f64 / self.text.len().max(1) as f64;
+                    self.stage = OpenStage::Read(r);
+                    Ok(Step::Running(Progress::new(
+                        0.9 * done,
+                        "reading the project file",
+                    )))
+                }
+            },
+            OpenStage::Check(mut doc) => {
+                let out = check_project(&mut doc)?;
+                self.stage =
+                    OpenStage::Free(vec![Drain::List(vec![doc].into_iter())], Box::new(out));
+                Ok(Step::Running(Progress::new(
+                    0.95,
+                    "freeing the file's data",
+                )))
+            }
+            OpenStage::Free(mut stack, out) => {
+                if free_some(&mut stack, FREE_PER_STEP) {
+                    return Ok(Step::Done(*out));
+                }
+                self.stage = OpenStage::Free(stack, out);
+                Ok(Step::Running(Progress::new(
+                    0.95,
+                    "freeing the file's data",
+                )))
+            }
+            OpenStage::Over => Err(Error::input("this job has already finished")),
+        }
+    }
+}
+
+/// Check a project file's envelope and its state.
+fn check_project(doc: &mut Value) -> Result<OpenedProject> {
+    let nope = not_a_project;
     if doc.get("format").and_then(Value::as_text) != Some(PROJECT_FORMAT) {
         return Err(nope("\"format\" is missing or different"));
     }
@@ -646,7 +785,16 @@ pub fn open_project(text: &str) -> Result<OpenedProject> {
             ProjectState::Checked(check_state(t.id, state_version as u64, state)?),
         )
     } else {
-        (false, ProjectState::Raw(state.clone()))
+        // Moved out of the document, not copied.
+        let state = match doc {
+            Value::Object(kv) => kv
+                .iter_mut()
+                .find(|(k, _)| k == "state")
+                .map(|(_, v)| std::mem::take(v))
+                .unwrap_or_default(),
+            _ => Value::Null,
+        };
+        (false, ProjectState::Raw(state))
     };
     Ok(OpenedProject {
         tool: t.id.to_string(),

@@ -358,6 +358,42 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
             time_job(|| Ok(start_decode(req)))?,
         ));
     }
+    if want("open-project") {
+        let text = big_project()?;
+        let what = format!(
+            "{:.1} MB pixel project: 4096² mask, 200,000 stroke points",
+            text.len() as f64 / 1e6
+        );
+        rows.push(report(
+            "open-project",
+            &what,
+            time_job(|| {
+                Ok(filigree::api::project::start_open_project(
+                    filigree::api::project::OpenProjectRequest { text: text.clone() },
+                ))
+            })?,
+        ));
+        // Baselines in the same run: the whole request as one step, and
+        // the one-go serde_json reading it was before it was stepped.
+        rows.push(report(
+            "open-project",
+            &format!("{what}; baseline: the whole request in one step"),
+            time_job(|| {
+                Ok(filigree::core::job::OneShot::new(|| {
+                    filigree::api::project::open_project(&text)
+                }))
+            })?,
+        ));
+        rows.push(report(
+            "open-project",
+            &format!("{what}; baseline: reading it in one go with serde_json (before)"),
+            time_job(|| {
+                Ok(filigree::core::job::OneShot::new(|| {
+                    filigree::api::project::json::read_at_once(&text)
+                }))
+            })?,
+        ));
+    }
     println!(
         "{}",
         json!({
@@ -367,4 +403,46 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         })
     );
     Ok(())
+}
+
+/// A pixel project as the page saves it, at the limits: a 4096² mask (its
+/// bits as base64, 22 MB), 200,000 stroke points in 200 strokes.
+fn big_project() -> Result<String, String> {
+    use filigree::api::project::base64_encode;
+    let side = 4096usize;
+    let bits: Vec<u8> = (0..side * side)
+        .map(|i| {
+            let (x, y) = ((i % side) as f64 - 2048.0, (i / side) as f64 - 2048.0);
+            u8::from(x * x + y * y < 1800.0 * 1800.0)
+        })
+        .collect();
+    let strokes: Vec<Vec<[f64; 2]>> = (0..200)
+        .map(|s| {
+            (0..1000)
+                .map(|j| {
+                    let t = (s * 1000 + j) as f64;
+                    let r = |v: f64| (v * 100.0).round() / 100.0;
+                    [r((t * 7.31) % 4096.0), r((t * 3.77 + 11.0) % 4096.0)]
+                })
+                .collect()
+        })
+        .collect();
+    let b = |bytes: &[u8]| json!({ "$bytes": base64_encode(bytes) });
+    let params =
+        serde_json::to_value(filigree::pixel::PixelParams::default()).map_err(|e| e.to_string())?;
+    let state = json!({
+        "example": null,
+        "source": b(super::bench::fixture("fish.png")?),
+        "sheet": b(super::bench::fixture("fish_scale.png")?),
+        "sprite": null,
+        "mask": {"width": side, "height": side, "bits": b(&bits)},
+        "strokes": strokes,
+        "params": params,
+        "names": {"source": "big.png", "sheet": "fish_scale.png"},
+    });
+    Ok(
+        json!({"format": "filigree-project", "version": 2, "tool": "pixel",
+              "stateVersion": 1, "state": state})
+        .to_string(),
+    )
 }

@@ -66,7 +66,7 @@ pub fn mean_value_weights(rings: &[Vec<DVec2>], p: DVec2, out: &mut Vec<f64>) {
         }
     }
     let eps = SNAP * scale;
-    if !(nearest.0 > eps) {
+    if nearest.0 <= eps {
         // On a vertex (or a non-finite input): that vertex.
         out.iter_mut().for_each(|w| *w = 0.0);
         out[nearest.1] = 1.0;

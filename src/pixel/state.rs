@@ -352,17 +352,17 @@ pub fn check(raw: &Value) -> Result<PixelState> {
             })?;
         let mut stroke = Vec::with_capacity(s.len());
         for (j, p) in s.iter().enumerate() {
-            let field = format!("strokes.{i}.{j}");
+            let field = || format!("strokes.{i}.{j}");
             let [x, y] = p
                 .as_list()
                 .and_then(|l| match l {
                     [x, y] => Some([x.finite()?, y.finite()?]),
                     _ => None,
                 })
-                .ok_or_else(|| invalid(&field, "must be a point [x, y] of finite numbers"))?;
+                .ok_or_else(|| invalid(&field(), "must be a point [x, y] of finite numbers"))?;
             if x < -1.0 || y < -1.0 || x > w + 1.0 || y > h + 1.0 {
                 return Err(invalid(
-                    &field,
+                    &field(),
                     format!("lies outside the {width}×{height} image"),
                 ));
             }

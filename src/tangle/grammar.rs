@@ -34,6 +34,7 @@ use super::ast::{
 };
 use crate::core::error::{Error, Result};
 use glam::DVec2;
+use std::collections::HashMap;
 use std::fmt::Write as _;
 
 /// Longest grammar text, in bytes.
@@ -284,12 +285,12 @@ fn lex_line(text: &str, line: usize) -> Result<Vec<Token<'_>>> {
                 let s = &text[byte(start)..byte(i)];
                 let v: f64 = s
                     .parse()
-                    .map_err(|_| syntax(line, col, format!("'{s}' is not a number")))?;
+                    .map_err(|_| syntax(line, col, format!("'{}' is not a number", shown(s))))?;
                 if !v.is_finite() {
                     return Err(syntax(
                         line,
                         col,
-                        format!("the number '{s}' is too large: numbers must be finite"),
+                        format!("the number '{}' is too large: numbers must be finite", shown(s)),
                     ));
                 }
                 Tok::Num(v)
@@ -360,7 +361,7 @@ fn lex_number(chars: &[(usize, char)], mut i: usize, line: usize) -> Result<usiz
         while at(j).is_some_and(|c| is_name_char(c) || c == '.' || c == '+' || c == '-') {
             j += 1;
         }
-        chars[start..j].iter().map(|c| c.1).collect::<String>()
+        shown(&chars[start..j].iter().map(|c| c.1).collect::<String>())
     };
     if matches!(at(i), Some('+' | '-')) {
         i += 1;
@@ -388,7 +389,7 @@ fn lex_number(chars: &[(usize, char)], mut i: usize, line: usize) -> Result<usiz
                 format!(
                     "'{}' needs digits after the decimal point: write {}0",
                     word_end(start),
-                    chars[start..i].iter().map(|c| c.1).collect::<String>()
+                    shown(&chars[start..i].iter().map(|c| c.1).collect::<String>())
                 ),
             ));
         }
@@ -515,7 +516,7 @@ impl<'t, 'a> Cursor<'t, 'a> {
     fn found(&self) -> String {
         match self.peek_tok() {
             None => "the end of the line".into(),
-            Some(Tok::Ident(n)) => format!("'{n}'"),
+            Some(Tok::Ident(n)) => format!("'{}'", shown(n)),
             Some(Tok::Num(v)) => format!("the number {v}"),
             Some(Tok::Str(..)) => "a string".into(),
             Some(Tok::Sym(c)) => format!("'{c}'"),
@@ -693,23 +694,18 @@ struct Ref {
 struct Parser {
     g: Grammar,
     refs: Vec<Ref>,
+    /// Definition names → their index in `g.defs`.
+    names: HashMap<String, usize>,
 }
 
 impl Parser {
     fn statement(&mut self, cur: &mut Cursor) -> Result<()> {
         let first = cur.peek().expect("a statement has tokens");
-        let second = cur.toks.get(1).map(|t| &t.tok);
-        match (&first.tok, second) {
-            (Tok::Ident(kw @ ("curve" | "shape")), Some(Tok::Ident(_))) => {
-                let kind = if *kw == "curve" {
-                    DefKind::Curve
-                } else {
-                    DefKind::Shape
-                };
-                self.definition(cur, kind)
-            }
-            (Tok::Ident("start"), s) if s != Some(&Tok::Sym('(')) => self.start(cur),
-            (Tok::Ident(_), _) => self.rule(cur),
+        match &first.tok {
+            Tok::Ident("curve") => self.definition(cur, DefKind::Curve),
+            Tok::Ident("shape") => self.definition(cur, DefKind::Shape),
+            Tok::Ident("start") => self.start(cur),
+            Tok::Ident(_) => self.rule(cur),
             _ => Err(cur.err(format!(
                 "a line starts with a rule such as outline(25) : big_poly -> [in, out], or with 'curve', 'shape' or 'start'; found {}",
                 cur.found()
@@ -728,7 +724,10 @@ impl Parser {
             };
             return Err(cur.err_at(
                 col,
-                format!("unknown operator '{name}': {hint}the operators are {OPERATOR_LIST}"),
+                format!(
+                    "unknown operator '{}': {hint}the operators are {OPERATOR_LIST}",
+                    shown(name)
+                ),
             ));
         };
         if self.g.rules.len() >= MAX_RULES {
@@ -756,7 +755,8 @@ impl Parser {
         if cur.peek_tok() != Some(&Tok::Arrow) {
             return Err(cur.err(format!(
                 "expected '->' and the output tags after '{tag}', found {}: write {name}(...) : {tag} -> [out]",
-                cur.found()
+                cur.found(),
+                tag = shown(&tag)
             )));
         }
         cur.next();
@@ -970,10 +970,20 @@ impl Parser {
 
     fn definition(&mut self, cur: &mut Cursor, kind: DefKind) -> Result<()> {
         cur.next();
-        let (name, name_col) = cur.ident().expect("checked by statement");
         let kw = match kind {
             DefKind::Curve => "curve",
             DefKind::Shape => "shape",
+        };
+        let Some((name, name_col)) = cur.ident() else {
+            return Err(cur.err(format!(
+                "expected the {kw}'s name after '{kw}', found {}: write {}",
+                cur.found(),
+                if kind == DefKind::Curve {
+                    "curve teeth = zigzag(5, 20)"
+                } else {
+                    "shape hex = ngon(6)"
+                }
+            )));
         };
         if name == BUILTIN_CURVE || name == BUILTIN_SHAPE {
             return Err(cur.err_at(
@@ -981,12 +991,13 @@ impl Parser {
                 format!("'{name}' is built in: give your {kw} another name"),
             ));
         }
-        if let Some(d) = self.g.defs.iter().find(|d| d.name == name) {
+        if let Some(&i) = self.names.get(name) {
             return Err(cur.err_at(
                 name_col,
                 format!(
-                    "'{name}' is already defined on line {}: give this {kw} another name",
-                    d.line
+                    "'{}' is already defined on line {}: give this {kw} another name",
+                    shown(name),
+                    self.g.defs[i].line
                 ),
             ));
         }
@@ -1022,7 +1033,7 @@ impl Parser {
             };
             return Err(cur.err_at(
                 ctor_col,
-                format!("unknown {kw} '{ctor}': {hint}{ctor_usage}"),
+                format!("unknown {kw} '{}': {hint}{ctor_usage}", shown(ctor)),
             ));
         }
         let args = if cur.peek_tok() == Some(&Tok::Sym('(')) {
@@ -1093,6 +1104,7 @@ impl Parser {
             _ => CurveDef::Svg(svg_arg(&args, cur)?),
         };
         cur.end(&format!("the {kw} definition"))?;
+        self.names.insert(name.to_string(), self.g.defs.len());
         self.g.defs.push(Def {
             name: name.to_string(),
             kind,
@@ -1117,7 +1129,10 @@ impl Parser {
                 Some(s) => format!("did you mean {s}? "),
                 None => String::new(),
             };
-            return Err(cur.err_at(col, format!("unknown start shape '{ctor}': {hint}{usage}")));
+            return Err(cur.err_at(
+                col,
+                format!("unknown start shape '{}': {hint}{usage}", shown(ctor)),
+            ));
         }
         if cur.peek_tok() != Some(&Tok::Sym('(')) {
             return Err(cur.err(format!(
@@ -1200,7 +1215,7 @@ impl Parser {
     }
 
     fn finish(self) -> Result<Grammar> {
-        let Parser { g, refs } = self;
+        let Parser { g, refs, names } = self;
         for r in &refs {
             let builtin = match r.kind {
                 DefKind::Curve => BUILTIN_CURVE,
@@ -1213,7 +1228,7 @@ impl Parser {
             if r.name == builtin {
                 continue;
             }
-            match g.defs.iter().find(|d| d.name == r.name) {
+            match names.get(&r.name).map(|&i| &g.defs[i]) {
                 Some(d) if d.kind == r.kind => {}
                 Some(d) => {
                     return Err(syntax(
@@ -1221,7 +1236,9 @@ impl Parser {
                         r.col,
                         format!(
                             "'{}' (line {}) is a {other}, and {} needs a {kw}: define a {kw} and use its name",
-                            r.name, d.line, r.op
+                            shown(&r.name),
+                            d.line,
+                            r.op
                         ),
                     ))
                 }
@@ -1238,15 +1255,15 @@ impl Parser {
                         None => String::new(),
                     };
                     let example = match r.kind {
-                        DefKind::Curve => format!("curve {} = zigzag(5, 20)", r.name),
-                        DefKind::Shape => format!("shape {} = ngon(6)", r.name),
+                        DefKind::Curve => format!("curve {} = zigzag(5, 20)", shown(&r.name)),
+                        DefKind::Shape => format!("shape {} = ngon(6)", shown(&r.name)),
                     };
                     return Err(syntax(
                         r.line,
                         r.col,
                         format!(
                             "unknown {kw} '{}': {hint}use {builtin} or define it on a line of its own, as in {example}",
-                            r.name
+                            shown(&r.name)
                         ),
                     ));
                 }
@@ -1396,7 +1413,8 @@ fn bind<'x, 'a>(
                         };
                         let first: Vec<&str> = slots.iter().map(|s| s[0]).collect();
                         format!(
-                            "{callee} has no parameter '{k}': {hint}its parameters are {}",
+                            "{callee} has no parameter '{}': {hint}its parameters are {}",
+                            shown(k),
                             first.join(", ")
                         )
                     };
@@ -1504,7 +1522,8 @@ fn choose<T: Copy>(
             Err(cur.err_at(
                 a.col,
                 format!(
-                    "unknown {what} '{n}': {hint}it is one of {}",
+                    "unknown {what} '{}': {hint}it is one of {}",
+                    shown(n),
                     names.join(", ")
                 ),
             ))
@@ -1605,14 +1624,27 @@ fn one_tag(cur: &mut Cursor, what: &str) -> Result<String> {
         let mut j = cur.i;
         while let Some(Token {
             tok: Tok::Ident(w), ..
-        }) = cur.toks.get(j)
+        }) = cur.toks.get(j).filter(|_| words.len() <= 8)
         {
             words.push(w);
             j += 1;
         }
-        return Err(cur.err(format!("tags are one word: write {}", words.join("_"))));
+        let joined = words.join("_");
+        return Err(cur.err(if words.len() <= 8 {
+            format!("tags are one word: write {}", shown(&joined))
+        } else {
+            "tags are one word: join the words with '_'".to_string()
+        }));
     }
     Ok(t.to_string())
+}
+
+/// `s` cut to 40 characters for a message.
+fn shown(s: &str) -> String {
+    match s.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &s[..i]),
+        None => s.to_string(),
+    }
 }
 
 /// The closest of `names` to `word` when it is close enough to be a typo
@@ -1627,7 +1659,14 @@ fn closest<'n>(word: &str, names: &[&'n str]) -> Option<&'n str> {
         .map(|n| (edit_distance(&w, &n.to_ascii_lowercase()), *n))
         .min_by_key(|(d, _)| *d)?;
     let allowed = if w.len() >= 5 { 2 } else { 1 };
-    (best.0 <= allowed).then_some(best.1)
+    if best.0 <= allowed {
+        return Some(best.1);
+    }
+    // An abbreviation: `dist` for `distance`.
+    let prefix = names
+        .iter()
+        .find(|n| w.len() >= 3 && n.to_ascii_lowercase().starts_with(&w));
+    prefix.copied()
 }
 
 fn edit_distance(a: &str, b: &str) -> usize {
@@ -1646,4 +1685,873 @@ fn edit_distance(a: &str, b: &str) -> usize {
 }
 
 #[cfg(test)]
-mod tests {}
+mod tests {
+    use super::*;
+
+    const LEAF: &str = include_str!("../../assets/tangle/leaf.tangle");
+
+    fn rule_of(g: &Grammar, i: usize) -> (&Op, &str, Vec<&str>) {
+        let r = &g.rules[i];
+        (
+            &r.op,
+            r.tag.as_str(),
+            r.outputs.iter().map(String::as_str).collect(),
+        )
+    }
+
+    fn split(offset: f64, dual: bool) -> Op {
+        Op::Split {
+            curve: "line".into(),
+            offsets: vec![offset],
+            dual,
+        }
+    }
+
+    #[test]
+    fn fig9_leaf_parses_to_its_twelve_rules() {
+        let g = parse(LEAF).unwrap();
+        let outline = |distance| Op::Outline { distance };
+        let expected: Vec<(Op, &str, Vec<&str>)> = vec![
+            (outline(25.0), "big_poly", vec!["in", "out"]),
+            (
+                Op::Place {
+                    size: 20.0,
+                    distance: 25.0,
+                    shape: "circle".into(),
+                },
+                "out",
+                vec!["blob", "rem"],
+            ),
+            (split(90.0, true), "in", vec!["quads"]),
+            (Op::Regroup { k: 2 }, "quads", vec!["ung_quads"]),
+            (outline(7.0), "ung_quads", vec!["in_2", "out_2"]),
+            (outline(5.0), "in_2", vec!["in_3", "out_3"]),
+            (
+                Op::Stipple {
+                    kind: StippleKind::Dots,
+                    spacing: 6.0,
+                    size: 1.0,
+                },
+                "in_3",
+                vec!["term", "term"],
+            ),
+            (split(50.0, false), "ung_quads", vec!["slices"]),
+            (Op::Regroup { k: 2 }, "slices", vec!["reg_slices"]),
+            (split(10.0, false), "reg_slices", vec!["final"]),
+            (outline(3.0), "final", vec!["tiny", "tiny_out"]),
+            (Op::Invert, "rem", vec!["term", "term"]),
+        ];
+        assert_eq!(g.rules.len(), 12);
+        for (i, (op, tag, outputs)) in expected.iter().enumerate() {
+            assert_eq!(
+                rule_of(&g, i),
+                (op, *tag, outputs.clone()),
+                "rule {}",
+                i + 1
+            );
+        }
+        // Rules keep their place in the file.
+        let first = LEAF
+            .lines()
+            .position(|l| l.starts_with("outline(25)"))
+            .unwrap()
+            + 1;
+        assert_eq!((g.rules[0].line, g.rules[0].column), (first, 1));
+        assert_eq!(g.rules[11].line, first + 11);
+        assert_eq!(
+            g.start,
+            vec![Start {
+                shape: StartShape::Rect {
+                    width: 800.0,
+                    height: 600.0
+                },
+                tag: "big_poly".into(),
+                line: first - 2,
+            }]
+        );
+        assert!(g.defs.is_empty());
+    }
+
+    /// (text, line, column, a piece of the message)
+    const ERRORS: &[(&str, usize, usize, &str)] = &[
+        // unknown operators, with the closest name
+        (
+            "outlin(25) : a -> [b]",
+            1,
+            1,
+            "unknown operator 'outlin': did you mean outline?",
+        ),
+        (
+            "# c\n\n  regularsplit(line, 9) : a -> b",
+            3,
+            3,
+            "did you mean regularSplit?",
+        ),
+        (
+            "cruve c = line\noutline(3) : a -> b",
+            1,
+            1,
+            "did you mean curve?",
+        ),
+        (
+            "frobnicate(1) : a -> b",
+            1,
+            1,
+            "the operators are ungroup, regroup",
+        ),
+        // parameter count and type
+        (
+            "outline(25, 3) : a -> [b]",
+            1,
+            13,
+            "too many parameters: outline takes one distance: outline(25)",
+        ),
+        (
+            "outline() : a -> [b]",
+            1,
+            9,
+            "missing the distance: outline takes one distance: outline(25)",
+        ),
+        (
+            "outline(x) : a -> [b]",
+            1,
+            9,
+            "the distance is a number: outline takes one distance",
+        ),
+        (
+            "outline(2 5) : a -> [b]",
+            1,
+            9,
+            "found 2 numbers: separate parameters with commas",
+        ),
+        (
+            "ungroup(1) : a -> b",
+            1,
+            9,
+            "too many parameters: ungroup takes no parameters",
+        ),
+        (
+            "invert : a -> b",
+            1,
+            8,
+            "operators take parentheses even without parameters",
+        ),
+        (
+            "place(20) : a -> b",
+            1,
+            9,
+            "missing the distance: place takes a size, a distance",
+        ),
+        (
+            "streamlineSplit(smoth, 5) : a -> b",
+            1,
+            17,
+            "unknown kind 'smoth': did you mean smooth?",
+        ),
+        ("stippling(dits) : a -> b", 1, 11, "did you mean dots?"),
+        (
+            "regularSplit(line, 10, 2) : a -> b",
+            1,
+            24,
+            "dual is 0 or 1",
+        ),
+        ("regularSplit(3, 10) : a -> b", 1, 14, "the curve is a name"),
+        (
+            "regularSplit(line, [10, x]) : a -> b",
+            1,
+            25,
+            "expected a number in the list",
+        ),
+        (
+            "regularSplit(line, []) : a -> b",
+            1,
+            21,
+            "the list is empty",
+        ),
+        (
+            "regularSplit(line, [1, 2, 3, 4, 5, 6, 7, 8, 9]) : a -> b",
+            1,
+            45,
+            "at most 8 offsets (MAX_OFFSETS)",
+        ),
+        (
+            "regularSplit(line, 10, offset3 = 5) : a -> b",
+            1,
+            24,
+            "offset3 follows offset2",
+        ),
+        // lengths and ranges
+        ("outline(0.2) : a -> [b]", 1, 9, "at least 0.5 (MIN_LENGTH)"),
+        ("outline(-4) : a -> [b]", 1, 9, "at least 0.5 (MIN_LENGTH)"),
+        (
+            "outline(2e6) : a -> [b]",
+            1,
+            9,
+            "at most 1000000 (MAX_LENGTH)",
+        ),
+        (
+            "regularSplit(line, [10, 0.1]) : a -> b",
+            1,
+            25,
+            "an offset must be at least 0.5",
+        ),
+        (
+            "place(20, -1) : a -> b",
+            1,
+            11,
+            "the distance must be from 0",
+        ),
+        ("fill(2) : a -> b", 1, 6, "the tone must be from 0 to 1"),
+        ("regroup(0) : a -> b", 1, 9, "k must be from 1 to 1000000"),
+        ("regroup(1.5) : a -> b", 1, 9, "k is a whole number"),
+        (
+            "stippling(dots, 6, 0) : a -> b",
+            1,
+            20,
+            "the size must be at least 0.5",
+        ),
+        // keyword arguments
+        (
+            "outline(dist = 3) : a -> b",
+            1,
+            9,
+            "outline has no parameter 'dist': did you mean distance?",
+        ),
+        (
+            "place(size = 3, 4) : a -> b",
+            1,
+            17,
+            "positional parameters come before the named ones",
+        ),
+        (
+            "outline(25, distance = 3) : a -> b",
+            1,
+            13,
+            "'distance' is given twice",
+        ),
+        ("invert(x = 1) : a -> b", 1, 8, "invert has no parameters"),
+        // curve and shape names
+        (
+            "outline(1) : a -> b\nregularSplit(zz, 10) : a -> [b]",
+            2,
+            14,
+            "unknown curve 'zz': use line or define it",
+        ),
+        (
+            "curve teeth = zigzag(1, 4)\nregularSplit(teth, 10) : a -> [b]",
+            2,
+            14,
+            "did you mean teeth?",
+        ),
+        (
+            "place(20, 25, blob) : a -> b",
+            1,
+            15,
+            "unknown shape 'blob'",
+        ),
+        (
+            "shape s = ngon(6)\nregularSplit(s, 10) : a -> b",
+            2,
+            14,
+            "'s' (line 1) is a shape, and regularSplit needs a curve",
+        ),
+        (
+            "curve c = line\nplace(3, 3, c) : a -> b",
+            2,
+            13,
+            "'c' (line 1) is a curve, and place needs a shape",
+        ),
+        (
+            "curve c = line\ncurve c = wave(1, 2)\nfill() : a -> b",
+            2,
+            7,
+            "'c' is already defined on line 1",
+        ),
+        (
+            "curve c = line\nshape c = circle\nfill() : a -> b",
+            2,
+            7,
+            "already defined on line 1",
+        ),
+        (
+            "curve line = zigzag(1, 2)\nfill() : a -> b",
+            1,
+            7,
+            "'line' is built in",
+        ),
+        (
+            "curve z = zigzog(1, 2)\nfill() : a -> b",
+            1,
+            11,
+            "unknown curve 'zigzog': did you mean zigzag?",
+        ),
+        (
+            "shape z = zigzag(1, 2)\nfill() : a -> b",
+            1,
+            11,
+            "a shape is circle, ngon(n)",
+        ),
+        (
+            "curve z = zigzag(1, 0)\nfill() : a -> b",
+            1,
+            21,
+            "the period must be at least 0.5",
+        ),
+        (
+            "curve z = arc(3)\nfill() : a -> b",
+            1,
+            15,
+            "the bulge must be from -1 to 1",
+        ),
+        (
+            "shape z = ngon(2)\nfill() : a -> b",
+            1,
+            16,
+            "n must be from 3 to 1000",
+        ),
+        (
+            "shape z = polyline(0 0, 1 1)\nfill() : a -> b",
+            1,
+            28,
+            "polyline needs at least 3 points",
+        ),
+        (
+            "shape z = polyline(0 0, 1 1, 2 2)\nfill() : a -> b",
+            1,
+            20,
+            "encloses no area",
+        ),
+        (
+            "curve z = polyline(0 0, 1 1 1)\nfill() : a -> b",
+            1,
+            25,
+            "a point is two numbers 'x y', found 3",
+        ),
+        (
+            "shape s = svg(\"M 0 0 L 1 x\")\nfill() : a -> b",
+            1,
+            26,
+            "'x' is not part of SVG path data",
+        ),
+        (
+            "shape s = svg(\"0 0 L 1 1\")\nfill() : a -> b",
+            1,
+            15,
+            "must start with a move",
+        ),
+        (
+            "curve z = wave(1, 2) extra\nfill() : a -> b",
+            1,
+            22,
+            "unexpected 'extra' after the curve definition",
+        ),
+        // tags, ':' and '->'
+        (
+            "outline(25) : big poly -> [in, out]",
+            1,
+            19,
+            "tags are one word: write big_poly",
+        ),
+        (
+            "outline(25) : a -> [in, tiny out piece]",
+            1,
+            30,
+            "tags are one word: write tiny_out_piece",
+        ),
+        (
+            "outline(25) big_poly -> [a]",
+            1,
+            13,
+            "expected ':' and the tag the rule matches",
+        ),
+        (
+            "outline(25) : big_poly [a]",
+            1,
+            24,
+            "expected '->' and the output tags after 'big_poly'",
+        ),
+        ("outline(25) : big_poly", 1, 23, "expected '->'"),
+        (
+            "outline(25) : -> [a]",
+            1,
+            15,
+            "expected the tag this rule matches",
+        ),
+        (
+            "outline(25) : a -> 3",
+            1,
+            20,
+            "expected the output tags after '->'",
+        ),
+        (
+            "outline(25) : a -> [b] c",
+            1,
+            24,
+            "unexpected 'c' after the output tags: one statement a line",
+        ),
+        // output counts
+        (
+            "regularSplit(line, 10) : a -> [b, c]",
+            1,
+            35,
+            "too many output tags: this operator gives all its shapes one tag",
+        ),
+        (
+            "outline(25) : a -> [b, c, d]",
+            1,
+            27,
+            "outline gives at most two tags",
+        ),
+        (
+            "place(2, 2) : a -> [b, c, d]",
+            1,
+            27,
+            "place gives at most two tags",
+        ),
+        (
+            "fill() : a -> [b, c, d]",
+            1,
+            22,
+            "a decorative operator gives at most two tags",
+        ),
+        ("outline(25) : a -> []", 1, 21, "the output list is empty"),
+        // brackets and strings
+        (
+            "start svg(\"M 0 0 L 1 1) : a",
+            1,
+            11,
+            "this string is not closed",
+        ),
+        ("start text(\"a\\q\") : a", 1, 14, "unknown escape"),
+        (
+            "outline(25 : a -> [b]",
+            1,
+            8,
+            "this '(' is not closed: add ')'",
+        ),
+        (
+            "regularSplit(line, [10, 20) : a -> [b]",
+            1,
+            27,
+            "')' does not close the '[' at column 20",
+        ),
+        ("outline(25)) : a -> [b]", 1, 12, "')' has no '(' before it"),
+        // numbers and characters
+        (
+            "outline(1e999) : a -> b",
+            1,
+            9,
+            "too large: numbers must be finite",
+        ),
+        ("outline(.5) : a -> b", 1, 9, "write 0.5"),
+        (
+            "outline(1.) : a -> b",
+            1,
+            9,
+            "needs digits after the decimal point: write 1.0",
+        ),
+        ("outline(1e) : a -> b", 1, 9, "an exponent needs digits"),
+        ("outline(25px) : a -> b", 1, 9, "'25px' is not a number"),
+        ("outline(25) : a - b", 1, 17, "the arrow is written '->'"),
+        (
+            "outline(25) : a → [b, c, d]",
+            1,
+            26,
+            "outline gives at most two tags",
+        ),
+        ("outline(25) : a → [über]", 1, 20, "'ü' is not one of them"),
+        (
+            "outline(25) : a -> [b] ; fill() : a -> b",
+            1,
+            24,
+            "unexpected character ';'",
+        ),
+        ("= 3", 1, 1, "a line starts with a rule"),
+        // start shapes
+        (
+            "start square(3) : a\nfill() : a -> b",
+            1,
+            7,
+            "unknown start shape 'square'",
+        ),
+        (
+            "start rect(800) : a\nfill() : a -> b",
+            1,
+            15,
+            "missing the height",
+        ),
+        (
+            "start rect(800, 600) a\nfill() : a -> b",
+            1,
+            22,
+            "expected ':' and the start shape's tag",
+        ),
+        (
+            "start text(\"\") : a\nfill() : a -> b",
+            1,
+            12,
+            "the word is empty",
+        ),
+        (
+            "start polygon(0 0, 1 0) : a\nfill() : a -> b",
+            1,
+            23,
+            "polygon needs at least 3 points",
+        ),
+        (
+            "curve = line\nfill() : a -> b",
+            1,
+            7,
+            "expected the curve's name after 'curve'",
+        ),
+        (
+            "start\nfill() : a -> b",
+            1,
+            6,
+            "expected a shape after 'start'",
+        ),
+        // a grammar without rules
+        ("", 1, 1, "the grammar has no rules"),
+        (
+            "# only a comment\ncurve c = line\n",
+            1,
+            1,
+            "the grammar has no rules",
+        ),
+    ];
+
+    #[test]
+    fn syntax_errors_point_at_the_offending_token() {
+        let mut failures = vec![];
+        for (text, line, column, piece) in ERRORS {
+            match parse(text) {
+                Err(Error::Syntax {
+                    line: l,
+                    column: c,
+                    message,
+                }) => {
+                    if (l, c) != (*line, *column) || !message.contains(piece) {
+                        failures.push(format!(
+                            "{text:?}: got {l}:{c} {message:?}, want {line}:{column} …{piece}…"
+                        ));
+                    }
+                }
+                other => failures.push(format!("{text:?}: got {other:?}")),
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+    }
+
+    #[test]
+    fn numbers_round_trip_exactly() {
+        let values = [
+            0.5,
+            1.0,
+            25.0,
+            10.1 + 0.2,
+            10.0 / 3.0,
+            std::f64::consts::PI * 1000.0,
+            MAX_LENGTH,
+            999_999.999_999_999_9,
+            0.500_000_000_000_000_1,
+            123.456e2,
+        ];
+        for v in values {
+            for text in [
+                format!("{v}"),
+                format!("{v:?}"),
+                format!("{v:e}"),
+                format!("+{v}"),
+            ] {
+                let g = parse(&format!("outline({text}) : a -> b")).unwrap();
+                match g.rules[0].op {
+                    Op::Outline { distance } => {
+                        assert_eq!(distance.to_bits(), v.to_bits(), "{text}")
+                    }
+                    ref op => panic!("{op:?}"),
+                }
+            }
+        }
+        // Signs, exponents and negative zero in coordinates.
+        let g = parse(
+            "shape s = polyline(-0 0, 1e2 -2.5E-1, +3 4e+1, -1.25e-3 1E0)\nplace(1, 0, s) : a -> b",
+        )
+        .unwrap();
+        let CurveDef::Polyline(p) = &g.defs[0].curve else {
+            panic!("{:?}", g.defs[0])
+        };
+        let want = [(-0.0, 0.0), (100.0, -0.25), (3.0, 40.0), (-0.00125, 1.0)];
+        for (p, (x, y)) in p.iter().zip(want) {
+            assert_eq!(
+                (p.x.to_bits(), p.y.to_bits()),
+                (f64::to_bits(x), f64::to_bits(y))
+            );
+        }
+        // What `to_text` writes reads back bit for bit.
+        let again = parse(&to_text(&g)).unwrap();
+        assert_eq!(positionless(again), positionless(g));
+    }
+
+    #[test]
+    fn keyword_arguments_name_any_parameter() {
+        let g = parse(
+            "curve teeth = zigzag(period = 20, amplitude = 5)\n\
+             shape hex = ngon(n = 6)\n\
+             regularSplit(dual = true, offsets = [20, 40], curve = teeth) : a -> b\n\
+             split(line, offset = 10, offset2 = 30, offset3 = 50) : b -> c\n\
+             place(distance = 4, size = 12, shape = hex) : c -> [d, e]\n\
+             streamline(offset = 8, kind = circular) : d -> f\n\
+             stipple(size = 2, kind = dashes) : f -> [g, h]\n\
+             fill(tone = 0.25) : g -> h\n\
+             regroup(k = 3) : h -> i\n\
+             outline(distance = 7) : i -> [j, k]\n\
+             start rect(height = 600, width = 800) : a\n\
+             start circle(radius = 50) : a\n\
+             start text(word = \"TANGLE\") : a",
+        )
+        .unwrap();
+        let ops: Vec<&Op> = g.rules.iter().map(|r| &r.op).collect();
+        assert_eq!(
+            ops,
+            [
+                &Op::Split {
+                    curve: "teeth".into(),
+                    offsets: vec![20.0, 40.0],
+                    dual: true
+                },
+                &Op::Split {
+                    curve: "line".into(),
+                    offsets: vec![10.0, 30.0, 50.0],
+                    dual: false
+                },
+                &Op::Place {
+                    size: 12.0,
+                    distance: 4.0,
+                    shape: "hex".into()
+                },
+                &Op::Streamline {
+                    kind: StreamKind::Circular,
+                    offset: 8.0
+                },
+                &Op::Stipple {
+                    kind: StippleKind::Dashes,
+                    spacing: 6.0,
+                    size: 2.0
+                },
+                &Op::Fill { tone: 0.25 },
+                &Op::Regroup { k: 3 },
+                &Op::Outline { distance: 7.0 },
+            ]
+        );
+        assert_eq!(
+            g.defs[0].curve,
+            CurveDef::Zigzag {
+                amplitude: 5.0,
+                period: 20.0
+            }
+        );
+        assert_eq!(g.defs[1].curve, CurveDef::Ngon(6));
+        let shapes: Vec<&StartShape> = g.start.iter().map(|s| &s.shape).collect();
+        assert_eq!(
+            shapes,
+            [
+                &StartShape::Rect {
+                    width: 800.0,
+                    height: 600.0
+                },
+                &StartShape::Circle { radius: 50.0 },
+                &StartShape::Text("TANGLE".into()),
+            ]
+        );
+        // What the parser accepts, with_param keeps as it is.
+        for r in &g.rules {
+            for p in r.op.params() {
+                assert_eq!(r.op.with_param(p.name, p.value), Some(r.op.clone()));
+            }
+        }
+    }
+
+    #[test]
+    fn aliases_defaults_comments_and_arrows() {
+        let g = parse(
+            "// a comment\r\n\
+             \t# another\r\n\
+             \r\n\
+             stipling() : a → [b, c]   # trailing comment\r\n\
+             stippling(curves) : a -> b // and another\n\
+             fill() : b -> c\n\
+             place(5, 0) : c -> d\n\
+             streamlineSplit(strip, 3) : d -> e\n\
+             regularSplit(wiggle, 3, false) : e -> f\n\
+             curve wiggle = svg(\"M 0 0 C 1 2, 3 -4, 5.5e1 6 z\")\n\
+             shape star = polyline(0 0, 2 5, 4 0, 0 3, 4 3)\n\
+             curve bow = arc(-0.5)\n\
+             curve w = wave(0, 10)\n\
+             curve l = polyline(0 0, 0 10)\n\
+             shape round = circle()\n\
+             ungroup() : f -> g",
+        )
+        .unwrap();
+        let ops: Vec<&Op> = g.rules.iter().map(|r| &r.op).collect();
+        let stipple = |kind| Op::Stipple {
+            kind,
+            spacing: 6.0,
+            size: 1.0,
+        };
+        assert_eq!(ops[0], &stipple(StippleKind::Dots));
+        assert_eq!(ops[1], &stipple(StippleKind::Curves));
+        assert_eq!(ops[2], &Op::Fill { tone: 1.0 });
+        assert_eq!(
+            ops[3],
+            &Op::Place {
+                size: 5.0,
+                distance: 0.0,
+                shape: "circle".into()
+            }
+        );
+        assert_eq!(
+            ops[4],
+            &Op::Streamline {
+                kind: StreamKind::Strip,
+                offset: 3.0
+            }
+        );
+        assert!(matches!(ops[5], Op::Split { dual: false, curve, .. } if curve == "wiggle"));
+        assert_eq!(ops[6], &Op::Ungroup);
+        assert_eq!((g.rules[0].line, g.rules[0].column), (4, 1));
+        assert_eq!(g.rules[0].outputs, ["b", "c"]);
+        assert_eq!(g.rules[1].outputs, ["b"]);
+        let defs: Vec<(&str, DefKind, usize)> = g
+            .defs
+            .iter()
+            .map(|d| (d.name.as_str(), d.kind, d.line))
+            .collect();
+        assert_eq!(
+            defs,
+            [
+                ("wiggle", DefKind::Curve, 10),
+                ("star", DefKind::Shape, 11),
+                ("bow", DefKind::Curve, 12),
+                ("w", DefKind::Curve, 13),
+                ("l", DefKind::Curve, 14),
+                ("round", DefKind::Shape, 15),
+            ]
+        );
+        assert_eq!(g.defs[2].curve, CurveDef::Arc { bulge: -0.5 });
+        assert_eq!(g.defs[5].curve, CurveDef::Circle);
+    }
+
+    /// The grammar without its lines and columns.
+    fn positionless(mut g: Grammar) -> Grammar {
+        g.defs.iter_mut().for_each(|d| d.line = 0);
+        g.start.iter_mut().for_each(|s| s.line = 0);
+        g.rules.iter_mut().for_each(|r| (r.line, r.column) = (0, 0));
+        g
+    }
+
+    #[test]
+    fn to_text_reads_back_to_the_same_grammar() {
+        let texts = [
+            LEAF.to_string(),
+            "curve c = wave(2.5, 12)\nshape s = svg(\"M 0 0 L 4 0 L 2 3 Z\")\nshape t = ngon(5)\n\
+             start polygon(0 0, 10 0, 5 8) : a\nstart svg(\"M0 0h10v10z\") : a\nstart text(\"a \\\"q\\\" \\\\\") : b\n\
+             regularSplit(c, [3, 4.5], 1) : a -> [b]\nplace(3, 1, s) : b -> [c, d]\n\
+             streamlineSplit(circular, 7) : c -> e\nfill(0.3) : d -> f\n"
+                .to_string(),
+        ];
+        for t in texts {
+            let g = parse(&t).unwrap();
+            let written = to_text(&g);
+            let again = parse(&written).unwrap_or_else(|e| panic!("{written}\n{e}"));
+            assert_eq!(positionless(again), positionless(g), "{written}");
+        }
+    }
+
+    #[test]
+    fn limits_are_named_and_bound_the_input() {
+        let long = format!("fill() : a -> b\n{}", "#".repeat(MAX_TEXT_BYTES));
+        let e = parse(&long).unwrap_err();
+        assert_eq!(e.kind(), "limit");
+        assert!(e.to_string().contains("MAX_TEXT_BYTES"), "{e}");
+
+        let mut many = "fill() : a -> b\n".repeat(MAX_RULES);
+        assert_eq!(parse(&many).unwrap().rules.len(), MAX_RULES);
+        many.push_str("fill() : a -> b\n");
+        let e = parse(&many).unwrap_err();
+        assert_eq!(e.position(), Some((MAX_RULES + 1, 1)));
+        assert!(e.to_string().contains("MAX_RULES"), "{e}");
+
+        let pts = |n: usize| {
+            let p: Vec<String> = (0..n).map(|i| format!("{i} {}", i % 2)).collect();
+            format!("curve c = polyline({})\nfill() : a -> b", p.join(","))
+        };
+        let g = parse(&pts(MAX_POLYLINE_POINTS)).unwrap();
+        assert!(
+            matches!(&g.defs[0].curve, CurveDef::Polyline(p) if p.len() == MAX_POLYLINE_POINTS)
+        );
+        let text = pts(MAX_POLYLINE_POINTS + 1);
+        let e = parse(&text).unwrap_err();
+        let col = text.find(&format!(",{} ", MAX_POLYLINE_POINTS)).unwrap() + 2;
+        assert_eq!(e.position(), Some((1, col)));
+        assert!(e.to_string().contains("MAX_POLYLINE_POINTS"), "{e}");
+
+        let word = "W".repeat(MAX_START_TEXT_CHARS + 1);
+        let e = parse(&format!("start text(\"{word}\") : a\nfill() : a -> b")).unwrap_err();
+        assert!(e.to_string().contains("MAX_START_TEXT_CHARS"), "{e}");
+    }
+
+    #[test]
+    fn deep_brackets_and_garbage_neither_panic_nor_recurse() {
+        // 200k nested brackets: the parser has no recursion to overflow.
+        let deep = format!(
+            "outline({}25{}) : a -> b",
+            "(".repeat(100_000),
+            ")".repeat(100_000)
+        );
+        let e = parse(&deep).unwrap_err();
+        assert_eq!(e.position(), Some((1, 9)));
+        let deep = format!("outline({}25) : a -> b", "[".repeat(100_000));
+        assert!(parse(&deep).is_err());
+        // One-byte corruptions of the leaf parse or fail at a position
+        // inside the text.
+        let bytes = LEAF.as_bytes();
+        for i in (0..bytes.len()).step_by(5) {
+            for b in [
+                b'(', b')', b'[', b']', b':', b'"', b'-', b'>', b' ', b'\n', b'9', b'x', 0xE2,
+            ] {
+                let mut v = bytes.to_vec();
+                v[i] = b;
+                let text = String::from_utf8_lossy(&v);
+                if let Err(e) = parse(&text) {
+                    let (l, c) = e.position().expect("a syntax error");
+                    let n = text.split('\n').nth(l - 1).map(|l| l.chars().count());
+                    assert!(
+                        n.is_some_and(|n| c >= 1 && c <= n + 1),
+                        "{e} for byte {i} = {b}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn messages_quote_at_most_a_few_words_of_the_input() {
+        let long = "x".repeat(100_000);
+        for text in [
+            format!("{long}(1) : a -> b"),
+            format!("outline(1) : a -> b\nregularSplit({long}, 3) : a -> b"),
+            format!("outline({}.) : a -> b", "1".repeat(100_000)),
+            format!("outline(1) : a b {} -> c", "w ".repeat(50_000)),
+        ] {
+            let e = parse(&text).unwrap_err();
+            assert!(e.to_string().len() < 400, "{}", &e.to_string()[..400]);
+        }
+    }
+
+    #[test]
+    fn names_may_be_used_before_they_are_defined() {
+        let g = parse("regularSplit(teeth, 10) : a -> b\ncurve teeth = zigzag(3, 9)").unwrap();
+        assert_eq!(g.defs[0].name, "teeth");
+        assert!(matches!(&g.rules[0].op, Op::Split { curve, .. } if curve == "teeth"));
+    }
+}

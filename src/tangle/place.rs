@@ -5,7 +5,7 @@
 //!
 //! 1. **Poisson disc centres by dart throwing** inside the region: darts
 //!    land uniformly on the region's raster (below), a dart is kept when it
-//!    lies in the region, at least `d/2 + MIN_SCALE·s/2` from its boundary
+//!    lies in the region, at least `e + MIN_SCALE·s/2` from its boundary
 //!    and at least `s + d` from every kept centre. At most
 //!    [`MAX_DARTS`] darts, stopping after [`MAX_MISSES`] misses in a row or
 //!    at [`MAX_PLACEMENTS`] centres.
@@ -24,7 +24,7 @@
 //! 3. **The motif at each centre**, scaled to diameter `s`, unrotated (the
 //!    motif's own orientation is kept; a rule that wants rotation rotates
 //!    the motif), shrunk until it fits: its bounding disc (the motif lies
-//!    in the unit disc) keeps `d/2` from the region's boundary, measured
+//!    in the unit disc) keeps `e` from the region's boundary, measured
 //!    exactly with [`Polygon::boundary_distance`].
 //! 4. **Shrinking until nothing overlaps**: while two placed shapes'
 //!    bounding discs are closer than `d`, the larger of the pair is scaled
@@ -32,17 +32,18 @@
 //!    most. Centres too close for even two minimum-size shapes (possible
 //!    after relaxation) drop the later one first, and any pair still
 //!    offending after the rounds drops its later shape, so the result holds
-//!    by construction: placed shapes lie inside the region, keep `d/2` from
+//!    by construction: placed shapes lie inside the region, keep `e` from
 //!    its boundary and `d` from each other (on their bounding discs, so
 //!    the polygons themselves keep at least that).
 //!
 //! Parameters: `s` (size) is a placed shape's diameter — the diameter of
 //! the disc it is scaled into; `d` (distance) is the desired gap between
-//! two placed shapes, so full-size centres are `s + d` apart, and a shape
-//! keeps `d/2` from the region's edge (so shapes in two neighbouring
-//! regions also end up `d` apart, and `place` after a split into cells
-//! `s + d` wide puts one full-size shape in each: the paper's regular
-//! patterns, Fig. 7). Shapes that would be smaller than
+//! two placed shapes, so full-size centres are `s + d` apart; a shape
+//! keeps `e = min(d/2, s/10)` from the region's edge. (Not `d/2`: the
+//! paper's own Fig. 9 grammar places blobs of `s = 20` with `d = 25` in
+//! the 25-wide ring of an `outline(25)`, which only works if the edge
+//! margin is small; `s/10` keeps shapes off the edge line.) Shapes that
+//! would be smaller than
 //! [`MIN_SCALE`]` · s` are dropped rather than placed as specks.
 //!
 //! Degenerate input (an empty or sliver region, a non-finite or
@@ -60,7 +61,8 @@ use std::collections::BinaryHeap;
 pub const MAX_PLACEMENTS: usize = 2000;
 
 /// Raster cells along the longer side of the region at most (so the raster
-/// has at most `MAX_RASTER²` cells whatever the region's size).
+/// has at most `(MAX_RASTER + 2)²` cells, border included, whatever the
+/// region's size).
 pub const MAX_RASTER: usize = 512;
 
 /// Raster cells per sample spacing `s + d` (when the cap allows).
@@ -99,7 +101,7 @@ pub struct Placement {
 /// is at distance 1: the form [`place`] expects. `None` for an empty,
 /// zero-area or non-finite polygon.
 pub fn normalise_motif(p: &Polygon) -> Option<Polygon> {
-    if p.rings.is_empty() || !(p.area() >= SLIVER_AREA) {
+    if !solid(p) {
         return None;
     }
     let c = p.centroid();
@@ -174,6 +176,11 @@ pub fn place(
     Placement { placed, remainder }
 }
 
+/// Finite points and at least a sliver's area.
+fn solid(p: &Polygon) -> bool {
+    p.rings.iter().flatten().all(|v| v.is_finite()) && p.area() >= SLIVER_AREA
+}
+
 /// Checked parameters.
 struct Params {
     /// The motif inside the unit disc.
@@ -184,19 +191,17 @@ struct Params {
     min_radius: f64,
     /// Desired gap `d`.
     gap: f64,
+    /// Gap kept from the region's edge, `min(d/2, s/10)`.
+    edge: f64,
     /// Poisson radius `s + d`.
     spacing: f64,
 }
 
 impl Params {
     fn new(region: &Polygon, motif: &Polygon, size: f64, distance: f64) -> Option<Params> {
-        if region.rings.is_empty()
-            || !(region.area() >= SLIVER_AREA)
-            || !(size.is_finite() && size > 0.0)
-            || !(distance.is_finite() && distance >= 0.0)
-            || motif.rings.is_empty()
-            || !(motif.area() >= SLIVER_AREA)
-        {
+        let size_ok = size.is_finite() && size > 0.0;
+        let gap_ok = distance.is_finite() && distance >= 0.0;
+        if !(solid(region) && solid(motif) && size_ok && gap_ok) {
             return None;
         }
         let reach = motif
@@ -228,6 +233,7 @@ impl Params {
             radius: size * 0.5,
             min_radius: MIN_SCALE * size * 0.5,
             gap: distance,
+            edge: (0.5 * distance).min(0.1 * size),
             spacing,
         })
     }
@@ -261,26 +267,28 @@ impl Raster {
         if !(cell.is_finite() && cell > 0.0) {
             return empty;
         }
-        let dims = |len: f64| ((len / cell).ceil() as usize).clamp(1, MAX_RASTER);
+        // The region's cells plus a border of outside cells all round, so
+        // that a cell's 8 neighbours need no bounds checks.
+        let dims = |len: f64| ((len / cell).ceil() as usize).clamp(1, MAX_RASTER) + 2;
         let (w, h) = (dims(hi.x - lo.x), dims(hi.y - lo.y));
+        let origin = lo - DVec2::splat(cell);
         // Crossings of each row's centre line, edge by edge (each edge
         // only visits the rows it spans).
         let mut rows: Vec<Vec<f64>> = vec![vec![]; h];
+        let inner = |v: f64, n: usize| v.clamp(1.0, (n - 1) as f64) as usize;
         for ring in &region.rings {
             let n = ring.len();
             for i in 0..n {
                 let (a, b) = (ring[i], ring[(i + n - 1) % n]);
                 let (y0, y1) = (a.y.min(b.y), a.y.max(b.y));
-                // Rows whose centre y is in [y0, y1).
-                // One row more each side against rounding; the test below
-                // decides.
-                let first = ((y0 - lo.y) / cell - 1.5).ceil().max(0.0);
-                let last = ((y1 - lo.y) / cell + 0.5).ceil().min(h as f64);
-                let (first, last) = (first as usize, last.max(0.0) as usize);
+                // Rows whose centre y is in [y0, y1), one more each side
+                // against rounding (the exact test below decides).
+                let first = inner(((y0 - origin.y) / cell - 1.5).ceil(), h);
+                let last = inner(((y1 - origin.y) / cell + 0.5).ceil(), h);
                 for (row, xs) in rows.iter_mut().enumerate().take(last).skip(first) {
-                    let y = lo.y + (row as f64 + 0.5) * cell;
-                    // The exact test `contains` makes, so a cell centre is
-                    // inside here exactly when `contains` says so.
+                    let y = origin.y + (row as f64 + 0.5) * cell;
+                    // The test `contains` makes, so a cell centre is inside
+                    // here exactly when `contains` says so.
                     if (a.y > y) != (b.y > y) {
                         xs.push((b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x);
                     }
@@ -291,17 +299,17 @@ impl Raster {
         for (row, xs) in rows.iter_mut().enumerate() {
             xs.sort_by(f64::total_cmp);
             for pair in xs.chunks_exact(2) {
-                // Centres x with pair[0] <= x < pair[1].
-                let first = ((pair[0] - lo.x) / cell - 0.5).ceil().max(0.0);
-                let last = ((pair[1] - lo.x) / cell - 0.5).ceil().min(w as f64);
-                for i in first as usize..last.max(0.0) as usize {
+                // Centres x with pair[0] <= x < pair[1], border excluded.
+                let first = inner(((pair[0] - origin.x) / cell - 0.5).ceil(), w);
+                let last = inner(((pair[1] - origin.x) / cell - 0.5).ceil(), w);
+                for i in first..last {
                     inside[row * w + i] = true;
                 }
             }
         }
         let inside_cells = (0..w * h).filter(|&i| inside[i]).collect();
         Raster {
-            origin: lo,
+            origin,
             cell,
             w,
             h,
@@ -384,7 +392,7 @@ fn dart_throw(region: &Polygon, raster: &Raster, params: &Params, rng: &mut Rng)
     let (lo, hi) = region.bbox();
     let mut grid = PointGrid::new(lo, hi, params.spacing);
     let spacing2 = params.spacing * params.spacing;
-    let margin = params.gap * 0.5 + params.min_radius;
+    let margin = params.edge + params.min_radius;
     let mut centres: Vec<DVec2> = vec![];
     let mut misses = 0;
     for _ in 0..MAX_DARTS {
@@ -420,9 +428,7 @@ fn geodesic_cells(raster: &Raster, centres: &[DVec2]) -> Vec<u32> {
     let n = raster.w * raster.h;
     let mut dist = vec![f64::INFINITY; n];
     let mut label = vec![NO_SITE; n];
-    // Non-negative f64 order equals their bit patterns' order; the index
-    // breaks ties, so the result does not depend on the heap's internals.
-    let mut heap: BinaryHeap<Reverse<(u64, usize)>> = BinaryHeap::new();
+    let mut heap: BinaryHeap<Reverse<u64>> = BinaryHeap::new();
     for (k, &c) in centres.iter().enumerate() {
         let Some(idx) = raster.index(c) else { continue };
         if !raster.inside[idx] {
@@ -432,53 +438,52 @@ fn geodesic_cells(raster: &Raster, centres: &[DVec2]) -> Vec<u32> {
         if d < dist[idx] {
             dist[idx] = d;
             label[idx] = k as u32;
-            heap.push(Reverse((d.to_bits(), idx)));
+            heap.push(Reverse(dist_key(d) << 32 | idx as u64));
         }
     }
-    let (w, h) = (raster.w as isize, raster.h as isize);
+    let w = raster.w;
     let diag = raster.cell * std::f64::consts::SQRT_2;
-    while let Some(Reverse((bits, idx))) = heap.pop() {
-        let d = f64::from_bits(bits);
-        if d > dist[idx] {
-            continue;
+    let inside = &raster.inside;
+    while let Some(Reverse(key)) = heap.pop() {
+        let idx = (key & 0xFFFF_FFFF) as usize;
+        if key >> 32 != dist_key(dist[idx]) {
+            continue; // superseded by a shorter path
         }
-        let (x, y) = ((idx % raster.w) as isize, (idx / raster.w) as isize);
-        let at = |xx: isize, yy: isize| -> Option<usize> {
-            let i = (yy * w + xx) as usize;
-            (xx >= 0 && yy >= 0 && xx < w && yy < h && raster.inside[i]).then_some(i)
-        };
-        for (dx, dy) in [
-            (1, 0),
-            (-1, 0),
-            (0, 1),
-            (0, -1),
-            (1, 1),
-            (1, -1),
-            (-1, 1),
-            (-1, -1),
-        ] {
-            let Some(j) = at(x + dx, y + dy) else {
-                continue;
-            };
-            let step = if dx != 0 && dy != 0 {
-                // No corner cutting: a diagonal step needs both of the
-                // cells it passes between.
-                if at(x + dx, y).is_none() || at(x, y + dy).is_none() {
-                    continue;
-                }
-                diag
-            } else {
-                raster.cell
-            };
+        let d = dist[idx];
+        let site = label[idx];
+        // Inside cells are never on the border, so all 8 neighbours exist.
+        let (e, wst, n, s) = (idx + 1, idx - 1, idx + w, idx - w);
+        let orth = [e, wst, n, s].map(|j| inside[j]);
+        let mut relax = |j: usize, step: f64| {
             let nd = d + step;
             if nd < dist[j] {
                 dist[j] = nd;
-                label[j] = label[idx];
-                heap.push(Reverse((nd.to_bits(), j)));
+                label[j] = site;
+                heap.push(Reverse(dist_key(nd) << 32 | j as u64));
+            }
+        };
+        for (k, &j) in [e, wst, n, s].iter().enumerate() {
+            if orth[k] {
+                relax(j, raster.cell);
+            }
+        }
+        // No corner cutting: a diagonal step needs both cells it passes
+        // between.
+        for (dx, dy, j) in [(0, 2, n + 1), (0, 3, s + 1), (1, 2, n - 1), (1, 3, s - 1)] {
+            if orth[dx] && orth[dy] && inside[j] {
+                relax(j, diag);
             }
         }
     }
     label
+}
+
+/// A distance's heap key: its `f32` bit pattern (monotone for
+/// non-negative values), so that key and cell index share one `u64`.
+/// Ties within `f32` precision go to the lower cell index, the same on
+/// every platform.
+fn dist_key(d: f64) -> u64 {
+    (d as f32).to_bits() as u64
 }
 
 /// Step 2: Lloyd relaxation of the geodesic centroidal Voronoi diagram.
@@ -550,7 +555,7 @@ fn lloyd(region: &Polygon, raster: &Raster, centres: &mut [DVec2]) {
 }
 
 /// Steps 3 and 4: each centre's bounding disc `(centre, radius)`, shrunk
-/// to keep `d/2` from the boundary and `d` from the other discs.
+/// to keep `e` from the boundary and `d` from the other discs.
 fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2, f64)> {
     let gap = params.gap;
     // Step 3: fit inside, exactly (the motif lies in its bounding disc).
@@ -558,7 +563,7 @@ fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2
         .iter()
         .filter(|&&c| region.contains(c))
         .map(|&c| {
-            let room = region.boundary_distance(c) - gap * 0.5;
+            let room = region.boundary_distance(c) - params.edge;
             (c, params.radius.min(room))
         })
         .filter(|&(_, r)| r >= params.min_radius && r.is_finite())
@@ -632,6 +637,8 @@ fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::core::rng::Rng;
+    use proptest::prelude::*;
 
     fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
         Polygon::rect(DVec2::new(x0, y0), DVec2::new(x1, y1))
@@ -700,8 +707,20 @@ mod tests {
         check_valid(&region, &p);
     }
 
+    /// The paper's Fig. 9 places blobs of 20 with gaps of 25 in the
+    /// 25-wide ring an `outline(25)` leaves: they must fit across it.
     #[test]
-    fn the_gap_d_is_kept_between_shapes_and_half_of_it_from_the_edge() {
+    fn fig_9_blobs_fit_in_the_outline_ring() {
+        let outer = rect(0.0, 0.0, 800.0, 600.0);
+        let ring = outer.difference(&rect(25.0, 25.0, 775.0, 575.0)).remove(0);
+        let p = place(&ring, &disc(), 20.0, 25.0, &mut Rng::new(1));
+        // About one blob per 45 units of the ring's 2,700-unit midline.
+        assert!(p.placed.len() > 40, "{} placed", p.placed.len());
+        check_valid(&ring, &p);
+    }
+
+    #[test]
+    fn the_gap_d_is_kept_between_shapes_and_a_margin_from_the_edge() {
         let region = rect(0.0, 0.0, 300.0, 200.0);
         let (s, d) = (16.0, 12.0);
         let p = place(&region, &disc(), s, d, &mut Rng::new(5));
@@ -720,7 +739,7 @@ mod tests {
                 r <= s / 2.0 + 1e-9 && r >= MIN_SCALE * s / 2.0 - 1e-9,
                 "radius {r}"
             );
-            assert!(region.boundary_distance(c) - r >= d / 2.0 - 1e-6);
+            assert!(region.boundary_distance(c) - r >= (d / 2.0).min(s / 10.0) - 1e-6);
             for &(c2, r2) in &discs[i + 1..] {
                 assert!(c.distance(c2) - r - r2 >= d - 1e-6);
             }
@@ -854,6 +873,16 @@ mod tests {
             assert!(p.placed.is_empty(), "s {s} d {d}");
             assert_eq!(p.remainder, vec![region.clone()]);
         }
+        let nan = Polygon {
+            rings: vec![vec![DVec2::ZERO, DVec2::new(f64::NAN, 1.0), DVec2::ONE]],
+        };
+        assert!(place(&nan, &disc(), 5.0, 1.0, &mut Rng::new(1))
+            .placed
+            .is_empty());
+        assert!(place(&region, &nan, 5.0, 1.0, &mut Rng::new(1))
+            .placed
+            .is_empty());
+        assert!(normalise_motif(&nan).is_none());
         let p = place(&Polygon::default(), &disc(), 5.0, 1.0, &mut Rng::new(1));
         assert!(p.placed.is_empty() && p.remainder.is_empty());
         let p = place(&region, &Polygon::default(), 5.0, 1.0, &mut Rng::new(1));
@@ -883,6 +912,27 @@ mod tests {
         let region = rect(0.0, 0.0, 200.0, 200.0);
         let big = Polygon::circle(DVec2::ZERO, 7.0, 16);
         check_valid(&region, &place(&region, &big, 20.0, 5.0, &mut Rng::new(4)));
+    }
+
+    fn arb_region() -> impl Strategy<Value = Polygon> {
+        proptest::collection::vec((0.0f64..120.0, 0.0f64..120.0), 3..10).prop_filter_map(
+            "degenerate",
+            |pts| {
+                let ring = pts.into_iter().map(|(x, y)| DVec2::new(x, y)).collect();
+                Polygon::new(vec![ring])?.into_iter().next()
+            },
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        /// Any polygon, any size and gap: inside, disjoint, area conserved.
+        #[test]
+        fn any_region_gets_a_valid_placement(region in arb_region(),
+            s in 2.0f64..30.0, d in 0.0f64..15.0, seed in 0u64..1000) {
+            let p = place(&region, &disc(), s, d, &mut Rng::new(seed));
+            check_valid(&region, &p);
+        }
     }
 
     /// Timings for the report (run by hand:

@@ -317,7 +317,7 @@ impl Field {
     fn dir(&mut self, p: DVec2) -> Option<DVec2> {
         let v = self.raw(p);
         let r = v.length();
-        if !(r > 1e-9) {
+        if r.is_nan() || r <= 1e-9 {
             return None;
         }
         if !self.doubled {
@@ -1014,125 +1014,6 @@ mod tests {
             prop_assert!((sum - p.area()).abs() <= 1e-3 * p.area().max(1.0), "{sum} vs {}", p.area());
             let union: f64 = Polygon::union_all(&pieces).iter().map(Polygon::area).sum();
             prop_assert!((union - sum).abs() <= 1e-3 * sum.max(1.0), "overlap: {union} vs {sum}");
-        }
-    }
-}
-
-#[cfg(test)]
-mod dump {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn dump_svgs() {
-        let v = DVec2::new;
-        let shapes = [
-            ("sq", Polygon::rect(v(0.0, 0.0), v(200.0, 200.0))),
-            ("disc", Polygon::circle(v(0.0, 0.0), 100.0, 200)),
-            (
-                "l",
-                Polygon {
-                    rings: vec![vec![
-                        v(0.0, 0.0),
-                        v(300.0, 0.0),
-                        v(300.0, 120.0),
-                        v(120.0, 120.0),
-                        v(120.0, 300.0),
-                        v(0.0, 300.0),
-                    ]],
-                },
-            ),
-            (
-                "hole",
-                Polygon::new(vec![
-                    Polygon::rect(v(0.0, 0.0), v(200.0, 200.0)).rings[0].clone(),
-                    Polygon::circle(v(70.0, 110.0), 30.0, 48).rings[0].clone(),
-                ])
-                .unwrap()
-                .remove(0),
-            ),
-            ("rect", Polygon::rect(v(0.0, 0.0), v(400.0, 100.0))),
-            ("big", Polygon::rect(v(0.0, 0.0), v(400.0, 400.0))),
-        ];
-        for (name, s) in &shapes {
-            for kind in [StreamKind::Smooth, StreamKind::Strip, StreamKind::Circular] {
-                let at = if *name == "sq" {
-                    Some(v(60.0, 140.0))
-                } else {
-                    None
-                };
-                let cuts =
-                    streamline_cuts_at(s, kind, if *name == "big" { 10.0 } else { 20.0 }, at);
-                let (lo, hi) = s.bbox();
-                let mut svg = format!("<svg xmlns='http://www.w3.org/2000/svg' viewBox='{} {} {} {}' width='600'><rect x='-1000' y='-1000' width='3000' height='3000' fill='white'/>", lo.x - 10.0, lo.y - 10.0, hi.x - lo.x + 20.0, hi.y - lo.y + 20.0);
-                for (k, piece) in s.slice(&cuts).iter().enumerate() {
-                    svg += &format!("<path fill-rule='evenodd' fill='hsl({},70%,80%)' stroke='black' stroke-width='0.3' d='", (k * 67) % 360);
-                    for r in &piece.rings {
-                        svg += "M";
-                        for p in r {
-                            svg += &format!("{},{} ", p.x, p.y);
-                        }
-                        svg += "Z ";
-                    }
-                    svg += "'/>";
-                }
-                for c in &cuts {
-                    svg += "<polyline fill='none' stroke='red' stroke-width='0.4' points='";
-                    for p in c {
-                        svg += &format!("{},{} ", p.x, p.y);
-                    }
-                    svg += "'/>";
-                }
-                svg += "</svg>";
-                std::fs::write(format!("/tmp/sl_{name}_{kind:?}.svg"), svg).unwrap();
-                eprintln!(
-                    "{name} {kind:?}: {} cuts, {} pieces",
-                    cuts.len(),
-                    s.slice(&cuts).len()
-                );
-            }
-        }
-    }
-}
-
-#[cfg(test)]
-mod timing {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn time_big_square() {
-        let sq = Polygon::rect(DVec2::ZERO, DVec2::splat(400.0));
-        for kind in [StreamKind::Smooth, StreamKind::Strip, StreamKind::Circular] {
-            let mut best = (f64::MAX, f64::MAX);
-            for _ in 0..5 {
-                let t = std::time::Instant::now();
-                let cuts = streamline_cuts(&sq, kind, 10.0);
-                let a = t.elapsed().as_secs_f64();
-                let pieces = sq.slice(&cuts);
-                let b = t.elapsed().as_secs_f64();
-                best = (best.0.min(a), best.1.min(b));
-                std::hint::black_box(pieces);
-            }
-            eprintln!(
-                "{kind:?}: cuts {:.2} ms, +slice {:.2} ms",
-                best.0 * 1e3,
-                best.1 * 1e3
-            );
-            let t = std::time::Instant::now();
-            let c = sq.centroid();
-            let mut field = Field::new(&sq, kind, 10.0, c).unwrap();
-            let a = t.elapsed().as_secs_f64();
-            for j in 0..field.ny {
-                for i in 0..field.nx {
-                    field.node(i, j);
-                }
-            }
-            let b = t.elapsed().as_secs_f64();
-            let nodes = field.nx * field.ny;
-            let mut tr = Tracer::new(&sq, field, 10.0);
-            let c2 = t.elapsed().as_secs_f64();
-            tr.run(kind, c);
-            let d = t.elapsed().as_secs_f64();
-            eprintln!("  field new {:.2} all {nodes} nodes {:.2} tracer new {:.2} run {:.2}; steps {} lines {} pts {}", a*1e3, (b-a)*1e3, (c2-b)*1e3, (d-c2)*1e3, tr.steps, tr.lines.len(), tr.pts.len());
         }
     }
 }
