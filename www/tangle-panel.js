@@ -621,7 +621,7 @@ function mount(el, ctx) {
   };
   canvas.addEventListener('pointerdown', (e) => {
     if (e.button > 0) return;
-    canvas.setPointerCapture(e.pointerId);
+    try { canvas.setPointerCapture(e.pointerId); } catch { /* a synthetic or already-ended pointer */ }
     pointers.set(e.pointerId, local(e));
     if (pointers.size === 2) {
       const [a, b] = [...pointers.values()];
