@@ -336,6 +336,11 @@ pub fn project(data: &[u8]) {
                 assert_eq!(t.len(), s.values.len());
             }
         }
+        ToolState::Tangle(s) => {
+            assert!(s.grammar.len() <= filigree::tangle::state::MAX_GRAMMAR_BYTES);
+            assert!(s.edits.len() <= filigree::tangle::api::MAX_EDITS);
+            assert!(s.wobble.is_finite() && s.stroke_width.is_finite());
+        }
         ToolState::Inspect(_) => {}
     }
     let again = project_text(&opened.tool, opened.state_version, state).expect("saves");
