@@ -458,7 +458,7 @@ pub fn start_tangle(req: TangleRequest) -> Result<TangleJob> {
     };
     Ok(TangleJob {
         x: Some(x),
-        edits: req.edits[done..].to_vec().into_iter(),
+        edits: req.edits.clone().split_off(done).into_iter(),
         edit_no: done,
         fresh: None,
         reused,
