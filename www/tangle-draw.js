@@ -31,34 +31,63 @@ export function pointsOf(bytes) {
   return out;
 }
 
+/** A column of little-endian bytes as a typed array of `Type`. */
+function column(bytes, Type) {
+  if (bytes instanceof Type) return bytes;
+  const u8 = bytes.byteOffset % Type.BYTES_PER_ELEMENT === 0 ? bytes : bytes.slice();
+  const n = u8.byteLength / Type.BYTES_PER_ELEMENT;
+  if (new Uint8Array(new Uint16Array([1]).buffer)[0] === 1) return new Type(u8.buffer, u8.byteOffset, n);
+  const view = new DataView(u8.buffer, u8.byteOffset, u8.byteLength);
+  const get = { 1: 'getUint8', 4: Type === Float32Array ? 'getFloat32' : Type === Int32Array ? 'getInt32' : 'getUint32' }[Type.BYTES_PER_ELEMENT];
+  return Type.from({ length: n }, (_, i) => view[get](i * Type.BYTES_PER_ELEMENT, true));
+}
+
+/**
+ * The answer's shapes (columns of bytes, src/tangle/api.rs `shape_columns`)
+ * as typed arrays, plus `at(i)`: shape i as an object
+ * {tag, group, id, born, died, first, rings, fill, white_lines, mark}.
+ */
+export function shapeColumns(c) {
+  if (c.born instanceof Int32Array) return c;
+  const S = {
+    count: c.count,
+    tag: column(c.tag, Uint32Array), group: column(c.group, Uint32Array), id: column(c.id, Uint32Array),
+    first: column(c.first, Uint32Array), born: column(c.born, Int32Array), died: column(c.died, Int32Array),
+    fill: column(c.fill, Float32Array), flags: column(c.flags, Uint8Array),
+    ringFirst: column(c.ring_first, Uint32Array), rings: column(c.rings, Uint32Array),
+  };
+  S.ringsOf = (i) => S.rings.subarray(S.ringFirst[i], S.ringFirst[i + 1]);
+  S.at = (i) => ({
+    tag: S.tag[i], group: S.group[i], id: S.id[i], born: S.born[i], died: S.died[i], first: S.first[i],
+    rings: [...S.ringsOf(i)], fill: S.fill[i], white_lines: (S.flags[i] & 1) !== 0, mark: (S.flags[i] & 2) !== 0,
+  });
+  return S;
+}
+
 export function prepareTangle(r) {
-  const n = r.shapes.length;
+  const S = r.shapes = shapeColumns(r.shapes);
+  const n = S.count;
   const pts = pointsOf(r.points);
-  const born = new Int32Array(n);
-  const died = new Int32Array(n);
+  const { born, died, first } = S;
   const box = new Float32Array(4 * n);
   const paths = new Array(n);
   for (let i = 0; i < n; i++) {
-    const s = r.shapes[i];
-    born[i] = s.born;
-    died[i] = s.died;
     let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
-    const outer = s.rings[0] || 0; // the outer ring bounds the shape
-    for (let p = s.first * 2, e = (s.first + outer) * 2; p < e; p += 2) {
+    const outer = S.rings[S.ringFirst[i]] || 0; // the outer ring bounds the shape
+    for (let p = first[i] * 2, e = (first[i] + outer) * 2; p < e; p += 2) {
       const x = pts[p], y = pts[p + 1];
       if (x < x0) x0 = x;
       if (x > x1) x1 = x;
       if (y < y0) y0 = y;
       if (y > y1) y1 = y;
     }
-    box.set([x0, y0, x1, y1], 4 * i);
+    box[4 * i] = x0; box[4 * i + 1] = y0; box[4 * i + 2] = x1; box[4 * i + 3] = y1;
   }
 
   /** Append shape i's rings to path p. */
   function trace(p, i) {
-    const s = r.shapes[i];
-    let o = s.first * 2;
-    for (const len of s.rings) {
+    let o = first[i] * 2;
+    for (const len of S.ringsOf(i)) {
       if (!len) continue;
       p.moveTo(pts[o], pts[o + 1]);
       for (let j = 1; j < len; j++) p.lineTo(pts[o + 2 * j], pts[o + 2 * j + 1]);
@@ -78,7 +107,7 @@ export function prepareTangle(r) {
   // are built the first time a step below it is shown, so a slider move
   // paints ~log2(steps) batches per ink style and builds only what it has not
   // seen before: the upper nodes (most of the picture) are shared by all steps.
-  const S = r.steps.length;
+  const nSteps = r.steps.length;
   const members = new Map(); // node (heap numbering, root 1) → shape indices
   const built = new Map(); // node → its batches
   function insert(node, lo, hi, a, b, i) {
@@ -92,7 +121,7 @@ export function prepareTangle(r) {
     insert(2 * node, lo, mid, a, b, i);
     insert(2 * node + 1, mid + 1, hi, a, b, i);
   }
-  for (let i = 0; i < n; i++) insert(1, 0, S, born[i] + 1, died[i] === -1 ? S : died[i], i);
+  for (let i = 0; i < n; i++) insert(1, 0, nSteps, born[i] + 1, died[i] === -1 ? nSteps : died[i], i);
 
   /** The batches of a node: one Path2D per ink style (fills by grey). */
   function batchOf(node) {
@@ -107,15 +136,14 @@ export function prepareTangle(r) {
     };
     for (const i of members.get(node) || []) {
       b.count++;
-      const s = r.shapes[i];
-      for (const len of s.rings) b.vertices += len;
-      if (s.mark) { add('marks', i); continue; }
-      if (s.fill > 0) {
-        const g = greyOf(s.fill);
+      for (const len of S.ringsOf(i)) b.vertices += len;
+      if (S.flags[i] & 2) { add('marks', i); continue; }
+      if (S.fill[i] > 0) {
+        const g = greyOf(S.fill[i]);
         if (!b.fills.has(g)) b.fills.set(g, new Path2D());
         b.fills.get(g).addPath(pathOf(i));
       }
-      add(s.white_lines ? 'white' : 'black', i);
+      add(S.flags[i] & 1 ? 'white' : 'black', i);
     }
     built.set(node, b);
     return b;
@@ -124,7 +152,7 @@ export function prepareTangle(r) {
   let cached = null;
   const t = {
     r, n, pts, born, died, box,
-    steps: S,
+    steps: nSteps,
     visible: (i, k) => shownAt(born[i], died[i], k),
     count(k) {
       let c = 0;
@@ -137,7 +165,7 @@ export function prepareTangle(r) {
       if (cached?.k === k) return cached;
       const parts = [];
       let count = 0;
-      for (let node = 1, lo = 0, hi = S; ;) {
+      for (let node = 1, lo = 0, hi = nSteps; ;) {
         if (members.has(node)) {
           const b = batchOf(node);
           parts.push(b);

@@ -174,6 +174,9 @@ pub struct TangleStats {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TangleResponse {
     pub tags: Vec<String>,
+    /// Sent as columns of little-endian bytes (see [`shape_columns`]): a
+    /// village's 36k shapes as 36k JS objects cost the browser ~0.5 s.
+    #[serde(serialize_with = "shape_columns")]
     pub shapes: Vec<ShapeOut>,
     /// x, y of every shape's rings, in order. Sent as the bytes of the
     /// f32s, little-endian (the browser gets a `Uint8Array` it views as a
@@ -191,6 +194,65 @@ pub struct TangleResponse {
     #[serde(skip_serializing_if = "Option::is_none", with = "opt_bytes")]
     pub png: Option<Vec<u8>>,
 }
+
+/// The shapes as columns, each the little-endian bytes of one typed
+/// array: `count`; `tag`, `group`, `id`, `first` (u32); `born`, `died`
+/// (i32); `fill` (f32); `flags` (u8: 1 white lines, 2 mark);
+/// `ring_first` (u32, count + 1 entries: shape i's ring lengths are
+/// `rings[ring_first[i]..ring_first[i + 1]]`) and `rings` (u32).
+/// `www/tangle-draw.js` (`shapeColumns`) reads them back.
+fn shape_columns<S: serde::Serializer>(
+    v: &[ShapeOut],
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    fn col<T, const N: usize>(v: &[ShapeOut], f: impl Fn(&ShapeOut) -> T) -> serde_bytes::ByteBuf
+    where
+        T: LeBytes<N>,
+    {
+        serde_bytes::ByteBuf::from(v.iter().flat_map(|x| f(x).le()).collect::<Vec<u8>>())
+    }
+    let mut ring_first = Vec::with_capacity(4 * (v.len() + 1));
+    let mut rings = vec![];
+    let mut at = 0u32;
+    for x in v {
+        ring_first.extend(at.to_le_bytes());
+        at += x.rings.len() as u32;
+        rings.extend(x.rings.iter().flat_map(|r| r.to_le_bytes()));
+    }
+    ring_first.extend(at.to_le_bytes());
+    let mut m = s.serialize_map(Some(11))?;
+    m.serialize_entry("count", &v.len())?;
+    m.serialize_entry("tag", &col(v, |x| x.tag))?;
+    m.serialize_entry("group", &col(v, |x| x.group))?;
+    m.serialize_entry("id", &col(v, |x| x.id))?;
+    m.serialize_entry("first", &col(v, |x| x.first))?;
+    m.serialize_entry("born", &col(v, |x| x.born as i32))?;
+    m.serialize_entry("died", &col(v, |x| x.died as i32))?;
+    m.serialize_entry("fill", &col(v, |x| x.fill))?;
+    m.serialize_entry(
+        "flags",
+        &col(v, |x| u8::from(x.white_lines) | (u8::from(x.mark) << 1)),
+    )?;
+    m.serialize_entry("ring_first", &serde_bytes::ByteBuf::from(ring_first))?;
+    m.serialize_entry("rings", &serde_bytes::ByteBuf::from(rings))?;
+    m.end()
+}
+
+/// Little-endian bytes of a column's element.
+trait LeBytes<const N: usize> {
+    fn le(self) -> [u8; N];
+}
+macro_rules! le_bytes {
+    ($($t:ty => $n:literal),*) => {$(
+        impl LeBytes<$n> for $t {
+            fn le(self) -> [u8; $n] {
+                self.to_le_bytes()
+            }
+        }
+    )*};
+}
+le_bytes!(u8 => 1, u32 => 4, i32 => 4, f32 => 4);
 
 fn f32_bytes<S: serde::Serializer>(v: &[f32], s: S) -> std::result::Result<S::Ok, S::Error> {
     let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();

@@ -99,7 +99,7 @@ const village = await page.evaluate(async () => {
   c.dispatchEvent(new PointerEvent('pointerup', { pointerId: 7, clientX: b.left + 200, clientY: b.top + 160, bubbles: true }));
   await new Promise((r) => setTimeout(r, 300));
   return {
-    steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.length,
+    steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.count,
     worker_ms: Math.round(t.timing().run), moves, paints, batches, drags, dragPaints, pans, sharp_paint: t.timing().paint,
   };
 });

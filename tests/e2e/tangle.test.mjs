@@ -66,12 +66,12 @@ async function shapeOf(page, which) {
     const pred = eval(`(${src})`);
     const t = window.filigreeTangle;
     const r = t.result();
-    const cands = r.shapes.map((s, i) => [s, i])
+    const cands = Array.from({ length: r.shapes.count }, (_, i) => [r.shapes.at(i), i])
       .filter(([s]) => s.died === -1 && s.born >= 0 && !s.mark && pred(s, r.steps[s.born], r))
       .map(([, i]) => i);
     for (const i of cands.slice(0, 60)) {
       const p = t.pointIn(i);
-      if (p) return { i, born: r.shapes[i].born, point: p };
+      if (p) return { i, born: r.shapes.born[i], point: p };
     }
     return null;
   }, which.toString());
@@ -131,7 +131,7 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   await clickCanvas(page, stippled.point);
   const parent = await page.evaluate((s) => {
     const r = window.filigreeTangle.result();
-    return r.shapes[r.steps[s].inputs[0]].born;
+    return r.shapes.born[r.steps[s].inputs[0]];
   }, stippled.born);
   assert.ok(parent >= 0 && parent < stippled.born);
   await page.waitForFunction((p) => window.filigreeTangle.state().selected === p, parent);
