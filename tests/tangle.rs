@@ -346,3 +346,55 @@ fn the_cli_writes_the_svg_the_request_makes() {
         "{err}"
     );
 }
+
+/// The answer's shapes and points cross to the browser as columns of
+/// little-endian bytes: decoding them gives back every field of every
+/// shape and every point (what `www/tangle-draw.js` reads).
+#[test]
+fn shapes_and_points_serialise_as_byte_columns_that_decode_exactly() {
+    let r = run(req(example("checkerboard").unwrap().grammar));
+    let v = serde_json::to_value(&r).unwrap();
+    let bytes = |name: &str| -> Vec<u8> {
+        let c = if name == "points" {
+            &v["points"]
+        } else {
+            &v["shapes"][name]
+        };
+        c.as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b.as_u64().unwrap() as u8)
+            .collect()
+    };
+    let u32s = |name: &str| -> Vec<u32> {
+        bytes(name)
+            .chunks(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    let n = r.shapes.len();
+    assert_eq!(v["shapes"]["count"], n);
+    let (tag, group, id, first) = (u32s("tag"), u32s("group"), u32s("id"), u32s("first"));
+    let (born, died, fill) = (u32s("born"), u32s("died"), u32s("fill"));
+    let (flags, ring_first, rings) = (bytes("flags"), u32s("ring_first"), u32s("rings"));
+    assert_eq!(ring_first.len(), n + 1);
+    for (i, s) in r.shapes.iter().enumerate() {
+        assert_eq!(
+            (tag[i], group[i], id[i], first[i]),
+            (s.tag, s.group, s.id, s.first)
+        );
+        assert_eq!(
+            (born[i] as i32, died[i] as i32),
+            (s.born as i32, s.died as i32)
+        );
+        assert_eq!(f32::from_bits(fill[i]), s.fill);
+        assert_eq!(flags[i], u8::from(s.white_lines) | (u8::from(s.mark) << 1));
+        assert_eq!(
+            rings[ring_first[i] as usize..ring_first[i + 1] as usize],
+            s.rings[..]
+        );
+    }
+    let pts: Vec<f32> = u32s("points").into_iter().map(f32::from_bits).collect();
+    assert_eq!(pts, r.points);
+    assert!(r.shapes.iter().any(|s| s.died >= 0) && r.shapes.iter().any(|s| s.born == -1));
+}
