@@ -76,8 +76,13 @@ fn fit_recovers_known_parameters_of_circles_grid() {
     );
 }
 
-/// Polishing with the image-space loss keeps the fit and lowers the
-/// parameter error on a stroked pattern (fills inset under strokes).
+/// Polishing with the image-space loss starts where the plain fit ended
+/// and keeps the fit on a stroked pattern (fills inset under strokes). The
+/// plain SDF fit is itself close: when the pattern's fields saw shapes past
+/// the canvas edge that the target could not, it ended at an error of
+/// 1.5e-3 and the polish lowered that to 7e-4; with both sides seeing the
+/// same canvas it ends at ~1e-4, closer than the polish (which has its own
+/// anti-aliasing bias), so the polish is no longer assumed to improve it.
 #[test]
 fn polish_with_the_image_loss() {
     let p = program("shingles");
@@ -111,13 +116,8 @@ fn polish_with_the_image_loss() {
         plain.start_points, pol.start_points,
         "the polish starts where the plain fit ended"
     );
-    assert!(
-        err(&pol.params) <= err(&plain.params),
-        "{} > {}",
-        err(&pol.params),
-        err(&plain.params)
-    );
-    assert!(err(&pol.params) < 2e-3, "{}", err(&pol.params));
+    assert!(err(&plain.params) < 5e-4, "plain {}", err(&plain.params));
+    assert!(err(&pol.params) < 2e-3, "polished {}", err(&pol.params));
 }
 
 /// A fit from an image file (PNG round trip, palette snapping) lands where
@@ -978,4 +978,136 @@ fn generators_match_their_golden_renders() {
         "{}\n(REPLACE=1 rewrites the goldens if the change is intended)",
         failures.join("\n")
     );
+}
+
+/// The loss's minimum is the truth: for every shipped generator and random
+/// true parameters (seeded), with the target drawn by the program itself,
+/// the loss at the truth is near zero and below the loss at each of a set
+/// of random small perturbations. A target sampled half a pixel off the
+/// pattern's grid, or fields that see shapes past the canvas edge the
+/// target cannot see, put the minimum elsewhere (a stripes program had loss
+/// 24 at its own truth). "Near zero" allows for the target's distances
+/// being measured between pixel centres (±½ pixel) and for the fields of
+/// shapes partly covered by others being bounds rather than distances.
+#[test]
+fn the_loss_is_lowest_at_the_truth_for_every_generator() {
+    let n = 128;
+    let opts = LossOptions {
+        grid: n,
+        kind: LossKind::Sdf,
+        ..LossOptions::default()
+    };
+    let mut rng = Rng::new(91);
+    let mut report = vec![];
+    let mut failures = vec![];
+    for g in GENERATORS {
+        let p = Program::parse(g.source).unwrap();
+        let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+        let decls = scene.rec.float_decls();
+        for _ in 0..3 {
+            let truth: Vec<f64> = decls
+                .iter()
+                .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.15, 0.85))
+                .collect();
+            let idx = colour_indices(&scene, &truth, n).unwrap();
+            let t = Target::from_indices(&scene, &idx, n, opts.scale());
+            let mut obj = Objective::new(scene.clone(), t, opts);
+            let at = obj.loss(&truth);
+            let mut lowest = f64::INFINITY;
+            for _ in 0..12 {
+                // Every parameter moved by 1–4% of its range, either way.
+                let q: Vec<f64> = truth
+                    .iter()
+                    .zip(&decls)
+                    .map(|(v, d)| {
+                        let s = if rng.f64() < 0.5 { -1.0 } else { 1.0 };
+                        v + s * (d.hi - d.lo) * rng.range_f64(0.01, 0.04)
+                    })
+                    .collect();
+                lowest = lowest.min(obj.loss(&q));
+            }
+            report.push(format!(
+                "{}: at truth {at:.4}, lowest perturbed {lowest:.4}",
+                g.name
+            ));
+            if !(at < 0.3 && at < lowest) {
+                failures.push(format!(
+                    "{}: at truth {at}, lowest perturbed {lowest}",
+                    g.name
+                ));
+            }
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A tiled program (stripes and dots running past every edge) fitted to its
+/// own render from a start 3% of each range away recovers the placement of
+/// its shapes (angle, periods, offset) with a normalised parameter MSE
+/// ≤ 1e-5, and its sizes (stripe width, dot radius) to a fifth of a grid
+/// pixel. With fields that saw the shapes past the edge the minimum sat
+/// elsewhere and the fitted periods came out too large. (The sizes keep a
+/// small bias: the target's distances are measured between pixel centres,
+/// which overstates shapes whose outline is slanted or curved.)
+#[test]
+fn a_tiled_program_fitted_to_its_own_render_recovers_its_placement() {
+    const TILED: &str = "background \"#ffffff\";
+param angle in [0.3, 0.9] = 0.6;
+param spacing in [0.12, 0.2] = 0.16;
+param offset in [0.0, 0.1] = 0.05;
+param w in [0.03, 0.06] = 0.045;
+param dx in [0.1, 0.16] = 0.13;
+param r in [0.015, 0.03] = 0.02;
+for k in 0..16 {
+  let c = cos(angle);
+  let s = sin(angle);
+  let d = offset + (k - 8) * spacing;
+  segment(0.5 - s * d - 2 * c, 0.5 + c * d - 2 * s, 0.5 - s * d + 2 * c, 0.5 + c * d + 2 * s, stroke: \"#2e86c1\", width: w);
+}
+for j in 0..12 {
+  for i in 0..12 {
+    circle((i - 1) * dx + 0.03, (j - 1) * dx + 0.05, r, fill: \"#c0392b\");
+  }
+}
+";
+    let p = Program::parse(TILED).unwrap();
+    let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+    let decls = scene.rec.float_decls();
+    for seed in [5, 6] {
+        let mut rng = Rng::new(seed);
+        let truth: Vec<f64> = decls
+            .iter()
+            .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.25, 0.75))
+            .collect();
+        let start: Vec<f64> = truth
+            .iter()
+            .zip(&decls)
+            .map(|(v, d)| v + if rng.f64() < 0.5 { -0.03 } else { 0.03 } * (d.hi - d.lo))
+            .collect();
+        let mut o = FitOptions::budget(Budget::Quick);
+        o.loss.grid = 96;
+        o.iterations = 300;
+        o.patience = 60;
+        let idx = colour_indices(&scene, &truth, o.loss.grid).unwrap();
+        let t = Target::from_indices(&scene, &idx, o.loss.grid, o.loss.scale());
+        let r = run_quietly(FitJob::refine_from(scene.clone(), t, o, &[start])).unwrap();
+        let placement = [0, 1, 2, 4]; // angle, spacing, offset, dx
+        let mse = placement
+            .iter()
+            .map(|&k| ((r.params[k] - truth[k]) / (decls[k].hi - decls[k].lo)).powi(2))
+            .sum::<f64>()
+            / placement.len() as f64;
+        assert!(
+            mse <= 1e-5,
+            "seed {seed}: normalised placement MSE {mse:.3e} (fitted {:?}, truth {truth:?})",
+            r.params
+        );
+        // Width (a full stroke width) and radius, in grid pixels.
+        let grid = o.loss.grid as f64;
+        for (k, what) in [(3, "stripe width"), (5, "dot radius")] {
+            let err = (r.params[k] - truth[k]).abs() * grid;
+            assert!(err < 0.2, "seed {seed}: {what} off by {err} pixels");
+        }
+    }
 }
