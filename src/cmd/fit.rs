@@ -55,9 +55,13 @@ pub struct FitArgs {
     /// Print JSON.
     #[arg(long)]
     json: bool,
-    /// Write the fitted pattern as SVG.
+    /// Write the fitted pattern as SVG, sized like the target image (512 px without one).
     #[arg(long)]
     svg: Option<PathBuf>,
+    /// Write the fitted pattern to this file, .png or .svg, sized like the target image
+    /// (512 px without one; the longer side at most 2048).
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// Print the request (as the browser would send it) and exit.
     #[arg(long, hide = true)]
     print_request: bool,
@@ -150,11 +154,67 @@ impl FitArgs {
     }
 }
 
+/// The lower-case extension of an output path, which must be .png or .svg.
+fn output_kind(path: &Path) -> Result<String, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if ext != "png" && ext != "svg" {
+        return Err(format!(
+            "{}: the output must end in .png or .svg",
+            path.display()
+        ));
+    }
+    Ok(ext)
+}
+
+/// The fitted pattern as a PNG of `width × height`: the same
+/// `render-pattern` request the browser sends (a square of the longer side),
+/// stretched to the target's shape (nearest) when it is not square.
+fn fitted_png(
+    req: &FitRequest,
+    out: &filigree::pattern::api::FitOutput,
+    origins: &Origins,
+) -> Result<Vec<u8>, String> {
+    let (w, h) = (out.width, out.height);
+    let side = w.max(h);
+    let mut params = req.params.clone();
+    params.extend(out.named.iter().map(|(k, v)| (k.clone(), *v)));
+    let r = RenderPatternRequest {
+        program: req.program.clone(),
+        params,
+        size: side as usize,
+        ..RenderPatternRequest::default()
+    };
+    let job = start_render(r).map_err(|e| explain(e, origins))?;
+    let r = drive(job, true, origins)?;
+    let square =
+        filigree::raster::Rgba8Image::from_raw(r.image.width, r.image.height, r.image.rgba)
+            .map_err(|e| e.to_string())?;
+    let img = if w == h {
+        square
+    } else {
+        let mut img = filigree::raster::Rgba8Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let sx = ((x as u64 * 2 + 1) * side as u64 / (2 * w as u64)) as u32;
+                let sy = ((y as u64 * 2 + 1) * side as u64 / (2 * h as u64)) as u32;
+                img.put(x, y, square.get(sx.min(side - 1), sy.min(side - 1)));
+            }
+        }
+        img
+    };
+    filigree::raster::encode_png(&img).map_err(|e| e.to_string())
+}
+
 pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let (mut req, name, origins) = a.request()?;
     if a.print_request {
         return print_request(&req);
     }
+    let out_kind = a.out.as_deref().map(output_kind).transpose()?;
     let threads = super::threads(a.threads)?;
     let t0 = Instant::now();
     // One shard per thread, exchanged by the same driver contract as the
@@ -183,6 +243,15 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let r = &out.result;
     if let Some(path) = &a.svg {
         std::fs::write(path, &out.svg).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    if let (Some(path), Some(kind)) = (&a.out, &out_kind) {
+        let bytes = if kind == "svg" {
+            out.svg.clone().into_bytes()
+        } else {
+            req.shards = None;
+            fitted_png(&req, &out, &origins)?
+        };
+        std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     if a.json {
         let params: Map<String, Value> = r
@@ -220,18 +289,7 @@ pub fn run_render(a: RenderArgs) -> Result<(), String> {
     if a.print_request {
         return print_request(&req);
     }
-    let ext = a
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext != "png" && ext != "svg" {
-        return Err(format!(
-            "{}: the output must end in .png or .svg",
-            a.out.display()
-        ));
-    }
+    let ext = output_kind(&a.out)?;
     let job = start_render(req).map_err(|e| explain(e, &origins))?;
     let r = drive(job, true, &origins)?;
     let bytes = if ext == "svg" {

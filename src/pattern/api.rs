@@ -546,13 +546,42 @@ pub struct FitOutput {
     pub result: FitResult,
     /// The best parameters by name (float ones).
     pub named: BTreeMap<String, f64>,
-    /// The fitted pattern as SVG, 512 px wide.
+    /// Width and height in pixels of the fitted pattern's pictures: the
+    /// target image's (its longer side at most [`FIT_OUTPUT_MAX_SIDE`]), or
+    /// 512 × 512 for a target drawn from parameters.
+    pub width: u32,
+    pub height: u32,
+    /// The fitted pattern as SVG, `width × height` px.
     pub svg: String,
 }
 
-/// Package a fit result with its SVG.
-pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
-    let svg = render::svg(scene, &r.params, 512.0)?;
+/// Longest side of a fit's output pictures (the `render-pattern` limit).
+pub const FIT_OUTPUT_MAX_SIDE: u32 = 2048;
+
+/// The size of a fit's output pictures for a target: the image's own, scaled
+/// down to [`FIT_OUTPUT_MAX_SIDE`] if bigger; 512 × 512 without an image.
+pub fn output_size(target: &TargetData) -> (u32, u32) {
+    match target {
+        TargetData::Image(img, _) => {
+            let (w, h) = (img.width.max(1), img.height.max(1));
+            let m = w.max(h);
+            if m <= FIT_OUTPUT_MAX_SIDE {
+                (w, h)
+            } else {
+                let k = |v: u32| {
+                    ((v as u64 * FIT_OUTPUT_MAX_SIDE as u64 + m as u64 / 2) / m as u64).max(1)
+                        as u32
+                };
+                (k(w), k(h))
+            }
+        }
+        TargetData::Params(_) => (512, 512),
+    }
+}
+
+/// Package a fit result with its SVG, `size` (width, height) pixels.
+pub fn fit_output(scene: &Scene, r: FitResult, size: (u32, u32)) -> Result<FitOutput> {
+    let svg = render::svg_sized(scene, &r.params, size.0 as f64, size.1 as f64)?;
     let named = r
         .names
         .iter()
@@ -562,6 +591,8 @@ pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
     Ok(FitOutput {
         result: r,
         named,
+        width: size.0,
+        height: size.1,
         svg,
     })
 }
@@ -570,6 +601,8 @@ pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
 pub struct FitRequestJob {
     job: FitJob,
     scene: Scene,
+    /// The output pictures' size ([`output_size`]).
+    size: (u32, u32),
 }
 
 impl FitRequestJob {
@@ -588,7 +621,7 @@ impl Job for FitRequestJob {
     fn step(&mut self) -> Result<Step<FitOutput>> {
         Ok(match self.job.step()? {
             Step::Running(p) => Step::Running(p),
-            Step::Done(r) => Step::Done(fit_output(&self.scene, r)?),
+            Step::Done(r) => Step::Done(fit_output(&self.scene, r, self.size)?),
         })
     }
     fn outbox(&mut self) -> Option<Vec<f64>> {
@@ -608,9 +641,10 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
     }
     let opts = req.options()?;
     let t = req.target_data(&p)?;
+    let size = output_size(&t);
     let job = FitJob::start(&p, &vals, t, opts).map_err(|e| e.at("program"))?;
     let scene = job.objective().scene.clone();
-    Ok(FitRequestJob { job, scene })
+    Ok(FitRequestJob { job, scene, size })
 }
 
 /// Losses of a `fit-eval` request, in the order of its points.
