@@ -486,3 +486,35 @@ fn fit_writes_the_fitted_render_sized_like_the_target() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("must end in .png or .svg"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `filigree fit --help` documents the defaults that make a fit work
+/// without flags, and the time bound and polish flags reach the request.
+#[test]
+fn fit_help_documents_the_defaults_and_the_flags_reach_the_request() {
+    let help = String::from_utf8_lossy(&filigree(&["fit", "--help"]).stdout).to_string();
+    for want in [
+        "--max-seconds",
+        "--polish 100",
+        "longer side, 32..=128",
+        "--out",
+    ] {
+        assert!(help.contains(want), "{want} missing from:\n{help}");
+    }
+    let v = print_request(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target-params",
+        "{}",
+        "--max-seconds",
+        "5",
+        "--polish",
+        "0",
+    ]);
+    assert_eq!(v["max_seconds"], 5.0);
+    assert_eq!(v["polish"], 0);
+    // Without the flags: the request's own defaults (none sent, as the browser does).
+    let v = print_request(&["fit", "--program", "circles-grid", "--target-params", "{}"]);
+    assert_eq!(v["max_seconds"], 30.0);
+    assert!(v["polish"].is_null() && v["grid"].is_null(), "{v}");
+}

@@ -815,7 +815,7 @@ fn a_sharded_fit_equals_one_fit() {
         generations: Some(3),
         candidates: Some(3),
         iterations: Some(30),
-        polish: 5,
+        polish: Some(5),
         seed: 9,
         ..Default::default()
     };
@@ -1110,4 +1110,115 @@ for j in 0..12 {
             assert!(err < 0.2, "seed {seed}: {what} off by {err} pixels");
         }
     }
+}
+
+/// Defaults that work without flags (`fit` with only a program and a
+/// target): the loss grid follows an image target's resolution up to a cap
+/// (a target drawn from parameters keeps the budget's), the image-space
+/// polish is on after an SDF fit and off after an image-loss fit, and the
+/// result names its loss.
+#[test]
+fn fit_defaults_follow_the_target_and_polish() {
+    use filigree::pattern::api::{start_fit, FitRequest, AUTO_GRID, AUTO_POLISH};
+    use std::collections::BTreeMap;
+    let p = program("circles-grid");
+    let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+    let truth = [0.19, 0.15, 0.09, 0.14, 0.045];
+    let png = |side: usize| encode_png(&render::render(&scene, &truth, side, 1).unwrap()).unwrap();
+    let src = generator("circles-grid").unwrap().source;
+    let req = |target_png: Option<Vec<u8>>| FitRequest {
+        program: src.into(),
+        target_png: target_png.clone(),
+        target_params: if target_png.is_none() {
+            Some(BTreeMap::from([("r".to_string(), 0.05)]))
+        } else {
+            None
+        },
+        ..Default::default()
+    };
+    for (side, want) in [(96, 96), (256, AUTO_GRID.1), (20, AUTO_GRID.0)] {
+        let job = start_fit(&req(Some(png(side)))).unwrap();
+        assert_eq!(job.fit().objective().opts.grid, want, "a {side} px target");
+    }
+    let job = start_fit(&req(None)).unwrap();
+    assert_eq!(
+        job.fit().objective().opts.grid,
+        FitOptions::budget(Budget::Quick).loss.grid
+    );
+    let r = req(None);
+    assert_eq!(r.options().unwrap().polish, AUTO_POLISH);
+    let image = FitRequest {
+        loss: LossKind::Image,
+        ..req(None)
+    };
+    assert_eq!(image.options().unwrap().polish, 0);
+    let off = FitRequest {
+        polish: Some(0),
+        ..req(None)
+    };
+    assert_eq!(off.options().unwrap().polish, 0);
+    // A small fit end to end: its output names its loss.
+    let small = FitRequest {
+        grid: Some(24),
+        population: Some(10),
+        generations: Some(2),
+        candidates: Some(1),
+        iterations: Some(5),
+        polish: Some(3),
+        ..req(Some(png(48)))
+    };
+    let out = run_quietly(start_fit(&small).unwrap()).unwrap();
+    assert_eq!(out.loss_name, LossKind::Sdf);
+    assert!(out.result.polish_loss.is_some());
+    let v = serde_json::to_value(&out).unwrap();
+    assert_eq!(v["loss_name"], "sdf");
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(48), Some(48))
+    );
+}
+
+/// The fit's time bound (`max_seconds`, `--max-seconds`): a fit whose
+/// estimated time exceeds it runs fewer GA generations and Adam iterations,
+/// found from the work of one evaluation (not the clock), so the same
+/// request gives the same fit everywhere.
+#[test]
+fn a_fit_is_bounded_by_time_as_well_as_evaluations() {
+    use filigree::pattern::api::{fit_time_bound, start_fit, FitRequest};
+    use std::collections::BTreeMap;
+    let mut o = FitOptions::budget(Budget::Paper);
+    let plain = o;
+    // 1e6 work units a loss (~20 ms): the paper budget (~9,000 losses) is minutes.
+    let f = fit_time_bound(&mut o, 1_000_000, 0, 10.0);
+    assert!(f < 0.1, "{f}");
+    assert!(o.ga.generations < plain.ga.generations && o.iterations < plain.iterations);
+    assert!(o.ga.generations >= 1 && o.iterations >= 1);
+    let mut same = plain;
+    assert_eq!(fit_time_bound(&mut same, 10, 0, 10.0), 1.0);
+    assert_eq!(same, plain);
+    let req = |max_seconds: f64| FitRequest {
+        program: generator("circles-grid").unwrap().source.into(),
+        target_params: Some(BTreeMap::from([("r".to_string(), 0.05)])),
+        grid: Some(32),
+        generations: Some(40),
+        iterations: Some(200),
+        polish: Some(0),
+        max_seconds,
+        ..Default::default()
+    };
+    let long = run_quietly(start_fit(&req(3600.0)).unwrap()).unwrap();
+    let short = run_quietly(start_fit(&req(0.1)).unwrap()).unwrap();
+    assert!(
+        short.result.evaluations * 3 < long.result.evaluations,
+        "{} vs {} evaluations",
+        short.result.evaluations,
+        long.result.evaluations
+    );
+    let again = run_quietly(start_fit(&req(0.1)).unwrap()).unwrap();
+    assert_eq!(
+        again.result, short.result,
+        "the bound does not read the clock"
+    );
+    let e = start_fit(&req(0.0)).err().expect("0 s is refused");
+    assert_eq!(e.field(), Some("max_seconds"));
 }

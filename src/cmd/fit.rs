@@ -12,6 +12,19 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(clap::Args)]
+#[command(
+    after_help = "Defaults (the same request the browser's Fit button sends):
+  --budget quick      GA 64 x 8 generations, 3 candidates x 120 Adam iterations
+  --grid              an image target's longer side, 32..=128 px (a bigger image's
+                      distance fields are computed at its resolution and sampled);
+                      64 with --target-params
+  --polish 100        image-space Adam iterations after an sdf/l1/pyramid fit
+                      (0 after --loss image)
+  --max-seconds 30    generations and iterations are scaled down when the fit's
+                      estimated time (from the work of one evaluation) exceeds it
+The loss printed is the fit's own (--loss, sdf by default), named; with a polish
+the image-space loss after it is printed too."
+)]
 pub struct FitArgs {
     /// Program file (.flg) or the name of a shipped generator (e.g. circles-grid).
     #[arg(long)]
@@ -34,7 +47,8 @@ pub struct FitArgs {
     /// genetic (default, ga) | random | nelder-mead (nm)
     #[arg(long)]
     init: Option<String>,
-    /// Loss grid side in pixels, 8..=256 (default: 64 for quick, 128 for paper).
+    /// Loss grid side in pixels, 8..=256 (default: an image target's longer side, 32..=128;
+    /// the budget's, 64 quick / 128 paper, for --target-params).
     #[arg(long)]
     grid: Option<usize>,
     /// Field units in the loss: pixels (default) | canvas.
@@ -49,9 +63,14 @@ pub struct FitArgs {
     /// RGB distance within which a target pixel matches a palette colour, 0..=442 (default 60).
     #[arg(long, allow_hyphen_values = true)]
     tolerance: Option<f64>,
-    /// Adam iterations on the image-space loss after the fit (default 0 = off, the paper's method).
+    /// Adam iterations on the image-space loss after the fit (default 100, 0 with --loss image;
+    /// 0 = off, the paper's method).
     #[arg(long)]
     polish: Option<usize>,
+    /// Time bound in seconds, 0.1..=3600 (default 30): generations and iterations are scaled
+    /// down when the estimated time exceeds it (estimated from the work, not the clock).
+    #[arg(long)]
+    max_seconds: Option<f64>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -140,6 +159,7 @@ impl FitArgs {
         put(&mut o, "seed", "--seed", self.seed)?;
         put(&mut o, "tolerance", "--tolerance", self.tolerance)?;
         put(&mut o, "polish", "--polish", self.polish)?;
+        put(&mut o, "max_seconds", "--max-seconds", self.max_seconds)?;
         let mut req: FitRequest = request("fit", Value::Object(o), &origins)?;
         req.program = program;
         if let Some(p) = &self.params {
@@ -260,17 +280,24 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
             .zip(&r.params)
             .map(|(n, v)| (n.clone(), json!(v)))
             .collect();
-        let j = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
+        let j = json!({"program": name, "params": params, "loss_name": out.loss_name, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
             "evaluations": r.evaluations, "seconds": secs, "history": r.history});
         println!("{j}");
     } else {
         for (n, v) in r.names.iter().zip(&r.params) {
             println!("{n:>14} = {v:.5}");
         }
+        let name = serde_json::to_value(out.loss_name)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
         println!(
-            "loss {:.6} (after initialisation {:.6}), {} evaluations, {secs:.2} s",
+            "{name} loss {:.6} (after initialisation {:.6}), {} evaluations, {secs:.2} s",
             r.loss, r.init_loss, r.evaluations
         );
+        if let Some(p) = r.polish_loss {
+            println!("image loss after the polish {p:.6}");
+        }
     }
     Ok(())
 }
