@@ -729,7 +729,6 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
         opts.loss.grid = auto_grid(&t, opts.loss.grid);
     }
     let size = output_size(&t);
-    let mut opts = opts;
     let max_seconds = lim::finite_in("max_seconds", req.max_seconds, lim::FIT_SECONDS)?;
     {
         // One field evaluation at the defaults: the work a loss costs.
