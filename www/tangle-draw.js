@@ -18,9 +18,22 @@ export const shownAt = (born, died, k) => born < k && (died === -1 || died >= k)
 /** Fill grey of a tone (0 = paper, 1 = black), as the core's export writes it. */
 const greyOf = (tone) => Math.round(255 * (1 - Math.min(1, Math.max(0, tone))));
 
+/** The answer's points (f32 little-endian bytes, src/tangle/api.rs) as a Float32Array. */
+export function pointsOf(bytes) {
+  if (bytes instanceof Float32Array) return bytes;
+  const u8 = bytes.byteOffset % 4 === 0 ? bytes : bytes.slice();
+  const view = new DataView(u8.buffer, u8.byteOffset, u8.byteLength);
+  const n = u8.byteLength >> 2;
+  // Little-endian on every platform a browser runs on; read it right anywhere else.
+  if (new Uint8Array(new Uint16Array([1]).buffer)[0] === 1) return new Float32Array(u8.buffer, u8.byteOffset, n);
+  const out = new Float32Array(n);
+  for (let i = 0; i < n; i++) out[i] = view.getFloat32(4 * i, true);
+  return out;
+}
+
 export function prepareTangle(r) {
   const n = r.shapes.length;
-  const pts = r.points instanceof Float32Array ? r.points : Float32Array.from(r.points);
+  const pts = pointsOf(r.points);
   const born = new Int32Array(n);
   const died = new Int32Array(n);
   const box = new Float32Array(4 * n);

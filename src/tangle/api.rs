@@ -175,7 +175,10 @@ pub struct TangleStats {
 pub struct TangleResponse {
     pub tags: Vec<String>,
     pub shapes: Vec<ShapeOut>,
-    /// x, y of every shape's rings, in order.
+    /// x, y of every shape's rings, in order. Sent as the bytes of the
+    /// f32s, little-endian (the browser gets a `Uint8Array` it views as a
+    /// `Float32Array`, transferred, not a 300k-element JS array).
+    #[serde(serialize_with = "f32_bytes")]
     pub points: Vec<f32>,
     pub steps: Vec<StepOut>,
     /// `[x0, y0, x1, y1]` of all shapes.
@@ -187,6 +190,11 @@ pub struct TangleResponse {
     pub svg: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none", with = "opt_bytes")]
     pub png: Option<Vec<u8>>,
+}
+
+fn f32_bytes<S: serde::Serializer>(v: &[f32], s: S) -> std::result::Result<S::Ok, S::Error> {
+    let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+    serde_bytes::serialize(&bytes, s)
 }
 
 mod opt_bytes {
@@ -450,7 +458,7 @@ pub fn start_tangle(req: TangleRequest) -> Result<TangleJob> {
     };
     Ok(TangleJob {
         x: Some(x),
-        edits: req.edits[done..].to_vec().into_iter(),
+        edits: req.edits.clone().split_off(done).into_iter(),
         edit_no: done,
         fresh: None,
         reused,

@@ -11,9 +11,11 @@
 //   parts of the picture are shared with the previous step and copied from
 //   bitmaps); jumps alternate between far steps (most parts new).
 //   A pan frame (the last picture moved as a bitmap) is measured the same way.
-// - leaf: a parameter edit on a step (an outline distance): from the slider's
+// - leaf: a parameter edit on a step (an outline distance, on the outline
+//   step with the largest subtree of ≤ 2,000 shapes): from the slider's
 //   change to the regrown tangle painted (round trip; a released slider runs
-//   at once, no debounce), and the worker's part (`run`).
+//   at once, no debounce), and the worker's part (`run`: the kept expansion
+//   regrows the subtree, then the whole answer is sent).
 // The floor line is an empty animation frame measured in the same run.
 import { launch } from './harness.mjs';
 
@@ -108,14 +110,29 @@ n = await runs();
 await page.click('[data-example=leaf]');
 await waitForResult(n);
 const edits = [];
+const subtreeSizes = [];
 for (let i = 0; i < 6; i++) {
-  // Select a (small) outline step and move its distance.
+  // Select the outline step with the largest subtree of at most 2,000 shapes
+  // (the issue's case; `bench tangle` picks the same way natively) and move its distance.
   const target = await page.evaluate(() => {
-    const t = window.filigreeTangle;
-    const r = t.result();
-    const steps = r.steps.map((s, k) => [s, k]).filter(([s]) => s.operator === 'outline').sort((a, b) => a[0].inputs.length - b[0].inputs.length);
-    return steps[0][1];
+    const r = window.filigreeTangle.result();
+    const subtree = (k) => {
+      const made = new Set(r.steps[k].outputs);
+      for (let j = k + 1; j < r.steps.length; j++) {
+        if (r.steps[j].inputs.some((i) => made.has(i))) for (const o of r.steps[j].outputs) made.add(o);
+      }
+      return made.size;
+    };
+    const c = r.steps.map((s, k) => [k, s.operator === 'outline' ? subtree(k) : Infinity]).filter(([, n]) => n <= 2000)
+      .sort((a, b) => b[1] - a[1]);
+    return c[0][0];
   });
+  subtreeSizes.push(await page.evaluate((k) => {
+    const r = window.filigreeTangle.result();
+    const made = new Set(r.steps[k].outputs);
+    for (let j = k + 1; j < r.steps.length; j++) if (r.steps[j].inputs.some((i) => made.has(i))) for (const o of r.steps[j].outputs) made.add(o);
+    return made.size;
+  }, target));
   await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigreeTangle.state(), selected: sel }), target);
   await page.waitForSelector('[data-testid=tangle-param-distance]');
   n = await runs();
@@ -147,7 +164,7 @@ console.log(JSON.stringify({
     pan_frame_ms: summary(village.pans), sharp_repaint_ms: round(village.sharp_paint),
   },
   leaf: {
-    final_shapes: leafShapes,
+    final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes,
     param_edit_round_trip_ms: summary(edits.map((e) => e.total)),
     param_edit_worker_ms: summary(edits.map((e) => e.run)), repaint_ms: summary(edits.map((e) => e.paint)),
   },
