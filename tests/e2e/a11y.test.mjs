@@ -14,6 +14,7 @@ const READY = {
   pixel: () => Number(document.querySelector('[data-testid=pixel-status]')?.dataset.runs) > 0,
   fit: () => !!document.querySelector('[data-testid=fit-sliders] input'),
   inspect: () => !!document.querySelector('[data-testid=drop-zone] button'),
+  tangle: () => Number(document.querySelector('[data-testid=tangle-status]')?.dataset.runs) > 0,
 };
 
 async function open(tool) {
@@ -49,7 +50,7 @@ async function tabThrough(page, max = 200) {
 }
 
 test('every button and control has an accessible name; the Fit tab and the Run fit button differ', async () => {
-  for (const tool of ['pixel', 'fit', 'inspect']) {
+  for (const tool of ['pixel', 'fit', 'inspect', 'tangle']) {
     const page = await open(tool);
     const unnamed = await page.evaluate((src) => new Function(`return (${src})`)()().filter((e) => {
       const label = e.getAttribute('aria-label') || e.getAttribute('aria-labelledby') || (e.labels && e.labels.length && [...e.labels].map((l) => l.textContent).join(''))
@@ -70,7 +71,7 @@ test('every button and control has an accessible name; the Fit tab and the Run f
 });
 
 test('keyboard alone: Tab reaches every control of each panel, and key actions work', async () => {
-  for (const tool of ['pixel', 'fit', 'inspect']) {
+  for (const tool of ['pixel', 'fit', 'inspect', 'tangle']) {
     const page = await open(tool);
     // The program editor too (it sits in a closed <details> at first).
     if (tool === 'fit') {
@@ -185,4 +186,27 @@ test('pointer input: pen and touch draw on the Fit target like a mouse', async (
   await touch('touchEnd');
   await page.waitForFunction((b) => window.filigreeFit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
   assert.equal(await page.$eval('.fit-target .stack', (e) => getComputedStyle(e).touchAction), 'none', 'no scrolling while drawing with touch');
+});
+
+test('tangle by keyboard: Enter picks a grammar, Home/End/arrows walk the step slider', async () => {
+  const page = await open('tangle');
+  const runs = () => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
+  const n = await runs();
+  await page.focus('[data-example=checkerboard]');
+  await page.keyboard.press('Enter');
+  await page.waitForFunction((p) => Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > p
+    && !window.filigreeTangle.pending(), n, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => window.filigreeTangle.state().example), 'checkerboard');
+  const count = () => page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.count));
+  const final = await count();
+  await page.focus('[data-testid=tangle-step]');
+  await page.keyboard.press('Home');
+  assert.equal(await page.evaluate(() => window.filigreeTangle.step()), 0);
+  const start = await count();
+  await page.keyboard.press('ArrowRight');
+  assert.equal(await page.evaluate(() => window.filigreeTangle.step()), 1);
+  await page.keyboard.press('End');
+  assert.equal(await count(), final);
+  assert.ok(start >= 1 && start < final, `${start} start shapes, ${final} at the end`);
+  await page.context().close();
 });
