@@ -24,7 +24,7 @@ enum Command {
     /// Describe an image: size, palette, colour clusters.
     Inspect(cmd::inspect::Args),
     /// Fit a pattern program's parameters to a target image.
-    Fit(cmd::fit::FitArgs),
+    Fit(Box<cmd::fit::FitArgs>),
     /// Draw a pattern program with given parameters to PNG or SVG.
     Render(cmd::fit::RenderArgs),
     /// Texture pixel art with oriented elements in the image's own palette.
@@ -62,7 +62,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
-        Command::Fit(a) => cmd::fit::run_fit(a),
+        Command::Fit(a) => cmd::fit::run_fit(*a),
         Command::Render(a) => cmd::fit::run_render(a),
         Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Tangle(a) => cmd::tangle::run(*a),

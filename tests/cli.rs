@@ -378,3 +378,143 @@ fn bad_numbers_are_rejected_with_the_flag_named() {
         assert!(err.contains(want), "{args:?}: {err}");
     }
 }
+
+/// `filigree fit --out fitted.png` writes the fitted pattern as a PNG the
+/// size of the target image (a non-square target too), in the pattern's
+/// colours, and `--svg` / `--out x.svg` write SVGs of that size.
+#[test]
+fn fit_writes_the_fitted_render_sized_like_the_target() {
+    use filigree::raster::{decode, encode_png, Limits, Rgba8Image};
+    let dir = std::env::temp_dir().join(format!("filigree-fit-out-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    // A 96 × 80 target: white with dark-blue dots roughly on circles-grid's lattice.
+    let (w, h) = (96u32, 80u32);
+    let mut img = Rgba8Image::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let (u, v) = ((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64);
+            let (fu, fv) = ((u - 0.1) / 0.2, (v - 0.1) / 0.2);
+            let d = ((fu - fu.round()) * 0.2).hypot((fv - fv.round()) * 0.2);
+            let c = if d < 0.05 {
+                [0x1f, 0x4e, 0x79, 255]
+            } else {
+                [255, 255, 255, 255]
+            };
+            img.put(x, y, c);
+        }
+    }
+    std::fs::write(p("target.png"), encode_png(&img).unwrap()).unwrap();
+    let out = filigree(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target",
+        &p("target.png"),
+        "--grid",
+        "32",
+        "--seed",
+        "2",
+        "--threads",
+        "1",
+        "--json",
+        "--out",
+        &p("fitted.png"),
+        "--svg",
+        &p("fitted.svg"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let fitted = decode(&std::fs::read(p("fitted.png")).unwrap(), Limits::default()).unwrap();
+    assert_eq!((fitted.width, fitted.height), (w, h));
+    let (mut bg, mut fg) = (0, 0);
+    for px in fitted.data.chunks(4) {
+        match px {
+            [255, 255, 255, 255] => bg += 1,
+            [0x1f, 0x4e, 0x79, 255] => fg += 1,
+            other => panic!("colour {other:?} is not in the circles-grid palette"),
+        }
+    }
+    assert!(bg > fg && fg > 100, "{bg} background and {fg} dot pixels");
+    let svg = std::fs::read_to_string(p("fitted.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("width=\"96\" height=\"80\""),
+        "{}",
+        &svg[..200.min(svg.len())]
+    );
+    assert!(svg.contains("<circle"));
+    // Without a target image (drawn from parameters): 512 px.
+    let out = filigree(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target-params",
+        r#"{"r": 0.05}"#,
+        "--grid",
+        "16",
+        "--threads",
+        "1",
+        "--json",
+        "--out",
+        &p("params.svg"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(p("params.svg")).unwrap();
+    assert!(
+        svg.contains("width=\"512\" height=\"512\""),
+        "{}",
+        &svg[..200.min(svg.len())]
+    );
+    // A wrong extension is refused before the fit runs.
+    let out = filigree(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target",
+        &p("target.png"),
+        "--out",
+        &p("fitted.jpg"),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("must end in .png or .svg"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `filigree fit --help` documents the defaults that make a fit work
+/// without flags, and the time bound and polish flags reach the request.
+#[test]
+fn fit_help_documents_the_defaults_and_the_flags_reach_the_request() {
+    let help = String::from_utf8_lossy(&filigree(&["fit", "--help"]).stdout).to_string();
+    for want in [
+        "--max-seconds",
+        "--polish 100",
+        "longer side, 32..=128",
+        "--out",
+    ] {
+        assert!(help.contains(want), "{want} missing from:\n{help}");
+    }
+    let v = print_request(&[
+        "fit",
+        "--program",
+        "circles-grid",
+        "--target-params",
+        "{}",
+        "--max-seconds",
+        "5",
+        "--polish",
+        "0",
+    ]);
+    assert_eq!(v["max_seconds"], 5.0);
+    assert_eq!(v["polish"], 0);
+    // Without the flags: the request's own defaults (none sent, as the browser does).
+    let v = print_request(&["fit", "--program", "circles-grid", "--target-params", "{}"]);
+    assert_eq!(v["max_seconds"], 30.0);
+    assert!(v["polish"].is_null() && v["grid"].is_null(), "{v}");
+}

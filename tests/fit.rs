@@ -76,8 +76,13 @@ fn fit_recovers_known_parameters_of_circles_grid() {
     );
 }
 
-/// Polishing with the image-space loss keeps the fit and lowers the
-/// parameter error on a stroked pattern (fills inset under strokes).
+/// Polishing with the image-space loss starts where the plain fit ended
+/// and keeps the fit on a stroked pattern (fills inset under strokes). The
+/// plain SDF fit is itself close: when the pattern's fields saw shapes past
+/// the canvas edge that the target could not, it ended at an error of
+/// 1.5e-3 and the polish lowered that to 7e-4; with both sides seeing the
+/// same canvas it ends at ~1e-4, closer than the polish (which has its own
+/// anti-aliasing bias), so the polish is no longer assumed to improve it.
 #[test]
 fn polish_with_the_image_loss() {
     let p = program("shingles");
@@ -111,13 +116,8 @@ fn polish_with_the_image_loss() {
         plain.start_points, pol.start_points,
         "the polish starts where the plain fit ended"
     );
-    assert!(
-        err(&pol.params) <= err(&plain.params),
-        "{} > {}",
-        err(&pol.params),
-        err(&plain.params)
-    );
-    assert!(err(&pol.params) < 2e-3, "{}", err(&pol.params));
+    assert!(err(&plain.params) < 5e-4, "plain {}", err(&plain.params));
+    assert!(err(&pol.params) < 2e-3, "polished {}", err(&pol.params));
 }
 
 /// A fit from an image file (PNG round trip, palette snapping) lands where
@@ -815,7 +815,7 @@ fn a_sharded_fit_equals_one_fit() {
         generations: Some(3),
         candidates: Some(3),
         iterations: Some(30),
-        polish: 5,
+        polish: Some(5),
         seed: 9,
         ..Default::default()
     };
@@ -978,4 +978,247 @@ fn generators_match_their_golden_renders() {
         "{}\n(REPLACE=1 rewrites the goldens if the change is intended)",
         failures.join("\n")
     );
+}
+
+/// The loss's minimum is the truth: for every shipped generator and random
+/// true parameters (seeded), with the target drawn by the program itself,
+/// the loss at the truth is near zero and below the loss at each of a set
+/// of random small perturbations. A target sampled half a pixel off the
+/// pattern's grid, or fields that see shapes past the canvas edge the
+/// target cannot see, put the minimum elsewhere (a stripes program had loss
+/// 24 at its own truth). "Near zero" allows for the target's distances
+/// being measured between pixel centres (±½ pixel) and for the fields of
+/// shapes partly covered by others being bounds rather than distances.
+#[test]
+fn the_loss_is_lowest_at_the_truth_for_every_generator() {
+    let n = 128;
+    let opts = LossOptions {
+        grid: n,
+        kind: LossKind::Sdf,
+        ..LossOptions::default()
+    };
+    let mut rng = Rng::new(91);
+    let mut report = vec![];
+    let mut failures = vec![];
+    for g in GENERATORS {
+        let p = Program::parse(g.source).unwrap();
+        let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+        let decls = scene.rec.float_decls();
+        for _ in 0..3 {
+            let truth: Vec<f64> = decls
+                .iter()
+                .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.15, 0.85))
+                .collect();
+            let idx = colour_indices(&scene, &truth, n).unwrap();
+            let t = Target::from_indices(&scene, &idx, n, opts.scale());
+            let mut obj = Objective::new(scene.clone(), t, opts);
+            let at = obj.loss(&truth);
+            let mut lowest = f64::INFINITY;
+            for _ in 0..12 {
+                // Every parameter moved by 1–4% of its range, either way.
+                let q: Vec<f64> = truth
+                    .iter()
+                    .zip(&decls)
+                    .map(|(v, d)| {
+                        let s = if rng.f64() < 0.5 { -1.0 } else { 1.0 };
+                        v + s * (d.hi - d.lo) * rng.range_f64(0.01, 0.04)
+                    })
+                    .collect();
+                lowest = lowest.min(obj.loss(&q));
+            }
+            report.push(format!(
+                "{}: at truth {at:.4}, lowest perturbed {lowest:.4}",
+                g.name
+            ));
+            if !(at < 0.3 && at < lowest) {
+                failures.push(format!(
+                    "{}: at truth {at}, lowest perturbed {lowest}",
+                    g.name
+                ));
+            }
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A tiled program (stripes and dots running past every edge) fitted to its
+/// own render from a start 3% of each range away recovers the placement of
+/// its shapes (angle, periods, offset) with a normalised parameter MSE
+/// ≤ 1e-5, and its sizes (stripe width, dot radius) to a fifth of a grid
+/// pixel. With fields that saw the shapes past the edge the minimum sat
+/// elsewhere and the fitted periods came out too large. (The sizes keep a
+/// small bias: the target's distances are measured between pixel centres,
+/// which overstates shapes whose outline is slanted or curved.)
+#[test]
+fn a_tiled_program_fitted_to_its_own_render_recovers_its_placement() {
+    const TILED: &str = "background \"#ffffff\";
+param angle in [0.3, 0.9] = 0.6;
+param spacing in [0.12, 0.2] = 0.16;
+param offset in [0.0, 0.1] = 0.05;
+param w in [0.03, 0.06] = 0.045;
+param dx in [0.1, 0.16] = 0.13;
+param r in [0.015, 0.03] = 0.02;
+for k in 0..16 {
+  let c = cos(angle);
+  let s = sin(angle);
+  let d = offset + (k - 8) * spacing;
+  segment(0.5 - s * d - 2 * c, 0.5 + c * d - 2 * s, 0.5 - s * d + 2 * c, 0.5 + c * d + 2 * s, stroke: \"#2e86c1\", width: w);
+}
+for j in 0..12 {
+  for i in 0..12 {
+    circle((i - 1) * dx + 0.03, (j - 1) * dx + 0.05, r, fill: \"#c0392b\");
+  }
+}
+";
+    let p = Program::parse(TILED).unwrap();
+    let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+    let decls = scene.rec.float_decls();
+    for seed in [5, 6] {
+        let mut rng = Rng::new(seed);
+        let truth: Vec<f64> = decls
+            .iter()
+            .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.25, 0.75))
+            .collect();
+        let start: Vec<f64> = truth
+            .iter()
+            .zip(&decls)
+            .map(|(v, d)| v + if rng.f64() < 0.5 { -0.03 } else { 0.03 } * (d.hi - d.lo))
+            .collect();
+        let mut o = FitOptions::budget(Budget::Quick);
+        o.loss.grid = 96;
+        o.iterations = 300;
+        o.patience = 60;
+        let idx = colour_indices(&scene, &truth, o.loss.grid).unwrap();
+        let t = Target::from_indices(&scene, &idx, o.loss.grid, o.loss.scale());
+        let r = run_quietly(FitJob::refine_from(scene.clone(), t, o, &[start])).unwrap();
+        let placement = [0, 1, 2, 4]; // angle, spacing, offset, dx
+        let mse = placement
+            .iter()
+            .map(|&k| ((r.params[k] - truth[k]) / (decls[k].hi - decls[k].lo)).powi(2))
+            .sum::<f64>()
+            / placement.len() as f64;
+        assert!(
+            mse <= 1e-5,
+            "seed {seed}: normalised placement MSE {mse:.3e} (fitted {:?}, truth {truth:?})",
+            r.params
+        );
+        // Width (a full stroke width) and radius, in grid pixels.
+        let grid = o.loss.grid as f64;
+        for (k, what) in [(3, "stripe width"), (5, "dot radius")] {
+            let err = (r.params[k] - truth[k]).abs() * grid;
+            assert!(err < 0.2, "seed {seed}: {what} off by {err} pixels");
+        }
+    }
+}
+
+/// Defaults that work without flags (`fit` with only a program and a
+/// target): the loss grid follows an image target's resolution up to a cap
+/// (a target drawn from parameters keeps the budget's), the image-space
+/// polish is on after an SDF fit and off after an image-loss fit, and the
+/// result names its loss.
+#[test]
+fn fit_defaults_follow_the_target_and_polish() {
+    use filigree::pattern::api::{start_fit, FitRequest, AUTO_GRID, AUTO_POLISH};
+    use std::collections::BTreeMap;
+    let p = program("circles-grid");
+    let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+    let truth = [0.19, 0.15, 0.09, 0.14, 0.045];
+    let png = |side: usize| encode_png(&render::render(&scene, &truth, side, 1).unwrap()).unwrap();
+    let src = generator("circles-grid").unwrap().source;
+    let req = |target_png: Option<Vec<u8>>| FitRequest {
+        program: src.into(),
+        target_png: target_png.clone(),
+        target_params: if target_png.is_none() {
+            Some(BTreeMap::from([("r".to_string(), 0.05)]))
+        } else {
+            None
+        },
+        ..Default::default()
+    };
+    for (side, want) in [(96, 96), (256, AUTO_GRID.1), (20, AUTO_GRID.0)] {
+        let job = start_fit(&req(Some(png(side)))).unwrap();
+        assert_eq!(job.fit().objective().opts.grid, want, "a {side} px target");
+    }
+    let job = start_fit(&req(None)).unwrap();
+    assert_eq!(
+        job.fit().objective().opts.grid,
+        FitOptions::budget(Budget::Quick).loss.grid
+    );
+    let r = req(None);
+    assert_eq!(r.options().unwrap().polish, AUTO_POLISH);
+    let image = FitRequest {
+        loss: LossKind::Image,
+        ..req(None)
+    };
+    assert_eq!(image.options().unwrap().polish, 0);
+    let off = FitRequest {
+        polish: Some(0),
+        ..req(None)
+    };
+    assert_eq!(off.options().unwrap().polish, 0);
+    // A small fit end to end: its output names its loss.
+    let small = FitRequest {
+        grid: Some(24),
+        population: Some(10),
+        generations: Some(2),
+        candidates: Some(1),
+        iterations: Some(5),
+        polish: Some(3),
+        ..req(Some(png(48)))
+    };
+    let out = run_quietly(start_fit(&small).unwrap()).unwrap();
+    assert_eq!(out.loss_name, LossKind::Sdf);
+    assert!(out.result.polish_loss.is_some());
+    let v = serde_json::to_value(&out).unwrap();
+    assert_eq!(v["loss_name"], "sdf");
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(48), Some(48))
+    );
+}
+
+/// The fit's time bound (`max_seconds`, `--max-seconds`): a fit whose
+/// estimated time exceeds it runs fewer GA generations and Adam iterations,
+/// found from the work of one evaluation (not the clock), so the same
+/// request gives the same fit everywhere.
+#[test]
+fn a_fit_is_bounded_by_time_as_well_as_evaluations() {
+    use filigree::pattern::api::{fit_time_bound, start_fit, FitRequest};
+    use std::collections::BTreeMap;
+    let mut o = FitOptions::budget(Budget::Paper);
+    let plain = o;
+    // 1e6 work units a loss (~20 ms): the paper budget (~9,000 losses) is minutes.
+    let f = fit_time_bound(&mut o, 1_000_000, 0, 10.0);
+    assert!(f < 0.1, "{f}");
+    assert!(o.ga.generations < plain.ga.generations && o.iterations < plain.iterations);
+    assert!(o.ga.generations >= 1 && o.iterations >= 1);
+    let mut same = plain;
+    assert_eq!(fit_time_bound(&mut same, 10, 0, 10.0), 1.0);
+    assert_eq!(same, plain);
+    let req = |max_seconds: f64| FitRequest {
+        program: generator("circles-grid").unwrap().source.into(),
+        target_params: Some(BTreeMap::from([("r".to_string(), 0.05)])),
+        grid: Some(32),
+        generations: Some(40),
+        iterations: Some(200),
+        polish: Some(0),
+        max_seconds,
+        ..Default::default()
+    };
+    let long = run_quietly(start_fit(&req(3600.0)).unwrap()).unwrap();
+    let short = run_quietly(start_fit(&req(0.1)).unwrap()).unwrap();
+    assert!(
+        short.result.evaluations * 3 < long.result.evaluations,
+        "{} vs {} evaluations",
+        short.result.evaluations,
+        long.result.evaluations
+    );
+    let again = run_quietly(start_fit(&req(0.1)).unwrap()).unwrap();
+    assert_eq!(
+        again.result, short.result,
+        "the bound does not read the clock"
+    );
+    let e = start_fit(&req(0.0)).err().expect("0 s is refused");
+    assert_eq!(e.field(), Some("max_seconds"));
 }

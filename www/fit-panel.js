@@ -492,7 +492,8 @@ function mount(el, ctx) {
       ctx.commit({ ...doc(), values, result: { params: r.params, loss: r.loss, names: r.names, evaluations: r.evaluations } });
       plot.push(1, r.loss);
       q('progress').value = 1;
-      status(`fitted in ${((performance.now() - t0) / 1000).toFixed(1)} s — loss ${r.loss.toPrecision(4)} after ${r.evaluations} evaluations`);
+      // One loss, named (the polish's image-space loss is a different one).
+      status(`fitted in ${((performance.now() - t0) / 1000).toFixed(1)} s — loss ${r.loss.toPrecision(4)} (${r.loss_name}) after ${r.evaluations} evaluations`);
     } catch (err) {
       if (err.kind === 'cancelled') {
         if (ctx.alive() && (running === ctrl || running === null)) status('cancelled — the values from before the fit are kept');

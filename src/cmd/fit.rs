@@ -12,6 +12,19 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(clap::Args)]
+#[command(
+    after_help = "Defaults (the same request the browser's Fit button sends):
+  --budget quick      GA 64 x 8 generations, 3 candidates x 120 Adam iterations
+  --grid              an image target's longer side, 32..=128 px (a bigger image's
+                      distance fields are computed at its resolution and sampled);
+                      64 with --target-params
+  --polish 100        image-space Adam iterations after an sdf/l1/pyramid fit
+                      (0 after --loss image)
+  --max-seconds 30    generations and iterations are scaled down when the fit's
+                      estimated time (from the work of one evaluation) exceeds it
+The loss printed is the fit's own (--loss, sdf by default), named; with a polish
+the image-space loss after it is printed too."
+)]
 pub struct FitArgs {
     /// Program file (.flg) or the name of a shipped generator (e.g. circles-grid).
     #[arg(long)]
@@ -34,7 +47,8 @@ pub struct FitArgs {
     /// genetic (default, ga) | random | nelder-mead (nm)
     #[arg(long)]
     init: Option<String>,
-    /// Loss grid side in pixels, 8..=256 (default: 64 for quick, 128 for paper).
+    /// Loss grid side in pixels, 8..=256 (default: an image target's longer side, 32..=128;
+    /// the budget's, 64 quick / 128 paper, for --target-params).
     #[arg(long)]
     grid: Option<usize>,
     /// Field units in the loss: pixels (default) | canvas.
@@ -49,15 +63,24 @@ pub struct FitArgs {
     /// RGB distance within which a target pixel matches a palette colour, 0..=442 (default 60).
     #[arg(long, allow_hyphen_values = true)]
     tolerance: Option<f64>,
-    /// Adam iterations on the image-space loss after the fit (default 0 = off, the paper's method).
+    /// Adam iterations on the image-space loss after the fit (default 100, 0 with --loss image;
+    /// 0 = off, the paper's method).
     #[arg(long)]
     polish: Option<usize>,
+    /// Time bound in seconds, 0.1..=3600 (default 30): generations and iterations are scaled
+    /// down when the estimated time exceeds it (estimated from the work, not the clock).
+    #[arg(long)]
+    max_seconds: Option<f64>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
-    /// Write the fitted pattern as SVG.
+    /// Write the fitted pattern as SVG, sized like the target image (512 px without one).
     #[arg(long)]
     svg: Option<PathBuf>,
+    /// Write the fitted pattern to this file, .png or .svg, sized like the target image
+    /// (512 px without one; the longer side at most 2048).
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// Print the request (as the browser would send it) and exit.
     #[arg(long, hide = true)]
     print_request: bool,
@@ -136,6 +159,7 @@ impl FitArgs {
         put(&mut o, "seed", "--seed", self.seed)?;
         put(&mut o, "tolerance", "--tolerance", self.tolerance)?;
         put(&mut o, "polish", "--polish", self.polish)?;
+        put(&mut o, "max_seconds", "--max-seconds", self.max_seconds)?;
         let mut req: FitRequest = request("fit", Value::Object(o), &origins)?;
         req.program = program;
         if let Some(p) = &self.params {
@@ -150,11 +174,67 @@ impl FitArgs {
     }
 }
 
+/// The lower-case extension of an output path, which must be .png or .svg.
+fn output_kind(path: &Path) -> Result<String, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if ext != "png" && ext != "svg" {
+        return Err(format!(
+            "{}: the output must end in .png or .svg",
+            path.display()
+        ));
+    }
+    Ok(ext)
+}
+
+/// The fitted pattern as a PNG of `width × height`: the same
+/// `render-pattern` request the browser sends (a square of the longer side),
+/// stretched to the target's shape (nearest) when it is not square.
+fn fitted_png(
+    req: &FitRequest,
+    out: &filigree::pattern::api::FitOutput,
+    origins: &Origins,
+) -> Result<Vec<u8>, String> {
+    let (w, h) = (out.width, out.height);
+    let side = w.max(h);
+    let mut params = req.params.clone();
+    params.extend(out.named.iter().map(|(k, v)| (k.clone(), *v)));
+    let r = RenderPatternRequest {
+        program: req.program.clone(),
+        params,
+        size: side as usize,
+        ..RenderPatternRequest::default()
+    };
+    let job = start_render(r).map_err(|e| explain(e, origins))?;
+    let r = drive(job, true, origins)?;
+    let square =
+        filigree::raster::Rgba8Image::from_raw(r.image.width, r.image.height, r.image.rgba)
+            .map_err(|e| e.to_string())?;
+    let img = if w == h {
+        square
+    } else {
+        let mut img = filigree::raster::Rgba8Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let sx = ((x as u64 * 2 + 1) * side as u64 / (2 * w as u64)) as u32;
+                let sy = ((y as u64 * 2 + 1) * side as u64 / (2 * h as u64)) as u32;
+                img.put(x, y, square.get(sx.min(side - 1), sy.min(side - 1)));
+            }
+        }
+        img
+    };
+    filigree::raster::encode_png(&img).map_err(|e| e.to_string())
+}
+
 pub fn run_fit(a: FitArgs) -> Result<(), String> {
     let (mut req, name, origins) = a.request()?;
     if a.print_request {
         return print_request(&req);
     }
+    let out_kind = a.out.as_deref().map(output_kind).transpose()?;
     let threads = super::threads(a.threads)?;
     let t0 = Instant::now();
     // One shard per thread, exchanged by the same driver contract as the
@@ -184,6 +264,15 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     if let Some(path) = &a.svg {
         std::fs::write(path, &out.svg).map_err(|e| format!("{}: {e}", path.display()))?;
     }
+    if let (Some(path), Some(kind)) = (&a.out, &out_kind) {
+        let bytes = if kind == "svg" {
+            out.svg.clone().into_bytes()
+        } else {
+            req.shards = None;
+            fitted_png(&req, &out, &origins)?
+        };
+        std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
     if a.json {
         let params: Map<String, Value> = r
             .names
@@ -191,17 +280,24 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
             .zip(&r.params)
             .map(|(n, v)| (n.clone(), json!(v)))
             .collect();
-        let j = json!({"program": name, "params": params, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
+        let j = json!({"program": name, "params": params, "loss_name": out.loss_name, "loss": r.loss, "init_loss": r.init_loss, "polish_loss": r.polish_loss,
             "evaluations": r.evaluations, "seconds": secs, "history": r.history});
         println!("{j}");
     } else {
         for (n, v) in r.names.iter().zip(&r.params) {
             println!("{n:>14} = {v:.5}");
         }
+        let name = serde_json::to_value(out.loss_name)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
         println!(
-            "loss {:.6} (after initialisation {:.6}), {} evaluations, {secs:.2} s",
+            "{name} loss {:.6} (after initialisation {:.6}), {} evaluations, {secs:.2} s",
             r.loss, r.init_loss, r.evaluations
         );
+        if let Some(p) = r.polish_loss {
+            println!("image loss after the polish {p:.6}");
+        }
     }
     Ok(())
 }
@@ -220,18 +316,7 @@ pub fn run_render(a: RenderArgs) -> Result<(), String> {
     if a.print_request {
         return print_request(&req);
     }
-    let ext = a
-        .out
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext != "png" && ext != "svg" {
-        return Err(format!(
-            "{}: the output must end in .png or .svg",
-            a.out.display()
-        ));
-    }
+    let ext = output_kind(&a.out)?;
     let job = start_render(req).map_err(|e| explain(e, &origins))?;
     let r = drive(job, true, &origins)?;
     let bytes = if ext == "svg" {

@@ -30,6 +30,8 @@ pub const GENERATIONS: (usize, usize) = (0, 10_000);
 /// Candidates refined with Adam, and Adam (and polish) iterations each.
 pub const CANDIDATES: (usize, usize) = (1, 100);
 pub const ITERATIONS: (usize, usize) = (0, 100_000);
+/// A fit's time bound (`max_seconds`), seconds.
+pub const FIT_SECONDS: (f64, f64) = (0.1, 3600.0);
 /// Shards one fit may be split into (one per worker of a pool).
 pub const SHARDS: usize = 64;
 /// Parameter vectors in one `fit-eval` request.

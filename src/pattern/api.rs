@@ -391,17 +391,33 @@ pub struct FitRequestOf<X> {
     pub units: SdfUnits,
     /// Seed of every random choice (1).
     pub seed: u64,
-    /// Loss grid side: `fit` 8..=256, `fit-eval` 8..=1024 (the budget's: 64 quick, 128 paper).
+    /// Loss grid side: `fit` 8..=256, `fit-eval` 8..=1024. Without it, an
+    /// image target's grid follows the image: its longer side, from
+    /// [`AUTO_GRID`]`.0` up to [`AUTO_GRID`]`.1` (a bigger image's fields are
+    /// computed at its own resolution and sampled onto the grid); a target
+    /// drawn from parameters takes the budget's (64 quick, 128 paper).
     pub grid: Option<usize>,
     /// Overrides of the budget.
     pub population: Option<usize>,
     pub generations: Option<usize>,
     pub candidates: Option<usize>,
     pub iterations: Option<usize>,
-    /// Adam iterations on the image-space loss after the fit (0 = off, the paper's method).
-    pub polish: usize,
+    /// Adam iterations on the image-space loss after the fit (0 = off, the
+    /// paper's method). Without it: [`AUTO_POLISH`] after an SDF, L1 or
+    /// pyramid fit (`filigree bench fit` shows the polish lowering the
+    /// parameter error on most generators), none after an image-loss fit
+    /// (it would only continue the same loss).
+    pub polish: Option<usize>,
     /// `[k, n]`: this job is shard k of n of one fit (see `FitOptions::shards`).
     pub shards: Option<(usize, usize)>,
+    /// Time bound in seconds, 0.1..=3600 (30): the GA generations, Adam
+    /// iterations and polish are scaled down, all by one factor, until the
+    /// fit's estimated time fits. The estimate counts the work of one field
+    /// evaluation at the program's defaults on the loss grid (item
+    /// evaluations, [`NS_PER_WORK`] each, a loss+gradient twice a loss) and
+    /// not the clock, so a fit stays the same on every machine and in every
+    /// shard; a slower machine (or the browser) takes longer than the bound.
+    pub max_seconds: f64,
     #[serde(flatten)]
     pub extra: X,
 }
@@ -430,10 +446,64 @@ impl<X: Default> Default for FitRequestOf<X> {
             generations: None,
             candidates: None,
             iterations: None,
-            polish: 0,
+            polish: None,
             shards: None,
+            max_seconds: 30.0,
             extra: X::default(),
         }
+    }
+}
+
+/// The loss grid of an image target without a `grid`: the image's longer
+/// side, at least `.0`, at most `.1` pixels.
+pub const AUTO_GRID: (usize, usize) = (32, 128);
+
+/// Image-space polish iterations without a `polish` (see `polish`).
+pub const AUTO_POLISH: usize = 100;
+
+/// Estimated native time of one weighted item evaluation
+/// ([`super::field::Evaluator::work`]) or field value of a loss, in
+/// nanoseconds, for `max_seconds`: 10–24 ns measured over the shipped
+/// generators at 64² and 128² (a loss with its gradient took 0.8–2.5 times
+/// a loss; counted as 2).
+pub const NS_PER_WORK: f64 = 20.0;
+
+/// Scale `o`'s GA generations, Adam iterations and polish down (by one
+/// factor, each kept at least 1) so that the fit's estimated time is at
+/// most `max_seconds`, one loss evaluation costing `work` weighted item
+/// evaluations plus one per field value. Returns the factor (1 = unchanged).
+pub fn fit_time_bound(o: &mut FitOptions, work: u64, field_values: usize, max_seconds: f64) -> f64 {
+    let loss_ns = (work as f64 + field_values as f64) * NS_PER_WORK;
+    let ga = o.ga.population as f64 * (o.ga.generations + 1) as f64;
+    let adam = (o.candidates * o.iterations + o.polish) as f64;
+    let planned = (ga + 2.0 * adam) * loss_ns * 1e-9;
+    if planned <= max_seconds {
+        return 1.0;
+    }
+    let f = max_seconds / planned;
+    let scale = |v: usize| {
+        if v == 0 {
+            0
+        } else {
+            ((v as f64 * f).floor() as usize).max(1)
+        }
+    };
+    o.ga.generations = scale(o.ga.generations);
+    o.iterations = scale(o.iterations);
+    o.patience = o.patience.min(o.iterations);
+    if o.polish > 0 {
+        o.polish = scale(o.polish);
+    }
+    f
+}
+
+/// The loss grid a request without `grid` gets for `target` (see `grid`).
+pub fn auto_grid(target: &TargetData, budget_grid: usize) -> usize {
+    match target {
+        TargetData::Image(img, _) => {
+            (img.width.max(img.height) as usize).clamp(AUTO_GRID.0, AUTO_GRID.1)
+        }
+        TargetData::Params(_) => budget_grid,
     }
 }
 
@@ -488,7 +558,11 @@ impl<X> FitRequestOf<X> {
         if let Some(v) = self.iterations {
             o.iterations = lim::int_in("iterations", v, lim::ITERATIONS)?;
         }
-        o.polish = lim::int_in("polish", self.polish, lim::ITERATIONS)?;
+        o.polish = match self.polish {
+            Some(v) => lim::int_in("polish", v, lim::ITERATIONS)?,
+            None if self.loss == LossKind::Image => 0,
+            None => AUTO_POLISH,
+        };
         if let Some((k, n)) = self.shards {
             if n == 0 || n > lim::SHARDS || k >= n {
                 return Err(Error::input(format!(
@@ -546,13 +620,50 @@ pub struct FitOutput {
     pub result: FitResult,
     /// The best parameters by name (float ones).
     pub named: BTreeMap<String, f64>,
-    /// The fitted pattern as SVG, 512 px wide.
+    /// The loss that `loss`, `init_loss` and `history` are values of
+    /// (`polish_loss`, when there is one, is the image-space loss).
+    pub loss_name: LossKind,
+    /// Width and height in pixels of the fitted pattern's pictures: the
+    /// target image's (its longer side at most [`FIT_OUTPUT_MAX_SIDE`]), or
+    /// 512 × 512 for a target drawn from parameters.
+    pub width: u32,
+    pub height: u32,
+    /// The fitted pattern as SVG, `width × height` px.
     pub svg: String,
 }
 
-/// Package a fit result with its SVG.
-pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
-    let svg = render::svg(scene, &r.params, 512.0)?;
+/// Longest side of a fit's output pictures (the `render-pattern` limit).
+pub const FIT_OUTPUT_MAX_SIDE: u32 = 2048;
+
+/// The size of a fit's output pictures for a target: the image's own, scaled
+/// down to [`FIT_OUTPUT_MAX_SIDE`] if bigger; 512 × 512 without an image.
+pub fn output_size(target: &TargetData) -> (u32, u32) {
+    match target {
+        TargetData::Image(img, _) => {
+            let (w, h) = (img.width.max(1), img.height.max(1));
+            let m = w.max(h);
+            if m <= FIT_OUTPUT_MAX_SIDE {
+                (w, h)
+            } else {
+                let k = |v: u32| {
+                    ((v as u64 * FIT_OUTPUT_MAX_SIDE as u64 + m as u64 / 2) / m as u64).max(1)
+                        as u32
+                };
+                (k(w), k(h))
+            }
+        }
+        TargetData::Params(_) => (512, 512),
+    }
+}
+
+/// Package a fit result with its SVG, `size` (width, height) pixels.
+pub fn fit_output(
+    scene: &Scene,
+    r: FitResult,
+    loss: LossKind,
+    size: (u32, u32),
+) -> Result<FitOutput> {
+    let svg = render::svg_sized(scene, &r.params, size.0 as f64, size.1 as f64)?;
     let named = r
         .names
         .iter()
@@ -562,6 +673,9 @@ pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
     Ok(FitOutput {
         result: r,
         named,
+        loss_name: loss,
+        width: size.0,
+        height: size.1,
         svg,
     })
 }
@@ -570,6 +684,9 @@ pub fn fit_output(scene: &Scene, r: FitResult) -> Result<FitOutput> {
 pub struct FitRequestJob {
     job: FitJob,
     scene: Scene,
+    /// The output pictures' size ([`output_size`]).
+    size: (u32, u32),
+    loss: LossKind,
 }
 
 impl FitRequestJob {
@@ -588,7 +705,7 @@ impl Job for FitRequestJob {
     fn step(&mut self) -> Result<Step<FitOutput>> {
         Ok(match self.job.step()? {
             Step::Running(p) => Step::Running(p),
-            Step::Done(r) => Step::Done(fit_output(&self.scene, r)?),
+            Step::Done(r) => Step::Done(fit_output(&self.scene, r, self.loss, self.size)?),
         })
     }
     fn outbox(&mut self) -> Option<Vec<f64>> {
@@ -606,11 +723,37 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
     if let Some(g) = req.grid {
         lim::int_in("grid", g, lim::FIT_GRID)?;
     }
-    let opts = req.options()?;
+    let mut opts = req.options()?;
     let t = req.target_data(&p)?;
+    if req.grid.is_none() {
+        opts.loss.grid = auto_grid(&t, opts.loss.grid);
+    }
+    let size = output_size(&t);
+    let max_seconds = lim::finite_in("max_seconds", req.max_seconds, lim::FIT_SECONDS)?;
+    {
+        // One field evaluation at the defaults: the work a loss costs.
+        let rec = p
+            .record(&vals, &RecordLimits::default())
+            .map_err(|e| e.at("program"))?;
+        let scene = Scene::new(rec);
+        let mut ev = super::field::Evaluator::new(opts.loss.grid, opts.loss.scale());
+        let mut nodes = vec![];
+        scene
+            .rec
+            .tape
+            .forward(&scene.rec.float_values(), &mut nodes);
+        ev.eval(&scene, &nodes, false);
+        let fields = opts.loss.grid * opts.loss.grid * scene.channels.len();
+        fit_time_bound(&mut opts, ev.work, fields, max_seconds);
+    }
     let job = FitJob::start(&p, &vals, t, opts).map_err(|e| e.at("program"))?;
     let scene = job.objective().scene.clone();
-    Ok(FitRequestJob { job, scene })
+    Ok(FitRequestJob {
+        job,
+        scene,
+        size,
+        loss: opts.loss.kind,
+    })
 }
 
 /// Losses of a `fit-eval` request, in the order of its points.
@@ -739,8 +882,11 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
     }
     let p = parse(&req.program)?;
     let vals = named_values(&p, &req.params)?;
-    let opts = req.options()?;
+    let mut opts = req.options()?;
     let t = req.target_data(&p)?;
+    if req.grid.is_none() {
+        opts.loss.grid = auto_grid(&t, opts.loss.grid);
+    }
     let (scene, prep) =
         super::fit::begin_prepare(&p, &vals, t, &opts.loss).map_err(|e| e.at("program"))?;
     let pending = Target::pending(opts.loss.grid, opts.loss.scale());

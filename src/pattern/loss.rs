@@ -821,7 +821,9 @@ mod tests {
         let at = o.loss(&truth);
         assert!(at < 0.15, "{at}");
         let off = o.loss(&[0.25, 0.06, 0.2, 0.015]);
-        assert!(off > at * 5.0 && off > at + 0.3, "{off} vs {at}");
+        // (Fields stop at the canvas edge, so pixels near it add at most
+        // their distance to the edge: the margin is 0.15, not more.)
+        assert!(off > at * 5.0 && off > at + 0.15, "{off} vs {at}");
     }
 
     /// A tape that divides by zero only at some parameter values: those

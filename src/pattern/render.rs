@@ -333,6 +333,28 @@ impl SvgOut<'_> {
 /// An SVG document of the scene with `params`, `size` pixels wide. Strokes
 /// of boolean shapes are not exported (SVG cannot stroke a mask).
 pub fn svg(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
+    svg_sized(scene, params, size, size)
+}
+
+/// [`svg`] `width × height` pixels: the square canvas stretched to that
+/// rectangle, as a fit stretches a target image of that size onto it.
+pub fn svg_sized(scene: &Scene, params: &[f64], width: f64, height: f64) -> Result<String> {
+    let size = width.max(height);
+    let doc = svg_square(scene, params, size)?;
+    if width == height {
+        return Ok(doc);
+    }
+    let s = num(size);
+    let square = format!("width=\"{s}\" height=\"{s}\" viewBox=");
+    let stretched = format!(
+        "width=\"{}\" height=\"{}\" preserveAspectRatio=\"none\" viewBox=",
+        num(width),
+        num(height)
+    );
+    Ok(doc.replacen(&square, &stretched, 1))
+}
+
+fn svg_square(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
     if params.len() != scene.rec.float_params.len() {
         return Err(Error::input(format!(
             "the program has {} float parameters but {} values were given",

@@ -4,7 +4,7 @@
 //! into a signed field.
 //!
 //! The distance transform itself is shared: [`crate::geom::distance_transform`].
-use super::field::{Evaluator, Scene, CAP};
+use super::field::{edge_cap, Evaluator, Scene, CAP};
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
 use crate::geom::distance_transform::SignedDistance;
@@ -482,7 +482,11 @@ impl TargetBuild {
                         // The grid's own fields: all rows at once (a copy).
                         let px_to_units = scale / n as f64;
                         let colour = scene.channels[c].colour;
-                        self.sdf.extend(d.iter().map(|v| v * px_to_units));
+                        self.sdf.extend(
+                            d.iter()
+                                .enumerate()
+                                .map(|(i, v)| edge_clamp(v * px_to_units, i % n, i / n, n, scale)),
+                        );
                         self.mask
                             .extend(idx.iter().map(|&i| if i == colour { 1.0f32 } else { 0.0 }));
                         spent = spent.saturating_add((n * n / 4) as BuildWork);
@@ -495,6 +499,7 @@ impl TargetBuild {
                         for x in 0..n {
                             let u = (x as f64 + 0.5) * sx - 0.5;
                             let value = bilinear(d, fw, fh, u, v) * px * scale;
+                            let value = edge_clamp(value, x, y, n, scale);
                             self.sdf.push(value);
                             self.mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
                         }
@@ -517,6 +522,16 @@ impl TargetBuild {
         }
         Ok(None)
     }
+}
+
+/// A target value `v` (in `scale` units per canvas unit) at grid pixel
+/// `(x, y)`, its magnitude taken no farther than the canvas edge, as the
+/// pattern's fields are ([`edge_cap`]): the image shows nothing past the
+/// edge, so both sides see the same world.
+#[inline]
+fn edge_clamp(v: f64, x: usize, y: usize, n: usize, scale: f64) -> f64 {
+    let cap = edge_cap(x, y, n) * scale;
+    v.clamp(-cap, cap)
 }
 
 /// The size of one pixel of a `fw × fh` raster covering the canvas, in
@@ -616,7 +631,11 @@ mod tests {
             let m: Vec<bool> = idx.iter().map(|&i| i == ch.colour).collect();
             if (fw, fh) == (n, n) {
                 let d = signed_distance(&m, n, n, CAP * n as f64);
-                sdf.extend(d.iter().map(|v| v * (scale / n as f64)));
+                sdf.extend(
+                    d.iter()
+                        .enumerate()
+                        .map(|(i, v)| edge_clamp(v * (scale / n as f64), i % n, i / n, n, scale)),
+                );
                 mask.extend(m.iter().map(|&b| if b { 1.0f32 } else { 0.0 }));
             } else {
                 let px = 1.0 / ((fw * fh) as f64).sqrt();
@@ -626,6 +645,7 @@ mod tests {
                     for x in 0..n {
                         let (u, v) = ((x as f64 + 0.5) * sx - 0.5, (y as f64 + 0.5) * sy - 0.5);
                         let value = bilinear(&d, fw, fh, u, v) * px * scale;
+                        let value = edge_clamp(value, x, y, n, scale);
                         sdf.push(value);
                         mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
                     }

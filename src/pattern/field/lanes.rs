@@ -3,7 +3,7 @@
 //! roots overlap (and vectorise).
 use super::scene::{Part, Scene};
 use super::tiles::Evaluator;
-use super::{CombineOp, Hit, CAP, NONE, NO_WIN};
+use super::{edge_cap, CombineOp, Hit, CAP, NONE, NO_WIN};
 use crate::pattern::sdf::{self, PrimKind};
 
 impl Evaluator {
@@ -24,14 +24,13 @@ impl Evaluator {
     ) {
         let n = self.n;
         let inv = 1.0 / n as f64;
-        let cap = CAP;
         let mut px = [0.0; 4];
         for (k, v) in px.iter_mut().enumerate() {
             *v = ((x0 + k).min(x1 - 1) as f64 + 0.5) * inv;
         }
         for y in y0..y1 {
             let py = (y as f64 + 0.5) * inv;
-            let mut b = [init * cap; 4];
+            let mut b = [init * CAP; 4];
             let mut wi = [NONE; 4];
             let mut wd = [0.0f64; 4];
             let mut flip = [false; 4];
@@ -105,6 +104,7 @@ impl Evaluator {
                 let idx = c * n * n + y * n + x0 + k;
                 let mut v = b[k];
                 let mut w = wi[k];
+                let cap = CAP.min(edge_cap(x0 + k, y, n));
                 if v.abs() >= cap {
                     v = v.clamp(-cap, cap);
                     w = NONE;

@@ -2,7 +2,7 @@
 //! tile culling (see [`cull`]), per-pixel evaluation of what survives, and
 //! the backward pass from field adjoints to tape nodes.
 use super::scene::{GeomCache, Scene};
-use super::{CombineOp, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+use super::{edge_cap, CombineOp, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
 use crate::pattern::sdf::{self, Fields, PrimKind};
 
 /// Scratch and results of evaluating all colour fields on an `n × n` grid.
@@ -13,7 +13,8 @@ pub struct Evaluator {
     /// Multiplier from canvas units to the stored field units.
     pub scale: f64,
     /// Field values, channel-major: `s[c * n² + y * n + x]`, in `scale` units,
-    /// clamped to `±CAP·scale`.
+    /// clamped to `±CAP·scale` and to the distance to the canvas edge
+    /// ([`super::edge_cap`]).
     pub s: Vec<f64>,
     /// Winners, same layout (filled only when asked for).
     pub win: Vec<Win>,
@@ -235,7 +236,8 @@ impl Evaluator {
                                     let ops = &chain2[a..b];
                                     work += ops.len() as u64;
                                     let idx = c * n * n + y * n + x;
-                                    self.pixel(scene, ch.init, ops, p, idx, winners);
+                                    let cap = edge_cap(x, y, n);
+                                    self.pixel(scene, ch.init, ops, p, cap, idx, winners);
                                 }
                             }
                         }
@@ -251,19 +253,23 @@ impl Evaluator {
     }
 
     /// Apply a culled chain at one pixel; consecutive same-kind operations
-    /// form a run whose minimum is applied once.
+    /// form a run whose minimum is applied once. The value is clamped to
+    /// `±edge` (canvas units, at most `CAP`; see [`super::edge_cap`]), and
+    /// a clamped value has no winner.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn pixel(
         &mut self,
         scene: &Scene,
         init: f64,
         ops: &[(CombineOp, u32)],
         p: [f64; 2],
+        edge: f64,
         idx: usize,
         winners: bool,
     ) {
-        let cap = CAP;
-        let mut b = init * cap;
+        let cap = CAP.min(edge);
+        let mut b = init * CAP;
         // Winner: item, hit, and whether a difference flipped it.
         let mut win: Option<(u32, Hit, bool)> = None;
         let mut i = 0;
