@@ -153,10 +153,17 @@ fn sphere_traced_hits_agree_with_dense_marching() {
                 (d, dense)
             })
             .collect();
-        for mode in [StepMode::Fixed, StepMode::Adaptive, StepMode::Bisection] {
+        for (mode, check_cell) in [
+            (StepMode::Fixed, 0.0),
+            (StepMode::Adaptive, 0.0),
+            (StepMode::Adaptive, 0.05),
+            (StepMode::Bisection, 0.0),
+        ] {
             let tr = Trace {
                 mode,
                 check_every: 3,
+                check_cell,
+                check_modulus: 3,
                 max_relax: 4.0,
                 bisection_factor: 1.5,
                 max_steps: 5000,

@@ -26,6 +26,11 @@ pub struct MicroRenderRequest {
     pub steps: StepMode,
     /// Adaptive: a gradient check every N steps (1: fully adaptive).
     pub check_every: u32,
+    /// Adaptive: when > 0, check gradients where the ray enters a new cell
+    /// of this size (world units) selected by a congruence of its index
+    /// (the paper's polynomial-selected checks) instead of every N steps.
+    pub check_cell: f64,
+    pub check_modulus: u32,
     /// Adaptive: the longest step, as a multiple of the distance.
     pub max_relax: f64,
     /// Bisection: step length as a multiple of the distance.
@@ -53,6 +58,8 @@ impl Default for MicroRenderRequest {
             camera: Camera::default(),
             steps: StepMode::Fixed,
             check_every: 10,
+            check_cell: 0.0,
+            check_modulus: 3,
             max_relax: 4.0,
             bisection_factor: 1.5,
             max_steps: 512,
@@ -165,6 +172,8 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
     lim::finite_in("camera.pitch", c.pitch, (-89.9, 89.9))?;
     lim::finite_in("camera.fov", c.fov, (0.001, 170.0))?;
     lim::int_in("check_every", req.check_every, (1, MAX_MICRO_STEPS))?;
+    lim::finite_in("check_cell", req.check_cell, (0.0, 1e6))?;
+    lim::int_in("check_modulus", req.check_modulus, (1, 1_000_000))?;
     lim::finite_in("max_relax", req.max_relax, (1.0, 16.0))?;
     lim::finite_in("bisection_factor", req.bisection_factor, (1.0, 16.0))?;
     lim::int_in("max_steps", req.max_steps, (1, MAX_MICRO_STEPS))?;
@@ -186,6 +195,8 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
         trace: Trace {
             mode: req.steps,
             check_every: req.check_every,
+            check_cell: req.check_cell,
+            check_modulus: req.check_modulus,
             max_relax: req.max_relax,
             bisection_factor: req.bisection_factor,
             max_steps: req.max_steps,

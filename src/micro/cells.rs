@@ -17,7 +17,7 @@ use crate::core::error::{Error, Result};
 use crate::core::limits::MAX_MICRO_TERMS;
 use crate::core::rng::Rng;
 use crate::geom::sdf3;
-use glam::{DMat3, DVec3, IVec3};
+use glam::{DVec3, IVec3};
 use serde::{Deserialize, Serialize};
 
 // ------------------------------------------------------------- hashing --
@@ -327,7 +327,8 @@ pub struct Particle {
     pub centre: DVec3,
     pub radius: f64,
     pub shape: usize,
-    pub rot: Option<DMat3>,
+    /// Three uniform numbers of a random rotation (built only when needed).
+    pub rot: Option<[f64; 3]>,
 }
 
 impl Particles {
@@ -388,9 +389,7 @@ impl Particles {
             .iter()
             .position(|&c| xi[6] < c)
             .unwrap_or(self.c.weights.len() - 1);
-        let rot = self
-            .random_orientation
-            .then(|| sdf3::random_rotation(xi[7], xi[8], xi[9]));
+        let rot = self.random_orientation.then_some([xi[7], xi[8], xi[9]]);
         Some(Particle {
             centre,
             radius,
@@ -401,19 +400,33 @@ impl Particles {
 
     /// Distance (cell units) from `pw` to particle `pt`.
     pub fn particle_distance(&self, pt: &Particle, pw: DVec3) -> f64 {
+        self.particle_distance_below(pt, pw, f64::INFINITY)
+    }
+
+    /// [`Self::particle_distance`], or any value ≥ `cut` when the particle's
+    /// bounding sphere is already at least `cut` away (so a running minimum
+    /// below `cut` is unchanged, exactly).
+    pub fn particle_distance_below(&self, pt: &Particle, pw: DVec3, cut: f64) -> f64 {
         if pt.radius <= 0.0 {
             return f64::INFINITY;
         }
         let mut d = pw - pt.centre;
         let bounding = d.length() - pt.radius;
-        if let Some(r) = pt.rot {
-            d = r.transpose() * d;
+        if bounding >= cut {
+            return bounding;
+        }
+        let shape = &self.shapes[pt.shape].shape;
+        if *shape == Shape::Sphere {
+            return bounding;
+        }
+        if let Some([u1, u2, u3]) = pt.rot {
+            d = sdf3::random_rotation(u1, u2, u3).transpose() * d;
         }
         // Lower-bound shapes (the ellipsoid) can be far below the true
         // distance away from the particle; the bounding sphere's distance
         // is also a lower bound, and with it no particle is ever closer
         // than its bounding sphere (what the bound `C` relies on).
-        (self.shapes[pt.shape].shape.sdf(d / pt.radius) * pt.radius).max(bounding)
+        (shape.sdf(d / pt.radius) * pt.radius).max(bounding)
     }
 
     /// The point in cell units (warped), Eq. 6.
@@ -432,7 +445,7 @@ impl Particles {
         for i in 0..8 {
             let q = b + IVec3::new(i & 1, (i >> 1) & 1, (i >> 2) & 1);
             if let Some(pt) = self.particle(q) {
-                d = d.min(self.particle_distance(&pt, pw));
+                d = d.min(self.particle_distance_below(&pt, pw, d));
             }
         }
         let lo = pw - b.as_dvec3();

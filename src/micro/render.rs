@@ -64,6 +64,11 @@ pub enum StepMode {
 pub struct Trace {
     pub mode: StepMode,
     pub check_every: u32,
+    /// When > 0, gradient checks are selected by position instead (the
+    /// paper's D(p) checks): when the ray enters a new cell of this size
+    /// whose index q has `qx + 2 qy + 3 qz ≡ 0 (mod check_modulus)`.
+    pub check_cell: f64,
+    pub check_modulus: u32,
     pub max_relax: f64,
     pub bisection_factor: f64,
     pub max_steps: u32,
@@ -128,6 +133,7 @@ pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Op
     let mut t = t0;
     let mut dist = f(t, st);
     let mut relax = 1.0f64;
+    let mut last_cell = DVec3::NAN;
     for i in 0..s.max_steps {
         let eps = s.precision * t.max(tiny);
         if dist < eps {
@@ -165,7 +171,16 @@ pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Op
                 }
             }
             StepMode::Adaptive => {
-                if s.check_every > 0 && i % s.check_every == 0 {
+                let check = if s.check_cell > 0.0 {
+                    let q = ((o + d * t) / s.check_cell).floor();
+                    let fresh = q != last_cell;
+                    last_cell = q;
+                    let m = s.check_modulus.max(1) as f64;
+                    i == 0 || (fresh && (q.x + 2.0 * q.y + 3.0 * q.z).rem_euclid(m) == 0.0)
+                } else {
+                    i % s.check_every.max(1) == 0
+                };
+                if check {
                     st.gradient_checks += 1;
                     let h = (s.precision * t).max(1e-9);
                     let p = o + d * t;
