@@ -467,6 +467,11 @@ impl Op {
 }
 
 impl Scene {
+    /// [`Scene::eval`] at `[x, y, z]`.
+    pub fn eval_array(&self, p: [f64; 3]) -> f64 {
+        self.eval(DVec3::from_array(p))
+    }
+
     /// The scene's signed distance at `p`, normalised so that it is
     /// 1-Lipschitz (a lower bound of the true distance outside).
     pub fn eval(&self, p: DVec3) -> f64 {
