@@ -16,6 +16,7 @@
 //! - [`api`]: the `micro-render` and `micro-slice` requests and their jobs.
 pub mod api;
 pub mod cells;
+pub mod fit;
 pub mod periodic;
 pub mod render;
 pub mod scene;
