@@ -496,7 +496,12 @@ pub fn micro_scene(data: &[u8]) {
     let Ok(scene) = filigree::micro::parse(&text) else {
         return;
     };
-    for p in [[0.0, 0.0, 0.0], [0.3, -0.7, 0.2], [1e3, -2e5, 7.0], [-0.5, 0.5, 1e-9]] {
+    for p in [
+        [0.0, 0.0, 0.0],
+        [0.3, -0.7, 0.2],
+        [1e3, -2e5, 7.0],
+        [-0.5, 0.5, 1e-9],
+    ] {
         let v = scene.eval_array(p);
         assert!(!v.is_nan(), "NaN at {p:?}");
     }

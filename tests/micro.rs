@@ -13,46 +13,103 @@ fn scenes() -> Vec<(&'static str, serde_json::Value)> {
     let sphere = json!({"type": "sphere", "radius": 0.4});
     vec![
         ("sphere", sphere.clone()),
-        ("box", json!({"type": "box", "center": [0.1, 0, 0], "half": [0.3, 0.5, 0.2], "round": 0.05})),
-        ("plane", json!({"type": "plane", "normal": [1, 2, 3], "offset": 0.2})),
-        ("particles-spheres", json!({"type": "particles", "cell": 0.2, "seed": 5, "size": {"dist": "uniform", "min": 0.1, "max": 0.45}})),
-        ("particles-mixture", json!({"type": "particles", "cell": 0.15, "seed": 2, "jitter": 0.7,
+        (
+            "box",
+            json!({"type": "box", "center": [0.1, 0, 0], "half": [0.3, 0.5, 0.2], "round": 0.05}),
+        ),
+        (
+            "plane",
+            json!({"type": "plane", "normal": [1, 2, 3], "offset": 0.2}),
+        ),
+        (
+            "particles-spheres",
+            json!({"type": "particles", "cell": 0.2, "seed": 5, "size": {"dist": "uniform", "min": 0.1, "max": 0.45}}),
+        ),
+        (
+            "particles-mixture",
+            json!({"type": "particles", "cell": 0.15, "seed": 2, "jitter": 0.7,
             "size": {"dist": "normal", "mean": 0.3, "std": 0.1, "max": 0.5},
             "shapes": [{"shape": "ellipsoid", "axes": [1, 0.4, 0.3], "weight": 2}, {"shape": "torus", "ratio": 0.4},
-                       {"shape": "cylinder", "aspect": 0.5}, {"shape": "hex_prism", "aspect": 2}, {"shape": "red_blood_cell"}]})),
-        ("particles-varying", json!({"type": "particles", "cell": 0.1, "seed": 9,
+                       {"shape": "cylinder", "aspect": 0.5}, {"shape": "hex_prism", "aspect": 2}, {"shape": "red_blood_cell"}]}),
+        ),
+        (
+            "particles-varying",
+            json!({"type": "particles", "cell": 0.1, "seed": 9,
             "size": {"dist": "fixed", "radius": 0.4},
             "size_scale": {"value": 0.5, "gradient": [0, 0, 0.5]},
             "keep": {"value": 0.5, "gradient": [0.3, 0, 0]},
             "offset": {"value": 0.0, "gradient": [0.01, 0.02, 0.0]},
             "warp": {"amplitude": 0.05, "frequency": 8},
-            "random_orientation": false})),
-        ("lattice", json!({"type": "lattice", "cell": 0.1, "radius": 0.9})),
-        ("lattice-agglomerate", json!({"type": "lattice", "cell": 0.1, "radius": 0.7, "smooth": 0.3, "jitter": 0.3,
+            "random_orientation": false}),
+        ),
+        (
+            "lattice",
+            json!({"type": "lattice", "cell": 0.1, "radius": 0.9}),
+        ),
+        (
+            "lattice-agglomerate",
+            json!({"type": "lattice", "cell": 0.1, "radius": 0.7, "smooth": 0.3, "jitter": 0.3,
             "select": {"combine": "any", "terms": [
                 {"poly": [{"c": 1, "x": 1}, {"c": 1, "y": 1}], "modulus": 3, "classes": [{"residue": 0}]},
-                {"poly": [{"c": 1, "z": 2}], "modulus": 5, "classes": [{"residue": 1, "include": false}], "combine": "all"}]}})),
-        ("pile", json!({"type": "pile", "cell": 0.2, "radius": 0.5, "axis": [0, 1, 1],
+                {"poly": [{"c": 1, "z": 2}], "modulus": 5, "classes": [{"residue": 1, "include": false}], "combine": "all"}]}}),
+        ),
+        (
+            "pile",
+            json!({"type": "pile", "cell": 0.2, "radius": 0.5, "axis": [0, 1, 1],
             "angle": {"value": 0.2, "gradient": [0.5, 0.2, 0]}, "deform": {"value": 0.01, "gradient": [0.02, 0.02, 0.02]},
-            "noise_frequency": 7, "extent": 1.2})),
-        ("gyroid-solid", json!({"type": "tpms", "surface": "gyroid", "period": 0.4, "level": 0.3})),
-        ("diamond-sheet", json!({"type": "tpms", "surface": "diamond", "period": 0.5, "thickness": 0.2})),
-        ("primitive", json!({"type": "tpms", "surface": "primitive", "period": 0.7, "level": -0.5})),
-        ("periodic", json!({"type": "periodic", "constant": 0.3, "thickness": 0.0, "terms": [
+            "noise_frequency": 7, "extent": 1.2}),
+        ),
+        (
+            "gyroid-solid",
+            json!({"type": "tpms", "surface": "gyroid", "period": 0.4, "level": 0.3}),
+        ),
+        (
+            "diamond-sheet",
+            json!({"type": "tpms", "surface": "diamond", "period": 0.5, "thickness": 0.2}),
+        ),
+        (
+            "primitive",
+            json!({"type": "tpms", "surface": "primitive", "period": 0.7, "level": -0.5}),
+        ),
+        (
+            "periodic",
+            json!({"type": "periodic", "constant": 0.3, "thickness": 0.0, "terms": [
             [{"wave": "sin", "axis": "x", "freq": 9, "amp": 1.2}, {"wave": "cos", "axis": "y", "freq": 5, "phase": 0.3, "power": 2}],
             [{"wave": "sin", "axis": "z", "freq": 13}],
-            [{"wave": "cos", "axis": "x", "freq": 3}, {"wave": "cos", "axis": "y", "freq": 3}, {"wave": "sin", "axis": "z", "freq": 4, "power": 3}]]})),
-        ("union-smooth", json!({"type": "union", "smooth": 0.2, "children": [sphere.clone(), {"type": "box", "center": [0.4, 0, 0], "half": [0.2, 0.2, 0.2]}]})),
-        ("intersection-smooth", json!({"type": "intersection", "smooth": 0.1, "children": [
-            {"type": "tpms", "surface": "gyroid", "period": 0.3, "thickness": 0.3}, sphere.clone()]})),
-        ("difference", json!({"type": "difference", "smooth": 0.05, "base": {"type": "box", "half": [0.5, 0.5, 0.5]},
-            "minus": [{"type": "particles", "cell": 0.25, "seed": 1, "size": {"dist": "fixed", "radius": 0.4}}]})),
-        ("transform-shear", json!({"type": "transform", "matrix": [[1, 0.8, 0], [0, 1, 0], [0.3, 0, 2]],
+            [{"wave": "cos", "axis": "x", "freq": 3}, {"wave": "cos", "axis": "y", "freq": 3}, {"wave": "sin", "axis": "z", "freq": 4, "power": 3}]]}),
+        ),
+        (
+            "union-smooth",
+            json!({"type": "union", "smooth": 0.2, "children": [sphere.clone(), {"type": "box", "center": [0.4, 0, 0], "half": [0.2, 0.2, 0.2]}]}),
+        ),
+        (
+            "intersection-smooth",
+            json!({"type": "intersection", "smooth": 0.1, "children": [
+            {"type": "tpms", "surface": "gyroid", "period": 0.3, "thickness": 0.3}, sphere.clone()]}),
+        ),
+        (
+            "difference",
+            json!({"type": "difference", "smooth": 0.05, "base": {"type": "box", "half": [0.5, 0.5, 0.5]},
+            "minus": [{"type": "particles", "cell": 0.25, "seed": 1, "size": {"dist": "fixed", "radius": 0.4}}]}),
+        ),
+        (
+            "transform-shear",
+            json!({"type": "transform", "matrix": [[1, 0.8, 0], [0, 1, 0], [0.3, 0, 2]],
             "rotate": {"axis": [1, 1, 0], "angle": 0.7}, "scale": 0.5, "translate": [0.1, 0.2, 0],
-            "child": {"type": "tpms", "surface": "gyroid", "period": 0.5}})),
-        ("offset", json!({"type": "offset", "amount": 0.05, "child": {"type": "lattice", "cell": 0.2, "radius": 0.5}})),
-        ("shell", json!({"type": "shell", "thickness": 0.02, "child": sphere.clone()})),
-        ("repeat", json!({"type": "repeat", "cell": [0.3, 0.3, 0.5], "child": {"type": "sphere", "radius": 0.1}})),
+            "child": {"type": "tpms", "surface": "gyroid", "period": 0.5}}),
+        ),
+        (
+            "offset",
+            json!({"type": "offset", "amount": 0.05, "child": {"type": "lattice", "cell": 0.2, "radius": 0.5}}),
+        ),
+        (
+            "shell",
+            json!({"type": "shell", "thickness": 0.02, "child": sphere.clone()}),
+        ),
+        (
+            "repeat",
+            json!({"type": "repeat", "cell": [0.3, 0.3, 0.5], "child": {"type": "sphere", "radius": 0.1}}),
+        ),
     ]
 }
 
@@ -61,7 +118,11 @@ fn scene(v: &serde_json::Value) -> Scene {
 }
 
 fn rnd(r: &mut Rng, lo: f64, hi: f64) -> DVec3 {
-    DVec3::new(r.range_f64(lo, hi), r.range_f64(lo, hi), r.range_f64(lo, hi))
+    DVec3::new(
+        r.range_f64(lo, hi),
+        r.range_f64(lo, hi),
+        r.range_f64(lo, hi),
+    )
 }
 
 /// |f(p) − f(q)| ≤ |p − q| (1 + ε) for every node type, at separations
@@ -179,7 +240,10 @@ fn sphere_traced_hits_agree_with_dense_marching() {
                         hits += 1;
                         if mode != StepMode::Bisection {
                             // Never past a surface dense marching saw.
-                            assert!(t <= td + 1e-4, "{name} {mode:?}: traced {t} beyond dense {td}");
+                            assert!(
+                                t <= td + 1e-4,
+                                "{name} {mode:?}: traced {t} beyond dense {td}"
+                            );
                         }
                         let sliver = || dense_hit(&s, o, d, t - 1e-3, t + 2e-3, 1e-5).is_some();
                         agree += ((t - td).abs() < 1e-3 || (t < td && sliver())) as usize;
@@ -194,7 +258,11 @@ fn sphere_traced_hits_agree_with_dense_marching() {
                     ),
                 }
             }
-            let need = if mode == StepMode::Bisection { 0.9 } else { 0.97 };
+            let need = if mode == StepMode::Bisection {
+                0.9
+            } else {
+                0.97
+            };
             assert!(
                 agree as f64 >= need * n as f64,
                 "{name} {mode:?}: {agree}/{n} rays agree"
@@ -205,13 +273,19 @@ fn sphere_traced_hits_agree_with_dense_marching() {
 }
 
 fn asset(name: &str) -> String {
-    std::fs::read_to_string(format!("{}/assets/micro/{name}.json", env!("CARGO_MANIFEST_DIR"))).unwrap()
+    std::fs::read_to_string(format!(
+        "{}/assets/micro/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap()
 }
 
 /// The same request gives the same bytes; another seed other bytes.
 #[test]
 fn renders_are_deterministic_by_seed() {
-    let req = |scene: &str| json!({"scene": scene, "width": 40, "height": 32, "steps": "adaptive"}).to_string();
+    let req = |scene: &str| {
+        json!({"scene": scene, "width": 40, "height": 32, "steps": "adaptive"}).to_string()
+    };
     let a = run_json("micro-render", &req(&asset("spheres"))).unwrap();
     let b = run_json("micro-render", &req(&asset("spheres"))).unwrap();
     assert_eq!(a["png"], b["png"]);
@@ -227,34 +301,71 @@ fn renders_are_deterministic_by_seed() {
 /// (some rays hit, some miss; the slice is partly inside).
 #[test]
 fn shipped_scenes_render_and_slice() {
-    for name in ["gyroid", "spheres", "fibres", "agglomerate", "piled", "multiscale"] {
+    for name in [
+        "gyroid",
+        "spheres",
+        "fibres",
+        "agglomerate",
+        "piled",
+        "multiscale",
+    ] {
         let text = asset(name);
-        let r = run_json("micro-render", &json!({"scene": text, "width": 32, "height": 32}).to_string())
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let r = run_json(
+            "micro-render",
+            &json!({"scene": text, "width": 32, "height": 32}).to_string(),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
         let hits = r["stats"]["hits"].as_u64().unwrap();
         assert!(hits > 50 && hits < 1024, "{name}: {hits} hits");
         let png = r["png"].as_array().unwrap();
-        assert_eq!(&png[1..4], &[json!(80), json!(78), json!(71)], "{name}: PNG signature");
-        let sl = run_json("micro-slice", &json!({"scene": text, "width": 24, "height": 24, "z": 0.1}).to_string()).unwrap();
+        assert_eq!(
+            &png[1..4],
+            &[json!(80), json!(78), json!(71)],
+            "{name}: PNG signature"
+        );
+        let sl = run_json(
+            "micro-slice",
+            &json!({"scene": text, "width": 24, "height": 24, "z": 0.1}).to_string(),
+        )
+        .unwrap();
         let inside = sl["inside"].as_f64().unwrap();
-        assert!(inside > 0.01 && inside < 0.99, "{name}: slice inside {inside}");
+        assert!(
+            inside > 0.01 && inside < 0.99,
+            "{name}: slice inside {inside}"
+        );
         assert!(sl["min"].as_f64().unwrap() < 0.0 && sl["max"].as_f64().unwrap() > 0.0);
     }
 }
 
 #[test]
 fn request_errors_name_their_field() {
-    let e = run_json("micro-render", r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "width": 0}"#).unwrap_err();
+    let e = run_json(
+        "micro-render",
+        r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "width": 0}"#,
+    )
+    .unwrap_err();
     assert_eq!(e.field(), Some("width"));
     let e = run_json("micro-render", r#"{"scene": "{\"type\": \"sphere\"}"}"#).unwrap_err();
     assert_eq!(e.field(), Some("scene"));
     assert_eq!(e.kind(), "syntax");
     assert!(e.to_string().contains("radius"), "{e}");
-    let e = run_json("micro-render", r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "camera": {"fov": 0}}"#).unwrap_err();
+    let e = run_json(
+        "micro-render",
+        r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "camera": {"fov": 0}}"#,
+    )
+    .unwrap_err();
     assert_eq!(e.field(), Some("camera.fov"));
-    let e = run_json("micro-render", r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "steps": "magic"}"#).unwrap_err();
+    let e = run_json(
+        "micro-render",
+        r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "steps": "magic"}"#,
+    )
+    .unwrap_err();
     assert_eq!(e.field(), Some("steps"));
-    let e = run_json("micro-slice", r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "width": 4096, "height": 4096}"#).unwrap_err();
+    let e = run_json(
+        "micro-slice",
+        r#"{"scene": "{\"type\": \"sphere\", \"radius\": 1}", "width": 4096, "height": 4096}"#,
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), "invalid-input");
     let d = run_json("defaults", r#"{"tool": "micro-render"}"#).unwrap();
     assert_eq!(d["request"]["width"], 256);
@@ -282,4 +393,3 @@ fn the_camera_zooms_to_microscale() {
         assert!(st["exhausted"].as_u64().unwrap() < 24, "{distance}: {st}");
     }
 }
-

@@ -148,7 +148,9 @@ fn render(a: RenderArgs) -> Result<(), String> {
             .collect::<Result<_, _>>()
             .map_err(|_| format!("--target: expected X,Y,Z (got '{t}')"))?;
         if v.len() != 3 {
-            return Err(format!("--target: expected three numbers X,Y,Z (got '{t}')"));
+            return Err(format!(
+                "--target: expected three numbers X,Y,Z (got '{t}')"
+            ));
         }
         put(&mut cam, "target", "--target", Some(v))?;
     }
@@ -164,7 +166,10 @@ fn render(a: RenderArgs) -> Result<(), String> {
     let out = drive(job, a.json, &origins)?;
     write(&a.out, &out.png)?;
     if a.json {
-        println!("{}", json!({"width": out.width, "height": out.height, "stats": out.stats}));
+        println!(
+            "{}",
+            json!({"width": out.width, "height": out.height, "stats": out.stats})
+        );
     } else {
         let s = out.stats;
         eprintln!(

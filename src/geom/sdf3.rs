@@ -76,9 +76,21 @@ pub fn rotation(axis: DVec3, angle: f64) -> DMat3 {
     let a = axis.normalize_or(DVec3::Z);
     let t = 1.0 - c;
     DMat3::from_cols(
-        DVec3::new(t * a.x * a.x + c, t * a.x * a.y + s * a.z, t * a.x * a.z - s * a.y),
-        DVec3::new(t * a.x * a.y - s * a.z, t * a.y * a.y + c, t * a.y * a.z + s * a.x),
-        DVec3::new(t * a.x * a.z + s * a.y, t * a.y * a.z - s * a.x, t * a.z * a.z + c),
+        DVec3::new(
+            t * a.x * a.x + c,
+            t * a.x * a.y + s * a.z,
+            t * a.x * a.z - s * a.y,
+        ),
+        DVec3::new(
+            t * a.x * a.y - s * a.z,
+            t * a.y * a.y + c,
+            t * a.y * a.z + s * a.x,
+        ),
+        DVec3::new(
+            t * a.x * a.z + s * a.y,
+            t * a.y * a.z - s * a.x,
+            t * a.z * a.z + c,
+        ),
     )
 }
 
@@ -124,9 +136,20 @@ mod tests {
     fn lipschitz(f: impl Fn(DVec3) -> f64) {
         let mut r = Rng::new(5);
         for _ in 0..4000 {
-            let p = DVec3::new(r.range_f64(-2.0, 2.0), r.range_f64(-2.0, 2.0), r.range_f64(-2.0, 2.0));
-            let q = p + DVec3::new(r.range_f64(-0.3, 0.3), r.range_f64(-0.3, 0.3), r.range_f64(-0.3, 0.3));
-            assert!((f(p) - f(q)).abs() <= p.distance(q) * (1.0 + 1e-9) + 1e-12, "{p} {q}");
+            let p = DVec3::new(
+                r.range_f64(-2.0, 2.0),
+                r.range_f64(-2.0, 2.0),
+                r.range_f64(-2.0, 2.0),
+            );
+            let q = p + DVec3::new(
+                r.range_f64(-0.3, 0.3),
+                r.range_f64(-0.3, 0.3),
+                r.range_f64(-0.3, 0.3),
+            );
+            assert!(
+                (f(p) - f(q)).abs() <= p.distance(q) * (1.0 + 1e-9) + 1e-12,
+                "{p} {q}"
+            );
         }
     }
 

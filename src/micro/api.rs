@@ -221,11 +221,22 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
 impl RenderJob {
     /// Render pixel `i` (row order) and store it.
     fn pixel(&mut self, i: u64) {
-        let (x, y) = ((i % self.width as u64) as u32, (i / self.width as u64) as u32);
+        let (x, y) = (
+            (i % self.width as u64) as u32,
+            (i / self.width as u64) as u32,
+        );
         let d = self.rays.dir(x, y);
         let o = self.rays.origin;
         let t = render::trace(&self.scene, o, d, &self.trace, &mut self.stats);
-        let px = render::shade(&self.scene, o, d, t, &self.trace, &self.shade, &mut self.stats);
+        let px = render::shade(
+            &self.scene,
+            o,
+            d,
+            t,
+            &self.trace,
+            &self.shade,
+            &mut self.stats,
+        );
         let k = i as usize * 4;
         self.rgba[k..k + 4].copy_from_slice(&px);
     }

@@ -24,7 +24,14 @@ use serde::{Deserialize, Serialize};
 
 /// The eight prime coefficients `a_ijk` of the multilinear hash (Eq. 1).
 const HASH_A: [i64; 8] = [
-    1_000_003, 73_856_093, 19_349_663, 83_492_791, 2_654_435_761, 805_459_861, 3_674_653_429, 2_097_152_011,
+    1_000_003,
+    73_856_093,
+    19_349_663,
+    83_492_791,
+    2_654_435_761,
+    805_459_861,
+    3_674_653_429,
+    2_097_152_011,
 ];
 
 /// Random numbers drawn per cell (`N` of Eq. 1).
@@ -34,7 +41,16 @@ const PER_CELL: i64 = 10;
 /// 64-bit arithmetic), mixed with the node's seed.
 pub fn cell_seed(q: IVec3, seed: u64) -> u64 {
     let (x, y, z) = (q.x as i64, q.y as i64, q.z as i64);
-    let terms = [1, x, y, x.wrapping_mul(y), z, x.wrapping_mul(z), y.wrapping_mul(z), x.wrapping_mul(y).wrapping_mul(z)];
+    let terms = [
+        1,
+        x,
+        y,
+        x.wrapping_mul(y),
+        z,
+        x.wrapping_mul(z),
+        y.wrapping_mul(z),
+        x.wrapping_mul(y).wrapping_mul(z),
+    ];
     let mut t: i64 = 0;
     for (a, m) in HASH_A.iter().zip(terms) {
         t = t.wrapping_add(a.wrapping_mul(m));
@@ -89,13 +105,21 @@ impl Field {
 pub enum Shape {
     Sphere,
     /// Semi-axes relative to the longest (which becomes 1).
-    Ellipsoid { axes: [f64; 3] },
+    Ellipsoid {
+        axes: [f64; 3],
+    },
     /// Tube radius relative to the ring radius.
-    Torus { ratio: f64 },
+    Torus {
+        ratio: f64,
+    },
     /// Half height relative to the radius.
-    Cylinder { aspect: f64 },
+    Cylinder {
+        aspect: f64,
+    },
     /// Half height relative to the apothem.
-    HexPrism { aspect: f64 },
+    HexPrism {
+        aspect: f64,
+    },
     /// A red blood cell: a biconcave disc (a torus rim smoothly joined to a
     /// thin disc), after the shape modelled in Kuchel et al. 2021.
     RedBloodCell,
@@ -168,10 +192,19 @@ fn one() -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "dist", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Size {
-    Fixed { radius: f64 },
-    Uniform { min: f64, max: f64 },
+    Fixed {
+        radius: f64,
+    },
+    Uniform {
+        min: f64,
+        max: f64,
+    },
     /// Normal, clamped to `[0, max]`.
-    Normal { mean: f64, std: f64, max: f64 },
+    Normal {
+        mean: f64,
+        std: f64,
+        max: f64,
+    },
 }
 
 impl Size {
@@ -293,7 +326,10 @@ const MIN_CLEARANCE: f64 = 0.02;
 
 fn check_shapes(path: &str, shapes: &[Choice]) -> Result<(Vec<Choice>, Vec<f64>)> {
     if shapes.len() > MAX_MICRO_TERMS {
-        return Err(bad(&join(path, "shapes"), format!("at most {MAX_MICRO_TERMS} shapes")));
+        return Err(bad(
+            &join(path, "shapes"),
+            format!("at most {MAX_MICRO_TERMS} shapes"),
+        ));
     }
     let mut out = vec![];
     let mut cum = vec![];
@@ -376,7 +412,9 @@ impl Particles {
     pub fn particle(&self, q: IVec3) -> Option<Particle> {
         let mut r = Rng::new(cell_seed(q, self.seed));
         let xi: [f64; PER_CELL as usize] = std::array::from_fn(|_| r.f64());
-        let centre = q.as_dvec3() + DVec3::splat(0.5) + (DVec3::new(xi[0], xi[1], xi[2]) - 0.5) * self.jitter;
+        let centre = q.as_dvec3()
+            + DVec3::splat(0.5)
+            + (DVec3::new(xi[0], xi[1], xi[2]) - 0.5) * self.jitter;
         let world = centre * self.cell;
         if xi[3] >= self.keep.at(world) {
             return None;
@@ -542,7 +580,9 @@ impl Congruence {
         let m = self.modulus;
         let mut s = 0i64;
         for t in &self.poly {
-            let v = t.c.rem_euclid(m) * pow_mod(q.x as i64, t.x, m) % m * pow_mod(q.y as i64, t.y, m) % m
+            let v = t.c.rem_euclid(m) * pow_mod(q.x as i64, t.x, m) % m
+                * pow_mod(q.y as i64, t.y, m)
+                % m
                 * pow_mod(q.z as i64, t.z, m)
                 % m;
             s = (s + v) % m;
@@ -563,7 +603,11 @@ impl Congruence {
 impl Select {
     fn check(&self, path: &str) -> Result<()> {
         let p = join(path, "select");
-        let n: usize = self.terms.iter().map(|t| t.poly.len() + t.classes.len()).sum();
+        let n: usize = self
+            .terms
+            .iter()
+            .map(|t| t.poly.len() + t.classes.len())
+            .sum();
         if self.terms.is_empty() || n > MAX_MICRO_TERMS {
             return Err(bad(
                 &join(&p, "terms"),
@@ -573,10 +617,16 @@ impl Select {
         for (i, t) in self.terms.iter().enumerate() {
             let tp = join(&p, format!("terms.{i}"));
             if !(1..=MAX_MODULUS).contains(&t.modulus) {
-                return Err(bad(&join(&tp, "modulus"), format!("must be in 1..={MAX_MODULUS}")));
+                return Err(bad(
+                    &join(&tp, "modulus"),
+                    format!("must be in 1..={MAX_MODULUS}"),
+                ));
             }
             if t.classes.is_empty() {
-                return Err(bad(&join(&tp, "classes"), "needs at least one residue class"));
+                return Err(bad(
+                    &join(&tp, "classes"),
+                    "needs at least one residue class",
+                ));
             }
             for (j, m) in t.poly.iter().enumerate() {
                 if m.x.max(m.y).max(m.z) > MAX_DEGREE {
@@ -823,7 +873,11 @@ mod tests {
     use super::*;
 
     fn rnd(r: &mut Rng, lo: f64, hi: f64) -> DVec3 {
-        DVec3::new(r.range_f64(lo, hi), r.range_f64(lo, hi), r.range_f64(lo, hi))
+        DVec3::new(
+            r.range_f64(lo, hi),
+            r.range_f64(lo, hi),
+            r.range_f64(lo, hi),
+        )
     }
 
     /// Eq. 4's 8 cells give exactly the brute-force distance over every
@@ -898,7 +952,11 @@ mod tests {
         let mut kept = 0;
         let mut r = Rng::new(9);
         for _ in 0..3000 {
-            let q = IVec3::new(r.below(200) as i32 - 100, r.below(200) as i32 - 100, r.below(200) as i32 - 100);
+            let q = IVec3::new(
+                r.below(200) as i32 - 100,
+                r.below(200) as i32 - 100,
+                r.below(200) as i32 - 100,
+            );
             let a = brute_poly(&s.terms[0].poly, q).rem_euclid(7);
             let b = brute_poly(&s.terms[1].poly, q).rem_euclid(5);
             let want = (a == 2 || a == 6) || (b != 0 && b != 3);
@@ -909,9 +967,17 @@ mod tests {
         assert!(kept > 500 && kept < 2900, "{kept}");
         // Huge indices and exponents do not overflow.
         let big = Congruence {
-            poly: vec![Monomial { c: i64::MAX, x: 8, y: 8, z: 8 }],
+            poly: vec![Monomial {
+                c: i64::MAX,
+                x: 8,
+                y: 8,
+                z: 8,
+            }],
             modulus: MAX_MODULUS,
-            classes: vec![Class { residue: 1, include: true }],
+            classes: vec![Class {
+                residue: 1,
+                include: true,
+            }],
             combine: Combine::Any,
         };
         let q = IVec3::new(i32::MAX, i32::MIN, 12345);
@@ -943,7 +1009,9 @@ mod tests {
                         assert!((v + 0.6).abs() < 1e-12, "{q}: {v}");
                         ins += 1;
                     } else {
-                        let none = (-1..=1).all(|a| (-1..=1).all(|b| (-1..=1).all(|c| !s.keeps(q + IVec3::new(a, b, c)))));
+                        let none = (-1..=1).all(|a| {
+                            (-1..=1).all(|b| (-1..=1).all(|c| !s.keeps(q + IVec3::new(a, b, c))))
+                        });
                         if none {
                             assert!(v >= 0.9 - 1e-12, "{q}: {v}");
                             empty += 1;
@@ -993,11 +1061,15 @@ mod tests {
 
     #[test]
     fn particles_that_could_escape_the_dual_grid_are_refused() {
-        let p: Particles = serde_json::from_str(r#"{"size": {"dist": "fixed", "radius": 0.5}, "jitter": 1}"#).unwrap();
+        let p: Particles =
+            serde_json::from_str(r#"{"size": {"dist": "fixed", "radius": 0.5}, "jitter": 1}"#)
+                .unwrap();
         let e = p.checked("children.0").unwrap_err();
         assert_eq!(e.field(), Some("scene"));
         assert!(e.to_string().contains("children.0.size"), "{e}");
-        let p: Particles = serde_json::from_str(r#"{"size": {"dist": "fixed", "radius": 0.5}, "jitter": 0.5}"#).unwrap();
+        let p: Particles =
+            serde_json::from_str(r#"{"size": {"dist": "fixed", "radius": 0.5}, "jitter": 0.5}"#)
+                .unwrap();
         p.checked("").unwrap();
     }
 }

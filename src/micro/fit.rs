@@ -72,7 +72,7 @@ pub fn spectrum(values: &[f64], n: usize) -> Result<Spectrum> {
         let stride = n.pow(axis as u32);
         for base in 0..n * n * n {
             // Lines start where the axis coordinate is 0.
-            if (base / stride) % n != 0 {
+            if !(base / stride).is_multiple_of(n) {
                 continue;
             }
             for (i, l) in line.iter_mut().enumerate() {
@@ -84,13 +84,22 @@ pub fn spectrum(values: &[f64], n: usize) -> Result<Spectrum> {
             }
         }
     }
-    let amp: Vec<f64> = data.iter().map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt()).collect();
+    let amp: Vec<f64> = data
+        .iter()
+        .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
+        .collect();
     // The phase of a coefficient at rounding-noise level is noise: 0.
     let floor = amp.iter().copied().fold(0.0, f64::max) * 1e-9;
     let phase = data
         .iter()
         .zip(&amp)
-        .map(|(c, &a)| if a > floor { libm::atan2(c[1], c[0]) } else { 0.0 })
+        .map(|(c, &a)| {
+            if a > floor {
+                libm::atan2(c[1], c[0])
+            } else {
+                0.0
+            }
+        })
         .collect();
     Ok(Spectrum { amp, phase })
 }
@@ -188,7 +197,11 @@ mod tests {
         }
         let best = es.best().unwrap();
         let got = eta(best.u[0]);
-        assert!((got - 100.0).abs() < 2.0, "η = {got} after {evals} evaluations (loss {})", best.loss);
+        assert!(
+            (got - 100.0).abs() < 2.0,
+            "η = {got} after {evals} evaluations (loss {})",
+            best.loss
+        );
         // And the loss tells: far parameters score far worse.
         assert!(loss((300.0 - lo) / (hi - lo)) > best.loss + 5.0);
     }

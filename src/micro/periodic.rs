@@ -167,7 +167,10 @@ impl Periodic {
                 num(&fp, "freq", f.freq, -1e6, 1e6)?;
                 num(&fp, "phase", f.phase, -1e6, 1e6)?;
                 if f.power > MAX_POWER {
-                    return Err(bad(&join(&fp, "power"), format!("must be at most {MAX_POWER}")));
+                    return Err(bad(
+                        &join(&fp, "power"),
+                        format!("must be at most {MAX_POWER}"),
+                    ));
                 }
                 mag *= powu(f.amp.abs(), f.power);
             }

@@ -261,7 +261,8 @@ impl Rays {
         let h = self.height as f64;
         let sx = (2.0 * (x as f64 + 0.5) - self.width as f64) / h;
         let sy = (h - 2.0 * (y as f64 + 0.5)) / h;
-        (self.forward + self.right * (sx * self.tan_half) + self.up * (sy * self.tan_half)).normalize()
+        (self.forward + self.right * (sx * self.tan_half) + self.up * (sy * self.tan_half))
+            .normalize()
     }
 
     /// Angular size of a pixel (radians, approximately).

@@ -312,10 +312,9 @@ fn children(
 fn build(node: &Node, path: &str, depth: usize, count: &mut usize) -> Result<Op> {
     *count += 1;
     if *count > MAX_MICRO_NODES {
-        return Err(Error::limit(format!(
-            "the scene has more than {MAX_MICRO_NODES} nodes"
-        ))
-        .at("scene"));
+        return Err(
+            Error::limit(format!("the scene has more than {MAX_MICRO_NODES} nodes")).at("scene"),
+        );
     }
     if depth > MAX_MICRO_DEPTH {
         return Err(Error::limit(format!(
@@ -350,13 +349,14 @@ fn build(node: &Node, path: &str, depth: usize, count: &mut usize) -> Result<Op>
         Node::Pile(p) => Op::Pile(Box::new(p.checked(path)?)),
         Node::Tpms(t) => Op::Tpms(t.checked(path)?),
         Node::Periodic(p) => Op::Periodic(Box::new(p.checked(path)?)),
-        Node::Union { children: c, smooth: k } => {
-            Op::Union(children(c, path, "children", depth, count, 1)?, smooth(*k)?)
-        }
-        Node::Intersection { children: c, smooth: k } => Op::Intersection(
-            children(c, path, "children", depth, count, 1)?,
-            smooth(*k)?,
-        ),
+        Node::Union {
+            children: c,
+            smooth: k,
+        } => Op::Union(children(c, path, "children", depth, count, 1)?, smooth(*k)?),
+        Node::Intersection {
+            children: c,
+            smooth: k,
+        } => Op::Intersection(children(c, path, "children", depth, count, 1)?, smooth(*k)?),
         Node::Difference {
             base,
             minus,

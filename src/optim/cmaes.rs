@@ -8,6 +8,8 @@
 //! update uses the clamped points, so the mean stays inside. The covariance
 //! is decomposed by cyclic Jacobi rotations (fixed sweep order: the same
 //! bits natively and in wasm; dimensions here are small).
+#![allow(clippy::needless_range_loop)] // small dense matrix code reads best indexed
+
 use super::{gauss, AskTell, Scored};
 use crate::core::rng::Rng;
 
@@ -201,7 +203,12 @@ impl AskTell for Cmaes {
             .map(|_| {
                 let z: Vec<f64> = (0..self.n).map(|_| gauss(rng)).collect();
                 let y = self.bdz(&z);
-                let mut x: Vec<f64> = self.mean.iter().zip(&y).map(|(m, y)| m + self.sigma * y).collect();
+                let mut x: Vec<f64> = self
+                    .mean
+                    .iter()
+                    .zip(&y)
+                    .map(|(m, y)| m + self.sigma * y)
+                    .collect();
                 super::clamp01(&mut x);
                 x
             })
@@ -225,7 +232,13 @@ impl AskTell for Cmaes {
         let ys: Vec<Vec<f64>> = order
             .iter()
             .take(self.weights.len())
-            .map(|&i| batch[i].iter().zip(&old).map(|(x, m)| (x - m) / self.sigma).collect())
+            .map(|&i| {
+                batch[i]
+                    .iter()
+                    .zip(&old)
+                    .map(|(x, m)| (x - m) / self.sigma)
+                    .collect()
+            })
             .collect();
         let mut yw = vec![0.0; n];
         for (w, y) in self.weights.iter().zip(&ys) {
@@ -260,7 +273,8 @@ impl AskTell for Cmaes {
                 }
                 let c = self.c[i * n + j];
                 self.c[i * n + j] = keep * c
-                    + self.c1 * (self.pc[i] * self.pc[j] + (1.0 - hs) * self.cc * (2.0 - self.cc) * c)
+                    + self.c1
+                        * (self.pc[i] * self.pc[j] + (1.0 - hs) * self.cc * (2.0 - self.cc) * c)
                     + self.cmu * rank_mu;
             }
         }
@@ -313,13 +327,29 @@ mod tests {
             let s = d[0] - d[1];
             r * r + 100.0 * s * s + 10.0 * d[2] * d[2] + 1000.0 * d[3] * d[3]
         };
-        let best = run(f, &[0.9, 0.1, 0.1, 0.1], CmaesOptions { generations: 300, ..Default::default() }, 1);
+        let best = run(
+            f,
+            &[0.9, 0.1, 0.1, 0.1],
+            CmaesOptions {
+                generations: 300,
+                ..Default::default()
+            },
+            1,
+        );
         assert!(best.loss < 1e-12, "{best:?}");
         for (a, b) in best.u.iter().zip(&target) {
             assert!((a - b).abs() < 1e-5, "{best:?}");
         }
         // Same seed, same run.
-        let again = run(f, &[0.9, 0.1, 0.1, 0.1], CmaesOptions { generations: 300, ..Default::default() }, 1);
+        let again = run(
+            f,
+            &[0.9, 0.1, 0.1, 0.1],
+            CmaesOptions {
+                generations: 300,
+                ..Default::default()
+            },
+            1,
+        );
         assert_eq!(best, again);
     }
 
