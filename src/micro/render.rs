@@ -13,8 +13,8 @@
 //!   turns negative, bisect back to the surface (may skip features thinner
 //!   than the overshoot).
 //! - `adaptive`: every `check_every` steps, estimate the local gradient
-//!   magnitude g (6 evaluations); where the normalised field is steeper
-//!   than it needs to be (g < 1) step `distance / g` (at most
+//!   magnitude g (6 evaluations); where the normalised field is clearly
+//!   flatter than its bound (g < 0.7) step `0.9 distance / g` (at most
 //!   `max_relax` × distance). A step whose unbounding spheres do not
 //!   overlap is undone and retaken plainly (over-relaxed sphere tracing,
 //!   Keinert et al. 2014), so it misses nothing fixed steps would find.
@@ -193,10 +193,12 @@ pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Op
                         h,
                     )
                     .length();
-                    relax = if g > 1e-9 {
-                        (1.0 / g).clamp(1.0, s.max_relax)
+                    // Over-relax only where the bound is clearly loose
+                    // (g < 0.7), with a 10% margin.
+                    relax = if g < 0.7 {
+                        (0.9 / g.max(1e-9)).clamp(1.0, s.max_relax)
                     } else {
-                        s.max_relax
+                        1.0
                     };
                 }
                 let (tp, dp) = (t, dist);
