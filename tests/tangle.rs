@@ -214,6 +214,65 @@ regularSplit(line, 8, 0) : in -> [s]
     assert_eq!(e.field(), Some("edits.0"));
 }
 
+/// A `keep` request continues from the expansion the instance kept for
+/// the same document: more edits replay only the new ones, other edits
+/// (an undo, a changed value) replay on a copy of the unedited expansion,
+/// and another document starts afresh. Every answer is the one a request
+/// from scratch gives, byte for byte.
+#[test]
+fn a_kept_expansion_answers_edits_exactly_as_a_replay_from_scratch() {
+    use filigree::tangle::api::forget_kept;
+    forget_kept();
+    let g = example("leaf").unwrap().grammar;
+    let edit = |step: usize, d: f64| Edit {
+        step,
+        params: BTreeMap::from([("distance".to_string(), d)]),
+    };
+    let base = run(req(g));
+    let outlines: Vec<usize> = (0..base.steps.len())
+        .filter(|&k| base.steps[k].operator == "outline")
+        .collect();
+    assert!(outlines.len() >= 3, "{outlines:?}");
+    let (a, b) = (outlines[outlines.len() - 1], outlines[outlines.len() - 2]);
+    let reroll = Edit {
+        step: a,
+        params: BTreeMap::new(),
+    };
+    let sequence: Vec<(Vec<Edit>, u64, bool)> = vec![
+        (vec![], 1, false),                            // new document: expand
+        (vec![edit(a, 3.0)], 1, true),                 // one more edit
+        (vec![edit(a, 3.0), edit(b, 4.0)], 1, true),   // and another
+        (vec![edit(a, 3.0)], 1, true),                 // undo: from the fresh copy
+        (vec![edit(a, 5.0)], 1, true),                 // a changed value
+        (vec![edit(a, 5.0), reroll.clone()], 1, true), // a re-expansion
+        (vec![edit(a, 5.0)], 2, false),                // another seed: afresh
+        (vec![], 2, true),                             // its unedited tangle
+    ];
+    for (edits, seed, reused) in sequence {
+        let r = TangleRequest {
+            edits: edits.clone(),
+            seed,
+            export: ExportFormat::Svg,
+            ..req(g)
+        };
+        let scratch = run(r.clone());
+        let job = start_tangle(TangleRequest { keep: true, ..r }).unwrap();
+        assert_eq!(job.reused(), reused, "{edits:?} seed {seed}");
+        let kept = run_quietly(job).unwrap();
+        assert_eq!(kept, scratch, "{edits:?} seed {seed}");
+    }
+    // A request without `keep` neither reads nor replaces what is kept.
+    run(TangleRequest { seed: 9, ..req(g) });
+    let job = start_tangle(TangleRequest {
+        keep: true,
+        seed: 2,
+        ..req(g)
+    })
+    .unwrap();
+    assert!(job.reused());
+    forget_kept();
+}
+
 #[test]
 fn start_shapes_from_text_svg_and_rings() {
     let g = "outline(6) : a -> [b, c]\n";

@@ -22,6 +22,7 @@ class Slot {
     this.worker = null;
     this.job = null; // {id, resolve, reject, onProgress, hardStop}
     this.version = null;
+    this.affinity = null; // the `affinity` of the last job started here (see WorkerPool.run)
   }
 
   ensureWorker() {
@@ -63,6 +64,7 @@ class Slot {
   crash(message) {
     this.worker?.terminate();
     this.worker = null;
+    this.affinity = null;
     const job = this.job;
     if (job) this.finish(() => job.reject(new JobError(`${message}. The worker was restarted; try again.`, 'crash')));
     this.pool.onCrash?.(message);
@@ -84,6 +86,7 @@ class Slot {
   start(req) {
     this.ensureWorker();
     this.job = req;
+    if (req.affinity) this.affinity = req.affinity;
     const { id, kind, payload } = req;
     this.worker.postMessage({ type: MSG.RUN, id, kind, payload }, req.transfer ?? transferables(payload));
   }
@@ -96,6 +99,7 @@ class Slot {
       if (this.job !== job) return;
       this.worker.terminate();
       this.worker = null;
+      this.affinity = null;
       this.finish(() => job.reject(new JobError('cancelled (the worker was stopped)', 'cancelled')));
     }, HARD_STOP_MS);
   }
@@ -121,15 +125,19 @@ export class WorkerPool {
    * (kind 'cancelled' when `signal` aborts it).
    * @param {string} kind @param {object} payload
    * `onNeed(data)` answers a job that must exchange data mid-way (async is fine).
-   * @param {{onProgress?: Function, onNeed?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[]}} [opts]
+   * `affinity` (a string): run on the worker that last ran a job with the same
+   * affinity, waiting for it if it is busy with one, so state the core keeps in
+   * its instance (a `tangle` request's `keep`) is there for the next request.
+   * Only a speed-up: any worker gives the same answer.
+   * @param {{onProgress?: Function, onNeed?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[], affinity?: string}} [opts]
    */
-  run(kind, payload, { onProgress, onNeed, signal, transfer } = {}) {
+  run(kind, payload, { onProgress, onNeed, signal, transfer, affinity } = {}) {
     return new Promise((resolve, reject) => {
       if (signal?.aborted) {
         reject(new JobError('cancelled', 'cancelled'));
         return;
       }
-      const req = { id: this.nextId++, kind, payload, transfer, onProgress, onNeed, resolve, reject };
+      const req = { id: this.nextId++, kind, payload, transfer, affinity, onProgress, onNeed, resolve, reject };
       if (signal) {
         const onAbort = () => this.abort(req);
         signal.addEventListener('abort', onAbort, { once: true });
@@ -192,10 +200,20 @@ export class WorkerPool {
     this.slots.find((s) => s.job === req)?.cancel();
   }
 
+  /** Start queued jobs on free workers, in order; see `run` for `affinity`. */
   dispatch() {
-    for (const slot of this.slots) {
-      if (!this.queue.length) return;
-      if (!slot.job) slot.start(this.queue.shift());
+    for (let q = 0; q < this.queue.length;) {
+      const req = this.queue[q];
+      const free = this.slots.filter((s) => !s.job);
+      if (!free.length) return;
+      const home = req.affinity ? this.slots.find((s) => s.affinity === req.affinity) : null;
+      let slot;
+      if (home && !home.job) slot = home;
+      else if (home && home.job.affinity === req.affinity) { q++; continue; } // wait for its worker
+      // Otherwise a free worker, keeping those that hold another job's state free.
+      else slot = free.find((s) => !s.affinity) ?? free[0];
+      this.queue.splice(q, 1);
+      slot.start(req);
     }
   }
 

@@ -12,14 +12,19 @@
 // page keeps no tangle state of its own and undo is just the previous
 // document. History, autosave, project files and links come from the
 // document controller (document.js); the schema is src/tangle/state.rs.
+// Its requests carry `keep` and go to one worker (affinity), which keeps the
+// expansion: an edit then regrows only its step's subtree there.
+// A curve or shape drawn on the canvas is added to the grammar text as a
+// `curve`/`shape` polyline definition for split and place rules.
 //
-// Drawing (tangle-draw.js): one Path2D per ink style for the shown step,
-// rebuilt only when the step or the answer changes; during a pan or zoom the
-// last full picture is moved as a bitmap and redrawn sharp once the gesture
-// pauses, so 18k shapes stay smooth.
+// Drawing (tangle-draw.js): a step's picture is a few Path2D parts from a
+// segment tree over the steps, built lazily; heavy parts are kept as bitmaps
+// of the current view, so a slider drag redraws only the small parts that
+// changed. During a pan or zoom the last full picture is moved as a bitmap
+// and redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
-import { prepareTangle, paintBatches, drawThumbnail } from './tangle-draw.js';
+import { prepareTangle, paintBatches, drawThumbnail, createLayers } from './tangle-draw.js';
 
 const RUN_DELAY_MS = 120;
 const TYPING_DELAY_MS = 600;
@@ -89,6 +94,10 @@ const html = `
       <details class="tangle-program" open>
         <summary>Grammar text</summary>
         <div class="tangle-editor"></div>
+        <div class="row-buttons">
+          <button type="button" data-act="draw-curve" title="Draw a polyline on the canvas; it is added to the grammar as a curve for regularSplit">Draw a curve</button>
+          <button type="button" data-act="draw-shape" title="Draw a closed outline on the canvas; it is added to the grammar as a shape for place">Draw a shape</button>
+        </div>
       </details>
       <h3>Start from</h3>
       <div class="tangle-start">
@@ -131,6 +140,18 @@ function invalid(field, why) {
   e.field = field;
   return e;
 }
+
+// The panel's own requests ask the worker to keep the expansion (`keep`) and
+// go to the worker that kept it, so an edit regrows only its step's subtree
+// there instead of the whole tangle (src/tangle/api.rs, www/client.js).
+const KEEP_AFFINITY = 'tangle';
+
+// What a polyline drawn on the canvas becomes.
+const DRAW_PURPOSES = {
+  start: { what: 'a start polygon', finish: 'Use this polygon', min: 3 },
+  curve: { what: 'a curve', finish: 'Add this curve', min: 2 },
+  shape: { what: 'a shape', finish: 'Add this shape', min: 3 },
+};
 
 /** The `tangle` request of document `s` (the core's defaults for the rest). */
 export const requestOf = (s) => ({
@@ -191,13 +212,15 @@ function mount(el, ctx) {
   let frame = 0;
   let sharpTimer = null;
   const snap = document.createElement('canvas');
+  const layers = createLayers(); // bitmaps of the heavy parts of recent steps (tangle-draw.js)
   let snapView = null;
   let hl = null; // {sel, k, path, box}
   let lastPick = -1;
   let drag = null; // a parameter drag: {key, base, step, predicted, group}
   let pendingGroup = null; // after an edit: re-find the selected step by its group
   let pendingKey = null;
-  let drawing = null; // the start polygon being drawn: [[x, y], ...]
+  let drawing = null; // the polyline being drawn: [[x, y], ...]
+  let drawingFor = 'start'; // what it becomes: DRAW_PURPOSES
   let playing = 0;
   const timing = { paint: 0, batches: 0, run: 0 };
 
@@ -256,8 +279,9 @@ function mount(el, ctx) {
     status('growing…');
     const t0 = performance.now();
     try {
-      const r = await ctx.run('tangle', requestOf(doc), {
+      const r = await ctx.run('tangle', { ...requestOf(doc), keep: true }, {
         signal: ctrl.signal,
+        affinity: KEEP_AFFINITY,
         onProgress: (p) => {
           if (running !== ctrl) return;
           status(`growing: ${p.figure != null ? `${Math.round(p.figure).toLocaleString('en')} shapes` : p.stage}`);
@@ -266,6 +290,7 @@ function mount(el, ctx) {
       if (running !== ctrl) return;
       const t1 = performance.now();
       T = prepareTangle(r);
+      layers.clear();
       shownFor = doc;
       hl = null;
       lastPick = -1;
@@ -353,7 +378,8 @@ function mount(el, ctx) {
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
       const sw = doc?.stroke_width ?? 1;
-      paintBatches(g, b, sw > 0 ? Math.max(sw, 0.5 / view.s) : 0);
+      const lw = sw > 0 ? Math.max(sw, 0.5 / view.s) : 0;
+      paintBatches(g, b, lw, layers, `${view.s} ${view.tx} ${view.ty} ${dpr} ${lw}`);
       paintHighlight();
     }
     paintDrawing();
@@ -422,7 +448,7 @@ function mount(el, ctx) {
       const [cx, cy] = toCss(x, y);
       if (i) g.lineTo(cx, cy); else g.moveTo(cx, cy);
     });
-    if (drawing.length > 2) g.closePath();
+    if (drawing.length > 2 && drawingFor !== 'curve') g.closePath();
     g.stroke();
     for (const [x, y] of drawing) {
       const [cx, cy] = toCss(x, y);
@@ -722,13 +748,19 @@ function mount(el, ctx) {
     setStart({ kind: 'svg', svg });
   };
   q('[data-act=draw-start]').onclick = () => beginDrawing();
+  q('[data-act=draw-curve]').onclick = () => beginDrawing('curve');
+  q('[data-act=draw-shape]').onclick = () => beginDrawing('shape');
 
-  function beginDrawing() {
+  /** Start drawing a polyline on the canvas for `purpose` (DRAW_PURPOSES). */
+  function beginDrawing(purpose = 'start') {
     drawing = [];
+    drawingFor = purpose;
     stopPlay();
+    const p = DRAW_PURPOSES[purpose];
     q('.tangle-draw-bar').hidden = false;
+    q('[data-act=draw-finish]').textContent = p.finish;
     q('[data-testid=tangle-draw-count]').textContent = '0';
-    status('drawing a start polygon: click to add points, double-click or "Use this polygon" to finish');
+    status(`drawing ${p.what}: click to add points, double-click or "${p.finish}" to finish`);
     paint();
   }
   function addDrawPoint(cx, cy) {
@@ -742,8 +774,31 @@ function mount(el, ctx) {
     endDrawing();
     // A double-click adds its point twice.
     const clean = pts.filter((p, i) => i === 0 || p[0] !== pts[i - 1][0] || p[1] !== pts[i - 1][1]);
-    if (clean.length < 3) { status('a polygon needs at least 3 points'); return; }
-    setStart({ kind: 'polygon', points: clean });
+    const p = DRAW_PURPOSES[drawingFor];
+    if (clean.length < p.min) { status(`${p.what} needs at least ${p.min} points`); return; }
+    if (drawingFor === 'start') setStart({ kind: 'polygon', points: clean });
+    else addDefinition(drawingFor, clean);
+  }
+
+  /**
+   * Add the drawn polyline to the grammar as `curve drawnN = polyline(...)` (or
+   * `shape`), first in the text so every rule can name it. The core scales it
+   * to what it cuts or fills, so only its form matters.
+   */
+  function addDefinition(kind, pts) {
+    const doc = state();
+    if (!doc) return;
+    const text = editor ? editor.getValue() : doc.grammar;
+    let k = 1;
+    while (new RegExp(`\\bdrawn${k}\\b`).test(text)) k++;
+    const name = `drawn${k}`;
+    const x0 = Math.min(...pts.map((p) => p[0])), y0 = Math.min(...pts.map((p) => p[1]));
+    const num = (v) => String(Math.round(v * 10) / 10);
+    const line = `${kind} ${name} = polyline(${pts.map(([x, y]) => `${num(x - x0)} ${num(y - y0)}`).join(', ')})`;
+    const use = kind === 'curve' ? `regularSplit(${name}, 40, 0) : tag -> [a]` : `place(20, 4, ${name}) : tag -> [a, b]`;
+    refit = false;
+    ctx.commit({ ...doc, grammar: `${line}\n${text}`, example: null, edits: [], selected: null });
+    status(`added "${kind} ${name}" to the grammar; use it in a rule, e.g. ${use}`);
   }
   function endDrawing() {
     drawing = null;
@@ -751,7 +806,7 @@ function mount(el, ctx) {
     paint();
   }
   q('[data-act=draw-finish]').onclick = finishDrawing;
-  q('[data-act=draw-cancel]').onclick = () => { endDrawing(); kindSel.value = startKind(state()); showStartRows(kindSel.value); };
+  q('[data-act=draw-cancel]').onclick = () => { endDrawing(); kindSel.value = startKind(state()); showStartRows(kindSel.value); status(''); };
 
   // ---- grammar picker ------------------------------------------------------------------
 
@@ -856,7 +911,8 @@ function mount(el, ctx) {
     const pngWidth = Number(q('[name=png-width]').value) || 1600;
     status(`exporting ${format.toUpperCase()}…`);
     try {
-      const r = await ctx.run('tangle', { ...requestOf(doc), export: format, png_width: pngWidth });
+      const r = await ctx.run('tangle', { ...requestOf(doc), export: format, png_width: pngWidth, keep: true },
+        { affinity: KEEP_AFFINITY });
       status(`exported ${format.toUpperCase()}: ${r.stats.shapes.toLocaleString('en')} shapes`);
       return r;
     } catch (err) {
@@ -881,6 +937,8 @@ function mount(el, ctx) {
     result: () => T?.r ?? null,
     pending: () => runTimer !== null || running !== null || typingTimer !== null,
     timing: () => ({ ...timing }),
+    /** Vertices per part of what step `at` shows (tangle-draw.js batches). */
+    parts: (at) => (T ? T.batches(at).parts.map((b) => b.vertices) : []),
     step: () => k,
     view: () => ({ ...view, dpr }),
     /** The selected step's input shapes' bounds in canvas pixels, or null. */

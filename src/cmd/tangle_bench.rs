@@ -4,7 +4,7 @@
 //! splits and outlines done with shapely/GEOS in the same run as a
 //! baseline (`scripts/tangle_shapely_baseline.py`).
 use filigree::core::job::{run_to_end, Cancel};
-use filigree::tangle::api::{start_tangle, TangleRequest};
+use filigree::tangle::api::{start_tangle, Edit, TangleRequest, TangleResponse};
 use filigree::tangle::examples::EXAMPLES;
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -53,6 +53,90 @@ fn expand(grammar: &str, wobble: f64, repeats: usize) -> Result<(Value, f64), St
     Ok((v, min))
 }
 
+/// Shapes made by step `s` and the steps that depend on it (its subtree).
+fn subtree(r: &TangleResponse, s: usize) -> usize {
+    let mut made: std::collections::HashSet<u32> = r.steps[s].outputs.iter().copied().collect();
+    for st in &r.steps[s + 1..] {
+        if st.inputs.iter().any(|i| made.contains(i)) {
+            made.extend(st.outputs.iter().copied());
+        }
+    }
+    made.len()
+}
+
+fn timed(req: TangleRequest) -> Result<(TangleResponse, f64, bool), String> {
+    let t = Instant::now();
+    let job = start_tangle(req).map_err(|e| e.to_string())?;
+    let reused = job.reused();
+    let r = run_to_end(job, &Cancel::new(), |_| {}).map_err(|e| e.to_string())?;
+    Ok((r, t.elapsed().as_secs_f64(), reused))
+}
+
+/// Issue 10's edit figure: a parameter edit on the step with the largest
+/// subtree of at most 2,000 shapes, answered from the kept expansion
+/// (what the browser's worker does) against a replay from scratch, and the
+/// answer alone (the same request again: nothing to regrow).
+fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> {
+    let doc = TangleRequest {
+        grammar: grammar.to_string(),
+        keep: true,
+        ..Default::default()
+    };
+    let (base, _, _) = timed(doc.clone())?;
+    let Some((step, size)) = (0..base.steps.len())
+        .filter(|&k| !base.steps[k].params.is_empty())
+        .map(|k| (k, subtree(&base, k)))
+        .filter(|&(_, n)| n <= 2000)
+        .max_by_key(|&(k, n)| (n, std::cmp::Reverse(k)))
+    else {
+        return Ok(json!({"grammar": name, "edit": "no step with parameters"}));
+    };
+    let p = &base.steps[step].params[0];
+    let mut secs = (vec![], vec![], vec![]);
+    for rep in 0..repeats.max(1) {
+        let value = (p.value * (0.8 + 0.05 * rep as f64)).clamp(p.min, p.max);
+        let edit = Edit {
+            step,
+            params: [(p.name.to_string(), value)].into(),
+        };
+        let edited = TangleRequest {
+            edits: vec![edit],
+            ..doc.clone()
+        };
+        timed(doc.clone())?; // the document as kept, unedited
+        let (_, kept, reused) = timed(edited.clone())?;
+        let (_, again, _) = timed(edited.clone())?;
+        let (_, scratch, _) = timed(TangleRequest {
+            keep: false,
+            ..edited
+        })?;
+        if !reused {
+            return Err(format!("{name}: the edit did not reuse the kept expansion"));
+        }
+        secs.0.push(kept);
+        secs.1.push(again);
+        secs.2.push(scratch);
+    }
+    let mm = |v: Vec<f64>| {
+        let (min, median) = super::min_median(v);
+        json!({"min": min, "median": median})
+    };
+    let kept_min = secs.0.iter().copied().fold(f64::INFINITY, f64::min);
+    let scratch_min = secs.2.iter().copied().fold(f64::INFINITY, f64::min);
+    Ok(json!({
+        "grammar": name,
+        "step": step,
+        "operator": base.steps[step].operator,
+        "parameter": p.name,
+        "subtree_shapes": size,
+        "shapes_in_answer": base.shapes.len(),
+        "kept_edit_seconds": mm(secs.0),
+        "answer_only_seconds": mm(secs.1),
+        "scratch_edit_seconds": mm(secs.2),
+        "speedup_kept_vs_scratch": scratch_min / kept_min,
+    }))
+}
+
 pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
     let want = |n: &str| only.is_none_or(|o| o.split(',').any(|x| x.trim() == n));
     let mut rows = vec![];
@@ -60,6 +144,13 @@ pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
         let (mut v, _) = expand(ex.grammar, 1.0, repeats)?;
         v["grammar"] = json!(ex.name);
         rows.push(v);
+    }
+    let mut edits = vec![];
+    for ex in EXAMPLES
+        .iter()
+        .filter(|e| want(e.name) && ["leaf", "village"].contains(&e.name))
+    {
+        edits.push(edit_row(ex.name, ex.grammar, repeats)?);
     }
     let mut baseline = Value::Null;
     if want("baseline") {
@@ -92,8 +183,9 @@ pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
         "{}",
         json!({
             "bench": "tangle",
-            "about": "each shipped grammar expanded natively (seed 1, default settings); seconds min/median over repeats; the paper's Table 1 (3.1 GHz machine, its own grammars) beside; the shapely baseline is the same grid+outline work in Python/GEOS in this run",
+            "about": "each shipped grammar expanded natively (seed 1, default settings); seconds min/median over repeats; the paper's Table 1 (3.1 GHz machine, its own grammars) beside; the shapely baseline is the same grid+outline work in Python/GEOS in this run; edits: one step's parameter changed, answered from the kept expansion (as the browser's worker does) vs replayed from scratch, and the answer alone",
             "rows": rows,
+            "edits": edits,
             "baseline": baseline,
             "paper_table1": table1,
         })

@@ -90,6 +90,11 @@ pub struct TangleRequest {
     pub stroke_width: f64,
     /// PNG width in pixels.
     pub png_width: u32,
+    /// Keep this expansion in the instance (the browser's worker) so the
+    /// next `keep` request with the same document and more edits only
+    /// replays its new edits: editing a step redoes that step's subtree,
+    /// not the whole tangle. The answer is the same either way.
+    pub keep: bool,
 }
 
 impl Default for TangleRequest {
@@ -107,6 +112,7 @@ impl Default for TangleRequest {
             export: ExportFormat::None,
             stroke_width: 1.0,
             png_width: 1600,
+            keep: false,
         }
     }
 }
@@ -169,7 +175,10 @@ pub struct TangleStats {
 pub struct TangleResponse {
     pub tags: Vec<String>,
     pub shapes: Vec<ShapeOut>,
-    /// x, y of every shape's rings, in order.
+    /// x, y of every shape's rings, in order. Sent as the bytes of the
+    /// f32s, little-endian (the browser gets a `Uint8Array` it views as a
+    /// `Float32Array`, transferred, not a 300k-element JS array).
+    #[serde(serialize_with = "f32_bytes")]
     pub points: Vec<f32>,
     pub steps: Vec<StepOut>,
     /// `[x0, y0, x1, y1]` of all shapes.
@@ -181,6 +190,11 @@ pub struct TangleResponse {
     pub svg: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none", with = "opt_bytes")]
     pub png: Option<Vec<u8>>,
+}
+
+fn f32_bytes<S: serde::Serializer>(v: &[f32], s: S) -> std::result::Result<S::Ok, S::Error> {
+    let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+    serde_bytes::serialize(&bytes, s)
 }
 
 mod opt_bytes {
@@ -368,44 +382,113 @@ fn motifs(g: &Grammar) -> HashMap<String, Polygon> {
     m
 }
 
+/// The expansion a `keep` request left in this instance (one per wasm
+/// worker; natively, per thread). `fresh` is the expansion before any
+/// edit, `edited` the one after `edits`. A request for the same document
+/// whose edits extend `edits` continues from `edited`; one with other
+/// edits (an undo, a changed value) replays them on a copy of `fresh`.
+/// Either way the same operations run on the same state as a replay from
+/// scratch, so the answer's bytes are the same.
+struct Kept {
+    /// The request, with what does not change the expansion cleared.
+    document: TangleRequest,
+    fresh: Expansion,
+    edited: Option<(Vec<Edit>, Expansion)>,
+}
+
+thread_local! {
+    static KEPT: std::cell::RefCell<Option<Kept>> = const { std::cell::RefCell::new(None) };
+}
+
+/// `req` without its edits and the fields that only shape the answer.
+fn document_of(req: &TangleRequest) -> TangleRequest {
+    TangleRequest {
+        edits: vec![],
+        export: ExportFormat::None,
+        stroke_width: 0.0,
+        png_width: 1,
+        keep: false,
+        ..req.clone()
+    }
+}
+
+/// A kept expansion for `req` and the edits still to apply, if this
+/// instance has one for its document.
+fn take_kept(req: &TangleRequest) -> Option<(Expansion, usize)> {
+    KEPT.with_borrow_mut(|kept| {
+        let k = kept.as_mut().filter(|k| k.document == document_of(req))?;
+        match k.edited.take() {
+            Some((done, x)) if req.edits.starts_with(&done) => Some((x, done.len())),
+            _ => Some((k.fresh.clone(), 0)),
+        }
+    })
+}
+
+/// Forget any kept expansion (tests; a worker never needs to).
+pub fn forget_kept() {
+    KEPT.with_borrow_mut(|k| *k = None);
+}
+
 /// A `tangle` request as a job: the expansion a bounded part a step, then
 /// each edit, then the answer.
 pub struct TangleJob {
-    x: Expansion,
+    /// `None` once answered (a `keep` job hands it to the instance).
+    x: Option<Expansion>,
     edits: std::vec::IntoIter<Edit>,
     edit_no: usize,
+    /// With `keep`: the expansion before any edit, once it has ended
+    /// (`None` while it runs, or when the instance keeps it already).
+    fresh: Option<Expansion>,
+    reused: bool,
     req: TangleRequest,
 }
 
 /// Check a `tangle` request and set its expansion up.
 pub fn start_tangle(req: TangleRequest) -> Result<TangleJob> {
     let (mut g, settings) = check(&req)?;
-    flatten_svg_defs(&mut g)?;
-    let start = start_shapes(&req, &g)?;
-    let m = motifs(&g);
-    let x = Expansion::new(g, start, m, settings)?;
+    let kept = if req.keep { take_kept(&req) } else { None };
+    let (x, done, reused) = match kept {
+        Some((x, done)) => (x, done, true),
+        None => {
+            flatten_svg_defs(&mut g)?;
+            let start = start_shapes(&req, &g)?;
+            let m = motifs(&g);
+            (Expansion::new(g, start, m, settings)?, 0, false)
+        }
+    };
     Ok(TangleJob {
-        x,
-        edits: req.edits.clone().into_iter(),
-        edit_no: 0,
+        x: Some(x),
+        edits: req.edits.clone().split_off(done).into_iter(),
+        edit_no: done,
+        fresh: None,
+        reused,
         req,
     })
 }
 
 impl TangleJob {
-    /// Apply the next edit; `false` when none is left.
-    fn next_edit(&mut self) -> Result<bool> {
+    /// Whether a `keep` request continues from the expansion this
+    /// instance kept (tests and benchmarks; the answer is the same).
+    pub fn reused(&self) -> bool {
+        self.reused
+    }
+
+    /// Apply the next edit to `x`; `false` when none is left.
+    fn next_edit(&mut self, x: &mut Expansion) -> Result<bool> {
+        if self.req.keep && !self.reused && self.fresh.is_none() {
+            self.fresh = Some(x.clone());
+        }
         let Some(e) = self.edits.next() else {
             return Ok(false);
         };
         let field = format!("edits.{}", self.edit_no);
         self.edit_no += 1;
-        let Some(step) = self.x.steps.get(e.step) else {
+        let Some(step) = x.steps.get(e.step) else {
             return Err(Error::input(format!(
                 "edit {} is for step {}, but the tangle has {} steps",
                 self.edit_no,
                 e.step + 1,
-                self.x.steps.len()
+                x.steps.len()
             ))
             .at(field));
         };
@@ -429,29 +512,56 @@ impl TangleJob {
             }
             Some(op)
         };
-        self.x.reexpand(e.step, op).map_err(|e| e.at(field))?;
+        x.reexpand(e.step, op).map_err(|e| e.at(field))?;
         Ok(true)
+    }
+
+    /// Leave the expansion `x` in the instance for the next `keep` request.
+    fn keep(&mut self, x: Expansion) {
+        let document = document_of(&self.req);
+        let edited = Some((std::mem::take(&mut self.req.edits), x));
+        let fresh = self.fresh.take();
+        KEPT.with_borrow_mut(|kept| match (kept.as_mut(), fresh) {
+            (_, Some(fresh)) => {
+                *kept = Some(Kept {
+                    document,
+                    fresh,
+                    edited,
+                })
+            }
+            (Some(k), None) if k.document == document => k.edited = edited,
+            _ => {}
+        });
     }
 }
 
 impl Job for TangleJob {
     type Output = TangleResponse;
     fn step(&mut self) -> Result<Step<TangleResponse>> {
+        let Some(mut x) = self.x.take() else {
+            return Err(Error::input("this tangle job has already answered"));
+        };
         // A slice: expansion work until ~a few ms of shapes are done.
         for _ in 0..4 {
-            match self.x.work()? {
+            match x.work()? {
                 Advance::Working | Advance::Stepped(_) => {}
                 Advance::Ended => {
-                    if self.next_edit()? {
+                    if self.next_edit(&mut x)? {
                         continue;
                     }
-                    return Ok(Step::Done(respond(&self.x, &self.req)?));
+                    let r = respond(&x, &self.req)?;
+                    if self.req.keep {
+                        self.keep(x);
+                    }
+                    return Ok(Step::Done(r));
                 }
             }
         }
-        let f = (self.x.steps.len() as f64 / self.req.max_steps as f64).min(0.99);
+        let f = (x.steps.len() as f64 / self.req.max_steps as f64).min(0.99);
+        let live = x.live();
+        self.x = Some(x);
         Ok(Step::Running(
-            Progress::new(f, "expanding").with_figure(self.x.live() as f64),
+            Progress::new(f, "expanding").with_figure(live as f64),
         ))
     }
 }

@@ -6,16 +6,25 @@
 // - village: the time to grow it (request → answer shown), then step-slider
 //   moves: from the input event to the end of the next animation frame (the
 //   panel's repaint: Path2D batches for the step + fills and strokes), and the
-//   panel's own paint work (`paint`, of which `batches` rebuilds the Path2Ds).
+//   panel's own paint work (`paint`, of which `batches` builds Path2Ds).
+//   Drags move the slider a few steps at a time, as a hand does (the heavy
+//   parts of the picture are shared with the previous step and copied from
+//   bitmaps); jumps alternate between far steps (most parts new).
 //   A pan frame (the last picture moved as a bitmap) is measured the same way.
-// - leaf: a parameter edit on a step (an outline distance): from the slider's
+// - leaf: a parameter edit on a step (an outline distance, on the outline
+//   step with the largest subtree of ≤ 2,000 shapes): from the slider's
 //   change to the regrown tangle painted (round trip; a released slider runs
-//   at once, no debounce), and the worker's part (`run`).
+//   at once, no debounce), and the worker's part (`run`: the kept expansion
+//   regrows the subtree, then the whole answer is sent).
 // The floor line is an empty animation frame measured in the same run.
 import { launch } from './harness.mjs';
 
 const root = process.argv[2];
-const env = await launch(root ? { root } : {});
+// Software 2-D canvas: in headless Chromium the GPU canvas runs on
+// SwiftShader, which rasterises big paths at ~30 s a frame (an artefact of
+// the emulated GPU, not what a user's GPU or Chromium's software raster does).
+const args = ['--disable-accelerated-2d-canvas'];
+const env = await launch(root ? { root, args } : { args });
 const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
 const p90 = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length * 0.9)]; };
 const round = (x) => Math.round(x * 10) / 10;
@@ -50,9 +59,19 @@ const village = await page.evaluate(async () => {
   const r = t.result();
   const slider = document.querySelector('[data-testid=tangle-step]');
   const steps = r.steps.length;
-  const moves = [], paints = [], batches = [];
+  const moves = [], paints = [], batches = [], drags = [], dragPaints = [];
   const frame = () => new Promise((res) => requestAnimationFrame(() => res()));
   await frame();
+  for (const from of [0.95, 0.6, 0.3]) {
+    for (let i = 0; i < 12; i++) {
+      const k = Math.round(steps * from) - i * 2;
+      const start = performance.now();
+      slider.value = String(k);
+      slider.dispatchEvent(new Event('input', { bubbles: true }));
+      await frame();
+      if (i > 0) { drags.push(performance.now() - start); dragPaints.push(t.timing().paint); }
+    }
+  }
   for (let i = 0; i < 24; i++) {
     const k = Math.round(steps * (i % 2 ? 0.5 + i / 60 : 1 - i / 60));
     const start = performance.now();
@@ -81,23 +100,39 @@ const village = await page.evaluate(async () => {
   await new Promise((r) => setTimeout(r, 300));
   return {
     steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.length,
-    worker_ms: Math.round(t.timing().run), moves, paints, batches, pans, sharp_paint: t.timing().paint,
+    worker_ms: Math.round(t.timing().run), moves, paints, batches, drags, dragPaints, pans, sharp_paint: t.timing().paint,
   };
 });
+
 
 // ---- leaf: a parameter edit round trip
 n = await runs();
 await page.click('[data-example=leaf]');
 await waitForResult(n);
 const edits = [];
+const subtreeSizes = [];
 for (let i = 0; i < 6; i++) {
-  // Select a (small) outline step and move its distance.
+  // Select the outline step with the largest subtree of at most 2,000 shapes
+  // (the issue's case; `bench tangle` picks the same way natively) and move its distance.
   const target = await page.evaluate(() => {
-    const t = window.filigreeTangle;
-    const r = t.result();
-    const steps = r.steps.map((s, k) => [s, k]).filter(([s]) => s.operator === 'outline').sort((a, b) => a[0].inputs.length - b[0].inputs.length);
-    return steps[0][1];
+    const r = window.filigreeTangle.result();
+    const subtree = (k) => {
+      const made = new Set(r.steps[k].outputs);
+      for (let j = k + 1; j < r.steps.length; j++) {
+        if (r.steps[j].inputs.some((i) => made.has(i))) for (const o of r.steps[j].outputs) made.add(o);
+      }
+      return made.size;
+    };
+    const c = r.steps.map((s, k) => [k, s.operator === 'outline' ? subtree(k) : Infinity]).filter(([, n]) => n <= 2000)
+      .sort((a, b) => b[1] - a[1]);
+    return c[0][0];
   });
+  subtreeSizes.push(await page.evaluate((k) => {
+    const r = window.filigreeTangle.result();
+    const made = new Set(r.steps[k].outputs);
+    for (let j = k + 1; j < r.steps.length; j++) if (r.steps[j].inputs.some((i) => made.has(i))) for (const o of r.steps[j].outputs) made.add(o);
+    return made.size;
+  }, target));
   await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigreeTangle.state(), selected: sel }), target);
   await page.waitForSelector('[data-testid=tangle-param-distance]');
   n = await runs();
@@ -124,11 +159,12 @@ console.log(JSON.stringify({
   village: {
     grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
     shapes_in_history: village.all_shapes,
-    slider_move_to_frame_ms: summary(village.moves), slider_paint_ms: summary(village.paints), slider_batches_ms: summary(village.batches),
+    slider_drag_to_frame_ms: summary(village.drags), slider_drag_paint_ms: summary(village.dragPaints),
+    slider_jump_to_frame_ms: summary(village.moves), slider_jump_paint_ms: summary(village.paints), slider_jump_batches_ms: summary(village.batches),
     pan_frame_ms: summary(village.pans), sharp_repaint_ms: round(village.sharp_paint),
   },
   leaf: {
-    final_shapes: leafShapes,
+    final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes,
     param_edit_round_trip_ms: summary(edits.map((e) => e.total)),
     param_edit_worker_ms: summary(edits.map((e) => e.run)), repaint_ms: summary(edits.map((e) => e.paint)),
   },

@@ -238,3 +238,49 @@ test('tangle: a grammar error is marked in the editor at its line; a typed word 
   assert.deepEqual(st, { kind: 'text', text: 'Tangle', height: 300 });
   assert.ok(await count(page) > 50);
 });
+
+test('tangle: a curve drawn on the canvas joins the grammar and a split cuts along it; a drawn shape joins too', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  let n = await runs(page);
+  const straight = 'start rect(600, 400) : a\nregularSplit(line, 100, 0) : a -> [b]\n';
+  await page.fill('[data-testid=tangle-grammar]', straight);
+  await page.click('[data-act=generate]');
+  n = await waitForResult(page, n);
+  const before = await page.evaluate(() => window.filigreeTangle.result().stats);
+  // A zigzag drawn with five clicks, finished with the bar's button.
+  await page.click('[data-act=draw-curve]');
+  assert.equal(await page.textContent('[data-act=draw-finish]'), 'Add this curve');
+  const box = await page.locator('[data-testid=tangle-canvas]').boundingBox();
+  for (const [fx, fy] of [[0.2, 0.5], [0.35, 0.3], [0.5, 0.5], [0.65, 0.3], [0.8, 0.5]]) {
+    await page.mouse.click(box.x + fx * box.width, box.y + fy * box.height);
+  }
+  assert.equal(await page.textContent('[data-testid=tangle-draw-count]'), '5');
+  await page.click('[data-act=draw-finish]');
+  n = await waitForResult(page, n);
+  const grammar = await page.evaluate(() => window.filigreeTangle.state().grammar);
+  const m = /^curve drawn1 = polyline\(([^)]*)\)\n/.exec(grammar);
+  assert.ok(m, grammar);
+  assert.equal(m[1].split(',').length, 5);
+  assert.ok(grammar.endsWith(straight), 'the rest of the grammar is kept');
+  // Used by the split: bands with zigzag edges (far more vertices per shape).
+  await page.fill('[data-testid=tangle-grammar]', grammar.replace('regularSplit(line', 'regularSplit(drawn1'));
+  await page.click('[data-act=generate]');
+  n = await waitForResult(page, n);
+  const after = await page.evaluate(() => window.filigreeTangle.result().stats);
+  assert.ok(after.shapes >= 2, JSON.stringify(after));
+  assert.ok(after.vertices / after.shapes > before.vertices / before.shapes + 4, `${JSON.stringify(after)} vs ${JSON.stringify(before)}`);
+  // A shape: three clicks and a double-click close it; it is added as `shape drawn2`.
+  await page.click('[data-act=draw-shape]');
+  for (const [fx, fy] of [[0.3, 0.3], [0.6, 0.35], [0.45, 0.7]]) {
+    await page.mouse.click(box.x + fx * box.width, box.y + fy * box.height);
+  }
+  await page.mouse.dblclick(box.x + 0.3 * box.width, box.y + 0.6 * box.height);
+  n = await waitForResult(page, n);
+  const g2 = await page.evaluate(() => window.filigreeTangle.state().grammar);
+  assert.match(g2, /^shape drawn2 = polyline\(([^,)]*,){3}[^,)]*\)\ncurve drawn1 = /);
+  // Undo takes the definition out again.
+  await page.keyboard.press('Control+z');
+  n = await waitForResult(page, n);
+  assert.ok((await page.evaluate(() => window.filigreeTangle.state().grammar)).startsWith('curve drawn1 ='));
+});

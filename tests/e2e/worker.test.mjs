@@ -138,3 +138,46 @@ test('errors arrive typed: a syntax error has kind, line, column and field; a ba
   assert.equal(r.unknownParam.field, 'params.radius');
   assert.match(r.unknownParam.message, /no parameter 'radius'/);
 });
+
+test('jobs with an affinity run on the worker that ran the last one (waiting for it), others flow around it', async () => {
+  const page = await env.newPage({ path: '#tool=inspect' });
+  const r = await page.evaluate(async () => {
+    const pool = window.filigree.pool;
+    const homes = () => pool.slots.filter((s) => s.affinity === 'tangle').map((s) => s.index);
+    const grammar = 'start rect(300, 200) : a\nregularSplit(line, 20, 0) : a -> [b]\noutline(4) : b -> [c, d]\n';
+    const tangle = (extra, opts = {}) => pool.run('tangle', { grammar, wobble: 0, keep: true, ...extra }, { affinity: 'tangle', ...opts });
+    const out = {};
+    await tangle({});
+    out.first = homes();
+    // Busy workers elsewhere do not move it.
+    const others = [pool.run('tangle', { grammar, seed: 7 }), pool.run('tangle', { grammar, seed: 8 })];
+    await tangle({ edits: [{ step: 1, params: { distance: 6 } }] });
+    await Promise.all(others);
+    out.second = homes();
+    // While its worker runs an affinity job, the next one waits for that
+    // worker even though others are free.
+    const ctrl = new AbortController();
+    const slow = tangle({ grammar: 'start rect(2000, 2000) : a\nregularSplit(line, 20, 1) : a -> [b]\noutline(2) : b -> [c, d]\n', wobble: 1 }, { signal: ctrl.signal })
+      .catch((e) => e.kind);
+    await new Promise((res) => setTimeout(res, 50));
+    const next = tangle({ edits: [{ step: 1, params: { distance: 5 } }], export: 'svg' });
+    await new Promise((res) => setTimeout(res, 50));
+    out.queued = pool.queue.length;
+    out.freeWhileQueued = pool.slots.filter((s) => !s.job).length;
+    ctrl.abort();
+    out.slow = await slow;
+    const kept = await next;
+    out.third = homes();
+    // The kept expansion's answer is a fresh one's.
+    const fresh = await pool.run('tangle', { grammar, wobble: 0, edits: [{ step: 1, params: { distance: 5 } }], export: 'svg' });
+    out.same = kept.svg === fresh.svg && kept.svg.length > 1000;
+    return out;
+  });
+  assert.equal(r.first.length, 1);
+  assert.deepEqual(r.second, r.first);
+  assert.equal(r.queued, 1, 'the affinity job waited for its worker');
+  assert.ok(r.freeWhileQueued >= 1, 'while another worker was free');
+  assert.equal(r.slow, 'cancelled');
+  assert.deepEqual(r.third, r.first);
+  assert.ok(r.same, 'a kept expansion answers as a fresh one does');
+});
