@@ -35,6 +35,7 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("project", project),
     ("tangle_grammar", tangle_grammar),
     ("tangle_start", tangle_start),
+    ("micro_scene", micro_scene),
 ];
 
 fn finite_svg(svg: &str, what: &str) {
@@ -483,5 +484,45 @@ pub fn tangle_start(data: &[u8]) {
         };
         assert!(r.points.iter().all(|v| v.is_finite()));
         assert!(r.stats.shapes <= 400);
+    }
+}
+
+/// A Micro scene's JSON text (lossy UTF-8): parsed and checked under the
+/// default limits; what compiles is evaluated at a few points (never NaN;
+/// finite, or +∞ for an empty scene) and sphere-traced and sliced at 6×4.
+pub fn micro_scene(data: &[u8]) {
+    use filigree::micro::api::{start_render, start_slice, MicroRenderRequest, MicroSliceRequest};
+    let text = String::from_utf8_lossy(data).into_owned();
+    let Ok(scene) = filigree::micro::parse(&text) else {
+        return;
+    };
+    for p in [
+        [0.0, 0.0, 0.0],
+        [0.3, -0.7, 0.2],
+        [1e3, -2e5, 7.0],
+        [-0.5, 0.5, 1e-9],
+    ] {
+        let v = scene.eval_array(p);
+        assert!(!v.is_nan(), "NaN at {p:?}");
+    }
+    let req = MicroRenderRequest {
+        scene: text.clone(),
+        width: 6,
+        height: 4,
+        max_steps: 64,
+        ..Default::default()
+    };
+    if let Some(out) = step_some(start_render(req).expect("the scene parsed")) {
+        assert_eq!(out.stats.rays, 24);
+        assert!(!out.png.is_empty());
+    }
+    let req = MicroSliceRequest {
+        scene: text,
+        width: 6,
+        height: 4,
+        ..Default::default()
+    };
+    if let Some(out) = step_some(start_slice(req).expect("the scene parsed")) {
+        assert!(out.min.is_finite() && out.max.is_finite() && (0.0..=1.0).contains(&out.inside));
     }
 }

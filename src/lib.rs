@@ -22,6 +22,7 @@ pub mod api;
 pub mod core;
 pub mod geom;
 pub mod inspect;
+pub mod micro;
 pub mod optim;
 pub mod pattern;
 pub mod pixel;

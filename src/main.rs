@@ -31,6 +31,11 @@ enum Command {
     Pixel(Box<cmd::pixel::Args>),
     /// Grow a pen-and-ink tangle from a group grammar, to SVG or PNG.
     Tangle(Box<cmd::tangle::Args>),
+    /// Multiscale microstructures: sphere-trace or slice an implicit scene.
+    Micro {
+        #[command(subcommand)]
+        which: cmd::micro::Which,
+    },
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -66,6 +71,7 @@ fn main() -> ExitCode {
         Command::Render(a) => cmd::fit::run_render(a),
         Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Tangle(a) => cmd::tangle::run(*a),
+        Command::Micro { which } => cmd::micro::run(which),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

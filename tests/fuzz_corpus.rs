@@ -123,6 +123,11 @@ fn tangle_start_corpus_replays() {
     replay("tangle_start");
 }
 
+#[test]
+fn micro_scene_corpus_replays() {
+    replay("micro_scene");
+}
+
 /// Every request kind has at least one seed in the `requests` corpus.
 #[test]
 fn requests_corpus_covers_every_kind() {
@@ -454,5 +459,58 @@ fn write_seeds() {
     text(
         "pixel-small.filigree.json",
         app_projects::project_text("pixel", 1, small),
+    );
+
+    // micro_scene: the shipped scenes and a few edges; requests: one
+    // render and one slice.
+    for name in [
+        "gyroid",
+        "spheres",
+        "fibres",
+        "agglomerate",
+        "piled",
+        "multiscale",
+    ] {
+        let scene = file(&format!("assets/micro/{name}.json"));
+        put("micro_scene", &format!("{name}.json"), &scene);
+    }
+    for (name, s) in [
+        (
+            "transform-matrix.json",
+            r#"{"type": "transform", "matrix": [[1, 0.5, 0], [0, 1, 0], [0, 0, 3]], "child": {"type": "periodic", "terms": [[{"wave": "sin", "axis": "x", "freq": 1e5, "power": 8}]]}}"#,
+        ),
+        (
+            "huge-values.json",
+            r#"{"type": "difference", "base": {"type": "box", "half": [1e6, 1e6, 1e6]}, "minus": [{"type": "lattice", "cell": 1e-6, "radius": 1, "jitter": 0.5, "select": {"terms": [{"poly": [{"c": 9223372036854775807, "x": 8, "y": 8, "z": 8}], "modulus": 2147483648, "classes": [{"residue": -1}]}]}}]}"#,
+        ),
+        (
+            "deep.json",
+            &format!(
+                "{}{{\"type\": \"sphere\", \"radius\": 1}}{}",
+                "{\"type\": \"shell\", \"thickness\": 0.01, \"child\": ".repeat(30),
+                "}".repeat(30)
+            ),
+        ),
+        (
+            "pile-steep.json",
+            r#"{"type": "pile", "angle": {"gradient": [1e6, 0, 0]}, "extent": 1e6}"#,
+        ),
+        (
+            "particles-everything.json",
+            r#"{"type": "particles", "cell": 0.01, "size": {"dist": "normal", "mean": 0.2, "std": 1, "max": 0.45}, "warp": {"amplitude": 1, "frequency": 1000}, "shapes": [{"shape": "red_blood_cell", "weight": 0}, {"shape": "torus", "ratio": 1}]}"#,
+        ),
+    ] {
+        put("micro_scene", name, s.as_bytes());
+    }
+    let scene = String::from_utf8(file("assets/micro/spheres.json")).unwrap();
+    req(
+        "micro-render.json",
+        "micro-render",
+        json!({"scene": scene, "width": 8, "height": 6, "steps": "adaptive"}),
+    );
+    req(
+        "micro-slice.json",
+        "micro-slice",
+        json!({"scene": scene, "width": 8, "height": 6, "z": 0.3}),
     );
 }

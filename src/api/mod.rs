@@ -23,6 +23,7 @@ pub mod project;
 
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Step};
+use crate::micro::api as micro;
 use crate::pattern::api as pattern;
 use crate::pixel::api as pixel;
 use crate::raster::Rgba8Image;
@@ -66,6 +67,8 @@ pub const KINDS: &[&str] = &[
     "open-project",
     "tangle",
     "tangle-examples",
+    "micro-render",
+    "micro-slice",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -87,6 +90,8 @@ pub enum Response {
     Project(Box<project::OpenedProject>),
     Tangle(Box<tangle::TangleResponse>),
     TangleExamples(&'static [crate::tangle::examples::Example]),
+    MicroRender(Box<micro::MicroRenderResponse>),
+    MicroSlice(Box<micro::MicroSliceResponse>),
     /// `null`.
     Nothing,
 }
@@ -149,6 +154,8 @@ pub enum DefaultRequest {
     CheckState(project::CheckStateRequest),
     OpenProject(project::OpenProjectRequest),
     Tangle(Box<tangle::TangleRequest>),
+    MicroRender(Box<micro::MicroRenderRequest>),
+    MicroSlice(Box<micro::MicroSliceRequest>),
     Nothing,
 }
 
@@ -181,6 +188,8 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "open-project" => D::OpenProject(Default::default()),
         "pattern-generators" | "tangle-examples" => D::Nothing,
         "tangle" => D::Tangle(Default::default()),
+        "micro-render" => D::MicroRender(Default::default()),
+        "micro-slice" => D::MicroSlice(Default::default()),
         other => return Err(unknown_kind(other).at("tool")),
     };
     let budgets = matches!(tool, "fit" | "fit-eval").then(pattern::budgets);
@@ -231,6 +240,12 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         ),
         "tangle" => boxed(tangle::start_tangle(request(kind, payload)?)?, |r| {
             Response::Tangle(Box::new(r))
+        }),
+        "micro-render" => boxed(micro::start_render(request(kind, payload)?)?, |r| {
+            Response::MicroRender(Box::new(r))
+        }),
+        "micro-slice" => boxed(micro::start_slice(request(kind, payload)?)?, |r| {
+            Response::MicroSlice(Box::new(r))
         }),
         "tangle-examples" => {
             serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;

@@ -64,6 +64,18 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Micro: render time per sphere-tracing step strategy (paper Table 2)
+    /// and a fibrous volume made three ways at four noise scales (Table 1).
+    Micro {
+        #[arg(long, default_value_t = 3)]
+        repeats: usize,
+        /// Image side in pixels.
+        #[arg(long, default_value_t = 160)]
+        size: u32,
+        /// Accepted for symmetry with other benches; output is always JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Pixel-art texturing: the fish and trunk cases stage by stage, plus a 512² Laplace solve.
     Pixel {
         #[arg(long, default_value_t = 10)]
@@ -100,6 +112,7 @@ pub fn run(w: Which) -> Result<(), String> {
         }
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
         Which::Tangle { repeats, only, .. } => super::tangle_bench::run(repeats, only.as_deref()),
+        Which::Micro { repeats, size, .. } => super::micro_bench::run(repeats, size),
         Which::Pixel { repeats, .. } => {
             println!("{}", pixel_bench(repeats.max(1))?);
             Ok(())

@@ -2,6 +2,8 @@ pub mod bench;
 pub mod fit;
 pub mod fit_bench;
 pub mod inspect;
+pub mod micro;
+pub mod micro_bench;
 pub mod pixel;
 pub mod slices_bench;
 pub mod tangle;

@@ -144,6 +144,24 @@ pub const MAX_STATE_DEPTH: usize = 64;
 // of this list: [`crate::core::request_limits`], beside the checks that
 // apply them where a request enters the core.
 
+// ----------------------------------------------------------------- micro --
+
+/// Micro scenes: most nodes in one scene tree, deepest nesting, most
+/// children of one boolean, bytes of scene JSON (so a scene cannot make
+/// evaluation slow without bound or its parse overflow a stack).
+pub const MAX_MICRO_NODES: usize = 256;
+pub const MAX_MICRO_DEPTH: usize = 24;
+pub const MAX_MICRO_CHILDREN: usize = 64;
+pub const MAX_MICRO_SCENE_BYTES: usize = 256 * 1024;
+/// Micro: terms of a periodic sum, monomials of a polynomial, congruences
+/// of a selection, shapes of a particle mixture.
+pub const MAX_MICRO_TERMS: usize = 64;
+/// Micro renders and slices: largest side and pixel count (4 Mpx).
+pub const MAX_MICRO_SIDE: u32 = 2048;
+pub const MAX_MICRO_PIXELS: u64 = 4 * 1024 * 1024;
+/// Micro sphere tracing: most steps along one ray.
+pub const MAX_MICRO_STEPS: u32 = 20_000;
+
 #[cfg(test)]
 mod tests {
     use super::*;

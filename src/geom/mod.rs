@@ -25,6 +25,7 @@ pub mod mvc;
 pub mod noise;
 pub mod polygon;
 pub mod primitives;
+pub mod sdf3;
 pub mod svg;
 pub mod winding;
 

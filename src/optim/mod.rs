@@ -30,11 +30,13 @@ use crate::core::rng::Rng;
 use serde::{Deserialize, Serialize};
 
 pub mod adam;
+pub mod cmaes;
 pub mod ga;
 pub mod nelder_mead;
 pub mod random;
 
 pub use adam::Adam;
+pub use cmaes::{Cmaes, CmaesOptions};
 pub use ga::{Ga, GaOptions};
 pub use nelder_mead::NelderMead;
 pub use random::RandomSearch;
