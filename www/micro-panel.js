@@ -168,7 +168,7 @@ function mount(el, ctx) {
   function preview() {
     run(true);
     ctx.clearTimeout(sharpTimer);
-    sharpTimer = ctx.setTimeout(() => { sharpTimer = null; if (!gesture) run(false); else preview(); }, SHARP_DELAY_MS);
+    sharpTimer = ctx.setTimeout(() => { sharpTimer = null; run(false); }, SHARP_DELAY_MS);
   }
 
   function requestOf(doc, side) {
@@ -202,7 +202,7 @@ function mount(el, ctx) {
         signal: ctrl.signal,
         onProgress: (p) => {
           if (running !== ctrl || small) return;
-          status(`${p.stage || 'working'}: ${Math.round((p.fraction ?? p.progress ?? 0) * 100)}%`);
+          status(`${p.stage || 'working'}: ${Math.round((p.fraction ?? 0) * 100)}%`);
         },
       });
       if (running !== ctrl) return;
@@ -410,6 +410,7 @@ function mount(el, ctx) {
     markError(err) { markSceneError(err); },
     keys: {
       '+': () => zoomBy(ZOOM_STEP, null),
+      '=': () => zoomBy(ZOOM_STEP, null),
       '-': () => zoomBy(1 / ZOOM_STEP, null),
     },
     unmount() {
