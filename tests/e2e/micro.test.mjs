@@ -145,3 +145,39 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
   assert.equal(back.z, saved.z);
   await page.context().close();
 });
+
+test('micro: a share link carries the scene by name and the camera; undo steps back through zooms', async () => {
+  const a = await env.newPage({ path: '#tool=micro' });
+  await a.waitForSelector('[data-testid=micro-examples] [data-example=piled]', { timeout: 30000 });
+  let n = await waitForRender(a, await runs(a));
+  await a.click('[data-example=piled]');
+  n = await waitForRender(a, n);
+  await a.selectOption('[data-testid=micro-steps]', 'adaptive');
+  n = await waitForRender(a, n);
+  assert.match(await a.textContent('[data-testid=micro-status]'), /adaptive steps/);
+  const before = (await state(a)).camera;
+  await a.click('button[data-act=zoom-in]');
+  n = await waitForRender(a, n);
+  const zoomed = (await state(a)).camera;
+  assert.ok(Math.abs(zoomed.distance - before.distance / 1.5) < 1e-9);
+  // Undo: the camera comes back and the picture is rendered again.
+  await a.click('button[data-act=undo]');
+  n = await waitForRender(a, n);
+  assert.deepEqual((await state(a)).camera, before);
+  await a.click('button[data-act=redo]');
+  n = await waitForRender(a, n);
+  assert.deepEqual((await state(a)).camera, zoomed);
+  const want = await state(a);
+
+  await a.click('button[data-act=copy-link]');
+  await a.waitForSelector('.toast[data-link]');
+  const link = await a.$eval('.toast[data-link]', (t) => t.dataset.link);
+  assert.match(link, /#tool=micro&share=[A-Za-z0-9_-]+$/);
+  assert.ok(link.length < 400, `a shipped scene travels by name (${link.length} characters)`);
+  const b = await env.newPage({ path: link.slice(link.indexOf('#')) });
+  await b.waitForFunction(() => window.filigreeMicro?.state()?.example === 'piled', null, { timeout: 30000 });
+  await waitForRender(b, 0);
+  assert.deepEqual(await state(b), want);
+  await a.context().close();
+  await b.context().close();
+});
