@@ -342,6 +342,14 @@ pub fn project(data: &[u8]) {
             assert!(s.edits.len() <= filigree::tangle::api::MAX_EDITS);
             assert!(s.wobble.is_finite() && s.stroke_width.is_finite());
         }
+        ToolState::Micro(s) => {
+            use filigree::micro::state::{DISTANCE, PITCH};
+            assert!(s.scene.len() <= filigree::core::limits::MAX_MICRO_SCENE_BYTES);
+            let c = &s.camera;
+            assert!(c.yaw.is_finite() && (PITCH.0..=PITCH.1).contains(&c.pitch));
+            assert!((DISTANCE.0..=DISTANCE.1).contains(&c.distance));
+            assert!(c.target.iter().all(|v| v.is_finite()) && s.z.is_finite());
+        }
         ToolState::Inspect(_) => {}
     }
     let again = project_text(&opened.tool, opened.state_version, state).expect("saves");

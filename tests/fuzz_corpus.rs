@@ -513,4 +513,5 @@ fn write_seeds() {
         "micro-slice",
         json!({"scene": scene, "width": 8, "height": 6, "z": 0.3}),
     );
+    req("micro-examples.json", "micro-examples", json!({}));
 }

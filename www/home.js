@@ -29,6 +29,11 @@ const CARDS = {
     alt: "The paper's leaf grammar grown by the core",
     preview: previewTangle,
   },
+  micro: {
+    blurb: 'Render multiscale microstructures from implicit functions; orbit and zoom from the sample down to its grains.',
+    alt: 'The gyroid scene sphere-traced by the core',
+    preview: previewMicro,
+  },
 };
 
 async function bytesOf(rel, signal) {
@@ -98,6 +103,20 @@ async function previewTangle(pool, box, signal) {
   canvas.width = 320;
   canvas.height = 240;
   drawThumbnail(canvas, r);
+  box.replaceChildren(canvas);
+}
+
+// The Micro panel's gyroid, sphere-traced small.
+async function previewMicro(pool, box, signal) {
+  const exs = await pool.run('micro-examples', {}, { signal });
+  const ex = exs.find((e) => e.name === 'gyroid') || exs[0];
+  const r = await pool.run('micro-render', { scene: ex.scene, width: 160, height: 120 }, { signal });
+  const bmp = await createImageBitmap(new Blob([r.png], { type: 'image/png' }));
+  const canvas = document.createElement('canvas');
+  canvas.width = r.width;
+  canvas.height = r.height;
+  canvas.getContext('2d').drawImage(bmp, 0, 0);
+  bmp.close();
   box.replaceChildren(canvas);
 }
 

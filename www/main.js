@@ -8,10 +8,11 @@ import inspectTool from './inspect-panel.js';
 import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
 import tangleTool from './tangle-panel.js';
+import microTool from './micro-panel.js';
 import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 import { mountHome } from './home.js';
 
-const TOOLS = [pixelTool, fitTool, inspectTool, tangleTool];
+const TOOLS = [pixelTool, fitTool, inspectTool, tangleTool, microTool];
 
 const $ = (sel) => document.querySelector(sel);
 

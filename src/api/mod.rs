@@ -69,6 +69,7 @@ pub const KINDS: &[&str] = &[
     "tangle-examples",
     "micro-render",
     "micro-slice",
+    "micro-examples",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -92,6 +93,7 @@ pub enum Response {
     TangleExamples(&'static [crate::tangle::examples::Example]),
     MicroRender(Box<micro::MicroRenderResponse>),
     MicroSlice(Box<micro::MicroSliceResponse>),
+    MicroExamples(&'static [crate::micro::examples::Example]),
     /// `null`.
     Nothing,
 }
@@ -186,7 +188,7 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "defaults" => D::Defaults(Default::default()),
         "check-state" => D::CheckState(Default::default()),
         "open-project" => D::OpenProject(Default::default()),
-        "pattern-generators" | "tangle-examples" => D::Nothing,
+        "pattern-generators" | "tangle-examples" | "micro-examples" => D::Nothing,
         "tangle" => D::Tangle(Default::default()),
         "micro-render" => D::MicroRender(Default::default()),
         "micro-slice" => D::MicroSlice(Default::default()),
@@ -252,6 +254,13 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
             boxed(
                 crate::core::job::OneShot::new(|| Ok(crate::tangle::examples::EXAMPLES)),
                 Response::TangleExamples,
+            )
+        }
+        "micro-examples" => {
+            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+            boxed(
+                crate::core::job::OneShot::new(|| Ok(crate::micro::examples::EXAMPLES)),
+                Response::MicroExamples,
             )
         }
         "pattern-generators" => {

@@ -482,6 +482,11 @@ pub const TOOLS: &[ToolSchema] = &[
         version: crate::tangle::state::STATE_VERSION,
     },
     ToolSchema {
+        id: "micro",
+        title: "Micro",
+        version: crate::micro::state::STATE_VERSION,
+    },
+    ToolSchema {
         id: "inspect",
         title: "Inspect image",
         version: inspect_state::STATE_VERSION,
@@ -500,6 +505,7 @@ pub enum ToolState {
     Pixel(Box<crate::pixel::state::PixelState>),
     Fit(Box<crate::pattern::state::FitState>),
     Tangle(Box<crate::tangle::state::TangleState>),
+    Micro(Box<crate::micro::state::MicroState>),
     Inspect(inspect_state::InspectState),
 }
 
@@ -517,6 +523,7 @@ pub fn check_state(tool_id: &str, version: u64, state: &Value) -> Result<ToolSta
         "pixel" => ToolState::Pixel(Box::new(crate::pixel::state::check(state)?)),
         "fit" => ToolState::Fit(Box::new(crate::pattern::state::check(state)?)),
         "tangle" => ToolState::Tangle(Box::new(crate::tangle::state::check(state)?)),
+        "micro" => ToolState::Micro(Box::new(crate::micro::state::check(state)?)),
         _ => ToolState::Inspect(inspect_state::check(state)?),
     })
 }

@@ -14,11 +14,15 @@
 //! - [`render`]: sphere tracing with fixed, bisection and adaptive steps,
 //!   normals, shading, the orbit camera and slices.
 //! - [`api`]: the `micro-render` and `micro-slice` requests and their jobs.
+//! - [`examples`]: the shipped scenes (`micro-examples`); [`state`]: the
+//!   browser tool's document.
 pub mod api;
 pub mod cells;
+pub mod examples;
 pub mod fit;
 pub mod periodic;
 pub mod render;
 pub mod scene;
+pub mod state;
 
 pub use scene::{parse, Node, Scene};

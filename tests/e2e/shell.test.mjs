@@ -11,7 +11,7 @@ after(async () => { await env?.close(); });
 
 const PHONE = { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true, deviceScaleFactor: 2 };
 const VIEWS = {
-  home: { path: '', ready: () => document.querySelectorAll('.home-preview[data-ready]').length === 4 },
+  home: { path: '', ready: () => document.querySelectorAll('.home-preview[data-ready]').length === 5 },
   pixel: { path: '#tool=pixel', ready: () => Number(document.querySelector('[data-testid=pixel-status]')?.dataset.runs) > 0 },
   fit: { path: '#tool=fit', ready: () => !!document.querySelector('[data-testid=fit-sliders] input') },
   inspect: { path: '#tool=inspect', ready: () => !!document.querySelector('[data-testid=drop-zone] button') },
@@ -33,10 +33,10 @@ test('home: no hash shows what Filigree is and a card per tool with a live examp
   assert.equal(await page.textContent('h1'), 'Filigree');
   assert.match(await page.textContent('.home-intro'), /browser/);
   const cards = await page.$$eval('.home-card', (as) => as.map((a) => [a.dataset.tool, a.getAttribute('href')]));
-  assert.deepEqual(cards, [['pixel', '#tool=pixel'], ['fit', '#tool=fit'], ['inspect', '#tool=inspect'], ['tangle', '#tool=tangle']]);
+  assert.deepEqual(cards, [['pixel', '#tool=pixel'], ['fit', '#tool=fit'], ['inspect', '#tool=inspect'], ['tangle', '#tool=tangle'], ['micro', '#tool=micro']]);
   await page.waitForFunction(VIEWS.home.ready, null, { timeout: 30000 });
   // Each preview was computed by the core: a picture, not a blank.
-  for (const tool of ['pixel', 'fit', 'inspect', 'tangle']) {
+  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro']) {
     assert.ok(await page.$eval(`.home-card[data-tool=${tool}]`, varied), `${tool} preview`);
   }
   await page.click('.home-card[data-tool=pixel]');

@@ -1,0 +1,66 @@
+//! The scenes shipped with Filigree (`assets/micro/*.json`), each shown in
+//! the browser's scene picker (`micro-examples`) and parsed in the tests
+//! below.
+use serde::Serialize;
+
+/// A shipped scene.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Example {
+    pub name: &'static str,
+    /// One line on what it shows.
+    pub about: &'static str,
+    pub scene: &'static str,
+}
+
+/// Every shipped scene.
+pub const EXAMPLES: &[Example] = &[
+    Example {
+        name: "gyroid",
+        about: "A sheet gyroid (triply periodic minimal surface)",
+        scene: include_str!("../../assets/micro/gyroid.json"),
+    },
+    Example {
+        name: "spheres",
+        about: "Suspended spheres of uniformly distributed sizes on a hashed grid",
+        scene: include_str!("../../assets/micro/spheres.json"),
+    },
+    Example {
+        name: "agglomerate",
+        about: "An agglomerate whose lattice cells are picked by polynomial congruences",
+        scene: include_str!("../../assets/micro/agglomerate.json"),
+    },
+    Example {
+        name: "piled",
+        about: "A pile of deformed, tilted grains",
+        scene: include_str!("../../assets/micro/piled.json"),
+    },
+    Example {
+        name: "fibres",
+        about: "Woven fibres: repeated boxes along three axes",
+        scene: include_str!("../../assets/micro/fibres.json"),
+    },
+    Example {
+        name: "multiscale",
+        about: "Particles of mixed shapes with a graded density, over a finer structure",
+        scene: include_str!("../../assets/micro/multiscale.json"),
+    },
+];
+
+/// The shipped scene called `name`.
+pub fn example(name: &str) -> Option<&'static Example> {
+    EXAMPLES.iter().find(|e| e.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_shipped_scene_parses_and_names_are_unique() {
+        for (i, e) in EXAMPLES.iter().enumerate() {
+            crate::micro::scene::parse(e.scene).unwrap_or_else(|err| panic!("{}: {err}", e.name));
+            assert_eq!(example(e.name).map(|x| x.name), Some(e.name));
+            assert!(EXAMPLES[..i].iter().all(|o| o.name != e.name));
+        }
+    }
+}
