@@ -10,6 +10,7 @@
 // The document is {example, scene, camera, steps, view, z}; its schema is
 // src/micro/state.rs. History, autosave, project files and links come from
 // the document controller (document.js).
+import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
 
@@ -29,8 +30,7 @@ const STEP_MODES = [
 ];
 
 // Shipped scenes: fetched once per page.
-let examplesPromise = null;
-const examples = (run) => (examplesPromise ??= run('micro-examples', {}).catch((e) => { examplesPromise = null; throw e; }));
+const examples = shippedExamples('micro-examples');
 
 const html = `
   <div class="micro-layout">
@@ -67,11 +67,6 @@ const html = `
     </aside>
   </div>`;
 
-function invalid(field, why) {
-  const e = new Error(`${field} ${why}`);
-  e.field = field;
-  return e;
-}
 
 const microState = {
   version: 1,
@@ -83,18 +78,7 @@ const microState = {
   migrate: (raw) => raw,
   fileName: (s) => s.example || 'micro',
   // A shipped scene travels by name.
-  toShare(s) {
-    return { ...s, scene: s.example ? null : s.scene };
-  },
-  async fromShare(x, ctx) {
-    if (!x || typeof x !== 'object' || Array.isArray(x)) throw invalid('state', 'is not a Micro document');
-    if (x.scene == null && x.example != null) {
-      const ex = (await examples(ctx.run)).find((e) => e.name === x.example);
-      if (!ex) throw invalid('example', 'is not a shipped scene');
-      return { ...x, scene: ex.scene };
-    }
-    return x;
-  },
+  ...shareByExample(examples, 'scene', { tool: 'Micro', what: 'scene' }),
 };
 
 const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));

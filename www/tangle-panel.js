@@ -22,6 +22,7 @@
 // of the current view, so a slider drag redraws only the small parts that
 // changed. During a pan or zoom the last full picture is moved as a bitmap
 // and redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
+import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
 import { prepareTangle, paintBatches, drawThumbnail, createLayers } from './tangle-draw.js';
@@ -43,8 +44,7 @@ const HIGHLIGHT = 'rgba(255, 122, 0, 0.38)';
 const HIGHLIGHT_LINE = '#e06000';
 
 // Shipped grammars and their thumbnails: fetched and drawn once per page.
-let examplesPromise = null;
-const examples = (run) => (examplesPromise ??= run('tangle-examples', {}).catch((e) => { examplesPromise = null; throw e; }));
+const examples = shippedExamples('tangle-examples');
 const thumbnails = new Map(); // name → canvas
 
 const html = `
@@ -135,11 +135,6 @@ const html = `
 // Schema (every field, its rules and messages): src/tangle/state.rs, applied by the
 // document controller (`check-state`).
 
-function invalid(field, why) {
-  const e = new Error(`${field} ${why}`);
-  e.field = field;
-  return e;
-}
 
 // The panel's own requests ask the worker to keep the expansion (`keep`) and
 // go to the worker that kept it, so an edit regrows only its step's subtree
@@ -171,18 +166,7 @@ const tangleState = {
   migrate: (raw) => raw,
   fileName: (s) => s.example || 'tangle',
   // A shipped grammar travels by name.
-  toShare(s) {
-    return { ...s, grammar: s.example ? null : s.grammar };
-  },
-  async fromShare(x, ctx) {
-    if (!x || typeof x !== 'object' || Array.isArray(x)) throw invalid('state', 'is not a Tangle document');
-    if (x.grammar == null && x.example != null) {
-      const ex = (await examples(ctx.run)).find((e) => e.name === x.example);
-      if (!ex) throw invalid('example', 'is not a shipped grammar');
-      return { ...x, grammar: ex.grammar };
-    }
-    return x;
-  },
+  ...shareByExample(examples, 'grammar', { tool: 'Tangle', what: 'grammar' }),
 };
 
 // ---- the view ----------------------------------------------------------------------
