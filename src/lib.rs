@@ -28,6 +28,7 @@ pub mod pattern;
 pub mod pixel;
 pub mod raster;
 pub mod tangle;
+pub mod texture;
 
 #[cfg(feature = "web")]
 pub mod web;
