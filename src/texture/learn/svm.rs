@@ -91,7 +91,7 @@ fn solve(q: &dyn Fn(usize, usize) -> f64, p: &[f64], y: &[f64], c: &[f64]) -> So
     let mut alpha = vec![0.0; l];
     let mut g = p.to_vec();
     let diag: Vec<f64> = (0..l).map(|i| q(i, i)).collect();
-    let cap = (l * 100).max(10_000).min(2_000_000);
+    let cap = (l * 100).clamp(10_000, 2_000_000);
     let up = |a: f64, y: f64, c: f64| if y > 0.0 { a < c } else { a > 0.0 };
     let low = |a: f64, y: f64, c: f64| if y > 0.0 { a > 0.0 } else { a < c };
     let mut iterations = 0;
@@ -436,10 +436,10 @@ mod tests {
         let d = train_svc(&gram, &pos, c);
         // Balanced bounds: C·n / 2nₖ, and the classes have 30 samples each.
         let bound = c * 60.0 / (2.0 * 30.0);
-        for i in 0..60 {
+        for (i, &p) in pos.iter().enumerate() {
             let a = d.coef[i].abs();
             let f: f64 = (0..60).map(|j| d.coef[j] * gram.at(i, j)).sum::<f64>() - d.rho;
-            let yf = if pos[i] { f } else { -f };
+            let yf = if p { f } else { -f };
             if a > 1e-6 && a < bound - 1e-6 {
                 assert!((yf - 1.0).abs() < 0.01, "free sample {i}: y·f = {yf}");
             } else if a <= 1e-6 {
