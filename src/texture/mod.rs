@@ -9,6 +9,7 @@
 //! (`scales`), the PCN-2 feature extractor (`pcn`), the learners (`learn`)
 //! and the static index asset the browser loads.
 pub mod image;
+pub mod index;
 pub mod learn;
 pub mod pcn;
 
