@@ -706,8 +706,8 @@ mod tests {
                 for y in 0..side {
                     for x in 0..side {
                         g.data[y * side + x] = match model {
-                            0 => 0.5 + 0.5 * (x as f32 * 6.283 / period).sin(),
-                            1 => 0.5 + 0.5 * (y as f32 * 6.283 / period).sin(),
+                            0 => 0.5 + 0.5 * (x as f32 * std::f32::consts::TAU / period).sin(),
+                            1 => 0.5 + 0.5 * (y as f32 * std::f32::consts::TAU / period).sin(),
                             _ => r.f64() as f32,
                         };
                     }
