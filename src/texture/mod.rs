@@ -8,6 +8,8 @@
 //! (`models`), the dataset (`dataset`), perceptual scale estimators
 //! (`scales`), the PCN-2 feature extractor (`pcn`), the learners (`learn`)
 //! and the static index asset the browser loads.
+pub mod dataset;
 pub mod image;
+pub mod models;
 
 pub use image::Gray;
