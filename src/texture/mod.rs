@@ -2,12 +2,14 @@
 //! Dong & Dong, "Perception-driven procedural texture generation from
 //! examples" (PCN). MISSION X1–X7.
 //!
+//! - [`api`]: the `texture-*` requests (CLI and browser).
 //! - [`image`]: the grey image every stage passes along ([`Gray`]).
 //! - [`models`]: the procedural models (height maps) and the one shading.
 //! - [`dataset`]: models' parameters on a linear grid, rendered, augmented.
 //! - [`pcn`]: the PCN-2 feature extractor.
 //! - [`learn`]: support vector machines and Isomap.
 //! - [`index`]: the trained index the browser loads, and retrieval.
+pub mod api;
 pub mod dataset;
 pub mod image;
 pub mod index;
