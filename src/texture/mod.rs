@@ -11,5 +11,6 @@
 pub mod dataset;
 pub mod image;
 pub mod models;
+pub mod scales;
 
 pub use image::Gray;
