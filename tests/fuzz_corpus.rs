@@ -128,6 +128,11 @@ fn micro_scene_corpus_replays() {
     replay("micro_scene");
 }
 
+#[test]
+fn texture_ratings_corpus_replays() {
+    replay("texture_ratings");
+}
+
 /// Every request kind has at least one seed in the `requests` corpus.
 #[test]
 fn requests_corpus_covers_every_kind() {

@@ -169,7 +169,7 @@ fn level_value(model: &Model, i: usize, j: usize, levels: usize) -> f64 {
     if levels <= 1 {
         return p.default;
     }
-    let v = p.lo + (p.hi - p.lo) * j as f64 / (levels - 1) as f64;
+    let v = (p.lo + (p.hi - p.lo) * j as f64 / (levels - 1) as f64).clamp(p.lo, p.hi);
     if p.integer {
         v.round()
     } else {

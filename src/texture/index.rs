@@ -29,21 +29,7 @@ use super::Gray;
 use crate::core::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
-/// The twelve perceptual scales, in the paper's order.
-pub const SCALES: [&str; 12] = [
-    "contrast",
-    "repetition",
-    "granularity",
-    "randomness",
-    "roughness",
-    "feature density",
-    "directionality",
-    "structural complexity",
-    "coarseness",
-    "regularity",
-    "local orientation",
-    "uniformity",
-];
+pub use super::scales::SCALE_NAMES as SCALES;
 
 /// Magic bytes at the start of every index file.
 pub const MAGIC: &[u8; 16] = b"FILIGREE-TEXIDX\0";

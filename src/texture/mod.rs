@@ -8,6 +8,7 @@
 //! - [`dataset`]: models' parameters on a linear grid, rendered, augmented.
 //! - [`pcn`]: the PCN-2 feature extractor.
 //! - [`learn`]: support vector machines and Isomap.
+//! - [`scales`]: estimators of the twelve perceptual scales, 1–9.
 //! - [`index`]: the trained index the browser loads, and retrieval.
 pub mod api;
 pub mod dataset;
@@ -16,5 +17,6 @@ pub mod index;
 pub mod learn;
 pub mod models;
 pub mod pcn;
+pub mod scales;
 
 pub use image::Gray;
