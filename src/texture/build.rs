@@ -51,28 +51,13 @@ pub fn sample_id(s: &DataSample) -> String {
     format!("{}/{}", MODELS[s.model].id, s.base)
 }
 
-/// Seconds spent per stage, and the sizes.
+/// How big the dataset came out.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct BuildTimes {
-    pub dataset_s: f64,
-    pub scales_s: f64,
-    pub train_s: f64,
+pub struct BuildStats {
     pub images: usize,
     pub bases: usize,
+    /// Bases whose labels came from human ratings.
     pub rated: usize,
-}
-
-fn now() -> f64 {
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64())
-    }
-    #[cfg(target_arch = "wasm32")]
-    {
-        0.0
-    }
 }
 
 /// The rendered dataset with every image's labels (1–9), base images
@@ -80,9 +65,8 @@ fn now() -> f64 {
 pub fn labelled(
     config: &DatasetConfig,
     ratings: &[Rating],
-    times: &mut BuildTimes,
+    stats: &mut BuildStats,
 ) -> Result<Vec<(DataSample, [u8; 12])>> {
-    let t0 = now();
     #[cfg(not(target_arch = "wasm32"))]
     let samples = dataset::build_threads(
         config,
@@ -90,7 +74,6 @@ pub fn labelled(
     )?;
     #[cfg(target_arch = "wasm32")]
     let samples = dataset::build(config)?;
-    let t1 = now();
     let is_base = |s: &DataSample| s.light_index == 0 && s.crop.is_none();
     // Bases: the main light's uncropped image. With crops on, no sample is
     // uncropped, so the base's four main-light crops are measured together
@@ -128,13 +111,11 @@ pub fn labelled(
             for (o, v) in l.iter_mut().zip(r.scales) {
                 *o = v.round().clamp(1.0, 9.0) as u8;
             }
-            times.rated += 1;
+            stats.rated += 1;
         }
     }
-    times.dataset_s += t1 - t0;
-    times.scales_s += now() - t1;
-    times.images = samples.len();
-    times.bases = bases;
+    stats.images = samples.len();
+    stats.bases = bases;
     Ok(samples
         .into_iter()
         .map(|s| {
@@ -186,15 +167,20 @@ pub fn training(samples: &[(DataSample, [u8; 12])], keep: impl Fn(usize) -> bool
 }
 
 /// Builds the index from scratch.
-pub fn build_index(config: &BuildConfig, ratings: &[Rating]) -> Result<(Index, BuildTimes)> {
-    let mut times = BuildTimes::default();
-    let samples = labelled(&config.dataset, ratings, &mut times)?;
-    let t = now();
-    let train = training(&samples, |_| true);
+pub fn build_index(config: &BuildConfig, ratings: &[Rating]) -> Result<(Index, BuildStats)> {
+    let mut stats = BuildStats::default();
+    let samples = labelled(&config.dataset, ratings, &mut stats)?;
+    Ok((train_index(&samples, config, |_| true)?, stats))
+}
+
+/// Trains an index on the labelled samples whose base `keep` accepts.
+pub fn train_index(
+    samples: &[(DataSample, [u8; 12])],
+    config: &BuildConfig,
+    keep: impl Fn(usize) -> bool,
+) -> Result<Index> {
     let names = MODELS.iter().map(|m| m.id.to_string()).collect();
-    let index = Index::build(names, &train, &config.index)?;
-    times.train_s = now() - t;
-    Ok((index, times))
+    Index::build(names, &training(samples, keep), &config.index)
 }
 
 #[cfg(test)]
@@ -228,8 +214,8 @@ mod tests {
 
     #[test]
     fn a_tiny_index_builds_loads_in_the_api_and_is_deterministic() {
-        let (a, times) = build_index(&tiny(), &[]).unwrap();
-        assert_eq!(times.bases, a.samples.len());
+        let (a, stats) = build_index(&tiny(), &[]).unwrap();
+        assert_eq!(stats.bases, a.samples.len());
         assert!(a.samples.len() >= 23 * 2, "{} samples", a.samples.len());
         let bytes = a.to_bytes();
         let (b, _) = build_index(&tiny(), &[]).unwrap();
@@ -248,14 +234,14 @@ mod tests {
     #[test]
     fn ratings_replace_the_estimates_of_the_samples_they_name() {
         let cfg = tiny();
-        let mut times = BuildTimes::default();
-        let plain = labelled(&cfg.dataset, &[], &mut times).unwrap();
+        let mut stats = BuildStats::default();
+        let plain = labelled(&cfg.dataset, &[], &mut stats).unwrap();
         let id = sample_id(&plain[4].0);
         let rating = Rating {
             id: id.clone(),
             scales: [2.4; 12],
         };
-        let mut t2 = BuildTimes::default();
+        let mut t2 = BuildStats::default();
         let rated = labelled(&cfg.dataset, &[rating], &mut t2).unwrap();
         assert_eq!(t2.rated, 1);
         for ((s, l), (_, l0)) in rated.iter().zip(&plain) {
@@ -277,8 +263,8 @@ mod tests {
             },
             ..tiny()
         };
-        let mut times = BuildTimes::default();
-        let s = labelled(&cfg.dataset, &[], &mut times).unwrap();
+        let mut stats = BuildStats::default();
+        let s = labelled(&cfg.dataset, &[], &mut stats).unwrap();
         let held = split(&s, 1);
         for m in 0..MODELS.len() {
             let bases: std::collections::BTreeSet<usize> = s
