@@ -1,0 +1,174 @@
+//! The Texture tool end to end outside the browser: `filigree build-index`
+//! writes an index, `filigree texture --index --image` answers from it, the
+//! `texture-*` requests load it and answer the same, and damaged indexes
+//! are clear errors.
+use filigree::texture::api;
+use filigree::texture::build::{build_index, BuildConfig};
+use filigree::texture::dataset::DatasetConfig;
+use filigree::texture::index::IndexConfig;
+use filigree::texture::models::{self, MODELS};
+use filigree::texture::pcn::PcnConfig;
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn filigree(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_filigree"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("filigree-texture-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+/// A small index (2 bases per model at 32², small filters), built once.
+fn small_index() -> &'static Vec<u8> {
+    static BYTES: OnceLock<Vec<u8>> = OnceLock::new();
+    BYTES.get_or_init(|| {
+        let cfg = BuildConfig {
+            dataset: DatasetConfig {
+                per_model: 3,
+                size: 32,
+                ..DatasetConfig::default()
+            },
+            index: IndexConfig {
+                pcn: PcnConfig {
+                    k1: 5,
+                    k2: 5,
+                    l1: 4,
+                    l2: 8,
+                    side: 32,
+                    ..PcnConfig::default()
+                },
+                isomap_k: 6,
+                ..IndexConfig::default()
+            },
+        };
+        build_index(&cfg, &[]).unwrap().0.to_bytes()
+    })
+}
+
+fn png_of(model: &str, size: usize) -> Vec<u8> {
+    let m = models::lookup(model).unwrap();
+    let g = models::render(m, &m.defaults(), 5, size).unwrap();
+    let img = image::GrayImage::from_raw(size as u32, size as u32, g.to_bytes()).unwrap();
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png).unwrap();
+    out.into_inner()
+}
+
+#[test]
+fn the_cli_answers_an_example_with_a_model_scales_and_a_rendered_texture() {
+    let index = tmp("small.bin");
+    std::fs::write(&index, small_index()).unwrap();
+    let example = tmp("example.png");
+    std::fs::write(&example, png_of("perlin", 48)).unwrap();
+    let out = tmp("out.png");
+    let o = filigree(&[
+        "texture",
+        "--index",
+        index.to_str().unwrap(),
+        "--image",
+        example.to_str().unwrap(),
+        "--set",
+        "regularity=9",
+        "--set",
+        "local orientation=2",
+        "--out",
+        out.to_str().unwrap(),
+        "--size",
+        "40",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(
+        MODELS.iter().any(|m| m.id == v["predicted"]["model"]),
+        "{v}"
+    );
+    assert_eq!(v["requested"]["regularity"], 9.0);
+    assert_eq!(v["requested"]["local_orientation"], 2.0);
+    assert!(v["cosine"].as_f64().unwrap() > 0.0);
+    let written = image::open(&out).unwrap();
+    assert_eq!((written.width(), written.height()), (40, 40));
+    // The retrieved parameters are the model's, by name.
+    let m = models::lookup(v["retrieved"]["model"].as_str().unwrap()).unwrap();
+    assert_eq!(
+        v["retrieved"]["params"].as_object().unwrap().len(),
+        m.params.len()
+    );
+}
+
+#[test]
+fn the_cli_names_bad_indexes_images_and_scales() {
+    let bytes = small_index();
+    let good = tmp("good.bin");
+    std::fs::write(&good, bytes).unwrap();
+    let example = tmp("ex2.png");
+    std::fs::write(&example, png_of("cellular", 32)).unwrap();
+    let mut damaged = bytes.clone();
+    let mid = damaged.len() / 3;
+    damaged[mid] ^= 0xff;
+    let bad = tmp("bad.bin");
+    std::fs::write(&bad, &damaged).unwrap();
+    let run = |index: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "texture",
+            "--index",
+            index.to_str().unwrap(),
+            "--image",
+            example.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = filigree(&args);
+        assert!(!o.status.success());
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    assert!(run(&bad, &[]).contains("corrupt"));
+    assert!(run(&good, &["--set", "loudness=3"]).contains("unknown scale"));
+    assert!(run(&good, &["--set", "contrast=12"]).contains("1 to 9"));
+    let o = filigree(&["texture"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--index"));
+}
+
+#[test]
+fn requests_load_the_index_by_id_and_answer_like_the_library() {
+    let bytes = small_index();
+    let loaded = filigree::api::run_json(
+        "texture-index",
+        &serde_json::json!({ "bytes": bytes }).to_string(),
+    )
+    .unwrap();
+    let id = loaded["id"].as_str().unwrap().to_string();
+    assert_eq!(id, api::index_id(bytes));
+    assert_eq!(loaded["models"].as_array().unwrap().len(), MODELS.len());
+    let png = png_of("islamic", 40);
+    let a = filigree::api::run_json(
+        "texture-analyse",
+        &serde_json::json!({ "index": id, "bytes": png }).to_string(),
+    )
+    .unwrap();
+    let index = api::parse_index(bytes).unwrap();
+    let want = api::analyse(&index, &api::decode_gray(&png).unwrap()).unwrap();
+    assert_eq!(a["model"], want.model);
+    assert_eq!(a["scales"], serde_json::json!(want.scales));
+    let r = filigree::api::run_json(
+        "texture-retrieve",
+        &serde_json::json!({ "index": id, "scales": [5, 5, 5, 5, 5, 5, 5, 5, 5, 9, 5, 5], "model": a["model"], "size": 24 }).to_string(),
+    )
+    .unwrap();
+    assert_eq!(r["model"], a["model"], "stays within the predicted model");
+    assert_eq!(r["image"]["gray"].as_array().unwrap().len(), 24 * 24);
+    // Another id: the worker says which field is wrong.
+    let e = filigree::api::run_json("texture-retrieve", r#"{"index": "feed"}"#).unwrap_err();
+    assert_eq!(e.field(), Some("index"));
+    let e = filigree::api::run_json("texture-index", r#"{"bytes": [1, 2, 3]}"#).unwrap_err();
+    assert!(
+        e.to_string().contains("not a Filigree texture index"),
+        "{e}"
+    );
+}
