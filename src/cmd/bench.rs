@@ -63,6 +63,10 @@ pub enum Which {
         /// Skip the second light and the crops.
         #[arg(long)]
         no_augment: bool,
+        /// The index settings as JSON (IndexConfig; missing fields default),
+        /// e.g. '{"c_class": 10, "pcn": {"hash_bits": 8}}'.
+        #[arg(long)]
+        index_config: Option<String>,
         #[arg(long)]
         json: bool,
     },
@@ -143,8 +147,9 @@ pub fn run(w: Which) -> Result<(), String> {
             per_model,
             size,
             no_augment,
+            index_config,
             ..
-        } => super::texture_index::bench(per_model, size, !no_augment),
+        } => super::texture_index::bench(per_model, size, !no_augment, index_config.as_deref()),
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
         Which::TextureModels {
             repeats,

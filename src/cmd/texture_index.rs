@@ -216,8 +216,16 @@ const PAPER_TABLE2: [f64; 12] = [
 
 /// `bench texture`: the paper's Tables 1–3 on a held-out quarter of every
 /// model's base textures, plus timings.
-pub fn bench(per_model: usize, size: usize, augment: bool) -> Result<(), String> {
-    let cfg = config(per_model, size, augment);
+pub fn bench(
+    per_model: usize,
+    size: usize,
+    augment: bool,
+    index: Option<&str>,
+) -> Result<(), String> {
+    let mut cfg = config(per_model, size, augment);
+    if let Some(json) = index {
+        cfg.index = serde_json::from_str(json).map_err(|e| format!("--index-config: {e}"))?;
+    }
     let mut stats = BuildStats::default();
     let t0 = Instant::now();
     let samples = build::labelled(&cfg.dataset, &[], &mut stats).map_err(|e| e.to_string())?;
@@ -335,7 +343,7 @@ pub fn bench(per_model: usize, size: usize, augment: bool) -> Result<(), String>
         },
         "retrieval_ms": retrieve_ms,
         "index_bytes": full.to_bytes().len(),
-        "input_side": full.pcn.config.side,
+        "index_config": cfg.index,
     });
     println!(
         "{}",
