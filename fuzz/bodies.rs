@@ -37,6 +37,7 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("tangle_start", tangle_start),
     ("micro_scene", micro_scene),
     ("texture_ratings", texture_ratings),
+    ("texture_index", texture_index),
 ];
 
 fn finite_svg(svg: &str, what: &str) {
@@ -568,5 +569,20 @@ pub fn texture_ratings(data: &[u8]) {
                 );
             }
         }
+    }
+}
+
+/// A texture index file (the app fetches it; `texture-index` parses it):
+/// parsing must reject damage with an error, and a parsed index must
+/// answer a retrieval.
+pub fn texture_index(data: &[u8]) {
+    use filigree::texture::api;
+    if let Ok(index) = api::parse_index(data) {
+        let req = api::TextureRetrieveRequest {
+            size: 0,
+            ..Default::default()
+        };
+        let r = api::retrieve(&index, &req).expect("a parsed index answers");
+        assert!(r.cosine.is_finite());
     }
 }

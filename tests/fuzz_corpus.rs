@@ -133,6 +133,11 @@ fn texture_ratings_corpus_replays() {
     replay("texture_ratings");
 }
 
+#[test]
+fn texture_index_corpus_replays() {
+    replay("texture_index");
+}
+
 /// Every request kind has at least one seed in the `requests` corpus.
 #[test]
 fn requests_corpus_covers_every_kind() {

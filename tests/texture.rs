@@ -172,3 +172,24 @@ fn requests_load_the_index_by_id_and_answer_like_the_library() {
         "{e}"
     );
 }
+
+/// Writes the `texture_index` fuzz corpus: the small index, and copies
+/// truncated and with a byte flipped (run by hand:
+/// `cargo test --test texture write_fuzz_seeds -- --ignored`).
+#[test]
+#[ignore]
+fn write_fuzz_seeds() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/texture_index");
+    std::fs::create_dir_all(&dir).unwrap();
+    let b = small_index();
+    std::fs::write(dir.join("small.bin"), b).unwrap();
+    std::fs::write(dir.join("truncated.bin"), &b[..b.len() / 2]).unwrap();
+    let mut f = b.clone();
+    f[100] ^= 1;
+    std::fs::write(dir.join("flipped.bin"), f).unwrap();
+    std::fs::write(dir.join("magic-only.bin"), &b[..20]).unwrap();
+    let mut v = b.clone();
+    v[16] = 2;
+    std::fs::write(dir.join("other-version.bin"), v).unwrap();
+    std::fs::write(dir.join("empty.bin"), b"").unwrap();
+}
