@@ -207,6 +207,7 @@ pub fn bench(
     size: usize,
     dataset_size: usize,
     threads: usize,
+    augmented: bool,
 ) -> Result<(), String> {
     let mut per_model = Vec::new();
     let mut total = 0.0;
@@ -230,10 +231,13 @@ pub fn bench(
         "ms_median_sum": total * 1e3,
     });
     if dataset_size > 0 {
-        let config = DatasetConfig {
+        let mut config = DatasetConfig {
             size: dataset_size,
             ..DatasetConfig::default()
         };
+        if augmented {
+            config = config.augmented();
+        }
         let specs = dataset::plan(&config).map_err(|e| e.to_string())?;
         let t = Instant::now();
         let data = dataset::build_threads(&config, threads).map_err(|e| e.to_string())?;
