@@ -271,7 +271,8 @@ pub fn build(config: &DatasetConfig) -> Result<Vec<Sample>> {
 pub fn build_threads(config: &DatasetConfig, threads: usize) -> Result<Vec<Sample>> {
     let specs = plan(config)?;
     let t = threads.clamp(1, 64);
-    let parts: Vec<Result<Vec<(usize, Vec<Sample>)>>> = std::thread::scope(|s| {
+    type Part = Result<Vec<(usize, Vec<Sample>)>>;
+    let parts: Vec<Part> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..t)
             .map(|k| {
                 let specs = &specs;
