@@ -81,6 +81,9 @@ pub enum Which {
         dataset_size: usize,
         #[arg(long, default_value_t = 2)]
         threads: usize,
+        /// The dataset with the paper's augmentation (2 lights × 4 crops).
+        #[arg(long)]
+        augmented: bool,
         #[arg(long)]
         json: bool,
     },
@@ -156,8 +159,9 @@ pub fn run(w: Which) -> Result<(), String> {
             size,
             dataset_size,
             threads,
+            augmented,
             ..
-        } => super::texture::bench(repeats, size, dataset_size, threads),
+        } => super::texture::bench(repeats, size, dataset_size, threads, augmented),
         Which::Tangle { repeats, only, .. } => super::tangle_bench::run(repeats, only.as_deref()),
         Which::Micro { repeats, size, .. } => super::micro_bench::run(repeats, size),
         Which::Pixel { repeats, .. } => {

@@ -4,6 +4,7 @@
 use clap::Subcommand;
 use filigree::texture::dataset::{self, DatasetConfig};
 use filigree::texture::models::{self, render_height, shade, Light, MODELS};
+use filigree::texture::scales;
 use filigree::texture::Gray;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -15,6 +16,18 @@ pub enum Which {
     Render(RenderArgs),
     /// List the models, their families and parameters (JSON).
     Models,
+    /// Raw perceptual-scale estimates (JSON) of a model's texture, or of
+    /// every model at its defaults when no --model is given.
+    Measure {
+        #[arg(long)]
+        model: Option<String>,
+        #[arg(long = "param", value_name = "NAME=VALUE")]
+        params: Vec<String>,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, default_value_t = 128)]
+        size: usize,
+    },
     /// A contact sheet of every model at its defaults (5 columns) to a PNG.
     Sheet {
         #[arg(long, default_value_t = 128)]
@@ -72,6 +85,36 @@ pub fn run(w: Which) -> Result<(), String> {
             );
             Ok(())
         }
+        Which::Measure {
+            model,
+            params,
+            seed,
+            size,
+        } => {
+            let chosen: Vec<(&'static models::Model, Vec<f64>)> = match model {
+                Some(name) => {
+                    let m = models::lookup(&name).map_err(|e| format!("--model: {e}"))?;
+                    vec![(m, parse_params(m, &params)?)]
+                }
+                None => MODELS.iter().map(|m| (m, m.defaults())).collect(),
+            };
+            let mut out = Vec::new();
+            for (m, p) in chosen {
+                let g = models::render(m, &p, seed, size).map_err(|e| e.to_string())?;
+                let raw = scales::measure(&g).map_err(|e| e.to_string())?;
+                let named: serde_json::Map<String, serde_json::Value> = scales::SCALE_NAMES
+                    .iter()
+                    .zip(raw)
+                    .map(|(n, v)| (n.to_string(), json!(v)))
+                    .collect();
+                out.push(json!({"model": m.id, "params": p, "raw": named}));
+            }
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+            );
+            Ok(())
+        }
         Which::Sheet { size, seed, out } => {
             let cols = 5;
             let rows = MODELS.len().div_ceil(cols);
@@ -108,10 +151,9 @@ fn parse_light(s: &str) -> Result<Light, String> {
     }
 }
 
-fn render(a: RenderArgs) -> Result<(), String> {
-    let m = models::lookup(&a.model).map_err(|e| format!("--model: {e}"))?;
+fn parse_params(m: &models::Model, params: &[String]) -> Result<Vec<f64>, String> {
     let mut pairs = Vec::new();
-    for p in &a.params {
+    for p in params {
         let (k, v) = p
             .split_once('=')
             .ok_or_else(|| format!("--param: expected NAME=VALUE, got '{p}'"))?;
@@ -121,7 +163,12 @@ fn render(a: RenderArgs) -> Result<(), String> {
             .map_err(|_| format!("--param {k}: '{v}' is not a number"))?;
         pairs.push((k.trim(), v));
     }
-    let params = m.with(&pairs).map_err(|e| format!("--param: {e}"))?;
+    m.with(&pairs).map_err(|e| format!("--param: {e}"))
+}
+
+fn render(a: RenderArgs) -> Result<(), String> {
+    let m = models::lookup(&a.model).map_err(|e| format!("--model: {e}"))?;
+    let params = parse_params(m, &a.params)?;
     let light = a
         .light
         .as_deref()
@@ -160,6 +207,7 @@ pub fn bench(
     size: usize,
     dataset_size: usize,
     threads: usize,
+    augmented: bool,
 ) -> Result<(), String> {
     let mut per_model = Vec::new();
     let mut total = 0.0;
@@ -183,10 +231,13 @@ pub fn bench(
         "ms_median_sum": total * 1e3,
     });
     if dataset_size > 0 {
-        let config = DatasetConfig {
+        let mut config = DatasetConfig {
             size: dataset_size,
             ..DatasetConfig::default()
         };
+        if augmented {
+            config = config.augmented();
+        }
         let specs = dataset::plan(&config).map_err(|e| e.to_string())?;
         let t = Instant::now();
         let data = dataset::build_threads(&config, threads).map_err(|e| e.to_string())?;

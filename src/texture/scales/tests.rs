@@ -235,7 +235,7 @@ fn ratings_csv_reads_columns_in_any_order_and_replaces_estimates() {
             .map(|v| format!("{}", 1.0 + v as f64 * 0.5))
             .collect::<Vec<_>>()
             .join(","),
-        vec!["5"; 12].join(", "),
+        ["5"; 12].join(", "),
     );
     let r = parse_ratings(&text).unwrap();
     assert_eq!(r.len(), 2);
@@ -252,7 +252,7 @@ fn ratings_csv_reads_columns_in_any_order_and_replaces_estimates() {
 
 #[test]
 fn ratings_csv_errors_name_the_line_and_column() {
-    let row = |v: &str| format!("s1,{}", vec![v; 12].join(","));
+    let row = |v: &str| format!("s1,{}", [v; 12].join(","));
     let cases: Vec<(String, (usize, usize))> = vec![
         (String::new(), (1, 1)),
         ("name,contrast".into(), (1, 1)),
@@ -263,17 +263,14 @@ fn ratings_csv_errors_name_the_line_and_column() {
         (format!("{}\n{}\n{}", header(), row("3"), row("4")), (3, 1)),
         (format!("{}\ns1,1,2", header()), (2, 1)),
         (
-            format!("{}\n\"s1,{}", header(), vec!["3"; 12].join(",")),
+            format!("{}\n\"s1,{}", header(), ["3"; 12].join(",")),
             (2, 1),
         ),
         (
-            format!("{}\n\"s\"x,{}", header(), vec!["3"; 12].join(",")),
+            format!("{}\n\"s\"x,{}", header(), ["3"; 12].join(",")),
             (2, 4),
         ),
-        (
-            format!("{}\n ,{}", header(), vec!["3"; 12].join(",")),
-            (2, 1),
-        ),
+        (format!("{}\n ,{}", header(), ["3"; 12].join(",")), (2, 1)),
     ];
     for (text, (line, col)) in cases {
         let e = parse_ratings(&text).unwrap_err();
