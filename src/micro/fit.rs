@@ -6,7 +6,11 @@
 //! over the N coefficients of the 3-D DFT (amplitudes A, phases θ), and
 //! the synthetic structures of the paper's dataset (gyroid 1D, Eq. 40).
 //! The DFT is an in-place radix-2 FFT along each axis (n a power of two);
-//! twiddles come from `libm`, so native and wasm agree bit for bit.
+//! twiddles come from `libm`, so native and wasm agree bit for bit
+//! ([`Fourier`] keeps them and its scratch between calls). The image loss
+//! of analysis by synthesis (Eq. 39) compares amplitudes only
+//! ([`amplitude_loss`]). The fit itself (request, job, optimisers) is in
+//! [`super::fit_api`].
 use crate::core::error::{Error, Result};
 use std::f64::consts::TAU;
 
@@ -52,6 +56,142 @@ pub struct Spectrum {
     pub phase: Vec<f64>,
 }
 
+/// A reusable DFT of volumes of one shape `[nx, ny, nz]` (each a power of
+/// two, or 1 for a flat axis: a 2-D image is `[w, h, 1]`): twiddles and
+/// scratch are kept between calls, so a fit's thousands of transforms
+/// allocate only their spectra.
+#[derive(Debug, Clone)]
+pub struct Fourier {
+    dims: [usize; 3],
+    tw: [Vec<C>; 3],
+    data: Vec<C>,
+    line: Vec<C>,
+}
+
+fn twiddles(n: usize) -> Vec<C> {
+    (0..n / 2)
+        .map(|k| {
+            let a = -TAU * k as f64 / n as f64;
+            [libm::cos(a), libm::sin(a)]
+        })
+        .collect()
+}
+
+impl Fourier {
+    /// A transform of `dims` volumes; each side a power of two (1 allowed).
+    pub fn new(dims: [usize; 3]) -> Result<Fourier> {
+        if dims
+            .iter()
+            .any(|&d| d == 0 || !d.is_power_of_two() || d > 4096)
+            || dims.iter().product::<usize>() < 2
+        {
+            return Err(Error::input(format!(
+                "a Fourier loss needs sides that are powers of two (got {}×{}×{})",
+                dims[0], dims[1], dims[2]
+            )));
+        }
+        let len = dims.iter().product();
+        Ok(Fourier {
+            dims,
+            tw: [twiddles(dims[0]), twiddles(dims[1]), twiddles(dims[2])],
+            data: vec![[0.0; 2]; len],
+            line: vec![[0.0; 2]; dims.iter().copied().max().unwrap_or(1)],
+        })
+    }
+
+    /// The shape this transform takes.
+    pub fn dims(&self) -> [usize; 3] {
+        self.dims
+    }
+
+    /// Values per volume.
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+
+    /// Whether the volume is empty (never: at least two values).
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+
+    /// The DFT coefficients of `values` (x fastest), in place in the scratch.
+    fn transform(&mut self, values: &[f64]) -> Result<&[C]> {
+        if values.len() != self.data.len() {
+            return Err(Error::input(format!(
+                "a {}×{}×{} transform needs {} values (got {})",
+                self.dims[0],
+                self.dims[1],
+                self.dims[2],
+                self.data.len(),
+                values.len()
+            )));
+        }
+        for (d, &v) in self.data.iter_mut().zip(values) {
+            *d = [v, 0.0];
+        }
+        let [nx, ny, nz] = self.dims;
+        // x: contiguous lines.
+        if nx > 1 {
+            for chunk in self.data.chunks_exact_mut(nx) {
+                fft(chunk, &self.tw[0]);
+            }
+        }
+        // y and z: gather a strided line, transform, scatter.
+        for (axis, n, stride) in [(1usize, ny, nx), (2, nz, nx * ny)] {
+            if n < 2 {
+                continue;
+            }
+            let line = &mut self.line[..n];
+            for base in 0..self.data.len() {
+                // Lines start where the axis coordinate is 0.
+                if !(base / stride).is_multiple_of(n) {
+                    continue;
+                }
+                for (i, l) in line.iter_mut().enumerate() {
+                    *l = self.data[base + i * stride];
+                }
+                fft(line, &self.tw[axis]);
+                for (i, l) in line.iter().enumerate() {
+                    self.data[base + i * stride] = *l;
+                }
+            }
+        }
+        Ok(&self.data)
+    }
+
+    /// Amplitudes and phases of the DFT of `values`.
+    pub fn spectrum(&mut self, values: &[f64]) -> Result<Spectrum> {
+        let data = self.transform(values)?;
+        let amp: Vec<f64> = data
+            .iter()
+            .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
+            .collect();
+        // The phase of a coefficient at rounding-noise level is noise: 0.
+        let floor = amp.iter().copied().fold(0.0, f64::max) * 1e-9;
+        let phase = data
+            .iter()
+            .zip(&amp)
+            .map(|(c, &a)| {
+                if a > floor {
+                    libm::atan2(c[1], c[0])
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        Ok(Spectrum { amp, phase })
+    }
+
+    /// Amplitudes alone (the image loss, Eq. 39, compares only these).
+    pub fn amplitudes(&mut self, values: &[f64]) -> Result<Vec<f64>> {
+        let data = self.transform(values)?;
+        Ok(data
+            .iter()
+            .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
+            .collect())
+    }
+}
+
 /// The 3-D DFT of `values` (n³, x fastest), n a power of two ≥ 2.
 pub fn spectrum(values: &[f64], n: usize) -> Result<Spectrum> {
     if n < 2 || !n.is_power_of_two() || values.len() != n * n * n {
@@ -60,48 +200,14 @@ pub fn spectrum(values: &[f64], n: usize) -> Result<Spectrum> {
             values.len()
         )));
     }
-    let tw: Vec<C> = (0..n / 2)
-        .map(|k| {
-            let a = -TAU * k as f64 / n as f64;
-            [libm::cos(a), libm::sin(a)]
-        })
-        .collect();
-    let mut data: Vec<C> = values.iter().map(|&v| [v, 0.0]).collect();
-    let mut line = vec![[0.0; 2]; n];
-    for axis in 0..3 {
-        let stride = n.pow(axis as u32);
-        for base in 0..n * n * n {
-            // Lines start where the axis coordinate is 0.
-            if !(base / stride).is_multiple_of(n) {
-                continue;
-            }
-            for (i, l) in line.iter_mut().enumerate() {
-                *l = data[base + i * stride];
-            }
-            fft(&mut line, &tw);
-            for (i, l) in line.iter().enumerate() {
-                data[base + i * stride] = *l;
-            }
-        }
-    }
-    let amp: Vec<f64> = data
-        .iter()
-        .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
-        .collect();
-    // The phase of a coefficient at rounding-noise level is noise: 0.
-    let floor = amp.iter().copied().fold(0.0, f64::max) * 1e-9;
-    let phase = data
-        .iter()
-        .zip(&amp)
-        .map(|(c, &a)| {
-            if a > floor {
-                libm::atan2(c[1], c[0])
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    Ok(Spectrum { amp, phase })
+    Fourier::new([n, n, n])?.spectrum(values)
+}
+
+/// The image loss of Eq. 39: `log(1/N Σ |Aᵢ − Âᵢ|² + ε)` over amplitudes.
+pub fn amplitude_loss(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()).max(1);
+    let s: f64 = a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum();
+    libm::log(s / n as f64 + 1e-12)
 }
 
 /// The paper's Fourier loss between two spectra of the same size.
