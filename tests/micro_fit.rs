@@ -22,8 +22,8 @@ fn eta_param() -> Vec<FitParam> {
     }]
 }
 
-/// The paper's set-up: η = 100 from η = 300 on a 32³ grid over a box of
-/// side 0.25 (four periods).
+/// The paper's set-up: η = 100 from η = 300 over a box of side 0.25 (four
+/// periods), on a 16³ grid here to keep the test quick (the bench uses 32³).
 fn gyroid_request(optimizer: Optimizer, budget: u32) -> MicroFitRequest {
     MicroFitRequest {
         scene: gyroid_1d(300.0),
@@ -31,7 +31,7 @@ fn gyroid_request(optimizer: Optimizer, budget: u32) -> MicroFitRequest {
         target: FitTarget::Scene {
             scene: gyroid_1d(100.0),
         },
-        grid: 32,
+        grid: 16,
         center: [0.125; 3],
         half: 0.125,
         optimizer,
@@ -51,7 +51,7 @@ fn fit(req: MicroFitRequest) -> MicroFitResponse {
 fn each_optimizer_recovers_the_gyroid_1d_frequency() {
     let runs: Vec<_> = [Optimizer::Cmaes, Optimizer::NelderMead, Optimizer::Powell]
         .into_iter()
-        .map(|opt| (opt, fit(gyroid_request(opt, 1500))))
+        .map(|opt| (opt, fit(gyroid_request(opt, 800))))
         .collect();
     for (opt, r) in &runs {
         eprintln!(
@@ -69,16 +69,18 @@ fn each_optimizer_recovers_the_gyroid_1d_frequency() {
             r.initial_loss
         );
         assert!(r.loss < r.initial_loss - 5.0, "{opt:?}");
-        assert!(r.evaluations <= 1500);
+        assert!(r.evaluations <= 800);
         // The history is the running best, ending at the answer.
         assert!(r.history.windows(2).all(|w| w[1] <= w[0]));
         assert_eq!(r.history.last(), Some(&r.loss));
         assert_eq!(r.history.len(), r.history_evaluations.len());
         assert!(r.validation.unwrap() < 1e-2, "{opt:?}: {:?}", r.validation);
-        // The fitted scene carries the value at every tied pointer.
+        // The fitted scene carries the value at every tied pointer (JSON
+        // text: serde_json reads floats back within an ulp).
         let s: serde_json::Value = serde_json::from_str(&r.scene).unwrap();
         for k in 0..3 {
-            assert_eq!(s["terms"][k][0]["freq"].as_f64(), Some(eta));
+            let v = s["terms"][k][0]["freq"].as_f64().unwrap();
+            assert!((v - eta).abs() < 1e-12 * eta, "{v} ≠ {eta}");
         }
     }
 }
@@ -478,6 +480,7 @@ fn the_cli_fits_a_scene_file_to_a_target_file() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let req: MicroFitRequest = serde_json::from_slice(&o.stdout).unwrap();
     let mut want = gyroid_request(Optimizer::Cmaes, 1);
+    want.grid = MicroFitRequest::default().grid;
     want.budget = MicroFitRequest::default().budget;
     want.population = MicroFitRequest::default().population;
     want.sigma = MicroFitRequest::default().sigma;
@@ -500,7 +503,8 @@ fn the_cli_fits_a_scene_file_to_a_target_file() {
     let fitted: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     let v = summary["params"][0]["value"].as_f64().unwrap();
-    assert_eq!(fitted["terms"][2][0]["freq"].as_f64(), Some(v));
+    let got = fitted["terms"][2][0]["freq"].as_f64().unwrap();
+    assert!((got - v).abs() < 1e-12 * v, "{got} ≠ {v}");
     // Errors name the flag.
     let o = run(&["--grid", "24"]);
     assert!(!o.status.success());

@@ -530,7 +530,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
             }
             let dims = [n, n, n];
             let mut f = Fourier::new(dims)?;
-            let t = TargetSpectrum::Full(f.spectrum(values)?);
+            let t = TargetSpectrum::Full(f.half_spectrum(values)?);
             (
                 Sampler::Volume {
                     points: lattice(dims, req.center, req.half, 0.0),
@@ -570,7 +570,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
             }
             let dims = [n, n, c];
             let mut f = Fourier::new(dims)?;
-            let t = TargetSpectrum::Full(f.spectrum(&values)?);
+            let t = TargetSpectrum::Full(f.half_spectrum(&values)?);
             (
                 Sampler::Volume {
                     points: lattice(dims, req.center, req.half, 0.0),
@@ -776,7 +776,7 @@ impl MicroFitJob {
     fn loss_of(&mut self, values: &[f64]) -> Result<f64> {
         let l = match &self.target {
             Some(TargetSpectrum::Full(t)) => {
-                let s = self.fourier.spectrum(values)?;
+                let s = self.fourier.half_spectrum(values)?;
                 fourier_loss(&s, t)
             }
             Some(TargetSpectrum::Amplitudes(t)) => {
@@ -975,7 +975,7 @@ impl Job for MicroFitJob {
                     if let Some(v) = self.sample_target(WORK_PER_STEP)? {
                         self.target = Some(match &self.sampler {
                             Sampler::Volume { .. } => {
-                                TargetSpectrum::Full(self.fourier.spectrum(&v)?)
+                                TargetSpectrum::Full(self.fourier.half_spectrum(&v)?)
                             }
                             Sampler::Image(_) => {
                                 TargetSpectrum::Amplitudes(self.fourier.amplitudes(&v)?)
