@@ -244,8 +244,11 @@ impl Fourier {
         let h = self.transform_half(values)?;
         let nx = self.dims[0];
         let m = h * self.dims[1] * self.dims[2];
-        let (mut amp, mut re_im, mut weight) =
-            (Vec::with_capacity(m), Vec::with_capacity(m), Vec::with_capacity(m));
+        let (mut amp, mut re_im, mut weight) = (
+            Vec::with_capacity(m),
+            Vec::with_capacity(m),
+            Vec::with_capacity(m),
+        );
         for (i, c) in self.data.iter().enumerate() {
             let kx = i % nx;
             if kx >= h {
