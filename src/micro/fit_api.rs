@@ -213,7 +213,7 @@ enum Sampler {
 /// One sampling in progress.
 enum Work {
     Volume {
-        scene: Scene,
+        scene: Box<Scene>,
         values: Vec<f64>,
         points: usize,
         clamp: Option<f64>,
@@ -228,7 +228,7 @@ impl Work {
     fn new(sampler: &Sampler, scene: Scene, text: &str) -> Result<Work> {
         Ok(match sampler {
             Sampler::Volume { points, clamp } => Work::Volume {
-                scene,
+                scene: Box::new(scene),
                 values: Vec::with_capacity(points.len()),
                 points: points.len(),
                 clamp: *clamp,

@@ -290,7 +290,9 @@ impl Powell {
         self.cycles += 1;
         let gain = self.f_start - self.fx;
         let scale = self.f_start.abs() + self.fx.abs();
-        if !(2.0 * gain > 1e-10 * scale + 1e-20) {
+        // Converged (or no finite gain to measure: NaN compares as none).
+        let tol = 1e-10 * scale + 1e-20;
+        if (2.0 * gain).partial_cmp(&tol) != Some(std::cmp::Ordering::Greater) {
             self.stage = Stage::Restart;
             return;
         }
