@@ -36,11 +36,18 @@ enum Command {
         #[command(subcommand)]
         which: cmd::micro::Which,
     },
-    /// Procedural texture models: render one, list them, a contact sheet.
+    /// Texture: from an example image to a procedural model and its
+    /// parameters (`--index I --image IMG [--set scale=v] --out OUT.png`),
+    /// or inspect the models (render, models, sheet).
+    #[command(args_conflicts_with_subcommands = true)]
     Texture {
         #[command(subcommand)]
-        which: cmd::texture::Which,
+        which: Option<cmd::texture::Which>,
+        #[command(flatten)]
+        query: Box<cmd::texture_index::QueryArgs>,
     },
+    /// Build the Texture tool's index (dataset, scales, PCN-2, SVMs, space).
+    BuildIndex(cmd::texture_index::BuildArgs),
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -77,7 +84,11 @@ fn main() -> ExitCode {
         Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Tangle(a) => cmd::tangle::run(*a),
         Command::Micro { which } => cmd::micro::run(which),
-        Command::Texture { which } => cmd::texture::run(which),
+        Command::Texture {
+            which: Some(which), ..
+        } => cmd::texture::run(which),
+        Command::Texture { which: None, query } => cmd::texture_index::run_query(*query),
+        Command::BuildIndex(a) => cmd::texture_index::run_build(a),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

@@ -51,6 +51,21 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Texture: the paper's Tables 1–3 (model and scale accuracy on a
+    /// held-out quarter of every model's textures, space regressions' R²),
+    /// PCN-2 seconds per 256² texture, retrieval ms, index size.
+    Texture {
+        /// Base textures per model.
+        #[arg(long, default_value_t = 24)]
+        per_model: usize,
+        #[arg(long, default_value_t = 128)]
+        size: usize,
+        /// Skip the second light and the crops.
+        #[arg(long)]
+        no_augment: bool,
+        #[arg(long)]
+        json: bool,
+    },
     /// Texture models: render ms per model at SIZE², dataset time at DATASET_SIZE².
     TextureModels {
         #[arg(long, default_value_t = 5)]
@@ -137,6 +152,12 @@ pub fn run(w: Which) -> Result<(), String> {
             println!("{out}");
             Ok(())
         }
+        Which::Texture {
+            per_model,
+            size,
+            no_augment,
+            ..
+        } => super::texture_index::bench(per_model, size, !no_augment),
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
         Which::TextureModels {
             repeats,

@@ -9,6 +9,7 @@ pub mod slices_bench;
 pub mod tangle;
 pub mod tangle_bench;
 pub mod texture;
+pub mod texture_index;
 
 use filigree::core::job::{run_to_end, Cancel, Job};
 use filigree::Error;

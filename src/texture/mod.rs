@@ -11,6 +11,7 @@
 //! - [`scales`]: estimators of the twelve perceptual scales, 1–9.
 //! - [`index`]: the trained index the browser loads, and retrieval.
 pub mod api;
+pub mod build;
 pub mod dataset;
 pub mod image;
 pub mod index;

@@ -65,7 +65,7 @@ impl Default for PcnConfig {
             k2: 7,
             l1: 16,
             l2: 38,
-            patch_step: 4,
+            patch_step: 3,
             pool: 2,
             hash_bits: 4,
             blocks: 1,

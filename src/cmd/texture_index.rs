@@ -1,0 +1,345 @@
+//! `filigree build-index`, `filigree texture --index … --image …` and
+//! `filigree bench texture`: the Texture index from the command line.
+//! The pipeline is `filigree::texture::build`; requests are the browser's
+//! (`filigree::texture::api`).
+use filigree::texture::api::{self, TextureRetrieveRequest};
+use filigree::texture::build::{self, BuildConfig, BuildStats};
+use filigree::texture::dataset::DatasetConfig;
+use filigree::texture::index::SCALES;
+use filigree::texture::learn::isomap::pearson;
+use filigree::texture::models::MODELS;
+use filigree::texture::pcn::{Pcn, PcnConfig};
+use filigree::texture::scales::parse_ratings;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(clap::Args)]
+pub struct BuildArgs {
+    /// Where to write the index (the app serves www/assets/texture-index.bin).
+    #[arg(long)]
+    out: PathBuf,
+    /// Base textures per model (parameter grid points).
+    #[arg(long, default_value_t = BuildConfig::default().dataset.per_model)]
+    per_model: usize,
+    /// Side of every dataset image, pixels.
+    #[arg(long, default_value_t = BuildConfig::default().dataset.size)]
+    size: usize,
+    /// Skip the paper's augmentation (second light, four crops).
+    #[arg(long)]
+    no_augment: bool,
+    /// Human ratings (CSV: id + the twelve scales) replacing the estimates.
+    #[arg(long)]
+    ratings: Option<PathBuf>,
+}
+
+fn config(per_model: usize, size: usize, augment: bool) -> BuildConfig {
+    let mut c = BuildConfig::default();
+    let d = DatasetConfig {
+        per_model,
+        size,
+        ..DatasetConfig::default()
+    };
+    c.dataset = if augment { d.augmented() } else { d };
+    c
+}
+
+fn read_ratings(path: Option<&Path>) -> Result<Vec<filigree::texture::scales::Rating>, String> {
+    let Some(p) = path else { return Ok(Vec::new()) };
+    let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+    parse_ratings(&text).map_err(|e| format!("{}: {e}", p.display()))
+}
+
+pub fn run_build(a: BuildArgs) -> Result<(), String> {
+    let cfg = config(a.per_model, a.size, !a.no_augment);
+    let ratings = read_ratings(a.ratings.as_deref())?;
+    let t = Instant::now();
+    let (index, stats) = build::build_index(&cfg, &ratings).map_err(|e| e.to_string())?;
+    let seconds = t.elapsed().as_secs_f64();
+    let bytes = index.to_bytes();
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    std::fs::write(&a.out, &bytes).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let out = json!({
+        "out": a.out.display().to_string(), "bytes": bytes.len(), "id": api::index_id(&bytes),
+        "images": stats.images, "bases": stats.bases, "rated": stats.rated,
+        "feature_len": index.pcn.config.feature_len(), "seconds": seconds,
+    });
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct QueryArgs {
+    /// The index file (`filigree build-index`).
+    #[arg(long)]
+    index: Option<PathBuf>,
+    /// An example texture (PNG, JPEG, ...).
+    #[arg(long)]
+    image: Option<PathBuf>,
+    /// Change a predicted scale, `name=value` with value 1–9 (repeatable),
+    /// e.g. `--set regularity=8`. Names: contrast, repetition, granularity,
+    /// randomness, roughness, feature_density, directionality,
+    /// structural_complexity, coarseness, regularity, local_orientation,
+    /// uniformity.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// Retrieve only among the predicted model's samples.
+    #[arg(long)]
+    same_model: bool,
+    /// Write the retrieved texture (grey PNG).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Side of the written texture, pixels.
+    #[arg(long, default_value_t = api::DEFAULT_SIZE)]
+    size: u32,
+    /// Print the whole answer as JSON (default: a short summary).
+    #[arg(long)]
+    json: bool,
+}
+
+fn scale_index(name: &str) -> Option<usize> {
+    let norm = |s: &str| s.replace([' ', '-'], "_").to_ascii_lowercase();
+    SCALES.iter().position(|s| norm(s) == norm(name))
+}
+
+pub fn run_query(a: QueryArgs) -> Result<(), String> {
+    let (Some(index_path), Some(image_path)) = (a.index.as_ref(), a.image.as_ref()) else {
+        return Err("texture: give --index I and --image IMG, or a subcommand (render, models, sheet); see --help".into());
+    };
+    let bytes = std::fs::read(index_path).map_err(|e| format!("{}: {e}", index_path.display()))?;
+    let index = api::parse_index(&bytes).map_err(|e| format!("{}: {e}", index_path.display()))?;
+    let img_bytes =
+        std::fs::read(image_path).map_err(|e| format!("{}: {e}", image_path.display()))?;
+    let gray =
+        api::decode_gray(&img_bytes).map_err(|e| format!("{}: {e}", image_path.display()))?;
+    let analysis = api::analyse(&index, &gray).map_err(|e| e.to_string())?;
+    let mut scales: [f32; 12] = analysis.scales.map(|v| v as f32);
+    for s in &a.set {
+        let (k, v) = s
+            .split_once('=')
+            .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
+        let i = scale_index(k.trim()).ok_or_else(|| {
+            format!(
+                "--set {s}: unknown scale '{k}' (known: {})",
+                SCALES.join(", ")
+            )
+        })?;
+        let v: f32 = v
+            .trim()
+            .parse()
+            .map_err(|_| format!("--set {s}: '{v}' is not a number"))?;
+        if !(1.0..=9.0).contains(&v) {
+            return Err(format!("--set {s}: scales run from 1 to 9"));
+        }
+        scales[i] = v;
+    }
+    let req = TextureRetrieveRequest {
+        index: String::new(),
+        scales,
+        model: if a.same_model {
+            analysis.model.to_string()
+        } else {
+            String::new()
+        },
+        size: if a.out.is_some() { a.size } else { 0 },
+    };
+    let got = api::retrieve(&index, &req).map_err(|e| e.to_string())?;
+    if let (Some(out), Some(img)) = (&a.out, &got.image) {
+        let png = image::GrayImage::from_raw(img.size, img.size, img.gray.clone())
+            .ok_or("internal: image size")?;
+        png.save(out)
+            .map_err(|e| format!("{}: {e}", out.display()))?;
+    }
+    let named = |s: &[f32]| {
+        SCALES
+            .iter()
+            .zip(s)
+            .map(|(n, v)| (n.to_string(), json!(v)))
+            .collect::<serde_json::Map<_, _>>()
+    };
+    let model = MODELS
+        .iter()
+        .find(|m| m.id == got.model)
+        .ok_or("internal: model")?;
+    let params: serde_json::Map<_, _> = model
+        .params
+        .iter()
+        .zip(&got.params)
+        .map(|(p, v)| (p.name.to_string(), json!(v)))
+        .collect();
+    let retrieved: Vec<f32> = got.scales.iter().map(|&v| v as f32).collect();
+    let answer = json!({
+        "predicted": {"model": analysis.model, "model_name": analysis.model_name, "scales": named(&analysis.scales.map(|v| v as f32))},
+        "requested": named(&scales),
+        "retrieved": {"model": got.model, "model_name": got.model_name, "params": params, "seed": got.seed, "scales": named(&retrieved), "sample": got.sample},
+        "cosine": got.cosine,
+    });
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&answer).map_err(|e| e.to_string())?
+        );
+    } else {
+        println!(
+            "predicted model: {} ({})",
+            analysis.model_name, analysis.model
+        );
+        println!(
+            "predicted scales: {}",
+            SCALES
+                .iter()
+                .zip(analysis.scales)
+                .map(|(n, v)| format!("{n} {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        println!(
+            "retrieved: {} with {}",
+            got.model_name,
+            serde_json::to_string(&params).unwrap_or_default()
+        );
+        println!("cosine(requested, retrieved scales) = {:.3}", got.cosine);
+    }
+    Ok(())
+}
+
+const AXES: [&str; 3] = ["X", "Y", "Z"];
+/// The paper's Table 2, PCN-2 row (fractions, scales in order).
+const PAPER_TABLE2: [f64; 12] = [
+    0.998, 0.997, 0.992, 0.992, 0.998, 0.996, 0.998, 0.994, 0.994, 0.997, 0.998, 0.992,
+];
+
+/// `bench texture`: the paper's Tables 1–3 on a held-out quarter of every
+/// model's base textures, plus timings.
+pub fn bench(per_model: usize, size: usize, augment: bool) -> Result<(), String> {
+    let cfg = config(per_model, size, augment);
+    let mut stats = BuildStats::default();
+    let t0 = Instant::now();
+    let samples = build::labelled(&cfg.dataset, &[], &mut stats).map_err(|e| e.to_string())?;
+    let label_s = t0.elapsed().as_secs_f64();
+    let held = build::split(&samples, 7);
+    let t1 = Instant::now();
+    let index = build::train_index(&samples, &cfg, |b| !held[b]).map_err(|e| e.to_string())?;
+    let train_s = t1.elapsed().as_secs_f64();
+    // Test textures: each held-out base's first image under the main light.
+    let mut seen = std::collections::HashSet::new();
+    let tests: Vec<_> = samples
+        .iter()
+        .filter(|(s, _)| held[s.base] && s.light_index == 0 && seen.insert(s.base))
+        .collect();
+    let mut model_right = 0;
+    let mut scale_right = [0usize; 12];
+    let mut scale_near = [0usize; 12];
+    let mut features_s = 0.0;
+    for (s, labels) in &tests {
+        let t = Instant::now();
+        let a = index.analyse(&s.image).map_err(|e| e.to_string())?;
+        features_s += t.elapsed().as_secs_f64();
+        model_right += (a.model as usize == s.model) as usize;
+        for k in 0..12 {
+            scale_right[k] += (a.scales[k] == labels[k]) as usize;
+            scale_near[k] += (a.scales[k].abs_diff(labels[k]) <= 1) as usize;
+        }
+    }
+    let n = tests.len().max(1) as f64;
+    // Table 3: regressions from held-out bases' scales to their coordinates
+    // in a space built from all bases (the space needs every sample).
+    let full = build::train_index(&samples, &cfg, |_| true).map_err(|e| e.to_string())?;
+    let test_set: std::collections::HashSet<usize> = tests.iter().map(|(s, _)| s.base).collect();
+    let mut base_order = Vec::new();
+    let mut seen2 = std::collections::HashSet::new();
+    for (s, _) in &samples {
+        if s.light_index == 0 && seen2.insert(s.base) {
+            base_order.push(s.base);
+        }
+    }
+    let mut table3 = Vec::new();
+    for (axis_no, axis) in full.axes.iter().enumerate() {
+        let (mut pred, mut truth) = (Vec::new(), Vec::new());
+        for (i, sample) in full.samples.iter().enumerate() {
+            if test_set.contains(&base_order[i]) {
+                let s: [f32; 12] = sample.scales.map(|v| v as f32);
+                pred.push(full.locate(&s)[axis_no] as f64);
+                truth.push(sample.coords[axis_no] as f64);
+            }
+        }
+        let spread = axis.spread as f64;
+        let mse = pred
+            .iter()
+            .zip(&truth)
+            .map(|(p, t)| ((p - t) / spread).powi(2))
+            .sum::<f64>()
+            / pred.len().max(1) as f64;
+        let r = pearson(&pred, &truth);
+        table3.push(json!({
+            "axis": AXES[axis_no],
+            "scales": axis.scales.iter().map(|&k| SCALES[k as usize]).collect::<Vec<_>>(),
+            "mse_standardised": mse, "r2": r * r,
+        }));
+    }
+    // Retrieval speed and quality: slider requests from held-out labels.
+    let t3 = Instant::now();
+    let mut cos = 0.0;
+    for (_, labels) in &tests {
+        let req = TextureRetrieveRequest {
+            scales: labels.map(|v| v as f32),
+            size: 0,
+            ..Default::default()
+        };
+        cos += api::retrieve(&full, &req)
+            .map_err(|e| e.to_string())?
+            .cosine;
+    }
+    let retrieve_ms = t3.elapsed().as_secs_f64() * 1e3 / n;
+    let t4 = Instant::now();
+    for (s, _) in tests.iter().take(8) {
+        full.analyse(&s.image).map_err(|e| e.to_string())?;
+    }
+    let full_size_s = t4.elapsed().as_secs_f64() / tests.len().clamp(1, 8) as f64;
+    // PCN-2 at the paper's settings on a 256² input (the reference figure).
+    let imgs: Vec<_> = tests.iter().take(4).map(|(s, _)| s.image.clone()).collect();
+    let pcn256 = Pcn::train(
+        &imgs,
+        PcnConfig {
+            side: 256,
+            ..PcnConfig::default()
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let t5 = Instant::now();
+    for img in &imgs {
+        pcn256.features(img).map_err(|e| e.to_string())?;
+    }
+    let pcn256_s = t5.elapsed().as_secs_f64() / imgs.len().max(1) as f64;
+    let out = json!({
+        "dataset": {"per_model": per_model, "size": size, "augmented": augment, "images": stats.images, "bases": stats.bases, "test_bases": tests.len()},
+        "table1_model_accuracy": {"ours": model_right as f64 / n, "paper_pcn2": 0.9989},
+        "table2_scale_accuracy": SCALES.iter().enumerate().map(|(k, name)| json!({
+            "scale": name, "exact": scale_right[k] as f64 / n, "within_one": scale_near[k] as f64 / n,
+            "paper_pcn2": PAPER_TABLE2[k],
+        })).collect::<Vec<_>>(),
+        "table3_space_regression": {"ours": table3, "paper_r2": [0.9988, 0.9987, 0.8769]},
+        "retrieval_mean_cosine": cos / n,
+        "seconds": {
+            "label_dataset": label_s, "train_index": train_s,
+            "features_and_prediction_per_texture": features_s / n,
+            "analyse_per_texture_full_index": full_size_s,
+            "pcn2_features_at_256": pcn256_s,
+            "paper_per_texture": 0.1136,
+            "numpy_im2col_reference_at_256": 0.06,
+        },
+        "retrieval_ms": retrieve_ms,
+        "index_bytes": full.to_bytes().len(),
+        "input_side": full.pcn.config.side,
+    });
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
