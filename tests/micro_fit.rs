@@ -203,9 +203,11 @@ fn slices_of_a_target_give_back_its_parameter() {
     use filigree::raster::{encode_png, Rgba8Image};
     let target = filigree::micro::parse(&gyroid_1d(100.0)).unwrap();
     let (n, range) = (16usize, 0.004);
-    let pngs: Vec<serde_bytes::ByteBuf> = (0..4)
+    // One slice per grid plane (fewer planes alias the z waves: with 4,
+    // their spacing is about one period at η = 100).
+    let pngs: Vec<serde_bytes::ByteBuf> = (0..n)
         .map(|k| {
-            let z = (k as f64 + 0.5) * 0.25 / 4.0;
+            let z = (k as f64 + 0.5) * 0.25 / n as f64;
             let mut data = vec![];
             for y in (0..n).rev() {
                 for x in 0..n {
