@@ -545,4 +545,32 @@ fn write_seeds() {
         "texture-retrieve",
         json!({"index": "0", "scales": [5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 9], "size": 0}),
     );
+    let g = r#"{"type": "tpms", "surface": "gyroid", "period": 0.5, "thickness": 0.35}"#;
+    let t = r#"{"type": "tpms", "surface": "gyroid", "period": 0.4, "thickness": 0.35}"#;
+    req(
+        "micro-fit.json",
+        "micro-fit",
+        json!({"scene": g, "params": [{"pointer": "/period", "lo": 0.2, "hi": 0.8}],
+               "target": {"kind": "scene", "scene": t}, "grid": 4, "budget": 6, "population": 3}),
+    );
+    req(
+        "micro-fit-powell-tied.json",
+        "micro-fit",
+        json!({"scene": g, "params": [{"pointer": "/period", "lo": 0.2, "hi": 0.8, "also": ["/thickness"]}],
+               "target": {"kind": "volume", "values": vec![0.1; 64]}, "grid": 4, "budget": 5,
+               "optimizer": "powell", "shards": [1, 2]}),
+    );
+    req(
+        "micro-fit-image.json",
+        "micro-fit",
+        json!({"scene": g, "params": [{"pointer": "/thickness", "lo": 0, "hi": 3}],
+               "target": {"kind": "image", "scene": t}, "budget": 3, "optimizer": "nelder-mead",
+               "render": {"width": 4, "height": 4}}),
+    );
+    req(
+        "micro-fit-bad.json",
+        "micro-fit",
+        json!({"scene": g, "params": [{"pointer": "/surface", "lo": 1, "hi": 0}],
+               "target": {"kind": "slices", "pngs": [[1, 2, 3]], "range": -1}, "grid": 3}),
+    );
 }

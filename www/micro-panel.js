@@ -13,6 +13,7 @@
 import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
+import { mountReconstruct } from './micro-fit.js';
 
 const RUN_DELAY_MS = 60;
 const TYPING_DELAY_MS = 600;
@@ -64,6 +65,7 @@ const html = `
         <summary>Scene JSON</summary>
         <div class="micro-editor"></div>
       </details>
+      <details class="micro-fit" data-testid="micro-fit"></details>
     </aside>
   </div>`;
 
@@ -98,6 +100,7 @@ function mount(el, ctx) {
   const statusEl = q('[data-testid=micro-status]');
   const status = (t) => { statusEl.textContent = t; };
   const state = () => ctx.state();
+  const recon = mountReconstruct(q('.micro-fit'), ctx);
 
   let running = null; // the AbortController of the request in flight
   let runTimer = null;
@@ -377,6 +380,7 @@ function mount(el, ctx) {
   return {
     render(s, prev) {
       if (!s) return;
+      recon.render(s);
       if (editor && editor.getValue() !== s.scene && typingTimer === null) editor.setValue(s.scene);
       if (editor && prev && prev.scene !== s.scene) editor.clearError();
       stepsSel.value = s.steps;
@@ -398,6 +402,7 @@ function mount(el, ctx) {
       '-': () => zoomBy(1 / ZOOM_STEP, null),
     },
     unmount() {
+      recon.unmount();
       ro.disconnect();
       running?.abort();
       bitmap?.close?.();

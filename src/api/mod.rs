@@ -24,6 +24,7 @@ pub mod project;
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Step};
 use crate::micro::api as micro;
+use crate::micro::fit_api as micro_fit;
 use crate::pattern::api as pattern;
 use crate::pixel::api as pixel;
 use crate::raster::Rgba8Image;
@@ -76,6 +77,7 @@ pub const KINDS: &[&str] = &[
     "texture-index",
     "texture-analyse",
     "texture-retrieve",
+    "micro-fit",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -105,6 +107,7 @@ pub enum Response {
     TextureIndex(Box<texture::TextureIndexResponse>),
     TextureAnalysis(Box<texture::TextureAnalysis>),
     TextureRetrieval(Box<texture::TextureRetrieval>),
+    MicroFit(Box<micro_fit::MicroFitResponse>),
     /// `null`.
     Nothing,
 }
@@ -173,6 +176,7 @@ pub enum DefaultRequest {
     TextureIndex(texture::TextureIndexRequest),
     TextureAnalyse(texture::TextureAnalyseRequest),
     TextureRetrieve(texture::TextureRetrieveRequest),
+    MicroFit(Box<micro_fit::MicroFitRequest>),
     Nothing,
 }
 
@@ -213,6 +217,7 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "tangle" => D::Tangle(Default::default()),
         "micro-render" => D::MicroRender(Default::default()),
         "micro-slice" => D::MicroSlice(Default::default()),
+        "micro-fit" => D::MicroFit(Default::default()),
         other => return Err(unknown_kind(other).at("tool")),
     };
     let budgets = matches!(tool, "fit" | "fit-eval").then(pattern::budgets);
@@ -269,6 +274,9 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         }),
         "micro-slice" => boxed(micro::start_slice(request(kind, payload)?)?, |r| {
             Response::MicroSlice(Box::new(r))
+        }),
+        "micro-fit" => boxed(micro_fit::start_fit(request(kind, payload)?)?, |r| {
+            Response::MicroFit(Box::new(r))
         }),
         "tangle-examples" => {
             serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;

@@ -100,14 +100,27 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
-    /// Micro: render time per sphere-tracing step strategy (paper Table 2)
-    /// and a fibrous volume made three ways at four noise scales (Table 1).
+    /// Micro: render time per sphere-tracing step strategy (paper Table 2),
+    /// a fibrous volume made three ways at four noise scales (Table 1) and
+    /// reconstruction per microstructure and optimiser (Table 3).
     Micro {
         #[arg(long, default_value_t = 3)]
         repeats: usize,
         /// Image side in pixels.
         #[arg(long, default_value_t = 160)]
         size: u32,
+        /// Only `render` (Tables 1 and 2) or `fit` (Table 3).
+        #[arg(long)]
+        only: Option<String>,
+        /// Table 3: two problems, one seed, a short budget.
+        #[arg(long)]
+        quick: bool,
+        /// Table 3: seeds per problem and optimiser.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Table 3: threads (shards of each fit); default all cores.
+        #[arg(long)]
+        threads: Option<usize>,
         /// Accepted for symmetry with other benches; output is always JSON.
         #[arg(long)]
         json: bool,
@@ -163,7 +176,28 @@ pub fn run(w: Which) -> Result<(), String> {
             ..
         } => super::texture::bench(repeats, size, dataset_size, threads, augmented),
         Which::Tangle { repeats, only, .. } => super::tangle_bench::run(repeats, only.as_deref()),
-        Which::Micro { repeats, size, .. } => super::micro_bench::run(repeats, size),
+        Which::Micro {
+            repeats,
+            size,
+            only,
+            quick,
+            seeds,
+            threads,
+            ..
+        } => {
+            let only = only.as_deref();
+            if !matches!(only, None | Some("render") | Some("fit")) {
+                return Err("--only: expected `render` or `fit`".into());
+            }
+            let parts = super::micro_bench::Parts {
+                render: only != Some("fit"),
+                fit: only != Some("render"),
+                quick,
+                seeds,
+                threads: super::threads(threads)?,
+            };
+            super::micro_bench::run(repeats, size, parts)
+        }
         Which::Pixel { repeats, .. } => {
             println!("{}", pixel_bench(repeats.max(1))?);
             Ok(())

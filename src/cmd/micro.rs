@@ -1,8 +1,11 @@
-//! `filigree micro`: flags → the browser's `micro-render` / `micro-slice`
-//! requests → the same core jobs. Defaults come from the requests.
+//! `filigree micro`: flags → the browser's `micro-render` / `micro-slice` /
+//! `micro-fit` requests → the same core jobs. Defaults come from the requests.
 use super::{drive, print_request, put, request, Origins};
 use clap::Subcommand;
+use filigree::core::job::Cancel;
+use filigree::core::parallel::run_sharded_threads;
 use filigree::micro::api::{start_render, start_slice, MicroRenderRequest, MicroSliceRequest};
+use filigree::micro::fit_api::{start_fit, FitParam, FitTarget, MicroFitRequest};
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
 
@@ -12,6 +15,76 @@ pub enum Which {
     Render(Box<RenderArgs>),
     /// The scene's signed distance on the plane z = Z, colour-mapped, to a PNG.
     Slice(SliceArgs),
+    /// Fit numbers of a scene to a target (reconstruction, paper §6) and
+    /// write the fitted scene; prints a JSON summary.
+    ///
+    /// The target (--target) is one of: a scene file (.json), sampled on the
+    /// same grid; a raw volume (.f32: grid³ little-endian floats, x fastest);
+    /// or slice images (.png, given N times for N planes, N a power of two
+    /// ≤ grid, each grid×grid, grey g meaning distance (2g − 1)·--range, dark
+    /// inside). With --image the target is a picture instead (analysis by
+    /// synthesis): a .png (sides powers of two), or a .json scene rendered
+    /// at --size with the same default camera.
+    Fit(Box<FitArgs>),
+}
+
+#[derive(clap::Args)]
+pub struct FitArgs {
+    /// Scene file (JSON) whose values are the start.
+    #[arg(long)]
+    scene: PathBuf,
+    /// Target: scene .json, volume .f32, or slice .png (repeat for a stack).
+    #[arg(long, required = true)]
+    target: Vec<PathBuf>,
+    /// Output: the fitted scene (JSON).
+    #[arg(long)]
+    out: PathBuf,
+    /// A parameter to fit: POINTER=LO:HI, e.g. /period=0.1:1 (JSON pointer
+    /// into the scene). POINTER,POINTER2=LO:HI ties several numbers. Repeat
+    /// for more parameters.
+    #[arg(long = "param", required = true, value_name = "POINTER=LO:HI")]
+    params: Vec<String>,
+    /// The target is a picture (analysis by synthesis, Eq. 39).
+    #[arg(long)]
+    image: bool,
+    /// Samples per side (power of two).
+    #[arg(long)]
+    grid: Option<u32>,
+    /// Half size of the sample box.
+    #[arg(long)]
+    half: Option<f64>,
+    /// Centre of the sample box X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    center: Option<String>,
+    /// cmaes, nelder-mead or powell.
+    #[arg(long)]
+    optimizer: Option<String>,
+    /// Loss evaluations in all.
+    #[arg(long)]
+    budget: Option<u32>,
+    /// CMA-ES samples per generation (0: automatic).
+    #[arg(long)]
+    population: Option<u32>,
+    /// CMA-ES initial step (fraction of each range).
+    #[arg(long)]
+    sigma: Option<f64>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Slice targets: the distance that white (and black) stands for.
+    #[arg(long)]
+    range: Option<f64>,
+    /// Image targets rendered from a scene: WIDTHxHEIGHT (powers of two).
+    #[arg(long, value_name = "WxH")]
+    size: Option<String>,
+    /// Worker threads (shards of the population); default all cores.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print only the JSON summary (no progress).
+    #[arg(long)]
+    json: bool,
+    /// Print the request (as the browser would send it) and exit.
+    #[arg(long, hide = true)]
+    print_request: bool,
 }
 
 #[derive(clap::Args)]
@@ -115,7 +188,192 @@ pub fn run(which: Which) -> Result<(), String> {
     match which {
         Which::Render(a) => render(*a),
         Which::Slice(a) => slice(a),
+        Which::Fit(a) => fit(*a),
     }
+}
+
+/// `POINTER[,POINTER...]=LO:HI`.
+fn parse_param(s: &str) -> Result<FitParam, String> {
+    let bad = || format!("--param: expected POINTER=LO:HI such as /period=0.1:1 (got '{s}')");
+    let (ptrs, range) = s.rsplit_once('=').ok_or_else(bad)?;
+    let (lo, hi) = range.split_once(':').ok_or_else(bad)?;
+    let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
+    let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+    let mut ptrs = ptrs.split(',').map(|p| p.trim().to_string());
+    let pointer = ptrs.next().filter(|p| !p.is_empty()).ok_or_else(bad)?;
+    Ok(FitParam {
+        pointer,
+        lo,
+        hi,
+        also: ptrs.collect(),
+    })
+}
+
+fn ext(p: &Path) -> String {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+fn fit_target(a: &FitArgs) -> Result<FitTarget, String> {
+    let first = &a.target[0];
+    let kind = ext(first);
+    if a.target.iter().any(|t| ext(t) != kind) {
+        return Err(
+            "--target: give one scene (.json), one volume (.f32), or .png slices, not a mix".into(),
+        );
+    }
+    if a.image {
+        if a.target.len() != 1 {
+            return Err("--target: an image target is one .png or one .json scene".into());
+        }
+        return match kind.as_str() {
+            "png" => Ok(FitTarget::Image {
+                png: Some(serde_bytes::ByteBuf::from(super::read_file(first)?)),
+                scene: None,
+            }),
+            "json" => Ok(FitTarget::Image {
+                png: None,
+                scene: Some(scene_text(first)?),
+            }),
+            _ => Err(format!(
+                "--target: {}: an image target is a .png or a .json scene",
+                first.display()
+            )),
+        };
+    }
+    match kind.as_str() {
+        "json" if a.target.len() == 1 => Ok(FitTarget::Scene {
+            scene: scene_text(first)?,
+        }),
+        "f32" if a.target.len() == 1 => {
+            let bytes = super::read_file(first)?;
+            if bytes.len() % 4 != 0 {
+                return Err(format!(
+                    "{}: a raw volume is little-endian f32 values ({} bytes is not a multiple of 4)",
+                    first.display(),
+                    bytes.len()
+                ));
+            }
+            Ok(FitTarget::Volume {
+                values: bytes
+                    .chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
+                    .collect(),
+            })
+        }
+        "png" => Ok(FitTarget::Slices {
+            pngs: a
+                .target
+                .iter()
+                .map(|p| super::read_file(p).map(serde_bytes::ByteBuf::from))
+                .collect::<Result<_, _>>()?,
+            range: a.range.unwrap_or(1.0),
+        }),
+        _ => Err(format!(
+            "--target: {}: expected a scene (.json), a raw volume (.f32) or slices (.png); \
+             one scene or volume at a time",
+            first.display()
+        )),
+    }
+}
+
+fn fit(a: FitArgs) -> Result<(), String> {
+    let origins: Origins = vec![
+        ("scene", a.scene.display().to_string()),
+        ("target", "--target".into()),
+        ("params", "--param".into()),
+        ("render.width", "--size".into()),
+        ("render.height", "--size".into()),
+    ];
+    let mut o = Map::new();
+    put(&mut o, "grid", "--grid", a.grid)?;
+    put(&mut o, "half", "--half", a.half)?;
+    put(&mut o, "optimizer", "--optimizer", a.optimizer.clone())?;
+    put(&mut o, "budget", "--budget", a.budget)?;
+    put(&mut o, "population", "--population", a.population)?;
+    put(&mut o, "sigma", "--sigma", a.sigma)?;
+    put(&mut o, "seed", "--seed", a.seed)?;
+    if let Some(c) = &a.center {
+        let v: Vec<f64> = c
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("--center: expected X,Y,Z (got '{c}')"))?;
+        if v.len() != 3 {
+            return Err(format!(
+                "--center: expected three numbers X,Y,Z (got '{c}')"
+            ));
+        }
+        put(&mut o, "center", "--center", Some(v))?;
+    }
+    if a.size.is_some() {
+        let mut r = Map::new();
+        size(&mut r, &a.size)?;
+        o.insert("render".into(), Value::Object(r));
+    }
+    let mut req: MicroFitRequest = request("micro-fit", Value::Object(o), &origins)?;
+    req.scene = scene_text(&a.scene)?;
+    req.params = a
+        .params
+        .iter()
+        .map(|p| parse_param(p))
+        .collect::<Result<_, _>>()?;
+    req.target = fit_target(&a)?;
+    if a.print_request {
+        return print_request(&req);
+    }
+    let threads = super::threads(a.threads)?;
+    let t0 = std::time::Instant::now();
+    // One shard per thread; the result equals a one-thread fit.
+    let jobs = (0..threads)
+        .map(|k| {
+            start_fit(MicroFitRequest {
+                shards: Some((k, threads)),
+                ..req.clone()
+            })
+            .map_err(|e| super::explain(e, &origins))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut last = -1.0;
+    let quiet = a.json;
+    let out = run_sharded_threads(jobs, &Cancel::new(), |k, p| {
+        if !quiet && k == 0 && p.fraction - last >= 0.05 {
+            last = p.fraction;
+            eprintln!(
+                "{:>3.0}%  {}  best loss {:.5}",
+                p.fraction * 100.0,
+                p.stage,
+                p.figure.unwrap_or(f64::NAN)
+            );
+        }
+    })
+    .map_err(|e| super::explain(e, &origins))?;
+    let secs = t0.elapsed().as_secs_f64();
+    write(&a.out, out.scene.as_bytes())?;
+    let params: Vec<Value> = req
+        .params
+        .iter()
+        .zip(&out.values)
+        .map(|(p, v)| json!({"pointer": p.pointer, "value": v}))
+        .collect();
+    println!(
+        "{}",
+        json!({
+            "params": params,
+            "loss": out.loss,
+            "initial_loss": out.initial_loss,
+            "validation": out.validation,
+            "evaluations": out.evaluations,
+            "seconds": secs,
+            "ms_per_eval": secs * 1e3 / out.evaluations.max(1) as f64,
+            "threads": threads,
+            "optimizer": req.optimizer,
+            "out": a.out.display().to_string(),
+        })
+    );
+    Ok(())
 }
 
 fn render(a: RenderArgs) -> Result<(), String> {

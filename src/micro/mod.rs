@@ -14,12 +14,15 @@
 //! - [`render`]: sphere tracing with fixed, bisection and adaptive steps,
 //!   normals, shading, the orbit camera and slices.
 //! - [`api`]: the `micro-render` and `micro-slice` requests and their jobs.
+//! - [`fit`]: the Fourier loss (§6.1, Eq. 36, 39); [`fit_api`]: the
+//!   `micro-fit` request and its job (reconstruction, Table 3).
 //! - [`examples`]: the shipped scenes (`micro-examples`); [`state`]: the
 //!   browser tool's document.
 pub mod api;
 pub mod cells;
 pub mod examples;
 pub mod fit;
+pub mod fit_api;
 pub mod periodic;
 pub mod render;
 pub mod scene;

@@ -10,7 +10,8 @@
 //! with patience and refinement to polish them.
 //!
 //! Files: [`ga`] (genetic algorithm), [`random`] (random sampling one
-//! coordinate at a time), [`nelder_mead`] (simplex with restarts), [`adam`].
+//! coordinate at a time), [`nelder_mead`] (simplex with restarts),
+//! [`cmaes`], [`powell`] (conjugate directions, bounded), [`adam`].
 //!
 //! ## Ask/tell
 //!
@@ -33,12 +34,14 @@ pub mod adam;
 pub mod cmaes;
 pub mod ga;
 pub mod nelder_mead;
+pub mod powell;
 pub mod random;
 
 pub use adam::Adam;
 pub use cmaes::{Cmaes, CmaesOptions};
 pub use ga::{Ga, GaOptions};
 pub use nelder_mead::NelderMead;
+pub use powell::Powell;
 pub use random::RandomSearch;
 
 /// An optimiser driven from outside: it proposes batches of points and

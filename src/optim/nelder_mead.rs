@@ -25,6 +25,8 @@ pub struct NelderMead {
     centroid: Vec<f64>,
     /// Best point told so far (restarts forget the simplex, not this).
     best: Option<Scored>,
+    /// Where the first simplex starts (else a random point).
+    start: Option<Vec<f64>>,
 }
 
 impl NelderMead {
@@ -39,7 +41,18 @@ impl NelderMead {
             xr: None,
             centroid: vec![],
             best: None,
+            start: None,
         }
+    }
+
+    /// A search whose first simplex starts at `x0` (restarts are random).
+    pub fn starting_at(x0: &[f64], budget: usize) -> Self {
+        let mut nm = NelderMead::new(x0.len().max(1), budget);
+        let mut x = x0.to_vec();
+        x.resize(nm.dim, 0.5);
+        clamp01(&mut x);
+        nm.start = Some(x);
+        nm
     }
 
     fn along(&self, from: &[f64], to: &[f64], t: f64) -> Vec<f64> {
@@ -56,7 +69,10 @@ impl AskTell for NelderMead {
         }
         match self.stage {
             NmStage::Start => {
-                let x0: Vec<f64> = (0..self.dim).map(|_| rng.f64()).collect();
+                let x0: Vec<f64> = match self.start.take() {
+                    Some(x) => x,
+                    None => (0..self.dim).map(|_| rng.f64()).collect(),
+                };
                 let mut pts = vec![x0.clone()];
                 for i in 0..self.dim {
                     let mut x = x0.clone();

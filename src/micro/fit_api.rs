@@ -1,0 +1,1057 @@
+//! `micro-fit` (paper §6, §12): fit some numbers of a scene to a target
+//! with the Fourier loss, shared by `filigree micro fit` and the browser.
+//!
+//! The parameters to fit are JSON pointers (RFC 6901) into the scene text,
+//! each with a range: `{"pointer": "/children/0/period", "lo": 0.1, "hi": 1}`.
+//! A number that is an integer in the scene (a seed, a count) stays one
+//! (rounded). The target is one of
+//! - `{"kind": "scene", "scene": "..."}`: another scene sampled on the same
+//!   grid (a synthetic exemplar, as in the paper's Table 3);
+//! - `{"kind": "volume", "values": [...]}`: a sampled SDF, `grid³` values,
+//!   x fastest;
+//! - `{"kind": "slices", "pngs": [...], "range": R}`: a stack of grey slice
+//!   images (`grid × grid` each; their count a power of two ≤ `grid`) on
+//!   planes evenly spaced in z over the sample box; grey `g ∈ [0, 1]` is
+//!   the distance `(2g − 1) R` (dark inside), and the fitted field is
+//!   clamped to `±R` to match;
+//! - `{"kind": "image", "png": ... | "scene": "..."}`: analysis by synthesis
+//!   (§12.2): a picture rendered with `render` (camera, steps, shading; the
+//!   image's own size, each side a power of two), compared by the amplitude
+//!   loss of Eq. 39. Given a `scene`, the target picture is rendered here.
+//!
+//! The volume is sampled at the cell centres of a `grid³` lattice over the
+//! box `center ± half`; the loss is Eq. 36's log MSE of amplitude and phase
+//! spectra ([`super::fit::fourier_loss`]). The optimiser (`cmaes`,
+//! `nelder-mead`, `powell`, all ask/tell in [`crate::optim`]) works in
+//! normalised coordinates; the start is the scene's own values.
+//!
+//! Parallel: `shards: [k, n]` makes this job shard k of n of one fit. Every
+//! shard asks the same batch, evaluates points `k, k + n, ...`, and the
+//! shards exchange their losses ([`Job::outbox`]/[`Job::inbox`]), so each
+//! tells its optimiser the same full batch and ends with the result of one
+//! unsharded fit, bit for bit.
+//!
+//! The response carries no time (the core reads no clock): the CLI and the
+//! page measure seconds around the job.
+use super::api::{start_render, MicroRenderRequest, RenderJob};
+use super::fit::{amplitude_loss, fourier_loss, Fourier, Spectrum};
+use super::scene::{self, Node, Scene};
+use crate::core::error::{Error, Result};
+use crate::core::job::{Job, Progress, Step};
+use crate::core::request_limits as lim;
+use crate::core::rng::Rng;
+use crate::optim::{AskTell, Cmaes, CmaesOptions, NelderMead, Powell, Scored};
+use crate::raster::{decode, Limits};
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use serde_bytes::ByteBuf;
+use serde_json::Value;
+
+/// Largest grid side, parameter count, budget, image side, population.
+pub const MAX_FIT_GRID: u32 = 64;
+pub const MAX_FIT_PARAMS: usize = 32;
+pub const MAX_FIT_BUDGET: u32 = 100_000;
+pub const MAX_FIT_IMAGE_SIDE: u32 = 256;
+pub const MAX_FIT_POPULATION: u32 = 1000;
+/// Numbers of a scene a fit may set stay within this magnitude.
+const MAX_VALUE: f64 = 1e9;
+
+/// Which optimiser.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Optimizer {
+    /// CMA-ES: a population per generation (global, the paper's choice).
+    #[default]
+    Cmaes,
+    /// Nelder–Mead simplex from the scene's values, random restarts.
+    NelderMead,
+    /// Powell's conjugate directions from the scene's values (local).
+    Powell,
+}
+
+/// A number of the scene to fit, and its range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FitParam {
+    /// JSON pointer to a number in the scene, e.g. `/children/0/period`.
+    pub pointer: String,
+    pub lo: f64,
+    pub hi: f64,
+    /// More pointers that take the same value (a tied parameter, e.g. one
+    /// frequency along x, y and z).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<String>,
+}
+
+/// What to fit to (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum FitTarget {
+    Scene {
+        scene: String,
+    },
+    Volume {
+        values: Vec<f64>,
+    },
+    Slices {
+        pngs: Vec<ByteBuf>,
+        #[serde(default = "one")]
+        range: f64,
+    },
+    Image {
+        #[serde(default)]
+        png: Option<ByteBuf>,
+        #[serde(default)]
+        scene: Option<String>,
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for FitTarget {
+    fn default() -> Self {
+        FitTarget::Scene {
+            scene: String::new(),
+        }
+    }
+}
+
+/// `micro-fit` / `filigree micro fit`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MicroFitRequest {
+    /// The scene as JSON text; its values are the start.
+    pub scene: String,
+    pub params: Vec<FitParam>,
+    pub target: FitTarget,
+    /// Samples per side of the volume (a power of two).
+    pub grid: u32,
+    /// The sample box `center ± half` (world units).
+    pub center: [f64; 3],
+    pub half: f64,
+    pub optimizer: Optimizer,
+    /// Loss evaluations in all (the start point's included).
+    pub budget: u32,
+    /// CMA-ES samples per generation (0: 4 + ⌊3 ln d⌋).
+    pub population: u32,
+    /// CMA-ES initial step, as a fraction of each range.
+    pub sigma: f64,
+    pub seed: u64,
+    /// Image targets: how to render (its `scene`, `width` and `height` are
+    /// ignored: the candidate and the target image's size are used).
+    pub render: MicroRenderRequest,
+    /// `[k, n]`: this job is shard k of n of one fit.
+    pub shards: Option<(usize, usize)>,
+}
+
+impl Default for MicroFitRequest {
+    fn default() -> Self {
+        MicroFitRequest {
+            scene: String::new(),
+            params: vec![],
+            target: FitTarget::default(),
+            grid: 32,
+            center: [0.0; 3],
+            half: 1.0,
+            optimizer: Optimizer::Cmaes,
+            budget: 1500,
+            population: 20,
+            sigma: 0.3,
+            seed: 1,
+            render: MicroRenderRequest {
+                width: 64,
+                height: 64,
+                ..Default::default()
+            },
+            shards: None,
+        }
+    }
+}
+
+/// The result of a fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MicroFitResponse {
+    /// Best values, one per request parameter (integers rounded).
+    pub values: Vec<f64>,
+    /// The scene with those values, as JSON text.
+    pub scene: String,
+    pub loss: f64,
+    /// Loss of the scene as given (the start).
+    pub initial_loss: f64,
+    /// Best loss after each batch, and the evaluations done by then.
+    pub history: Vec<f64>,
+    pub history_evaluations: Vec<u64>,
+    pub evaluations: u64,
+    /// With a target scene: the MSE of the fitted field against it on a
+    /// grid shifted by half a cell, over the target's variance there
+    /// (0: identical; about 1 or more: no better than a constant).
+    pub validation: Option<f64>,
+}
+
+struct Param {
+    /// The pointer and those tied to it.
+    pointers: Vec<String>,
+    lo: f64,
+    hi: f64,
+    integer: bool,
+}
+
+/// What an evaluation samples.
+#[derive(Clone)]
+enum Sampler {
+    /// The field at `points`; clamped to ±R when `clamp` is set.
+    Volume {
+        points: Vec<DVec3>,
+        clamp: Option<f64>,
+    },
+    /// A grey rendering of `width × height` with these settings.
+    Image(MicroRenderRequest),
+}
+
+/// One sampling in progress.
+enum Work {
+    Volume {
+        scene: Box<Scene>,
+        values: Vec<f64>,
+        points: usize,
+        clamp: Option<f64>,
+    },
+    Render(Box<RenderJob>),
+}
+
+/// Scene evaluations (or their equivalent) per job step.
+const WORK_PER_STEP: usize = 60_000;
+
+impl Work {
+    fn new(sampler: &Sampler, scene: Scene, text: &str) -> Result<Work> {
+        Ok(match sampler {
+            Sampler::Volume { points, clamp } => Work::Volume {
+                scene: Box::new(scene),
+                values: Vec::with_capacity(points.len()),
+                points: points.len(),
+                clamp: *clamp,
+            },
+            Sampler::Image(r) => Work::Render(Box::new(start_render(MicroRenderRequest {
+                scene: text.to_string(),
+                ..r.clone()
+            })?)),
+        })
+    }
+
+    /// Advance by about `budget` evaluations; the samples when finished.
+    fn advance(&mut self, sampler: &Sampler, budget: usize) -> Result<(usize, Option<Vec<f64>>)> {
+        match self {
+            Work::Volume {
+                scene,
+                values,
+                points,
+                clamp,
+            } => {
+                let Sampler::Volume { points: pts, .. } = sampler else {
+                    return Err(Error::input("micro-fit: sampler mismatch"));
+                };
+                let stop = (values.len() + budget).min(*points);
+                let from = values.len();
+                for p in &pts[from..stop] {
+                    let v = scene.eval(*p);
+                    let v = match clamp {
+                        Some(r) => v.clamp(-*r, *r),
+                        None => v,
+                    };
+                    values.push(if v.is_finite() { v } else { MAX_VALUE });
+                }
+                let done = stop - from;
+                Ok(if values.len() == *points {
+                    (done, Some(std::mem::take(values)))
+                } else {
+                    (done, None)
+                })
+            }
+            Work::Render(job) => match job.step()? {
+                Step::Running(_) => Ok((budget, None)),
+                Step::Done(out) => {
+                    let img = decode(
+                        &out.png,
+                        Limits {
+                            max_side: MAX_FIT_IMAGE_SIDE,
+                            max_pixels: (MAX_FIT_IMAGE_SIDE * MAX_FIT_IMAGE_SIDE) as u64,
+                        },
+                    )?;
+                    Ok((budget, Some(grey(&img.data))))
+                }
+            },
+        }
+    }
+}
+
+/// Mean of RGB in `[0, 1]` per pixel.
+fn grey(rgba: &[u8]) -> Vec<f64> {
+    rgba.chunks_exact(4)
+        .map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / (3.0 * 255.0))
+        .collect()
+}
+
+/// The target's spectrum, as the loss compares it.
+enum TargetSpectrum {
+    Full(Spectrum),
+    Amplitudes(Vec<f64>),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    /// Sampling the target.
+    Target,
+    /// Evaluating the start point.
+    Start,
+    Optimise,
+    /// Sampling target and fit on the validation grid.
+    Validate,
+    Finished,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Exchange {
+    None,
+    Ready(Vec<f64>),
+    Waiting,
+}
+
+/// A running fit.
+pub struct MicroFitJob {
+    base: Value,
+    params: Vec<Param>,
+    sampler: Sampler,
+    fourier: Fourier,
+    target_scene: Option<(Scene, String)>,
+    target: Option<TargetSpectrum>,
+    opt: Box<dyn AskTell + Send>,
+    rng: Rng,
+    phase: Phase,
+    work: Option<Work>,
+    batch: Vec<Vec<f64>>,
+    losses: Vec<f64>,
+    next: usize,
+    shards: (usize, usize),
+    exchange: Exchange,
+    budget: u64,
+    evaluations: u64,
+    best: Scored,
+    initial_loss: f64,
+    history: Vec<f64>,
+    history_evaluations: Vec<u64>,
+    /// Validation: the points and the target's samples once taken.
+    validation_points: Vec<DVec3>,
+    validation_target: Option<Vec<f64>>,
+    validation: Option<f64>,
+}
+
+fn is_pow2(v: u32) -> bool {
+    v.is_power_of_two()
+}
+
+/// Cell centres of an `nx × ny × nz` lattice over `center ± half` (x fastest),
+/// shifted by `shift` cells.
+fn lattice(dims: [usize; 3], center: [f64; 3], half: f64, shift: f64) -> Vec<DVec3> {
+    let c = DVec3::from_array(center);
+    let mut out = Vec::with_capacity(dims.iter().product());
+    let coord = |i: usize, n: usize| -half + (i as f64 + 0.5 + shift) * 2.0 * half / n as f64;
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                out.push(c + DVec3::new(coord(x, dims[0]), coord(y, dims[1]), coord(z, dims[2])));
+            }
+        }
+    }
+    out
+}
+
+fn decode_grey(bytes: &[u8], field: &str) -> Result<(u32, u32, Vec<f64>)> {
+    let img = decode(
+        bytes,
+        Limits {
+            max_side: MAX_FIT_IMAGE_SIDE,
+            max_pixels: (MAX_FIT_IMAGE_SIDE * MAX_FIT_IMAGE_SIDE) as u64,
+        },
+    )
+    .map_err(|e| Error::input(format!("`{field}`: {}", e.inner())).at(field))?;
+    Ok((img.width, img.height, grey(&img.data)))
+}
+
+/// Check a request and set the fit up (the target is sampled in the steps).
+pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
+    lim::int_in("grid", req.grid, (2, MAX_FIT_GRID))?;
+    if !is_pow2(req.grid) {
+        return Err(Error::input(format!(
+            "`grid` must be a power of two (2, 4, 8, 16, 32 or 64; got {})",
+            req.grid
+        ))
+        .at("grid"));
+    }
+    for (i, v) in req.center.iter().enumerate() {
+        lim::finite_in(&format!("center.{i}"), *v, (-1e6, 1e6))?;
+    }
+    lim::finite_in("half", req.half, (1e-9, 1e6))?;
+    lim::int_in("budget", req.budget, (1, MAX_FIT_BUDGET))?;
+    lim::int_in("population", req.population, (0, MAX_FIT_POPULATION))?;
+    if req.population == 1 {
+        return Err(
+            Error::input("`population` must be 0 (automatic) or at least 2").at("population"),
+        );
+    }
+    lim::finite_in("sigma", req.sigma, (1e-6, 1.0))?;
+    let shards = match req.shards {
+        None => (0, 1),
+        Some((k, n)) => {
+            if n == 0 || n > 64 || k >= n {
+                return Err(Error::input(format!(
+                    "`shards` [{k}, {n}]: need 1..=64 shards and an index below their count"
+                ))
+                .at("shards"));
+            }
+            (k, n)
+        }
+    };
+    if req.params.is_empty() {
+        return Err(Error::input(
+            "`params` is empty: name at least one number of the scene to fit, e.g. \
+             {\"pointer\": \"/period\", \"lo\": 0.1, \"hi\": 1}",
+        )
+        .at("params"));
+    }
+    if req.params.len() > MAX_FIT_PARAMS {
+        return Err(Error::limit(format!(
+            "{} parameters; at most {MAX_FIT_PARAMS} can be fitted at once",
+            req.params.len()
+        ))
+        .at("params"));
+    }
+    // The scene: checked as a scene, then read as plain JSON to edit.
+    scene::parse(&req.scene)?;
+    let base: Value = serde_json::from_str(&req.scene)
+        .map_err(|e| Error::input(format!("the scene is not JSON: {e}")).at("scene"))?;
+    let mut params = Vec::with_capacity(req.params.len());
+    let mut start = Vec::with_capacity(req.params.len());
+    for (i, p) in req.params.iter().enumerate() {
+        let field = format!("params.{i}");
+        lim::finite_in(&format!("{field}.lo"), p.lo, (-MAX_VALUE, MAX_VALUE))?;
+        lim::finite_in(&format!("{field}.hi"), p.hi, (-MAX_VALUE, MAX_VALUE))?;
+        if p.lo >= p.hi {
+            return Err(Error::input(format!(
+                "`{field}`: the range {}..{} is empty (lo must be below hi)",
+                p.lo, p.hi
+            ))
+            .at(format!("{field}.lo")));
+        }
+        if p.also.len() > MAX_FIT_PARAMS {
+            return Err(Error::limit(format!(
+                "`{field}.also` ties {} pointers; at most {MAX_FIT_PARAMS} can be",
+                p.also.len()
+            ))
+            .at(format!("{field}.also")));
+        }
+        let mut x = 0.0;
+        let mut integer = false;
+        let mut pointers = vec![];
+        let all = std::iter::once((format!("{field}.pointer"), &p.pointer)).chain(
+            p.also
+                .iter()
+                .enumerate()
+                .map(|(j, q)| (format!("{field}.also.{j}"), q)),
+        );
+        for (j, (f, ptr)) in all.enumerate() {
+            let Some(v) = base.pointer(ptr) else {
+                return Err(Error::input(format!(
+                    "`{f}`: '{ptr}' names nothing in the scene (a JSON pointer such as \
+                     /children/0/period)"
+                ))
+                .at(f));
+            };
+            let Some(xv) = v.as_f64() else {
+                return Err(Error::input(format!(
+                    "`{f}`: '{ptr}' is not a number in the scene (it is {})",
+                    kind_of(v)
+                ))
+                .at(f));
+            };
+            let seen = req.params[..i]
+                .iter()
+                .flat_map(|q| std::iter::once(&q.pointer).chain(&q.also))
+                .chain(&pointers)
+                .any(|q| q == ptr);
+            if seen {
+                return Err(Error::input(format!("`{f}`: '{ptr}' is listed twice")).at(f));
+            }
+            if j == 0 {
+                x = xv;
+                integer = v.is_i64() || v.is_u64();
+            }
+            pointers.push(ptr.clone());
+        }
+        params.push(Param {
+            pointers,
+            lo: p.lo,
+            hi: p.hi,
+            integer,
+        });
+        start.push(((x - p.lo) / (p.hi - p.lo)).clamp(0.0, 1.0));
+    }
+    let n = req.grid as usize;
+    let mut target_scene = None;
+    let (sampler, fourier, target) = match &req.target {
+        FitTarget::Scene { scene: text } => {
+            let s = scene::parse(text).map_err(|e| retarget(e, "target.scene"))?;
+            target_scene = Some((s, text.clone()));
+            let dims = [n, n, n];
+            (
+                Sampler::Volume {
+                    points: lattice(dims, req.center, req.half, 0.0),
+                    clamp: None,
+                },
+                Fourier::new(dims)?,
+                None,
+            )
+        }
+        FitTarget::Volume { values } => {
+            if values.len() != n * n * n {
+                return Err(Error::input(format!(
+                    "`target.values`: a {n}³ grid needs {} values (got {})",
+                    n * n * n,
+                    values.len()
+                ))
+                .at("target.values"));
+            }
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(
+                    Error::input(format!("`target.values.{i}` is not a finite number"))
+                        .at(format!("target.values.{i}")),
+                );
+            }
+            let dims = [n, n, n];
+            let mut f = Fourier::new(dims)?;
+            let t = TargetSpectrum::Full(f.half_spectrum(values)?);
+            (
+                Sampler::Volume {
+                    points: lattice(dims, req.center, req.half, 0.0),
+                    clamp: None,
+                },
+                f,
+                Some(t),
+            )
+        }
+        FitTarget::Slices { pngs, range } => {
+            lim::finite_in("target.range", *range, (1e-12, 1e6))?;
+            let c = pngs.len();
+            if c == 0 || !c.is_power_of_two() || c > n {
+                return Err(Error::input(format!(
+                    "`target.pngs`: {c} slices; give a power of two of them, at most `grid` ({n})"
+                ))
+                .at("target.pngs"));
+            }
+            let mut values = Vec::with_capacity(n * n * c);
+            for (i, png) in pngs.iter().enumerate() {
+                let field = format!("target.pngs.{i}");
+                let (w, h, g) = decode_grey(png, &field)?;
+                if (w, h) != (n as u32, n as u32) {
+                    return Err(Error::input(format!(
+                        "`{field}` is {w}×{h}; each slice must be grid × grid ({n}×{n})"
+                    ))
+                    .at(field));
+                }
+                // Image rows go down; the lattice's y goes up.
+                for y in (0..n).rev() {
+                    values.extend(
+                        g[y * n..(y + 1) * n]
+                            .iter()
+                            .map(|v| (2.0 * v - 1.0) * range),
+                    );
+                }
+            }
+            let dims = [n, n, c];
+            let mut f = Fourier::new(dims)?;
+            let t = TargetSpectrum::Full(f.half_spectrum(&values)?);
+            (
+                Sampler::Volume {
+                    points: lattice(dims, req.center, req.half, 0.0),
+                    clamp: Some(*range),
+                },
+                f,
+                Some(t),
+            )
+        }
+        FitTarget::Image { png, scene: text } => {
+            let mut render = req.render.clone();
+            let target = match (png, text) {
+                (Some(png), None) => {
+                    let (w, h, g) = decode_grey(png, "target.png")?;
+                    render.width = w;
+                    render.height = h;
+                    Some(g)
+                }
+                (None, Some(text)) => {
+                    let s = scene::parse(text).map_err(|e| retarget(e, "target.scene"))?;
+                    target_scene = Some((s, text.clone()));
+                    None
+                }
+                _ => {
+                    return Err(Error::input(
+                        "an image target needs exactly one of `png` (a picture) and `scene` \
+                         (a scene to render as the picture)",
+                    )
+                    .at("target"))
+                }
+            };
+            for (name, v) in [("width", render.width), ("height", render.height)] {
+                if !is_pow2(v) || !(2..=MAX_FIT_IMAGE_SIDE).contains(&v) {
+                    let field = if target.is_some() {
+                        "target.png".to_string()
+                    } else {
+                        format!("render.{name}")
+                    };
+                    return Err(Error::input(format!(
+                        "the image {name} is {v}; analysis by synthesis needs a power of two \
+                         from 2 to {MAX_FIT_IMAGE_SIDE}"
+                    ))
+                    .at(field));
+                }
+            }
+            // Check the render settings once, now.
+            start_render(MicroRenderRequest {
+                scene: r#"{"type": "sphere", "radius": 1}"#.into(),
+                ..render.clone()
+            })
+            .map_err(|e| match e.field() {
+                Some(f) => {
+                    let f = format!("render.{f}");
+                    e.at(f)
+                }
+                None => e,
+            })?;
+            let dims = [render.width as usize, render.height as usize, 1];
+            let mut f = Fourier::new(dims)?;
+            let t = match target {
+                Some(g) => Some(TargetSpectrum::Amplitudes(f.amplitudes(&g)?)),
+                None => None,
+            };
+            (Sampler::Image(render), f, t)
+        }
+    };
+    let dim = params.len();
+    let inner = (req.budget as usize).saturating_sub(1);
+    let opt: Box<dyn AskTell + Send> = match req.optimizer {
+        Optimizer::Cmaes => {
+            let lambda = if req.population >= 2 {
+                req.population as usize
+            } else {
+                4 + (3.0 * libm::log(dim as f64)).floor() as usize
+            };
+            Box::new(Cmaes::new(
+                &start,
+                CmaesOptions {
+                    population: lambda,
+                    sigma: req.sigma,
+                    generations: inner / lambda,
+                    tolerance: 1e-10,
+                },
+            ))
+        }
+        Optimizer::NelderMead => Box::new(NelderMead::starting_at(&start, inner)),
+        Optimizer::Powell => Box::new(Powell::new(&start, inner)),
+    };
+    let validation_points = if target_scene.is_some() {
+        lattice([n, n, n], req.center, req.half, 0.5)
+    } else {
+        vec![]
+    };
+    let has_target = target.is_some();
+    Ok(MicroFitJob {
+        base,
+        params,
+        sampler,
+        fourier,
+        target_scene,
+        target,
+        opt,
+        rng: Rng::new(req.seed),
+        phase: if has_target {
+            Phase::Start
+        } else {
+            Phase::Target
+        },
+        work: None,
+        batch: vec![start.clone()],
+        losses: vec![f64::NAN],
+        next: 0,
+        shards,
+        exchange: Exchange::None,
+        budget: req.budget as u64,
+        evaluations: 0,
+        best: Scored {
+            u: start,
+            loss: f64::INFINITY,
+        },
+        initial_loss: f64::INFINITY,
+        history: vec![],
+        history_evaluations: vec![],
+        validation_points,
+        validation_target: None,
+        validation: None,
+    })
+}
+
+fn kind_of(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "true or false",
+        Value::Number(_) => "a number",
+        Value::String(_) => "text",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "an object",
+    }
+}
+
+/// A scene error about the target scene, naming its field.
+fn retarget(e: Error, field: &str) -> Error {
+    let inner = e.inner().clone();
+    let msg = match &inner {
+        Error::Syntax { message, .. } => format!("target: {message}"),
+        other => format!("target: {other}"),
+    };
+    match inner {
+        Error::Syntax { line, column, .. } => Error::Syntax {
+            line,
+            column,
+            message: msg,
+        }
+        .at(field),
+        Error::Limit(..) => Error::limit(msg).at(field),
+        _ => Error::input(msg).at(field),
+    }
+}
+
+impl MicroFitJob {
+    /// Raw values of a normalised point (integers rounded).
+    pub fn values(&self, u: &[f64]) -> Vec<f64> {
+        self.params
+            .iter()
+            .zip(u)
+            .map(|(p, &u)| {
+                let v = p.lo + u.clamp(0.0, 1.0) * (p.hi - p.lo);
+                if p.integer {
+                    v.round()
+                } else {
+                    v
+                }
+            })
+            .collect()
+    }
+
+    /// The scene JSON with the values of `u` written in.
+    fn scene_value(&self, u: &[f64]) -> Value {
+        let mut v = self.base.clone();
+        for (p, x) in self.params.iter().zip(self.values(u)) {
+            let new = if p.integer {
+                Value::from(x as i64)
+            } else {
+                serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)
+            };
+            for ptr in &p.pointers {
+                if let Some(slot) = v.pointer_mut(ptr) {
+                    *slot = new.clone();
+                }
+            }
+        }
+        v
+    }
+
+    /// The compiled scene at `u`, or `None` where the values are invalid.
+    fn scene_at(&self, u: &[f64]) -> Option<(Scene, String)> {
+        let v = self.scene_value(u);
+        let node: Node = serde_json::from_value(v.clone()).ok()?;
+        let s = scene::compile(node).ok()?;
+        Some((s, v.to_string()))
+    }
+
+    fn loss_of(&mut self, values: &[f64]) -> Result<f64> {
+        let l = match &self.target {
+            Some(TargetSpectrum::Full(t)) => {
+                let s = self.fourier.half_spectrum(values)?;
+                fourier_loss(&s, t)
+            }
+            Some(TargetSpectrum::Amplitudes(t)) => {
+                let a = self.fourier.amplitudes(values)?;
+                amplitude_loss(&a, t)
+            }
+            None => return Err(Error::input("micro-fit: no target yet")),
+        };
+        Ok(if l.is_nan() { f64::INFINITY } else { l })
+    }
+
+    fn progress(&self, stage: &str) -> Progress {
+        let f = self.evaluations as f64 / self.budget.max(1) as f64;
+        let p = Progress::new(0.02 + 0.96 * f, stage);
+        if self.best.loss.is_finite() {
+            p.with_figure(self.best.loss)
+                .with_values(self.values(&self.best.u))
+        } else {
+            p
+        }
+    }
+
+    /// Advance the sampling of the current batch point; `Some(loss)` when
+    /// it is evaluated. Returns the work done too.
+    fn eval_point(&mut self, budget: usize) -> Result<(usize, Option<f64>)> {
+        if self.work.is_none() {
+            let u = self.batch[self.next].clone();
+            match self.scene_at(&u) {
+                None => return Ok((1, Some(f64::INFINITY))),
+                Some((s, text)) => match Work::new(&self.sampler, s, &text) {
+                    Ok(w) => self.work = Some(w),
+                    Err(_) => return Ok((1, Some(f64::INFINITY))),
+                },
+            }
+        }
+        let work = self.work.as_mut().expect("work");
+        let (done, values) = match work.advance(&self.sampler, budget) {
+            Ok(r) => r,
+            Err(_) => {
+                self.work = None;
+                return Ok((budget, Some(f64::INFINITY)));
+            }
+        };
+        match values {
+            None => Ok((done, None)),
+            Some(v) => {
+                self.work = None;
+                let n = v.len();
+                Ok((done + n, Some(self.loss_of(&v)?)))
+            }
+        }
+    }
+
+    /// All points of the batch are known: tell the optimiser (or the start).
+    fn tell_batch(&mut self) {
+        let batch = std::mem::take(&mut self.batch);
+        let losses: Vec<f64> = self
+            .losses
+            .iter()
+            .map(|&l| if l.is_nan() { f64::INFINITY } else { l })
+            .collect();
+        self.evaluations += batch.len() as u64;
+        for (u, &l) in batch.iter().zip(&losses) {
+            if l < self.best.loss {
+                self.best = Scored {
+                    u: u.clone(),
+                    loss: l,
+                };
+            }
+        }
+        if self.phase == Phase::Start {
+            self.initial_loss = losses[0];
+            self.phase = Phase::Optimise;
+        } else {
+            self.opt.tell(batch, &losses);
+        }
+        self.history.push(self.best.loss);
+        self.history_evaluations.push(self.evaluations);
+        self.losses.clear();
+    }
+
+    /// The finished fit.
+    fn output(&self) -> MicroFitResponse {
+        let v = self.scene_value(&self.best.u);
+        MicroFitResponse {
+            values: self.values(&self.best.u),
+            scene: serde_json::to_string_pretty(&v).unwrap_or_else(|_| v.to_string()),
+            loss: self.best.loss,
+            initial_loss: self.initial_loss,
+            history: self.history.clone(),
+            history_evaluations: self.history_evaluations.clone(),
+            evaluations: self.evaluations,
+            validation: self.validation,
+        }
+    }
+
+    /// Sample the target scene (preparation, or validation points).
+    fn sample_target(&mut self, budget: usize) -> Result<Option<Vec<f64>>> {
+        if self.work.is_none() {
+            let Some((s, text)) = &self.target_scene else {
+                return Err(Error::input("micro-fit: no target scene"));
+            };
+            let sampler = self.active_sampler();
+            self.work = Some(Work::new(&sampler, s.clone(), text)?);
+        }
+        let sampler = self.active_sampler();
+        let work = self.work.as_mut().expect("work");
+        let (_, v) = work.advance(&sampler, budget)?;
+        if v.is_some() {
+            self.work = None;
+        }
+        Ok(v)
+    }
+
+    /// Validation samples on the shifted grid; fitting samples otherwise.
+    fn active_sampler(&self) -> Sampler {
+        if self.phase == Phase::Validate {
+            Sampler::Volume {
+                points: self.validation_points.clone(),
+                clamp: None,
+            }
+        } else {
+            self.sampler.clone()
+        }
+    }
+}
+
+impl Job for MicroFitJob {
+    type Output = MicroFitResponse;
+
+    fn outbox(&mut self) -> Option<Vec<f64>> {
+        match std::mem::replace(&mut self.exchange, Exchange::None) {
+            Exchange::Ready(part) => {
+                self.exchange = Exchange::Waiting;
+                Some(part)
+            }
+            other => {
+                self.exchange = other;
+                None
+            }
+        }
+    }
+
+    fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
+        let (k, n) = self.shards;
+        if self.exchange != Exchange::Waiting {
+            return Err(Error::input(
+                "unexpected exchange: this fit is not waiting for its sibling shards",
+            ));
+        }
+        if parts.len() != n {
+            return Err(Error::input(format!(
+                "exchange: {} parts for {n} shards",
+                parts.len()
+            )));
+        }
+        let len = self.batch.len();
+        for (j, part) in parts.iter().enumerate() {
+            let want = (len + n - 1 - j) / n;
+            if part.len() != want {
+                return Err(Error::input(format!(
+                    "loss exchange: shard {j} sent {} losses for its {want} points",
+                    part.len()
+                )));
+            }
+        }
+        let own: Vec<f64> = self.losses.iter().skip(k).step_by(n).copied().collect();
+        if own
+            .iter()
+            .zip(&parts[k])
+            .any(|(a, b)| a.to_bits() != b.to_bits())
+        {
+            return Err(Error::input(
+                "loss exchange: the shards disagree on the batch",
+            ));
+        }
+        for i in 0..len {
+            self.losses[i] = parts[i % n][i / n];
+        }
+        self.exchange = Exchange::None;
+        self.tell_batch();
+        Ok(())
+    }
+
+    fn step(&mut self) -> Result<Step<MicroFitResponse>> {
+        if self.exchange != Exchange::None {
+            return Err(Error::input(
+                "this fit waits for its sibling shards' losses; drive it with \
+                 core::parallel::run_sharded",
+            ));
+        }
+        let mut work = 0usize;
+        while work < WORK_PER_STEP {
+            match self.phase {
+                Phase::Target => {
+                    if let Some(v) = self.sample_target(WORK_PER_STEP)? {
+                        self.target = Some(match &self.sampler {
+                            Sampler::Volume { .. } => {
+                                TargetSpectrum::Full(self.fourier.half_spectrum(&v)?)
+                            }
+                            Sampler::Image(_) => {
+                                TargetSpectrum::Amplitudes(self.fourier.amplitudes(&v)?)
+                            }
+                        });
+                        self.phase = Phase::Start;
+                    }
+                    return Ok(Step::Running(Progress::new(0.01, "sampling the target")));
+                }
+                Phase::Start | Phase::Optimise => {
+                    if self.batch.is_empty() {
+                        let b = self.opt.ask(&mut self.rng);
+                        if b.is_empty() {
+                            self.phase = if self.validation_points.is_empty() {
+                                Phase::Finished
+                            } else {
+                                Phase::Validate
+                            };
+                            continue;
+                        }
+                        self.losses = vec![f64::NAN; b.len()];
+                        self.batch = b;
+                        self.next = self.shards.0;
+                    }
+                    if self.next < self.batch.len() {
+                        let (w, l) = self.eval_point(WORK_PER_STEP - work)?;
+                        work += w;
+                        if let Some(l) = l {
+                            self.losses[self.next] = l;
+                            self.next += self.shards.1;
+                        }
+                        continue;
+                    }
+                    if self.shards.1 > 1 {
+                        let own = self
+                            .losses
+                            .iter()
+                            .skip(self.shards.0)
+                            .step_by(self.shards.1)
+                            .copied()
+                            .collect();
+                        self.exchange = Exchange::Ready(own);
+                        return Ok(Step::Running(self.progress("exchanging losses")));
+                    }
+                    self.tell_batch();
+                    return Ok(Step::Running(self.progress(match self.phase {
+                        Phase::Start => "evaluating the start",
+                        _ => "optimising",
+                    })));
+                }
+                Phase::Validate => {
+                    if self.validation_target.is_none() {
+                        if let Some(v) = self.sample_target(WORK_PER_STEP)? {
+                            self.validation_target = Some(v);
+                        }
+                        return Ok(Step::Running(self.progress("validating")));
+                    }
+                    let Some((s, _)) = self.scene_at(&self.best.u) else {
+                        self.phase = Phase::Finished;
+                        continue;
+                    };
+                    let t = self.validation_target.as_ref().expect("target samples");
+                    let f: Vec<f64> = self.validation_points.iter().map(|p| s.eval(*p)).collect();
+                    let mean = t.iter().sum::<f64>() / t.len() as f64;
+                    let var: f64 = t.iter().map(|v| (v - mean) * (v - mean)).sum();
+                    let err: f64 = t.iter().zip(&f).map(|(a, b)| (a - b) * (a - b)).sum();
+                    self.validation = Some(if var > 0.0 { err / var } else { err });
+                    self.phase = Phase::Finished;
+                    return Ok(Step::Running(self.progress("validating")));
+                }
+                Phase::Finished => return Ok(Step::Done(self.output())),
+            }
+        }
+        Ok(Step::Running(self.progress(match self.phase {
+            Phase::Start => "evaluating the start",
+            _ => "optimising",
+        })))
+    }
+}

@@ -1,0 +1,270 @@
+// The Micro tool's "Reconstruct" section (issue 12 item 3, paper §6):
+// pick numbers of the scene to fit, give a target — the current scene with
+// other values (a synthetic exemplar) or an uploaded slice image — and the
+// core fits them with the Fourier loss (`micro-fit`), sharded over the
+// worker pool exactly as one fit (src/micro/fit_api.rs). The loss falls on
+// a live plot; "Apply" puts the fitted values into the scene as one
+// undoable change of the document.
+//
+// mountReconstruct(el, ctx) → {render(doc), unmount()}; el is an empty
+// element inside the Micro panel. The request's defaults come from the
+// core (`defaults` for `micro-fit`), never from here.
+import { LossPlot } from './loss-plot.js';
+import { coreDefaults } from './document.js';
+
+const MAX_ROWS = 24; // numbers of the scene offered for fitting
+const OPTIMIZERS = [['cmaes', 'CMA-ES'], ['nelder-mead', 'Nelder–Mead'], ['powell', 'Powell']];
+
+const html = `
+  <summary>Reconstruct</summary>
+  <p class="muted small">Fit numbers of the scene to a target with the Fourier loss (amplitude and phase spectra of the sampled field).</p>
+  <div class="micro-fit-params" style="max-height:16rem;overflow:auto" data-testid="micro-fit-params" role="group" aria-label="Numbers to fit"></div>
+  <div class="micro-fit-target">
+    <label class="inline"><input type="radio" name="fit-target" value="scene" checked data-testid="micro-fit-target-scene"> This scene with the target values</label>
+    <label class="inline"><input type="radio" name="fit-target" value="slice" data-testid="micro-fit-target-slice"> A slice image</label>
+    <input type="file" accept="image/*" name="fit-slice" data-testid="micro-fit-slice" hidden>
+  </div>
+  <div class="micro-fit-settings">
+    <label class="inline">Optimizer <select name="fit-optimizer" data-testid="micro-fit-optimizer"></select></label>
+    <label class="inline">Evaluations <input type="number" name="fit-budget" min="2" max="100000" step="1" data-testid="micro-fit-budget"></label>
+    <label class="inline">Grid <select name="fit-grid"><option>8</option><option>16</option><option>32</option><option>64</option></select></label>
+  </div>
+  <div class="micro-fit-actions">
+    <button type="button" data-act="fit-run" data-testid="micro-fit-run">Reconstruct</button>
+    <button type="button" data-act="fit-stop" data-testid="micro-fit-stop" disabled>Stop</button>
+    <button type="button" data-act="fit-apply" data-testid="micro-fit-apply" disabled>Apply fitted values</button>
+  </div>
+  <canvas class="loss-plot" style="display:block;width:100%;height:140px" data-testid="micro-fit-plot" aria-label="loss while fitting"></canvas>
+  <div class="status muted" data-testid="micro-fit-status" aria-live="polite"></div>`;
+
+/** Every number in a JSON value: [{pointer, value, integer}], document order. */
+export function numbersOf(value, pointer = '', out = []) {
+  if (out.length >= MAX_ROWS) return out;
+  if (typeof value === 'number') out.push({ pointer, value, integer: Number.isInteger(value) });
+  else if (Array.isArray(value)) value.forEach((v, i) => numbersOf(v, `${pointer}/${i}`, out));
+  else if (value && typeof value === 'object') {
+    for (const [k, v] of Object.entries(value)) numbersOf(v, `${pointer}/${k.replace(/~/g, '~0').replace(/\//g, '~1')}`, out);
+  }
+  return out;
+}
+
+/** The JSON value with `pointer` (RFC 6901) set to `v`. */
+function setPointer(root, pointer, v) {
+  const keys = pointer.split('/').slice(1).map((k) => k.replace(/~1/g, '/').replace(/~0/g, '~'));
+  let o = root;
+  for (const k of keys.slice(0, -1)) o = o[k];
+  o[keys[keys.length - 1]] = v;
+  return root;
+}
+
+/** A default range around a value. */
+function rangeOf(v) {
+  if (v === 0) return [-1, 1];
+  const a = Math.abs(v);
+  return [v - a, v + a].sort((x, y) => x - y).map((x) => Number(x.toPrecision(6)));
+}
+
+/** An image file scaled to side×side grey, as PNG bytes. */
+async function slicePng(file, side) {
+  const bmp = await createImageBitmap(file);
+  try {
+    const c = new OffscreenCanvas(side, side);
+    const g = c.getContext('2d');
+    g.drawImage(bmp, 0, 0, side, side);
+    const blob = await c.convertToBlob({ type: 'image/png' });
+    return new Uint8Array(await blob.arrayBuffer());
+  } finally {
+    bmp.close?.();
+  }
+}
+
+export function mountReconstruct(el, ctx) {
+  el.innerHTML = html;
+  const q = (s) => el.querySelector(s);
+  const statusEl = q('[data-testid=micro-fit-status]');
+  const status = (t) => { statusEl.textContent = t; };
+  const plot = new LossPlot(q('[data-testid=micro-fit-plot]'));
+  const paramsEl = q('[data-testid=micro-fit-params]');
+  const optSel = q('[name=fit-optimizer]');
+  for (const [v, label] of OPTIMIZERS) {
+    const o = document.createElement('option');
+    o.value = v;
+    o.textContent = label;
+    optSel.append(o);
+  }
+  const budgetIn = q('[name=fit-budget]');
+  const gridSel = q('[name=fit-grid]');
+  const fileIn = q('[name=fit-slice]');
+  const runBtn = q('[data-act=fit-run]');
+  const stopBtn = q('[data-act=fit-stop]');
+  const applyBtn = q('[data-act=fit-apply]');
+
+  let defaults = null;
+  coreDefaults(ctx.pool, 'micro-fit').then((d) => {
+    defaults = d;
+    if (!ctx.alive()) return;
+    optSel.value = d.optimizer;
+    budgetIn.value = String(Math.min(d.budget, 400));
+    gridSel.value = String(Math.min(d.grid, 16));
+  }).catch((err) => ctx.error(err, { prefix: 'Reconstruct' }));
+
+  let scene = null; // the scene text the rows were built from
+  let rows = []; // [{pointer, value, integer, el}]
+  let running = null;
+  let result = null; // {scene (fitted text), from (scene text it was fitted from), values}
+  let slice = null; // {name, file}
+
+  fileIn.onchange = () => {
+    const f = fileIn.files?.[0];
+    slice = f ? { name: f.name, file: f } : null;
+    if (slice) status(`target: slice image ${slice.name}`);
+  };
+  for (const r of el.querySelectorAll('[name=fit-target]')) {
+    r.onchange = () => {
+      fileIn.hidden = r.value !== 'slice' || !r.checked;
+      if (r.value === 'slice' && r.checked && !slice) fileIn.click();
+    };
+  }
+
+  function buildRows(text) {
+    scene = text;
+    let json;
+    try { json = JSON.parse(text); } catch { paramsEl.replaceChildren(); rows = []; return; }
+    rows = numbersOf(json).map((n, i) => {
+      const [lo, hi] = rangeOf(n.value);
+      const row = document.createElement('div');
+      row.className = 'micro-fit-row';
+      row.style.cssText = 'display:flex;flex-wrap:wrap;gap:.3rem;align-items:center;margin:.2rem 0';
+      row.dataset.pointer = n.pointer;
+      row.innerHTML = `
+        <label class="inline"><input type="checkbox" name="fit-on"> <code></code> = <span class="now"></span></label>
+        <label class="inline">target <input type="number" name="fit-truth" step="any" style="width:6rem"></label>
+        <label class="inline">from <input type="number" name="fit-lo" step="any" style="width:5rem"></label>
+        <label class="inline">to <input type="number" name="fit-hi" step="any" style="width:5rem"></label>`;
+      row.querySelector('code').textContent = n.pointer;
+      row.querySelector('.now').textContent = String(n.value);
+      row.querySelector('[name=fit-truth]').value = String(n.value);
+      row.querySelector('[name=fit-lo]').value = String(lo);
+      row.querySelector('[name=fit-hi]').value = String(hi);
+      row.querySelector('[name=fit-on]').dataset.testid = `micro-fit-on-${i}`;
+      return { ...n, el: row };
+    });
+    paramsEl.replaceChildren(...rows.map((r) => r.el));
+  }
+
+  const num = (row, name) => Number(row.el.querySelector(`[name=${name}]`).value);
+
+  async function request() {
+    const doc = ctx.state();
+    const chosen = rows.filter((r) => r.el.querySelector('[name=fit-on]').checked);
+    if (!chosen.length) throw Object.assign(new Error('Tick at least one number of the scene to fit.'), { kind: 'invalid-input', field: 'params' });
+    const params = chosen.map((r) => ({ pointer: r.pointer, lo: num(r, 'fit-lo'), hi: num(r, 'fit-hi') }));
+    const grid = Number(gridSel.value);
+    let target;
+    if (q('[name=fit-target]:checked').value === 'slice') {
+      if (!slice) throw Object.assign(new Error('Choose a slice image to fit to.'), { kind: 'invalid-input', field: 'target' });
+      target = { kind: 'slices', pngs: [await slicePng(slice.file, grid)], range: 1 };
+    } else {
+      const t = JSON.parse(doc.scene);
+      for (const r of chosen) setPointer(t, r.pointer, r.integer ? Math.round(num(r, 'fit-truth')) : num(r, 'fit-truth'));
+      target = { kind: 'scene', scene: JSON.stringify(t) };
+    }
+    return {
+      ...defaults,
+      scene: doc.scene,
+      params,
+      target,
+      grid,
+      optimizer: optSel.value,
+      budget: Math.max(2, Math.round(Number(budgetIn.value) || defaults.budget)),
+    };
+  }
+
+  function setRunning(on) {
+    runBtn.disabled = on;
+    stopBtn.disabled = !on;
+    applyBtn.disabled = on || !result || result.from !== ctx.state()?.scene;
+  }
+
+  async function run() {
+    if (!defaults) return;
+    const ctrl = new AbortController();
+    running?.abort();
+    running = ctrl;
+    result = null;
+    setRunning(true);
+    plot.clear();
+    ctx.clearError('fit');
+    const from = ctx.state().scene;
+    const t0 = performance.now();
+    try {
+      const payload = await request();
+      // One fit sharded over the pool (all workers but one, which stays
+      // free for the view); the core merges, so this is one fit's result.
+      const n = Math.max(1, (ctx.pool.slots?.length ?? 2) - 1);
+      const fractions = Array(n).fill(0);
+      status('sampling the target…');
+      const r = await ctx.pool.runSharded('micro-fit', payload, {
+        shards: n,
+        signal: AbortSignal.any([ctrl.signal, ctx.signal]),
+        onProgress: (p, k) => {
+          if (running !== ctrl) return;
+          fractions[k] = p.fraction;
+          if (k !== 0) return;
+          const f = fractions.reduce((a, b) => a + b, 0) / n;
+          // The loss is a log MSE: the plot (log scale) shows the MSE.
+          if (p.figure != null && Number.isFinite(p.figure)) plot.push(f, Math.exp(p.figure));
+          status(`${p.stage}: ${Math.round(f * 100)}%${p.figure != null ? ` — loss ${p.figure.toFixed(3)}` : ''}${n > 1 ? ` (${n} workers)` : ''}`);
+        },
+      });
+      if (running !== ctrl || !ctx.alive()) return;
+      result = { scene: r.scene, from, values: r.values, pointers: payload.params.map((p) => p.pointer) };
+      plot.points = r.history.map((l, i) => [r.history_evaluations[i] / r.evaluations, Math.exp(l)]).filter((p) => Number.isFinite(p[1]) && p[1] > 0);
+      plot.draw();
+      const secs = (performance.now() - t0) / 1000;
+      const vals = result.pointers.map((p, i) => `${p} = ${Number(r.values[i].toPrecision(6))}`).join(', ');
+      status(`fitted in ${secs.toFixed(1)} s: ${vals}; loss ${r.initial_loss.toFixed(3)} → ${r.loss.toFixed(3)} after ${r.evaluations} evaluations`
+        + `${r.validation != null ? `, validation error ${r.validation.toPrecision(3)}` : ''}`);
+      statusEl.dataset.initial = String(r.initial_loss);
+      statusEl.dataset.loss = String(r.loss);
+      statusEl.dataset.fits = String(Number(statusEl.dataset.fits || 0) + 1);
+    } catch (err) {
+      if (err?.kind === 'cancelled') { if (ctx.alive()) status('stopped'); } else if (ctx.alive()) {
+        status('the reconstruction failed (see above)');
+        ctx.error(err, { prefix: 'Reconstruct', source: 'fit' });
+      }
+    } finally {
+      if (running === ctrl) { running = null; if (ctx.alive()) setRunning(false); }
+    }
+  }
+
+  runBtn.onclick = () => run();
+  stopBtn.onclick = () => running?.abort();
+  applyBtn.onclick = () => {
+    const doc = ctx.state();
+    if (!result || !doc || result.from !== doc.scene) return;
+    ctx.commit({ ...doc, scene: result.scene, example: null });
+    status(`applied: ${result.pointers.length} value(s) written into the scene (undo restores them)`);
+  };
+
+  // For tests and the console.
+  const hooks = {
+    rows: () => rows.map((r) => ({ pointer: r.pointer, value: r.value })),
+    result: () => result && { scene: result.scene, values: result.values },
+    running: () => running !== null,
+    plotted: () => plot.points.length,
+  };
+  window.filigreeMicroFit = hooks;
+
+  return {
+    render(doc) {
+      if (!doc) return;
+      if (doc.scene !== scene) buildRows(doc.scene);
+      if (!running) setRunning(false);
+    },
+    unmount() {
+      running?.abort();
+      if (window.filigreeMicroFit === hooks) delete window.filigreeMicroFit;
+    },
+  };
+}
