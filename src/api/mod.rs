@@ -68,6 +68,7 @@ pub const KINDS: &[&str] = &[
     "tangle",
     "tangle-examples",
     "micro-render",
+    "micro-glsl",
     "micro-slice",
     "micro-examples",
 ];
@@ -92,6 +93,7 @@ pub enum Response {
     Tangle(Box<tangle::TangleResponse>),
     TangleExamples(&'static [crate::tangle::examples::Example]),
     MicroRender(Box<micro::MicroRenderResponse>),
+    MicroGlsl(Box<micro::MicroGlslResponse>),
     MicroSlice(Box<micro::MicroSliceResponse>),
     MicroExamples(&'static [crate::micro::examples::Example]),
     /// `null`.
@@ -190,7 +192,7 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "open-project" => D::OpenProject(Default::default()),
         "pattern-generators" | "tangle-examples" | "micro-examples" => D::Nothing,
         "tangle" => D::Tangle(Default::default()),
-        "micro-render" => D::MicroRender(Default::default()),
+        "micro-render" | "micro-glsl" => D::MicroRender(Default::default()),
         "micro-slice" => D::MicroSlice(Default::default()),
         other => return Err(unknown_kind(other).at("tool")),
     };
@@ -245,6 +247,9 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         }),
         "micro-render" => boxed(micro::start_render(request(kind, payload)?)?, |r| {
             Response::MicroRender(Box::new(r))
+        }),
+        "micro-glsl" => boxed(micro::start_glsl(request(kind, payload)?)?, |r| {
+            Response::MicroGlsl(Box::new(r))
         }),
         "micro-slice" => boxed(micro::start_slice(request(kind, payload)?)?, |r| {
             Response::MicroSlice(Box::new(r))

@@ -1,12 +1,13 @@
 //! Micro's requests as typed data, shared by `filigree micro` and the
-//! browser worker (`micro-render`, `micro-slice`). Defaults are defined
+//! browser worker (`micro-render`, `micro-glsl`, `micro-slice`). Defaults are defined
 //! once: each request's `Default`. Errors name the field at fault (`scene`,
 //! `width`, `camera.fov`, ...); scene errors carry the node path and, for
 //! JSON mistakes, the line and column.
 use super::render::{self, Camera, Rays, Shade, Stats, StepMode, Trace};
 use super::scene::{self, Scene};
 use crate::core::error::{Error, Result};
-use crate::core::job::{Job, Progress, Step};
+use super::glsl;
+use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::limits::{MAX_MICRO_PIXELS, MAX_MICRO_SIDE, MAX_MICRO_STEPS};
 use crate::core::request_limits as lim;
 use crate::raster::{encode_png, Rgba8Image};
@@ -160,8 +161,16 @@ impl RenderJob {
     }
 }
 
-/// Check a render request and set the job up (no tracing yet).
-pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
+/// A checked render request: the scene and everything a trace needs.
+struct Checked {
+    scene: Scene,
+    rays: Rays,
+    trace: Trace,
+    shade: Shade,
+}
+
+/// Check every field of a render request (no tracing yet).
+fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
     check_size(req.width, req.height)?;
     let c = &req.camera;
     for (i, v) in c.target.iter().enumerate() {
@@ -189,8 +198,7 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
     }
     let scene = scene::parse(&req.scene)?;
     let rays = Rays::new(&req.camera, req.width, req.height);
-    let n = req.width as usize * req.height as usize * 4;
-    Ok(RenderJob {
+    Ok(Checked {
         scene,
         trace: Trace {
             mode: req.steps,
@@ -210,12 +218,58 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
             light: light.normalize(),
             absorption: req.absorption,
         },
+    })
+}
+
+/// Check a render request and set the job up (no tracing yet).
+pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
+    let c = check_render(&req)?;
+    let n = req.width as usize * req.height as usize * 4;
+    Ok(RenderJob {
+        scene: c.scene,
+        trace: c.trace,
+        rays: c.rays,
+        shade: c.shade,
         width: req.width,
         height: req.height,
         next: 0,
         rgba: vec![0; n],
         stats: Stats::default(),
     })
+}
+
+/// `micro-glsl`: the WebGL2 shader pair drawing what `micro-render` would
+/// draw for the same request. The camera and the image size are uniforms
+/// the page sets per frame (`u_origin`, `u_forward`, `u_right`, `u_up`,
+/// `u_tan_half`, `u_res`); `u_output` = 1 draws the steps each ray took
+/// (red + 256 green) and whether it hit (blue) instead of the picture.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MicroGlslResponse {
+    pub vertex: String,
+    pub fragment: String,
+    /// GLSL functions generated for the scene's nodes.
+    pub functions: usize,
+}
+
+/// Check a render request (the same checks as `micro-render`) and generate
+/// its shader; one step, no tracing.
+pub fn start_glsl(req: MicroRenderRequest) -> Result<impl Job<Output = MicroGlslResponse>> {
+    let c = check_render(&req)?;
+    let p = glsl::program(
+        &c.scene,
+        &glsl::Settings {
+            trace: c.trace,
+            pixel_fraction: req.pixel_fraction,
+            shade: c.shade,
+        },
+    )?;
+    Ok(OneShot::new(move || {
+        Ok(MicroGlslResponse {
+            vertex: p.vertex,
+            fragment: p.fragment,
+            functions: p.functions,
+        })
+    }))
 }
 
 impl RenderJob {

@@ -13,13 +13,16 @@
 //!   products of sines and cosines.
 //! - [`render`]: sphere tracing with fixed, bisection and adaptive steps,
 //!   normals, shading, the orbit camera and slices.
-//! - [`api`]: the `micro-render` and `micro-slice` requests and their jobs.
+//! - [`glsl`]: the same scene as a WebGL2 fragment-shader sphere tracer
+//!   (`micro-glsl`), the browser's interactive view.
+//! - [`api`]: the `micro-render`, `micro-glsl` and `micro-slice` requests.
 //! - [`examples`]: the shipped scenes (`micro-examples`); [`state`]: the
 //!   browser tool's document.
 pub mod api;
 pub mod cells;
 pub mod examples;
 pub mod fit;
+pub mod glsl;
 pub mod periodic;
 pub mod render;
 pub mod scene;
