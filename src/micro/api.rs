@@ -241,8 +241,9 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
 /// `micro-glsl`: the WebGL2 shader pair drawing what `micro-render` would
 /// draw for the same request. The camera and the image size are uniforms
 /// the page sets per frame (`u_origin`, `u_forward`, `u_right`, `u_up`,
-/// `u_tan_half`, `u_res`); `u_output` = 1 draws the steps each ray took
-/// (red + 256 green) and whether it hit (blue) instead of the picture.
+/// `u_tan_half`, `u_res`). Output 0 is the picture; output 1 (RGBA32UI)
+/// counts each ray's work like [`Stats`]: steps, field evaluations,
+/// hit | out-of-steps << 1 | undone steps << 2, gradient checks.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MicroGlslResponse {
     pub vertex: String,

@@ -112,8 +112,10 @@ uniform vec3 u_right;
 uniform vec3 u_up;
 uniform float u_tan_half;
 uniform vec2 u_res;
-uniform int u_output;
-out vec4 o_color;
+layout(location = 0) out vec4 o_color;
+// Work counters: steps, field evaluations, hit | exhausted << 1 | undone << 2, gradient checks.
+layout(location = 1) out uvec4 o_stats;
+int g_steps = 0, g_evals = 0, g_checks = 0, g_undone = 0;
 const float BIG = 1e30;
 
 // ---- 64-bit words as uvec2(high, low) ----
@@ -682,13 +684,15 @@ fn main_part(s: &Settings) -> Result<String> {
             format!(
                 "{check}
       if (check) {{
-        float g = length(grad(o + d * t, max(prec * t, 1e-9)));
+        g_checks++;
+        float g = length(grad(o + d * t, max(prec * t, 1e-5 * (1.0 + length(o + d * t)))));
         relax = g < 0.7 ? clamp(0.9 / max(g, 1e-9), 1.0, {mr}) : 1.0;
       }}
       float tp = t, dp = dist;
       t += dist * relax;
       dist = field(o + d * t);
       if (relax > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12))) {{
+        g_undone++;
         relax = 1.0;
         t = tp + dp;
         dist = field(o + d * t);
@@ -700,6 +704,7 @@ fn main_part(s: &Settings) -> Result<String> {
     Ok(format!(
         r#"
 float field(vec3 p) {{
+  g_evals++;
   float v = scene(p);
   if (isnan(v)) v = BIG;
   return max(v, sd_cuboid(p, vec3({b})));
@@ -718,9 +723,9 @@ bool clip_box(vec3 o, vec3 d, out float near, out float far) {{
   far = min(mx.x, min(mx.y, mx.z));
   return near <= far;
 }}
-int g_steps = 0;
-float trace(vec3 o, vec3 d, float prec, out bool hit) {{
+float trace(vec3 o, vec3 d, float prec, out bool hit, out bool exhausted) {{
   hit = false;
+  exhausted = false;
   float t0, t1;
   if (!clip_box(o, d, t0, t1)) return 0.0;
   float tiny = 1e-12 * (1.0 + t1);
@@ -738,6 +743,7 @@ float trace(vec3 o, vec3 d, float prec, out bool hit) {{
       {step}
     }}
   }}
+  exhausted = true;
   return t;
 }}
 void main() {{
@@ -745,15 +751,17 @@ void main() {{
   vec3 d = normalize(u_forward + u_right * (s.x * u_tan_half) + u_up * (s.y * u_tan_half));
   vec3 o = u_origin;
   float prec = 2.0 * u_tan_half / u_res.y * {pf};
-  bool hit;
-  float t = trace(o, d, prec, hit);
-  if (u_output == 1) {{
-    o_color = vec4(float(g_steps & 255) / 255.0, float((g_steps >> 8) & 255) / 255.0, hit ? 1.0 : 0.0, 1.0);
+  bool hit, exhausted;
+  float t = trace(o, d, prec, hit, exhausted);
+  if (!hit) {{
+    o_color = vec4({bg}, 1.0);
+    o_stats = uvec4(uint(g_steps), uint(g_evals), (exhausted ? 2u : 0u) | (uint(g_undone) << 2), uint(g_checks));
     return;
   }}
-  if (!hit) {{ o_color = vec4({bg}, 1.0); return; }}
   vec3 p = o + d * t;
-  vec3 n = grad(p, max(prec * t * 0.5, 1e-9));
+  // The CPU's step floor of 1e-9 is below 32-bit resolution: floor the
+  // step at 1e-5 of the point's magnitude (a hit at the camera, t = 0).
+  vec3 n = grad(p, max(prec * t * 0.5, 1e-5 * (1.0 + length(p))));
   float nl = length(n);
   n = nl > 0.0 && !isinf(nl) ? n / nl : -d;
   float lambert = max(dot(n, {light}), 0.0);
@@ -762,6 +770,7 @@ void main() {{
   float absorb = exp(-{absorption} * max(t - t0, 0.0));
   float k = (0.18 + 0.82 * lambert) * absorb;
   o_color = vec4(clamp({color} * k, 0.0, 1.0), 1.0);
+  o_stats = uvec4(uint(g_steps), uint(g_evals), 1u | (uint(g_undone) << 2), uint(g_checks));
 }}
 "#,
         b = lit(t.bounds)?,
