@@ -138,18 +138,15 @@ uvec2 shr64(uvec2 a, int n) {
   return uvec2(a.x >> uint(n), (a.y >> uint(n)) | (a.x << uint(32 - n)));
 }
 uvec2 sx64(int v) { return uvec2(v < 0 ? 0xFFFFFFFFu : 0u, uint(v)); }
-// Eq. 1-2 before the node's seed: N * sum a_ijk qx^i qy^j qz^k (wrapping).
+// Eq. 1-2 before the node's seed: N * sum a_ijk qx^i qy^j qz^k (wrapping),
+// in Horner form (the same value mod 2^64 with fewer products).
 uvec2 cell_hash(ivec3 q) {
   uvec2 x = sx64(q.x), y = sx64(q.y), z = sx64(q.z);
-  uvec2 xy = mul64(x, y);
-  uvec2 t = uvec2(0u, 1000003u);
-  t = add64(t, mul64(uvec2(0u, 73856093u), x));
-  t = add64(t, mul64(uvec2(0u, 19349663u), y));
-  t = add64(t, mul64(uvec2(0u, 83492791u), xy));
-  t = add64(t, mul64(uvec2(0u, 2654435761u), z));
-  t = add64(t, mul64(uvec2(0u, 805459861u), mul64(x, z)));
-  t = add64(t, mul64(uvec2(0u, 3674653429u), mul64(y, z)));
-  t = add64(t, mul64(uvec2(0u, 2097152011u), mul64(xy, z)));
+  uvec2 c0 = add64(uvec2(0u, 1000003u), mul64(uvec2(0u, 73856093u), x));
+  uvec2 c1 = add64(uvec2(0u, 19349663u), mul64(uvec2(0u, 83492791u), x));
+  uvec2 c2 = add64(uvec2(0u, 2654435761u), mul64(uvec2(0u, 805459861u), x));
+  uvec2 c3 = add64(uvec2(0u, 3674653429u), mul64(uvec2(0u, 2097152011u), x));
+  uvec2 t = add64(add64(c0, mul64(y, c1)), mul64(z, add64(c2, mul64(y, c3))));
   return mul64(t, uvec2(0u, 10u));
 }
 // SplitMix64's output for state s, as a uniform number in [0, 1) (top 24 bits).
