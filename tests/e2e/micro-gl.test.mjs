@@ -115,3 +115,77 @@ test('micro-gl: adaptive and bisection steps agree with the CPU too', async () =
   }
   await page.context().close();
 });
+
+const runs = (page) => page.$eval('[data-testid=micro-status]', (el) => Number(el.dataset.runs || 0));
+async function waitForRender(page, previous, timeout = 120000) {
+  await page.waitForFunction((prev) => Number(document.querySelector('[data-testid=micro-status]').dataset.runs || 0) > prev
+    && !window.filigreeMicro.pending(), previous, { timeout });
+  return runs(page);
+}
+
+test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slice stays on the CPU', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
+  let n = await waitForRender(page, 0);
+  assert.ok(await page.evaluate(() => window.filigreeMicro.gpu()), 'WebGL2 is used');
+  assert.equal(await page.isHidden('[data-testid=micro-gpu-note]'), true);
+  let last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, true);
+  assert.equal(last.preview, false);
+  assert.match(await page.textContent('[data-testid=micro-status]'), /on the GPU.*rays hit.*per ray.*field evaluations/);
+  // Drag: coarse frames while the camera moves, then the full picture.
+  const previews0 = Number(await page.$eval('[data-testid=micro-status]', (el) => el.dataset.previews || 0));
+  const box = await page.locator('[data-testid=micro-canvas]').boundingBox();
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  for (let i = 1; i <= 6; i++) {
+    await page.mouse.move(cx + i * 10, cy + i * 4);
+    await page.waitForTimeout(40);
+  }
+  await page.mouse.up();
+  n = await waitForRender(page, n);
+  const previews = Number(await page.$eval('[data-testid=micro-status]', (el) => el.dataset.previews || 0));
+  assert.ok(previews > previews0, 'coarse frames while dragging');
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, true);
+  assert.equal(last.preview, false, 'refined to full size once the camera rests');
+  const fg = await page.evaluate(() => {
+    const c = document.querySelector('[data-testid=micro-canvas]');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let k = 0;
+    for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 24) + Math.abs(d[i + 1] - 26) + Math.abs(d[i + 2] - 30) > 6) k++;
+    return k / (d.length / 4);
+  });
+  assert.ok(fg > 0.2, `the gyroid is drawn (${fg})`);
+  // The slice view is the CPU's.
+  await page.check('[data-testid=micro-slice-toggle]');
+  n = await waitForRender(page, n);
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.kind, 'micro-slice');
+  assert.equal(last.gpu, false);
+  await page.context().close();
+});
+
+test('micro-gl: without WebGL2 the panel says so and draws on the CPU', async () => {
+  const page = await env.newPage({ path: null });
+  await page.addInitScript(() => {
+    const get = HTMLCanvasElement.prototype.getContext;
+    HTMLCanvasElement.prototype.getContext = function (type, ...rest) {
+      return type === 'webgl2' ? null : get.call(this, type, ...rest);
+    };
+  });
+  await page.goto(`${env.url}#tool=micro`);
+  await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
+  await waitForRender(page, 0);
+  assert.equal(await page.evaluate(() => window.filigreeMicro.gpu()), null);
+  const note = await page.textContent('[data-testid=micro-gpu-note]');
+  assert.match(note, /GPU view off: this browser has no WebGL2.*CPU/);
+  assert.equal(await page.isVisible('[data-testid=micro-gpu-note]'), true);
+  const last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, false);
+  assert.equal(last.kind, 'micro-render');
+  assert.match(await page.textContent('[data-testid=micro-status]'), /rays hit.*field evaluations/);
+  await page.context().close();
+});
