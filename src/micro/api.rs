@@ -3,7 +3,7 @@
 //! once: each request's `Default`. Errors name the field at fault (`scene`,
 //! `width`, `camera.fov`, ...); scene errors carry the node path and, for
 //! JSON mistakes, the line and column.
-use super::render::{self, Camera, Rays, Shade, Stats, StepMode, Trace};
+use super::render::{self, Camera, Rays, Shade, Shading, Stats, StepMode, Trace};
 use super::scene::{self, Scene};
 use crate::core::error::{Error, Result};
 use super::glsl;
@@ -48,6 +48,12 @@ pub struct MicroRenderRequest {
     pub light: [f64; 3],
     /// Absorption per world unit inside the sample.
     pub absorption: f64,
+    /// Surface model: `lambert` or `ggx`.
+    pub shading: Shading,
+    /// GGX: perceptual roughness in 0.02..=1 (α = roughness²).
+    pub roughness: f64,
+    /// GGX: reflectance at normal incidence in 0..=1.
+    pub specular: f64,
 }
 
 impl Default for MicroRenderRequest {
@@ -70,6 +76,9 @@ impl Default for MicroRenderRequest {
             background: [24, 26, 30],
             light: [0.45, -0.35, 0.82],
             absorption: 0.0,
+            shading: Shading::Lambert,
+            roughness: 0.35,
+            specular: 0.04,
         }
     }
 }
@@ -189,6 +198,8 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
     lim::finite_in("pixel_fraction", req.pixel_fraction, (1e-6, 10.0))?;
     lim::finite_in("bounds", req.bounds, (1e-9, 1e6))?;
     lim::finite_in("absorption", req.absorption, (0.0, 1e6))?;
+    lim::finite_in("roughness", req.roughness, (0.02, 1.0))?;
+    lim::finite_in("specular", req.specular, (0.0, 1.0))?;
     for (i, v) in req.light.iter().enumerate() {
         lim::finite_in(&format!("light.{i}"), *v, (-1e6, 1e6))?;
     }
@@ -217,6 +228,9 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
             background: req.background,
             light: light.normalize(),
             absorption: req.absorption,
+            shading: req.shading,
+            roughness: req.roughness,
+            specular: req.specular,
         },
     })
 }

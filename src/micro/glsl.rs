@@ -32,7 +32,7 @@
 //! target falls below 1e-6 of the scene's size (`www/micro-gl.js`).
 use super::cells::{Combine, Field, Lattice, Particles, Pile, Select, Shape, Size};
 use super::periodic::{Periodic, Surface, Tpms, Wave};
-use super::render::{StepMode, Trace};
+use super::render::{Shade, Shading, StepMode, Trace, AMBIENT, LIGHT};
 use super::scene::{Op, Scene};
 use crate::core::error::{Error, Result};
 use std::fmt::Write;
@@ -44,7 +44,7 @@ pub struct Settings {
     pub trace: Trace,
     /// Hit threshold as a fraction of a pixel's footprint.
     pub pixel_fraction: f64,
-    pub shade: super::render::Shade,
+    pub shade: Shade,
 }
 
 /// A generated shader pair.
@@ -711,6 +711,7 @@ vec3 grad(vec3 p, float h) {{
   return vec3(field(p + dx) - field(p - dx), field(p + dy) - field(p - dy),
               field(p + dz) - field(p - dz)) / (2.0 * h);
 }}
+{surface}
 bool clip_box(vec3 o, vec3 d, out float near, out float far) {{
   vec3 dd = vec3(abs(d.x) < 1e-30 ? 1e-30 : d.x, abs(d.y) < 1e-30 ? 1e-30 : d.y, abs(d.z) < 1e-30 ? 1e-30 : d.z);
   vec3 inv = 1.0 / dd;
@@ -761,12 +762,11 @@ void main() {{
   vec3 n = grad(p, max(prec * t * 0.5, 1e-5 * (1.0 + length(p))));
   float nl = length(n);
   n = nl > 0.0 && !isinf(nl) ? n / nl : -d;
-  float lambert = max(dot(n, {light}), 0.0);
+  vec2 ks = surface(n, d);
   float t0, t1;
   if (!clip_box(o, d, t0, t1)) t0 = t;
   float absorb = exp(-{absorption} * max(t - t0, 0.0));
-  float k = (0.18 + 0.82 * lambert) * absorb;
-  o_color = vec4(clamp({color} * k, 0.0, 1.0), 1.0);
+  o_color = vec4(clamp(({color} * ks.x + ks.y) * absorb, 0.0, 1.0), 1.0);
   o_stats = uvec4(uint(g_steps), uint(g_evals), 1u | (uint(g_undone) << 2), uint(g_checks));
 }}
 "#,
@@ -775,9 +775,47 @@ void main() {{
         pf = lit(s.pixel_fraction)?,
         bg = col(sh.background),
         color = col(sh.color),
-        light = v3(sh.light.to_array())?,
         absorption = lit(sh.absorption)?,
+        surface = surface(sh)?,
     ))
+}
+
+/// `render::surface`: (multiplier of the colour, white specular).
+fn surface(sh: &Shade) -> Result<String> {
+    let l = v3(sh.light.to_array())?;
+    let body = match sh.shading {
+        Shading::Lambert => format!(
+            "return vec2({a} + {k} * max(dot(n, {l}), 0.0), 0.0);",
+            a = lit(AMBIENT)?,
+            k = lit(LIGHT)?
+        ),
+        Shading::Ggx => format!(
+            "const float PI = 3.141592653589793;
+  vec3 l = {l}, v = -d;
+  float n_l = max(dot(n, l), 0.0), n_v = dot(n, v);
+  float alpha = {alpha}, f0 = {f0};
+  vec3 hv = v + l;
+  vec3 h = length(hv) > 0.0 ? normalize(hv) : n;
+  float f = f0 + (1.0 - f0) * pow(1.0 - clamp(max(dot(v, h), 0.0), 0.0, 1.0), 5.0);
+  float spec = 0.0;
+  if (dot(n, l) > 0.0 && n_v > 0.0) {{
+    float a2 = alpha * alpha;
+    float c = max(dot(n, h), 0.0);
+    float dd = c * c * (a2 - 1.0) + 1.0;
+    float D = a2 / (PI * dd * dd);
+    float gl = 2.0 * n_l / max(n_l + sqrt(a2 + (1.0 - a2) * n_l * n_l), 1e-30);
+    float gv = 2.0 * n_v / max(n_v + sqrt(a2 + (1.0 - a2) * n_v * n_v), 1e-30);
+    float fs = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(v, h), 0.0, 1.0), 5.0);
+    spec = D * gl * gv * fs / (4.0 * n_l * n_v) * n_l * {k} * PI;
+  }}
+  return vec2(({a} + {k} * n_l) * (1.0 - f), spec);",
+            alpha = lit(sh.roughness * sh.roughness)?,
+            f0 = lit(sh.specular)?,
+            a = lit(AMBIENT)?,
+            k = lit(LIGHT)?
+        ),
+    };
+    Ok(format!("vec2 surface(vec3 n, vec3 d) {{\n  {body}\n}}"))
 }
 
 /// Generate the shader pair for `scene` with `settings`.
@@ -820,6 +858,9 @@ mod tests {
                 background: [0, 0, 0],
                 light: glam::DVec3::Z,
                 absorption: 0.0,
+                shading: super::super::render::Shading::Ggx,
+                roughness: 0.35,
+                specular: 0.04,
             },
         }
     }

@@ -23,8 +23,8 @@ before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 /** In the page: render every shipped scene both ways, return the comparison per scene. */
-async function compareAll(page, { side, steps, cameras }) {
-  return page.evaluate(async ({ side, steps, cameras }) => {
+async function compareAll(page, { side, steps, cameras, extra = {} }) {
+  return page.evaluate(async ({ side, steps, cameras, extra }) => {
     const { MicroGl } = await import('/www/micro-gl.js');
     const pool = window.filigree.pool;
     const examples = await pool.run('micro-examples', {});
@@ -39,7 +39,7 @@ async function compareAll(page, { side, steps, cameras }) {
     const out = [];
     for (const ex of examples) {
       for (const camera of cameras) {
-        const req = { scene: ex.scene, width: side, height: side, steps, camera };
+        const req = { scene: ex.scene, width: side, height: side, steps, camera, ...extra };
         const [shader, cpu] = await Promise.all([pool.run('micro-glsl', req), pool.run('micro-render', req)]);
         const t0 = performance.now();
         gl.use(shader);
@@ -55,7 +55,7 @@ async function compareAll(page, { side, steps, cameras }) {
         }
         const a = await decode(cpu.png);
         const b = last.rgba;
-        const bg = [24, 26, 30];
+        const bg = extra.background || [24, 26, 30];
         const isBg = (d, i) => d[i] === bg[0] && d[i + 1] === bg[1] && d[i + 2] === bg[2];
         let hitMiss = 0, sum = 0, cpuHits = 0;
         for (let i = 0; i < a.length; i += 4) {
@@ -73,7 +73,7 @@ async function compareAll(page, { side, steps, cameras }) {
       }
     }
     return out;
-  }, { side, steps, cameras });
+  }, { side, steps, cameras, extra });
 }
 
 const VIEWS = [
@@ -101,12 +101,13 @@ test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fi
   await page.context().close();
 });
 
-test('micro-gl: adaptive and bisection steps agree with the CPU too', async () => {
+test('micro-gl: adaptive and bisection steps, GGX shading and absorption agree with the CPU too', async () => {
   const page = await env.newPage({ path: '#tool=micro' });
-  for (const steps of ['adaptive', 'bisection']) {
-    const rows = await compareAll(page, { side: 64, steps, cameras: [VIEWS[0]] });
+  const ggx = { shading: 'ggx', roughness: 0.3, specular: 0.04, absorption: 0.8 };
+  for (const [steps, extra] of [['adaptive', {}], ['bisection', {}], ['fixed', ggx]]) {
+    const rows = await compareAll(page, { side: 64, steps, cameras: [VIEWS[0]], extra });
     for (const r of rows) {
-      console.log(`[micro-gl] ${steps} ${r.name}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `
+      console.log(`[micro-gl] ${steps}${extra.shading ? ' ggx' : ''} ${r.name}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `
         + `gradient checks cpu ${r.cpuStats.gradient_checks} gpu ${r.glStats.gradient_checks}`);
       assert.ok(r.hitMiss <= MAX_HIT_MISS, `${steps} ${r.name}: ${(r.hitMiss * 100).toFixed(2)}% hit/miss`);
       assert.ok(r.mean <= MAX_MEAN, `${steps} ${r.name}: mean ${r.mean.toFixed(2)}`);
