@@ -36,6 +36,7 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("tangle_grammar", tangle_grammar),
     ("tangle_start", tangle_start),
     ("micro_scene", micro_scene),
+    ("texture_ratings", texture_ratings),
 ];
 
 fn finite_svg(svg: &str, what: &str) {
@@ -532,5 +533,40 @@ pub fn micro_scene(data: &[u8]) {
     };
     if let Some(out) = step_some(start_slice(req).expect("the scene parsed")) {
         assert!(out.min.is_finite() && out.max.is_finite() && (0.0..=1.0).contains(&out.inside));
+    }
+}
+
+/// A human-ratings CSV for the Texture tool's perceptual scales
+/// (`texture::scales::parse_ratings`): errors must point inside the text,
+/// and what parses must be ids with 12 values in 1..=9, no id twice.
+pub fn texture_ratings(data: &[u8]) {
+    use filigree::texture::scales::{parse_ratings, N_SCALES};
+    let text = String::from_utf8_lossy(data);
+    match parse_ratings(&text) {
+        Ok(rows) => {
+            let mut ids = std::collections::HashSet::new();
+            for r in &rows {
+                assert!(
+                    !r.id.is_empty() && ids.insert(r.id.clone()),
+                    "id {:?}",
+                    r.id
+                );
+                assert_eq!(r.scales.len(), N_SCALES);
+                assert!(
+                    r.scales.iter().all(|v| (1.0..=9.0).contains(v)),
+                    "{:?}",
+                    r.scales
+                );
+            }
+        }
+        Err(e) => {
+            if let Some((line, column)) = e.position() {
+                let lines = text.split('\n').count().max(1);
+                assert!(
+                    line >= 1 && line <= lines && column >= 1,
+                    "{e} outside the text"
+                );
+            }
+        }
     }
 }

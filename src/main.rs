@@ -36,6 +36,11 @@ enum Command {
         #[command(subcommand)]
         which: cmd::micro::Which,
     },
+    /// Procedural texture models: render one, list them, a contact sheet.
+    Texture {
+        #[command(subcommand)]
+        which: cmd::texture::Which,
+    },
     /// Benchmarks that print JSON.
     Bench {
         #[command(subcommand)]
@@ -72,6 +77,7 @@ fn main() -> ExitCode {
         Command::Pixel(a) => cmd::pixel::run(*a),
         Command::Tangle(a) => cmd::tangle::run(*a),
         Command::Micro { which } => cmd::micro::run(which),
+        Command::Texture { which } => cmd::texture::run(which),
         Command::Bench { which } => cmd::bench::run(which),
     };
     match result {

@@ -128,6 +128,11 @@ fn micro_scene_corpus_replays() {
     replay("micro_scene");
 }
 
+#[test]
+fn texture_ratings_corpus_replays() {
+    replay("texture_ratings");
+}
+
 /// Every request kind has at least one seed in the `requests` corpus.
 #[test]
 fn requests_corpus_covers_every_kind() {
@@ -514,4 +519,25 @@ fn write_seeds() {
         json!({"scene": scene, "width": 8, "height": 6, "z": 0.3}),
     );
     req("micro-examples.json", "micro-examples", json!({}));
+    req("texture-models.json", "texture-models", json!({}));
+    req(
+        "texture-render.json",
+        "texture-render",
+        json!({"model": "perlin", "size": 16, "seed": 3}),
+    );
+    req(
+        "texture-index.json",
+        "texture-index",
+        json!({"bytes": b"FILIGREE-TEXIDX\0\x01\0\0\0".to_vec()}),
+    );
+    req(
+        "texture-analyse.json",
+        "texture-analyse",
+        json!({"index": "0000000000000000", "bytes": [137, 80, 78, 71]}),
+    );
+    req(
+        "texture-retrieve.json",
+        "texture-retrieve",
+        json!({"index": "0", "scales": [5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 5, 9], "size": 0}),
+    );
 }

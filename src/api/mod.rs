@@ -28,6 +28,7 @@ use crate::pattern::api as pattern;
 use crate::pixel::api as pixel;
 use crate::raster::Rgba8Image;
 use crate::tangle::api as tangle;
+use crate::texture::api as texture;
 use serde::{Deserialize, Deserializer, Serialize};
 
 /// An image as it crosses the boundary undecoded: straight RGBA bytes
@@ -71,6 +72,11 @@ pub const KINDS: &[&str] = &[
     "micro-glsl",
     "micro-slice",
     "micro-examples",
+    "texture-models",
+    "texture-render",
+    "texture-index",
+    "texture-analyse",
+    "texture-retrieve",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -96,6 +102,11 @@ pub enum Response {
     MicroGlsl(Box<micro::MicroGlslResponse>),
     MicroSlice(Box<micro::MicroSliceResponse>),
     MicroExamples(&'static [crate::micro::examples::Example]),
+    TextureModels(Vec<texture::ModelInfo>),
+    TextureImage(Box<texture::TextureImage>),
+    TextureIndex(Box<texture::TextureIndexResponse>),
+    TextureAnalysis(Box<texture::TextureAnalysis>),
+    TextureRetrieval(Box<texture::TextureRetrieval>),
     /// `null`.
     Nothing,
 }
@@ -160,6 +171,10 @@ pub enum DefaultRequest {
     Tangle(Box<tangle::TangleRequest>),
     MicroRender(Box<micro::MicroRenderRequest>),
     MicroSlice(Box<micro::MicroSliceRequest>),
+    TextureRender(texture::TextureRenderRequest),
+    TextureIndex(texture::TextureIndexRequest),
+    TextureAnalyse(texture::TextureAnalyseRequest),
+    TextureRetrieve(texture::TextureRetrieveRequest),
     Nothing,
 }
 
@@ -190,7 +205,13 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "defaults" => D::Defaults(Default::default()),
         "check-state" => D::CheckState(Default::default()),
         "open-project" => D::OpenProject(Default::default()),
-        "pattern-generators" | "tangle-examples" | "micro-examples" => D::Nothing,
+        "pattern-generators" | "tangle-examples" | "micro-examples" | "texture-models" => {
+            D::Nothing
+        }
+        "texture-render" => D::TextureRender(Default::default()),
+        "texture-index" => D::TextureIndex(Default::default()),
+        "texture-analyse" => D::TextureAnalyse(Default::default()),
+        "texture-retrieve" => D::TextureRetrieve(Default::default()),
         "tangle" => D::Tangle(Default::default()),
         "micro-render" | "micro-glsl" => D::MicroRender(Default::default()),
         "micro-slice" => D::MicroSlice(Default::default()),
@@ -268,6 +289,25 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
                 Response::MicroExamples,
             )
         }
+        "texture-models" => {
+            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+            boxed(
+                crate::core::job::OneShot::new(|| Ok(texture::model_infos())),
+                Response::TextureModels,
+            )
+        }
+        "texture-render" => boxed(texture::start_render(request(kind, payload)?)?, |r| {
+            Response::TextureImage(Box::new(r))
+        }),
+        "texture-index" => boxed(texture::start_index(request(kind, payload)?), |r| {
+            Response::TextureIndex(Box::new(r))
+        }),
+        "texture-analyse" => boxed(texture::start_analyse(request(kind, payload)?)?, |r| {
+            Response::TextureAnalysis(Box::new(r))
+        }),
+        "texture-retrieve" => boxed(texture::start_retrieve(request(kind, payload)?)?, |r| {
+            Response::TextureRetrieval(Box::new(r))
+        }),
         "pattern-generators" => {
             serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
             boxed(pattern::start_generators(), Response::Generators)

@@ -51,6 +51,20 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Texture models: render ms per model at SIZE², dataset time at DATASET_SIZE².
+    TextureModels {
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        #[arg(long, default_value_t = 256)]
+        size: usize,
+        /// 0 skips the dataset.
+        #[arg(long, default_value_t = 128)]
+        dataset_size: usize,
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+        #[arg(long)]
+        json: bool,
+    },
     /// Tangle: every shipped grammar expanded (rules, steps, shapes, vertices,
     /// seconds) beside the paper's Table 1, and a shapely/GEOS baseline run
     /// in the same process when Python has shapely.
@@ -111,6 +125,13 @@ pub fn run(w: Which) -> Result<(), String> {
             Ok(())
         }
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
+        Which::TextureModels {
+            repeats,
+            size,
+            dataset_size,
+            threads,
+            ..
+        } => super::texture::bench(repeats, size, dataset_size, threads),
         Which::Tangle { repeats, only, .. } => super::tangle_bench::run(repeats, only.as_deref()),
         Which::Micro { repeats, size, .. } => super::micro_bench::run(repeats, size),
         Which::Pixel { repeats, .. } => {

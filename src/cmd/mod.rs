@@ -8,6 +8,7 @@ pub mod pixel;
 pub mod slices_bench;
 pub mod tangle;
 pub mod tangle_bench;
+pub mod texture;
 
 use filigree::core::job::{run_to_end, Cancel, Job};
 use filigree::Error;

@@ -2,12 +2,22 @@
 //! Dong & Dong, "Perception-driven procedural texture generation from
 //! examples" (PCN). MISSION X1–X7.
 //!
+//! - [`api`]: the `texture-*` requests (CLI and browser).
 //! - [`image`]: the grey image every stage passes along ([`Gray`]).
-//!
-//! Planned (issue 11): procedural models and their height-map shading
-//! (`models`), the dataset (`dataset`), perceptual scale estimators
-//! (`scales`), the PCN-2 feature extractor (`pcn`), the learners (`learn`)
-//! and the static index asset the browser loads.
+//! - [`models`]: the procedural models (height maps) and the one shading.
+//! - [`dataset`]: models' parameters on a linear grid, rendered, augmented.
+//! - [`pcn`]: the PCN-2 feature extractor.
+//! - [`learn`]: support vector machines and Isomap.
+//! - [`scales`]: estimators of the twelve perceptual scales, 1–9.
+//! - [`index`]: the trained index the browser loads, and retrieval.
+pub mod api;
+pub mod build;
+pub mod dataset;
 pub mod image;
+pub mod index;
+pub mod learn;
+pub mod models;
+pub mod pcn;
+pub mod scales;
 
 pub use image::Gray;

@@ -1,0 +1,209 @@
+//! `filigree texture`: inspect the procedural texture models (render one,
+//! list them, or a contact sheet of all), and `filigree bench
+//! texture-models`: per-model render and dataset times as JSON.
+use clap::Subcommand;
+use filigree::texture::dataset::{self, DatasetConfig};
+use filigree::texture::models::{self, render_height, shade, Light, MODELS};
+use filigree::texture::Gray;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Subcommand)]
+pub enum Which {
+    /// Render one model's shaded texture (or height map) to a grey PNG.
+    Render(RenderArgs),
+    /// List the models, their families and parameters (JSON).
+    Models,
+    /// A contact sheet of every model at its defaults (5 columns) to a PNG.
+    Sheet {
+        #[arg(long, default_value_t = 128)]
+        size: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Model id (see `filigree texture models`) or its paper name.
+    #[arg(long)]
+    model: String,
+    /// A parameter, `name=value` (repeatable); others take their defaults.
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    params: Vec<String>,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, default_value_t = 256)]
+    size: usize,
+    /// Light azimuth and elevation in degrees (default 135,45).
+    #[arg(long, value_name = "AZ,EL")]
+    light: Option<String>,
+    /// Write the height map instead of the shaded texture.
+    #[arg(long)]
+    height: bool,
+    /// Output PNG.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+pub fn run(w: Which) -> Result<(), String> {
+    match w {
+        Which::Render(a) => render(a),
+        Which::Models => {
+            let list: Vec<_> = MODELS
+                .iter()
+                .enumerate()
+                .map(|(i, m)| {
+                    json!({
+                        "index": i, "id": m.id, "name": m.name, "family": m.family.name(),
+                        "params": m.params.iter().map(|p| json!({
+                            "name": p.name, "lo": p.lo, "hi": p.hi, "default": p.default,
+                            "integer": p.integer,
+                        })).collect::<Vec<_>>(),
+                    })
+                })
+                .collect();
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&list).map_err(|e| e.to_string())?
+            );
+            Ok(())
+        }
+        Which::Sheet { size, seed, out } => {
+            let cols = 5;
+            let rows = MODELS.len().div_ceil(cols);
+            let gap = 4;
+            let mut sheet = Gray::new(cols * (size + gap), rows * (size + gap));
+            sheet.data.iter_mut().for_each(|v| *v = 1.0);
+            for (i, m) in MODELS.iter().enumerate() {
+                let g = models::render(m, &m.defaults(), seed, size).map_err(|e| e.to_string())?;
+                let (ox, oy) = ((i % cols) * (size + gap), (i / cols) * (size + gap));
+                for y in 0..size {
+                    for x in 0..size {
+                        sheet.data[(oy + y) * sheet.width + ox + x] = g.at(x, y);
+                    }
+                }
+            }
+            write_png(&out, &sheet)
+        }
+    }
+}
+
+fn parse_light(s: &str) -> Result<Light, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--light: expected AZ,EL in degrees, got '{s}'"))?;
+    match v[..] {
+        [azimuth, elevation] if azimuth.is_finite() && (0.0..=90.0).contains(&elevation) => {
+            Ok(Light { azimuth, elevation })
+        }
+        _ => Err(format!(
+            "--light: expected AZ,EL with elevation in 0..=90 degrees, got '{s}'"
+        )),
+    }
+}
+
+fn render(a: RenderArgs) -> Result<(), String> {
+    let m = models::lookup(&a.model).map_err(|e| format!("--model: {e}"))?;
+    let mut pairs = Vec::new();
+    for p in &a.params {
+        let (k, v) = p
+            .split_once('=')
+            .ok_or_else(|| format!("--param: expected NAME=VALUE, got '{p}'"))?;
+        let v: f64 = v
+            .trim()
+            .parse()
+            .map_err(|_| format!("--param {k}: '{v}' is not a number"))?;
+        pairs.push((k.trim(), v));
+    }
+    let params = m.with(&pairs).map_err(|e| format!("--param: {e}"))?;
+    let light = a
+        .light
+        .as_deref()
+        .map(parse_light)
+        .transpose()?
+        .unwrap_or_default();
+    let h = render_height(m, &params, a.seed, a.size).map_err(|e| match e.field() {
+        Some("size") => format!("--size: {e}"),
+        _ => format!("--param: {e}"),
+    })?;
+    let img = if a.height { h } else { shade(&h, light) };
+    write_png(&a.out, &img)
+}
+
+fn write_png(path: &Path, g: &Gray) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut enc = png::Encoder::new(
+        std::io::BufWriter::new(file),
+        g.width as u32,
+        g.height as u32,
+    );
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc
+        .write_header()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    w.write_image_data(&g.to_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// `filigree bench texture-models`: per-model height + shade time at
+/// `size`² (median of `repeats`, default parameters, one core), and the
+/// time and size of a dataset at `dataset_size`² on `threads` threads.
+pub fn bench(
+    repeats: usize,
+    size: usize,
+    dataset_size: usize,
+    threads: usize,
+) -> Result<(), String> {
+    let mut per_model = Vec::new();
+    let mut total = 0.0;
+    for m in &MODELS {
+        let d = m.defaults();
+        let mut secs = Vec::new();
+        for r in 0..repeats.max(1) {
+            let t = Instant::now();
+            let h = render_height(m, &d, r as u64, size).map_err(|e| e.to_string())?;
+            std::hint::black_box(shade(&h, Light::DEFAULT));
+            secs.push(t.elapsed().as_secs_f64());
+        }
+        let (min, median) = super::min_median(secs);
+        total += median;
+        per_model.push(json!({"model": m.id, "ms_min": min * 1e3, "ms_median": median * 1e3}));
+    }
+    let mut out = json!({
+        "bench": "texture-models",
+        "size": size,
+        "models": per_model,
+        "ms_median_sum": total * 1e3,
+    });
+    if dataset_size > 0 {
+        let config = DatasetConfig {
+            size: dataset_size,
+            ..DatasetConfig::default()
+        };
+        let specs = dataset::plan(&config).map_err(|e| e.to_string())?;
+        let t = Instant::now();
+        let data = dataset::build_threads(&config, threads).map_err(|e| e.to_string())?;
+        let secs = t.elapsed().as_secs_f64();
+        out["dataset"] = json!({
+            "size": dataset_size,
+            "base_samples": specs.len(),
+            "images": data.len(),
+            "lights": config.lights.len(),
+            "crops": config.crops,
+            "threads": threads,
+            "seconds": secs,
+        });
+    }
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}

@@ -1,0 +1,445 @@
+//! The dataset (paper §4 and §5.1; MISSION X2): every model's parameters
+//! sampled on a linear grid ("we discretize and sample the parameter space
+//! on the linear scale for each parameter"), each grid point rendered once
+//! as a height map and shaded under the fixed light, then optionally
+//! augmented as in §5.1: re-shaded under other light directions (same
+//! elevation, other azimuths) and cut into 4 non-overlapping crops.
+//!
+//! Grid: a model with k parameters gets `levels[i]` values of parameter i,
+//! raised one parameter at a time in spec order (round robin) while the
+//! product stays within [`DatasetConfig::per_model`]; a parameter left at
+//! one level keeps its default. The default `per_model` of 40 gives 23
+//! models × 32–40 = 849 base samples (see the test). Parameters are
+//! listed most important first in every model, so they vary first.
+//!
+//! With crops on, the height map is rendered at twice the size and shaded,
+//! and its four quadrants are the samples (the paper cut its 512² textures
+//! into four 256² ones), so every image has side `size`.
+//!
+//! Every sample keeps its model, parameters, seed, light and crop; the
+//! same config gives the same samples and bytes, natively and in wasm.
+//! Rendering is independent per base sample: [`DatasetJob`] steps one base
+//! at a time (browser, progress) and natively [`build_threads`] spreads
+//! bases over scoped threads. (`core::parallel`'s sharded jobs exchange
+//! `f64` vectors through an all-gather; images would be copied to every
+//! shard, so the dataset does not use it.)
+use crate::core::error::{Error, Result};
+use crate::core::job::{Job, Progress, Step};
+use crate::core::rng::Rng;
+use crate::texture::image::Gray;
+use crate::texture::models::{render_height, shade, Light, Model, MODELS};
+
+/// What to build.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DatasetConfig {
+    /// Most base samples (grid points) per model.
+    pub per_model: usize,
+    /// Side of every image in pixels.
+    pub size: usize,
+    /// Lights to shade every height map under (the first is the main one).
+    pub lights: Vec<Light>,
+    /// Cut each texture into 4 quadrant crops (rendered at 2 × `size`).
+    pub crops: bool,
+    /// Seed of the whole dataset; each base sample derives its own.
+    pub seed: u64,
+}
+
+impl Default for DatasetConfig {
+    /// 40 per model (849 bases), 256², the fixed light only, no crops.
+    fn default() -> Self {
+        DatasetConfig {
+            per_model: 40,
+            size: 256,
+            lights: vec![Light::DEFAULT],
+            crops: false,
+            seed: 1,
+        }
+    }
+}
+
+/// The paper's second light for augmentation: same elevation, from the
+/// lower right.
+pub const AUGMENT_LIGHT: Light = Light {
+    azimuth: 315.0,
+    elevation: 45.0,
+};
+
+impl DatasetConfig {
+    /// The paper's augmentation (§5.1): two lights × four crops per base.
+    pub fn augmented(mut self) -> Self {
+        self.lights = vec![Light::DEFAULT, AUGMENT_LIGHT];
+        self.crops = true;
+        self
+    }
+
+    fn check(&self) -> Result<()> {
+        if self.per_model == 0 || self.per_model > 100_000 {
+            return Err(Error::input("per_model must be in 1..=100000").at("per_model"));
+        }
+        if self.lights.is_empty() {
+            return Err(Error::input("a dataset needs at least one light").at("lights"));
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if !l.azimuth.is_finite() || !(0.0..=90.0).contains(&l.elevation) {
+                return Err(Error::input(
+                    "a light needs a finite azimuth and an elevation in 0..=90 degrees",
+                )
+                .at(format!("lights.{i}")));
+            }
+        }
+        let render = if self.crops { self.size * 2 } else { self.size };
+        if !(crate::texture::models::MIN_SIZE..=crate::texture::models::MAX_SIZE).contains(&render)
+        {
+            return Err(Error::limit(format!(
+                "dataset size {} (rendered at {render}) is outside {}..={} pixels",
+                self.size,
+                crate::texture::models::MIN_SIZE,
+                crate::texture::models::MAX_SIZE
+            ))
+            .at("size"));
+        }
+        Ok(())
+    }
+}
+
+/// One grid point: a model and parameters, before rendering.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BaseSpec {
+    /// Index among all base samples.
+    pub base: usize,
+    /// Index of the model in [`MODELS`] (the class label).
+    pub model: usize,
+    pub params: Vec<f64>,
+    pub seed: u64,
+}
+
+/// One rendered image with everything needed to make it again.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    pub base: usize,
+    pub model: usize,
+    pub params: Vec<f64>,
+    pub seed: u64,
+    /// Index into the config's lights, and the light itself.
+    pub light_index: usize,
+    pub light: Light,
+    /// Quadrant 0..4 (row-major: top-left, top-right, bottom-left,
+    /// bottom-right) or `None` for the whole texture.
+    pub crop: Option<u8>,
+    pub image: Gray,
+}
+
+impl Sample {
+    /// The model that made it.
+    pub fn model(&self) -> &'static Model {
+        &MODELS[self.model]
+    }
+}
+
+/// Levels per parameter for a model with these specs (see module docs).
+pub fn levels(model: &Model, per_model: usize) -> Vec<usize> {
+    let k = model.params.len();
+    let cap = |i: usize| {
+        let p = &model.params[i];
+        if p.integer {
+            (p.hi - p.lo) as usize + 1
+        } else {
+            usize::MAX
+        }
+    };
+    let mut l = vec![1usize; k];
+    loop {
+        let mut grew = false;
+        for i in 0..k {
+            let product: usize = l.iter().product();
+            if l[i] < cap(i) && product / l[i] * (l[i] + 1) <= per_model {
+                l[i] += 1;
+                grew = true;
+            }
+        }
+        if !grew {
+            return l;
+        }
+    }
+}
+
+/// The value of level `j` of `levels` for parameter `i` of `model`.
+fn level_value(model: &Model, i: usize, j: usize, levels: usize) -> f64 {
+    let p = &model.params[i];
+    if levels <= 1 {
+        return p.default;
+    }
+    let v = (p.lo + (p.hi - p.lo) * j as f64 / (levels - 1) as f64).clamp(p.lo, p.hi);
+    if p.integer {
+        v.round()
+    } else {
+        v
+    }
+}
+
+/// Every base sample of the dataset, in model order then grid order (the
+/// first parameter varies fastest).
+pub fn plan(config: &DatasetConfig) -> Result<Vec<BaseSpec>> {
+    config.check()?;
+    let mut out = Vec::new();
+    for (mi, m) in MODELS.iter().enumerate() {
+        let lv = levels(m, config.per_model);
+        let total: usize = lv.iter().product();
+        for g in 0..total {
+            let mut rest = g;
+            let params: Vec<f64> = lv
+                .iter()
+                .enumerate()
+                .map(|(i, &l)| {
+                    let j = rest % l;
+                    rest /= l;
+                    level_value(m, i, j, l)
+                })
+                .collect();
+            let mut rng =
+                Rng::new(config.seed ^ ((mi as u64) << 40) ^ (g as u64).wrapping_mul(0x9e37_79b9));
+            out.push(BaseSpec {
+                base: out.len(),
+                model: mi,
+                params,
+                seed: rng.next_u64(),
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Render one base sample into its images (lights × crops).
+pub fn render_base(config: &DatasetConfig, spec: &BaseSpec) -> Result<Vec<Sample>> {
+    let model = &MODELS[spec.model];
+    let n = if config.crops {
+        config.size * 2
+    } else {
+        config.size
+    };
+    let height = render_height(model, &spec.params, spec.seed, n)?;
+    let mut out = Vec::new();
+    for (li, &light) in config.lights.iter().enumerate() {
+        let lit = shade(&height, light);
+        let pieces: Vec<(Option<u8>, Gray)> = if config.crops {
+            (0..4u8)
+                .map(|q| (Some(q), crop(&lit, q, config.size)))
+                .collect()
+        } else {
+            vec![(None, lit)]
+        };
+        for (c, image) in pieces {
+            out.push(Sample {
+                base: spec.base,
+                model: spec.model,
+                params: spec.params.clone(),
+                seed: spec.seed,
+                light_index: li,
+                light,
+                crop: c,
+                image,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Quadrant `q` (row-major) of side `s` of `g`.
+fn crop(g: &Gray, q: u8, s: usize) -> Gray {
+    let (ox, oy) = ((q as usize % 2) * s, (q as usize / 2) * s);
+    let mut out = Gray::new(s, s);
+    for y in 0..s {
+        out.data[y * s..(y + 1) * s]
+            .copy_from_slice(&g.data[(oy + y) * g.width + ox..(oy + y) * g.width + ox + s]);
+    }
+    out
+}
+
+/// Build the whole dataset on this thread.
+pub fn build(config: &DatasetConfig) -> Result<Vec<Sample>> {
+    let specs = plan(config)?;
+    let mut out = Vec::new();
+    for s in &specs {
+        out.extend(render_base(config, s)?);
+    }
+    Ok(out)
+}
+
+/// Build the whole dataset on `threads` scoped threads (native only); the
+/// same samples in the same order as [`build`].
+#[cfg(not(target_arch = "wasm32"))]
+pub fn build_threads(config: &DatasetConfig, threads: usize) -> Result<Vec<Sample>> {
+    let specs = plan(config)?;
+    let t = threads.clamp(1, 64);
+    let parts: Vec<Result<Vec<(usize, Vec<Sample>)>>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..t)
+            .map(|k| {
+                let specs = &specs;
+                s.spawn(move || {
+                    specs
+                        .iter()
+                        .enumerate()
+                        .filter(|(i, _)| i % t == k)
+                        .map(|(i, spec)| Ok((i, render_base(config, spec)?)))
+                        .collect()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err(Error::input("a dataset thread panicked")))
+            })
+            .collect()
+    });
+    let mut all: Vec<(usize, Vec<Sample>)> = Vec::with_capacity(specs.len());
+    for p in parts {
+        all.extend(p?);
+    }
+    all.sort_by_key(|(i, _)| *i);
+    Ok(all.into_iter().flat_map(|(_, v)| v).collect())
+}
+
+/// The dataset as a resumable job: one base sample per step.
+pub struct DatasetJob {
+    config: DatasetConfig,
+    specs: Vec<BaseSpec>,
+    next: usize,
+    out: Vec<Sample>,
+}
+
+impl DatasetJob {
+    pub fn new(config: DatasetConfig) -> Result<Self> {
+        let specs = plan(&config)?;
+        Ok(DatasetJob {
+            config,
+            specs,
+            next: 0,
+            out: Vec::new(),
+        })
+    }
+}
+
+impl Job for DatasetJob {
+    type Output = Vec<Sample>;
+    fn step(&mut self) -> Result<Step<Vec<Sample>>> {
+        if self.next >= self.specs.len() {
+            return Ok(Step::Done(std::mem::take(&mut self.out)));
+        }
+        let s = &self.specs[self.next];
+        self.out.extend(render_base(&self.config, s)?);
+        self.next += 1;
+        Ok(Step::Running(Progress::new(
+            self.next as f64 / self.specs.len() as f64,
+            format!("rendering {}", MODELS[s.model].id),
+        )))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::job::{run_to_end, Cancel};
+
+    #[test]
+    fn the_default_grid_has_a_few_dozen_samples_per_model() {
+        let specs = plan(&DatasetConfig::default()).unwrap();
+        assert!((400..=1500).contains(&specs.len()), "{}", specs.len());
+        for (mi, m) in MODELS.iter().enumerate() {
+            let of_model: Vec<_> = specs.iter().filter(|s| s.model == mi).collect();
+            assert!(of_model.len() >= 16, "{}: {}", m.id, of_model.len());
+            // Grid values are distinct and in range; the first parameter varies.
+            let firsts: std::collections::BTreeSet<u64> =
+                of_model.iter().map(|s| s.params[0].to_bits()).collect();
+            assert!(firsts.len() >= 2, "{}", m.id);
+            for s in &of_model {
+                assert_eq!(m.check(&s.params).unwrap(), s.params, "{}", m.id);
+            }
+        }
+        let bigger = plan(&DatasetConfig {
+            per_model: 80,
+            ..DatasetConfig::default()
+        })
+        .unwrap();
+        assert!(bigger.len() > specs.len());
+    }
+
+    #[test]
+    fn augmentation_gives_lights_times_crops_images_that_keep_their_provenance() {
+        let config = DatasetConfig {
+            per_model: 2,
+            size: 16,
+            ..DatasetConfig::default()
+        }
+        .augmented();
+        let specs = plan(&config).unwrap();
+        let one = render_base(&config, &specs[5]).unwrap();
+        assert_eq!(one.len(), 8);
+        for (i, s) in one.iter().enumerate() {
+            assert_eq!((s.image.width, s.image.height), (16, 16));
+            assert_eq!(s.light_index, i / 4);
+            assert_eq!(s.crop, Some((i % 4) as u8));
+            assert_eq!(
+                (s.model, &s.params, s.seed),
+                (specs[5].model, &specs[5].params, specs[5].seed)
+            );
+        }
+        // The crops are the quadrants of the one 32² texture.
+        let whole = shade(
+            &render_height(&MODELS[specs[5].model], &specs[5].params, specs[5].seed, 32).unwrap(),
+            Light::DEFAULT,
+        );
+        assert_eq!(one[3].image.at(0, 0), whole.at(16, 16));
+        assert_eq!(one[1].image.at(2, 5), whole.at(18, 5));
+        // Another light gives other pixels.
+        assert_ne!(one[0].image, one[4].image);
+    }
+
+    #[test]
+    fn the_job_the_threads_and_the_plain_build_agree() {
+        let config = DatasetConfig {
+            per_model: 2,
+            size: 16,
+            ..DatasetConfig::default()
+        };
+        let a = build(&config).unwrap();
+        let b = build_threads(&config, 3).unwrap();
+        let c = run_to_end(
+            DatasetJob::new(config.clone()).unwrap(),
+            &Cancel::new(),
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(a, b);
+        assert_eq!(a, c);
+        assert_eq!(a.len(), plan(&config).unwrap().len());
+        assert_eq!(build(&config).unwrap(), a);
+    }
+
+    #[test]
+    fn bad_configs_are_typed_errors() {
+        let e = plan(&DatasetConfig {
+            lights: vec![],
+            ..DatasetConfig::default()
+        })
+        .unwrap_err();
+        assert_eq!(e.field(), Some("lights"));
+        let e = plan(&DatasetConfig {
+            size: 2000,
+            crops: true,
+            ..DatasetConfig::default()
+        })
+        .unwrap_err();
+        assert_eq!((e.kind(), e.field()), ("limit", Some("size")));
+        let e = plan(&DatasetConfig {
+            lights: vec![Light {
+                azimuth: f64::NAN,
+                elevation: 45.0,
+            }],
+            ..DatasetConfig::default()
+        })
+        .unwrap_err();
+        assert_eq!(e.field(), Some("lights.0"));
+    }
+}

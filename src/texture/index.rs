@@ -1,0 +1,799 @@
+//! The Texture index: everything the browser needs to go from an example
+//! image to a procedural model and its parameters (MISSION X5, X6).
+//!
+//! - a trained [`Pcn`] (both filter banks);
+//! - linear one-vs-rest SVMs from PCN features to the generating model and
+//!   to each of the twelve perceptual scales (1–9), as in Section 4.1;
+//! - the perceptual texture space: a 3-D Isomap of the samples'
+//!   dissimilarities, with, per axis, the subset of scales that correlate
+//!   with it and a Gaussian SVR from that subset to the coordinate (4.2);
+//! - every base sample's model, parameters, seed, scales and coordinates,
+//!   for retrieval (4.3).
+//!
+//! **Dissimilarity.** The paper's similarity matrix comes from people
+//! sorting textures into groups. We have no such data, so two samples'
+//! dissimilarity is the Euclidean distance between their (estimated or
+//! user-supplied) scale vectors: the space is built from the same
+//! perceptual description the paper's subjects were asked to rate.
+//!
+//! **File.** [`Index::to_bytes`] writes one little-endian binary: a magic
+//! string, a format version, the sections in a fixed order, and an FNV-1a
+//! checksum of everything before it. [`Index::from_bytes`] checks all of
+//! them and every length against the bytes left, so a truncated, corrupt
+//! or other-version file is a clear error, never a panic or a huge
+//! allocation.
+use super::learn::isomap::{isomap, pearson};
+use super::learn::svm::{Gram, Linear, OneVsRest, Svr};
+use super::pcn::{Pcn, PcnConfig};
+use super::Gray;
+use crate::core::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+pub use super::scales::SCALE_NAMES as SCALES;
+
+/// Magic bytes at the start of every index file.
+pub const MAGIC: &[u8; 16] = b"FILIGREE-TEXIDX\0";
+/// The index format's version: bump it whenever the layout changes.
+pub const VERSION: u32 = 1;
+
+/// One training texture: its grey image, where it came from, and its
+/// scales (1–9). Augmented copies have `base: false`: they train the
+/// classifiers but do not enter the space.
+#[derive(Clone, Debug)]
+pub struct Training {
+    pub image: Gray,
+    pub model: u16,
+    pub params: Vec<f32>,
+    pub seed: u64,
+    pub scales: [u8; 12],
+    pub base: bool,
+}
+
+/// A base sample as the index keeps it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    pub model: u16,
+    pub params: Vec<f32>,
+    pub seed: u64,
+    pub scales: [u8; 12],
+    pub coords: [f32; 3],
+}
+
+/// One axis of the perceptual space: the scales it is regressed from and
+/// the regression (inputs are (scale − 1) / 8; the output is the
+/// coordinate divided by `spread`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    pub scales: Vec<u8>,
+    pub spread: f32,
+    pub svr: Svr,
+}
+
+/// How to build an index.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct IndexConfig {
+    pub pcn: PcnConfig,
+    /// SVM penalty of the model and scale classifiers.
+    pub c_class: f64,
+    /// Neighbours in Isomap's graph.
+    pub isomap_k: usize,
+    /// At most this many images (spread evenly) learn the PCA filters.
+    pub filter_images: usize,
+    /// A scale joins an axis's regression if |r| with the axis is at least
+    /// this (the best three always do).
+    pub min_correlation: f64,
+}
+
+impl Default for IndexConfig {
+    fn default() -> Self {
+        IndexConfig {
+            pcn: PcnConfig::default(),
+            c_class: 1.0,
+            isomap_k: 10,
+            filter_images: 240,
+            min_correlation: 0.3,
+        }
+    }
+}
+
+/// The trained index.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Index {
+    /// The model names, by model id (checked against the app's models).
+    pub model_names: Vec<String>,
+    pub pcn: Pcn,
+    pub model_classifier: OneVsRest,
+    pub scale_classifiers: Vec<OneVsRest>,
+    pub axes: Vec<Axis>,
+    pub samples: Vec<Sample>,
+}
+
+/// What the index says about an image.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Analysis {
+    pub model: u16,
+    pub scales: [u8; 12],
+}
+
+/// A retrieved sample and how well it matches the request.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Retrieval {
+    pub sample: usize,
+    pub point: [f32; 3],
+    /// Cosine similarity of the requested and the retrieved scales.
+    pub cosine: f64,
+}
+
+/// Maps `f` over `items` on all cores natively (one thread in wasm),
+/// keeping the order.
+pub fn par_map<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync) -> Vec<U> {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(items.len().max(1));
+        if threads > 1 {
+            let chunk = items.len().div_ceil(threads);
+            return std::thread::scope(|s| {
+                let handles: Vec<_> = items
+                    .chunks(chunk)
+                    .map(|c| s.spawn(|| c.iter().map(&f).collect::<Vec<U>>()))
+                    .collect();
+                handles
+                    .into_iter()
+                    .flat_map(|h| h.join().expect("a worker thread panicked"))
+                    .collect()
+            });
+        }
+    }
+    items.iter().map(f).collect()
+}
+
+/// The linear kernel matrix, rows in parallel.
+fn linear_gram(rows: &[Vec<f32>]) -> Gram {
+    let n = rows.len();
+    let idx: Vec<usize> = (0..n).collect();
+    let upper = par_map(&idx, |&i| {
+        (i..n)
+            .map(|j| super::learn::svm::dot(&rows[i], &rows[j]))
+            .collect::<Vec<f64>>()
+    });
+    let mut k = vec![0.0; n * n];
+    for (i, row) in upper.iter().enumerate() {
+        for (o, v) in row.iter().enumerate() {
+            k[i * n + i + o] = *v;
+            k[(i + o) * n + i] = *v;
+        }
+    }
+    Gram { n, k }
+}
+
+fn to_unit(s: &[u8; 12], subset: &[u8]) -> Vec<f32> {
+    subset
+        .iter()
+        .map(|&k| (s[k as usize] as f32 - 1.0) / 8.0)
+        .collect()
+}
+
+fn to_unit_f(s: &[f32; 12], subset: &[u8]) -> Vec<f32> {
+    subset
+        .iter()
+        .map(|&k| (s[k as usize] - 1.0) / 8.0)
+        .collect()
+}
+
+/// Cosine similarity of two scale vectors.
+pub fn cosine(a: &[f32], b: &[f32]) -> f64 {
+    let ab: f64 = a.iter().zip(b).map(|(x, y)| *x as f64 * *y as f64).sum();
+    let aa: f64 = a.iter().map(|x| (*x as f64).powi(2)).sum();
+    let bb: f64 = b.iter().map(|x| (*x as f64).powi(2)).sum();
+    if aa <= 0.0 || bb <= 0.0 {
+        0.0
+    } else {
+        ab / (aa * bb).sqrt()
+    }
+}
+
+impl Index {
+    /// Trains everything from `training` (see [`Training`]).
+    pub fn build(
+        model_names: Vec<String>,
+        training: &[Training],
+        config: &IndexConfig,
+    ) -> Result<Index> {
+        config.pcn.validate()?;
+        let base: Vec<&Training> = training.iter().filter(|t| t.base).collect();
+        if base.len() < 4 {
+            return Err(Error::input("an index needs at least four base samples"));
+        }
+        if let Some(t) = training.iter().find(|t| {
+            t.model as usize >= model_names.len() || t.scales.iter().any(|s| !(1..=9).contains(s))
+        }) {
+            return Err(Error::input(format!(
+                "sample of model {} has a model id or a scale out of range",
+                t.model
+            )));
+        }
+        // Filters from an even spread of the images.
+        let stride = training.len().div_ceil(config.filter_images.max(1)).max(1);
+        let filter_set: Vec<Gray> = training
+            .iter()
+            .step_by(stride)
+            .map(|t| t.image.clone())
+            .collect();
+        let pcn = Pcn::train(&filter_set, config.pcn.clone())?;
+        let features: Vec<Vec<f32>> = par_map(training, |t| pcn.features(&t.image))
+            .into_iter()
+            .collect::<Result<_>>()?;
+        let gram = linear_gram(&features);
+        let models: Vec<u16> = training.iter().map(|t| t.model).collect();
+        let model_classifier = OneVsRest::train(&gram, &features, &models, config.c_class);
+        let scale_ids: Vec<usize> = (0..12).collect();
+        let scale_classifiers = par_map(&scale_ids, |&k| {
+            let labels: Vec<u16> = training.iter().map(|t| t.scales[k] as u16).collect();
+            OneVsRest::train(&gram, &features, &labels, config.c_class)
+        });
+        let (axes, coords) = Self::space(&base, config)?;
+        let samples = base
+            .iter()
+            .zip(&coords)
+            .map(|(t, c)| Sample {
+                model: t.model,
+                params: t.params.clone(),
+                seed: t.seed,
+                scales: t.scales,
+                coords: *c,
+            })
+            .collect();
+        Ok(Index {
+            model_names,
+            pcn,
+            model_classifier,
+            scale_classifiers,
+            axes,
+            samples,
+        })
+    }
+
+    /// The perceptual space of the base samples and its axis regressions.
+    fn space(base: &[&Training], config: &IndexConfig) -> Result<(Vec<Axis>, Vec<[f32; 3]>)> {
+        let n = base.len();
+        let mut d = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                d[i * n + j] = base[i]
+                    .scales
+                    .iter()
+                    .zip(&base[j].scales)
+                    .map(|(a, b)| (*a as f64 - *b as f64).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+            }
+        }
+        let y = isomap(&d, n, config.isomap_k, 3)?;
+        let coords: Vec<[f32; 3]> = (0..n)
+            .map(|i| [y[i * 3] as f32, y[i * 3 + 1] as f32, y[i * 3 + 2] as f32])
+            .collect();
+        let mut axes = Vec::with_capacity(3);
+        for a in 0..3 {
+            let target: Vec<f64> = (0..n).map(|i| y[i * 3 + a]).collect();
+            let mut ranked: Vec<(usize, f64)> = (0..12)
+                .map(|k| {
+                    (
+                        k,
+                        pearson(
+                            &base.iter().map(|t| t.scales[k] as f64).collect::<Vec<_>>(),
+                            &target,
+                        )
+                        .abs(),
+                    )
+                })
+                .collect();
+            ranked.sort_by(|p, q| q.1.total_cmp(&p.1).then(p.0.cmp(&q.0)));
+            let subset: Vec<u8> = ranked
+                .iter()
+                .enumerate()
+                .filter(|(r, (_, c))| *r < 3 || *c >= config.min_correlation)
+                .map(|(_, (k, _))| *k as u8)
+                .collect();
+            let mean = target.iter().sum::<f64>() / n as f64;
+            let spread = (target.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64)
+                .sqrt()
+                .max(1e-9);
+            let rows: Vec<Vec<f32>> = base.iter().map(|t| to_unit(&t.scales, &subset)).collect();
+            let z: Vec<f64> = target.iter().map(|v| v / spread).collect();
+            let svr = Svr::train(&rows, &z, 10.0, 0.05, 1.0 / subset.len() as f64 * 8.0);
+            axes.push(Axis {
+                scales: subset,
+                spread: spread as f32,
+                svr,
+            });
+        }
+        Ok((axes, coords))
+    }
+
+    /// The predicted model and scales of an image.
+    pub fn analyse(&self, img: &Gray) -> Result<Analysis> {
+        let f = self.pcn.features(img)?;
+        let mut scales = [5u8; 12];
+        for (s, c) in scales.iter_mut().zip(&self.scale_classifiers) {
+            *s = c.predict(&f) as u8;
+        }
+        Ok(Analysis {
+            model: self.model_classifier.predict(&f),
+            scales,
+        })
+    }
+
+    /// The point of requested scales (1–9, fractional allowed) in the space.
+    pub fn locate(&self, scales: &[f32; 12]) -> [f32; 3] {
+        let mut p = [0f32; 3];
+        for (o, axis) in p.iter_mut().zip(&self.axes) {
+            *o = (axis.svr.predict(&to_unit_f(scales, &axis.scales)) * axis.spread as f64) as f32;
+        }
+        p
+    }
+
+    /// The base sample nearest the requested scales in the space,
+    /// optionally among one model's samples only.
+    pub fn retrieve(&self, scales: &[f32; 12], model: Option<u16>) -> Result<Retrieval> {
+        if scales
+            .iter()
+            .any(|s| !s.is_finite() || !(1.0..=9.0).contains(s))
+        {
+            return Err(Error::input("scales run from 1 to 9").at("scales"));
+        }
+        let point = self.locate(scales);
+        let d2 = |c: &[f32; 3]| {
+            (0..3)
+                .map(|i| (c[i] as f64 - point[i] as f64).powi(2))
+                .sum::<f64>()
+        };
+        let best = self
+            .samples
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| model.is_none_or(|m| s.model == m))
+            .min_by(|(i, a), (j, b)| d2(&a.coords).total_cmp(&d2(&b.coords)).then(i.cmp(j)))
+            .map(|(i, _)| i)
+            .ok_or_else(|| Error::input("no sample of that model is in the index").at("model"))?;
+        let got: Vec<f32> = self.samples[best]
+            .scales
+            .iter()
+            .map(|&s| s as f32)
+            .collect();
+        Ok(Retrieval {
+            sample: best,
+            point,
+            cosine: cosine(scales, &got),
+        })
+    }
+}
+
+// ---- The binary file -------------------------------------------------------
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+struct Writer(Vec<u8>);
+
+impl Writer {
+    fn u32(&mut self, v: u32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f32(&mut self, v: f32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn len(&mut self, n: usize) {
+        self.u32(n as u32);
+    }
+    fn f32s(&mut self, v: &[f32]) {
+        self.len(v.len());
+        for x in v {
+            self.f32(*x);
+        }
+    }
+    fn bytes(&mut self, v: &[u8]) {
+        self.len(v.len());
+        self.0.extend_from_slice(v);
+    }
+    fn ovr(&mut self, c: &OneVsRest) {
+        self.len(c.classes.len());
+        for (k, m) in c.classes.iter().zip(&c.machines) {
+            self.u32(*k as u32);
+            self.f32(m.rho);
+            self.f32s(&m.w);
+        }
+    }
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    at: usize,
+}
+
+fn corrupt(what: &str) -> Error {
+    Error::input(format!(
+        "the texture index is corrupt ({what}); rebuild it with `filigree build-index`"
+    ))
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8]> {
+        if self.b.len() - self.at < n {
+            return Err(corrupt(&format!("{what} runs past the end")));
+        }
+        self.at += n;
+        Ok(&self.b[self.at - n..self.at])
+    }
+    fn u32(&mut self, what: &str) -> Result<u32> {
+        Ok(u32::from_le_bytes(
+            self.take(4, what)?.try_into().expect("4 bytes"),
+        ))
+    }
+    fn u64(&mut self, what: &str) -> Result<u64> {
+        Ok(u64::from_le_bytes(
+            self.take(8, what)?.try_into().expect("8 bytes"),
+        ))
+    }
+    fn f32(&mut self, what: &str) -> Result<f32> {
+        let v = f32::from_le_bytes(self.take(4, what)?.try_into().expect("4 bytes"));
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(corrupt(&format!("{what} is not a finite number")))
+        }
+    }
+    /// A count of items of at least `item` bytes each, checked against
+    /// what is left so a bad count cannot allocate more than the file.
+    fn len(&mut self, item: usize, what: &str) -> Result<usize> {
+        let n = self.u32(what)? as usize;
+        if n.saturating_mul(item.max(1)) > self.b.len() - self.at {
+            return Err(corrupt(&format!("{what} claims {n} items")));
+        }
+        Ok(n)
+    }
+    fn f32s(&mut self, what: &str) -> Result<Vec<f32>> {
+        let n = self.len(4, what)?;
+        (0..n).map(|_| self.f32(what)).collect()
+    }
+    fn bytes(&mut self, what: &str) -> Result<&'a [u8]> {
+        let n = self.len(1, what)?;
+        self.take(n, what)
+    }
+    fn ovr(&mut self, dim: usize, what: &str) -> Result<OneVsRest> {
+        let n = self.len(12, what)?;
+        let mut classes = Vec::with_capacity(n);
+        let mut machines = Vec::with_capacity(n);
+        for _ in 0..n {
+            classes.push(self.u32(what)?.min(u16::MAX as u32) as u16);
+            let rho = self.f32(what)?;
+            let w = self.f32s(what)?;
+            if w.len() != dim {
+                return Err(corrupt(&format!("{what} has weights of the wrong length")));
+            }
+            machines.push(Linear { w, rho });
+        }
+        if n == 0 {
+            return Err(corrupt(&format!("{what} has no classes")));
+        }
+        Ok(OneVsRest { classes, machines })
+    }
+}
+
+impl Index {
+    /// The index as one versioned binary (see the module docs).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut w = Writer(MAGIC.to_vec());
+        w.u32(VERSION);
+        w.bytes(
+            serde_json::to_string(&self.pcn.config)
+                .expect("the settings serialise")
+                .as_bytes(),
+        );
+        w.len(self.model_names.len());
+        for n in &self.model_names {
+            w.bytes(n.as_bytes());
+        }
+        for f in &self.pcn.stage1 {
+            w.f32s(f);
+        }
+        for bank in &self.pcn.stage2 {
+            for f in bank {
+                w.f32s(f);
+            }
+        }
+        w.ovr(&self.model_classifier);
+        for c in &self.scale_classifiers {
+            w.ovr(c);
+        }
+        for a in &self.axes {
+            w.bytes(&a.scales);
+            w.f32(a.spread);
+            w.f32(a.svr.gamma);
+            w.f32(a.svr.rho);
+            w.f32s(&a.svr.coef);
+            for s in &a.svr.support {
+                w.f32s(s);
+            }
+        }
+        w.len(self.samples.len());
+        for s in &self.samples {
+            w.u32(s.model as u32);
+            w.u64(s.seed);
+            w.0.extend_from_slice(&s.scales);
+            for c in s.coords {
+                w.f32(c);
+            }
+            w.f32s(&s.params);
+        }
+        let sum = fnv1a(&w.0);
+        w.u64(sum);
+        w.0
+    }
+
+    /// Reads an index written by [`Index::to_bytes`]; any damage is an error.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Index> {
+        if bytes.len() < MAGIC.len() + 12 || &bytes[..MAGIC.len()] != MAGIC {
+            return Err(Error::input("this is not a Filigree texture index"));
+        }
+        let body = &bytes[..bytes.len() - 8];
+        let sum = u64::from_le_bytes(bytes[bytes.len() - 8..].try_into().expect("8 bytes"));
+        let mut r = Reader {
+            b: body,
+            at: MAGIC.len(),
+        };
+        let version = r.u32("version")?;
+        if version != VERSION {
+            return Err(Error::input(format!(
+                "the texture index is format version {version}, this app reads version {VERSION}; rebuild it with `filigree build-index`"
+            )));
+        }
+        if fnv1a(body) != sum {
+            return Err(corrupt("checksum mismatch"));
+        }
+        let config: PcnConfig = serde_json::from_slice(r.bytes("settings")?)
+            .map_err(|e| corrupt(&format!("settings: {e}")))?;
+        config
+            .validate()
+            .map_err(|e| corrupt(&format!("settings: {e}")))?;
+        let names = r.len(4, "model names")?;
+        let model_names = (0..names)
+            .map(|_| {
+                String::from_utf8(r.bytes("model name")?.to_vec())
+                    .map_err(|_| corrupt("a model name is not UTF-8"))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let taps = config.k1 * config.k2;
+        let filter = |r: &mut Reader| -> Result<Vec<f32>> {
+            let f = r.f32s("filter")?;
+            if f.len() != taps {
+                return Err(corrupt("a filter has the wrong size"));
+            }
+            Ok(f)
+        };
+        let stage1 = (0..config.l1)
+            .map(|_| filter(&mut r))
+            .collect::<Result<Vec<_>>>()?;
+        let stage2 = (0..config.subsets().len())
+            .map(|_| {
+                (0..config.l2)
+                    .map(|_| filter(&mut r))
+                    .collect::<Result<Vec<_>>>()
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let dim = config.feature_len();
+        let model_classifier = r.ovr(dim, "model classifier")?;
+        if model_classifier
+            .classes
+            .iter()
+            .any(|&c| c as usize >= model_names.len())
+        {
+            return Err(corrupt("the model classifier names an unknown model"));
+        }
+        let scale_classifiers = (0..12)
+            .map(|_| r.ovr(dim, "scale classifier"))
+            .collect::<Result<Vec<_>>>()?;
+        let mut axes = Vec::with_capacity(3);
+        for _ in 0..3 {
+            let scales = r.bytes("axis scales")?.to_vec();
+            if scales.is_empty() || scales.iter().any(|&k| k >= 12) {
+                return Err(corrupt("an axis names an unknown scale"));
+            }
+            let spread = r.f32("axis spread")?;
+            let gamma = r.f32("axis gamma")?;
+            let rho = r.f32("axis rho")?;
+            let coef = r.f32s("axis coefficients")?;
+            let support = (0..coef.len())
+                .map(|_| {
+                    let s = r.f32s("support vector")?;
+                    if s.len() != scales.len() {
+                        return Err(corrupt("a support vector has the wrong length"));
+                    }
+                    Ok(s)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            axes.push(Axis {
+                scales,
+                spread,
+                svr: Svr {
+                    gamma,
+                    rho,
+                    support,
+                    coef,
+                },
+            });
+        }
+        let n = r.len(40, "samples")?;
+        let mut samples = Vec::with_capacity(n);
+        for _ in 0..n {
+            let model = r.u32("sample model")?;
+            if model as usize >= model_names.len() {
+                return Err(corrupt("a sample names an unknown model"));
+            }
+            let seed = r.u64("sample seed")?;
+            let scales: [u8; 12] = r.take(12, "sample scales")?.try_into().expect("12 bytes");
+            if scales.iter().any(|s| !(1..=9).contains(s)) {
+                return Err(corrupt("a sample's scale is outside 1–9"));
+            }
+            let coords = [r.f32("coords")?, r.f32("coords")?, r.f32("coords")?];
+            let params = r.f32s("sample parameters")?;
+            samples.push(Sample {
+                model: model as u16,
+                params,
+                seed,
+                scales,
+                coords,
+            });
+        }
+        if r.at != body.len() {
+            return Err(corrupt("bytes are left over"));
+        }
+        if samples.is_empty() {
+            return Err(corrupt("no samples"));
+        }
+        Ok(Index {
+            model_names,
+            pcn: Pcn {
+                config,
+                stage1,
+                stage2,
+            },
+            model_classifier,
+            scale_classifiers,
+            axes,
+            samples,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::rng::Rng;
+
+    /// A toy dataset: three "models" (stripes along x, along y, noise) at
+    /// several periods and seeds, with scales made up to follow them.
+    pub(crate) fn toy() -> (Vec<String>, Vec<Training>) {
+        let side = 40;
+        let mut out = Vec::new();
+        for seed in 0..8u64 {
+            let mut r = Rng::new(seed);
+            for model in 0..3u16 {
+                let period = 4.0 + seed as f32;
+                let mut g = Gray::new(side, side);
+                for y in 0..side {
+                    for x in 0..side {
+                        g.data[y * side + x] = match model {
+                            0 => 0.5 + 0.5 * (x as f32 * std::f32::consts::TAU / period).sin(),
+                            1 => 0.5 + 0.5 * (y as f32 * std::f32::consts::TAU / period).sin(),
+                            _ => r.f64() as f32,
+                        };
+                    }
+                }
+                let coarse = (1 + seed) as u8;
+                let mut scales = [5u8; 12];
+                scales[8] = coarse; // coarseness follows the period
+                scales[6] = if model == 2 { 1 } else { 9 }; // directionality
+                scales[3] = if model == 2 { 9 } else { 2 }; // randomness
+                scales[0] = 1 + (seed % 9) as u8;
+                out.push(Training {
+                    image: g,
+                    model,
+                    params: vec![period],
+                    seed,
+                    scales,
+                    base: true,
+                });
+            }
+        }
+        (
+            vec!["stripes x".into(), "stripes y".into(), "noise".into()],
+            out,
+        )
+    }
+
+    fn config() -> IndexConfig {
+        IndexConfig {
+            pcn: PcnConfig {
+                k1: 5,
+                k2: 5,
+                l1: 4,
+                l2: 6,
+                patch_step: 2,
+                side: 32,
+                intensity_bins: 4,
+                ..PcnConfig::default()
+            },
+            isomap_k: 5,
+            ..IndexConfig::default()
+        }
+    }
+
+    #[test]
+    fn an_index_round_trips_through_its_bytes_and_rejects_damage() {
+        let (names, data) = toy();
+        let idx = Index::build(names, &data, &config()).unwrap();
+        let bytes = idx.to_bytes();
+        let back = Index::from_bytes(&bytes).unwrap();
+        assert_eq!(back, idx);
+        assert_eq!(back.to_bytes(), bytes);
+        // Every truncation and a flipped byte anywhere are errors.
+        for cut in (0..bytes.len()).step_by(97) {
+            assert!(Index::from_bytes(&bytes[..cut]).is_err(), "cut at {cut}");
+        }
+        let mut flipped = bytes.clone();
+        flipped[bytes.len() / 2] ^= 0x10;
+        let e = Index::from_bytes(&flipped).unwrap_err().to_string();
+        assert!(e.contains("corrupt"), "{e}");
+        let mut other = bytes.clone();
+        other[16] = 9;
+        let e = Index::from_bytes(&other).unwrap_err().to_string();
+        assert!(e.contains("version 9"), "{e}");
+        assert!(Index::from_bytes(b"PNG....").is_err());
+    }
+
+    #[test]
+    fn the_model_classifier_recognises_the_models_of_the_toy_set() {
+        let (names, data) = toy();
+        let idx = Index::build(names, &data, &config()).unwrap();
+        let right = data
+            .iter()
+            .filter(|t| idx.analyse(&t.image).unwrap().model == t.model)
+            .count();
+        assert!(right * 10 >= data.len() * 9, "{right}/{} right", data.len());
+    }
+
+    /// Retrieval's answer has scales closer to the request than a random
+    /// sample's, on average over requests taken from the samples.
+    #[test]
+    fn retrieval_beats_a_random_sample() {
+        let (names, data) = toy();
+        let idx = Index::build(names, &data, &config()).unwrap();
+        let mut r = Rng::new(3);
+        let dist = |a: &[u8; 12], b: &[f32; 12]| {
+            a.iter()
+                .zip(b)
+                .map(|(x, y)| (*x as f32 - y).powi(2))
+                .sum::<f32>()
+        };
+        let (mut got, mut random) = (0.0, 0.0);
+        for s in &idx.samples {
+            let want: [f32; 12] = s.scales.map(|v| v as f32);
+            let hit = idx.retrieve(&want, None).unwrap();
+            got += dist(&idx.samples[hit.sample].scales, &want);
+            random += dist(&idx.samples[r.below(idx.samples.len())].scales, &want);
+        }
+        assert!(got < random * 0.5, "retrieved {got} vs random {random}");
+        let only = idx.retrieve(&[5.0; 12], Some(2)).unwrap();
+        assert_eq!(idx.samples[only.sample].model, 2);
+        assert!(idx.retrieve(&[0.0; 12], None).is_err());
+    }
+}

@@ -1,0 +1,469 @@
+//! Support vector machines: C-SVC and ε-SVR trained by sequential minimal
+//! optimisation with second-order working-set selection (Fan, Chen & Lin
+//! 2005, the solver behind LIBSVM), over a kernel matrix computed once.
+//!
+//! Why our own solver and not a crate's: the trained models must live in
+//! the Texture index (our versioned binary asset) and be evaluated in wasm,
+//! so we need their weights; smartcore's `SVC` keeps its support vectors
+//! private and caches kernel values in a `HashMap`, and linfa-svm brings
+//! ndarray and a solver we would still have to unpack. The dual problem is
+//! the same one LIBSVM solves:
+//!
+//! minimise ½ αᵀQα + pᵀα subject to yᵀα = 0 and 0 ≤ αᵢ ≤ Cᵢ,
+//!
+//! with Qᵢⱼ = yᵢyⱼK(xᵢ, xⱼ). C-SVC has p = −1; ε-SVR doubles the variables
+//! (α and α*, y = ±1, p = ε ∓ zᵢ). The decision is Σ coefᵢ K(xᵢ, x) − ρ.
+//! The iteration count is capped, so training always ends.
+
+/// A symmetric kernel matrix over `n` samples, stored in full.
+#[derive(Clone, Debug)]
+pub struct Gram {
+    pub n: usize,
+    pub k: Vec<f64>,
+}
+
+impl Gram {
+    /// The linear kernel (dot products) of `rows`.
+    pub fn linear(rows: &[Vec<f32>]) -> Gram {
+        let n = rows.len();
+        let mut k = vec![0.0; n * n];
+        for i in 0..n {
+            for j in i..n {
+                let v = dot(&rows[i], &rows[j]);
+                k[i * n + j] = v;
+                k[j * n + i] = v;
+            }
+        }
+        Gram { n, k }
+    }
+
+    /// The Gaussian kernel exp(−γ‖xᵢ − xⱼ‖²) of `rows`.
+    pub fn rbf(rows: &[Vec<f32>], gamma: f64) -> Gram {
+        let n = rows.len();
+        let mut k = vec![0.0; n * n];
+        for i in 0..n {
+            for j in i..n {
+                let v = rbf(&rows[i], &rows[j], gamma);
+                k[i * n + j] = v;
+                k[j * n + i] = v;
+            }
+        }
+        Gram { n, k }
+    }
+
+    #[inline]
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self.k[i * self.n + j]
+    }
+}
+
+/// Dot product in f64, summed in order.
+pub fn dot(a: &[f32], b: &[f32]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| *x as f64 * *y as f64).sum()
+}
+
+/// exp(−γ‖a − b‖²).
+pub fn rbf(a: &[f32], b: &[f32], gamma: f64) -> f64 {
+    let d: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (*x as f64 - *y as f64).powi(2))
+        .sum();
+    (-gamma * d).exp()
+}
+
+/// What the solver found: the α's, ρ, and whether it met the tolerance
+/// before the iteration cap.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    pub alpha: Vec<f64>,
+    pub rho: f64,
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+const TAU: f64 = 1e-12;
+const EPS: f64 = 1e-3;
+
+/// The SMO loop for variables whose Q entries are `q(i, j)`.
+fn solve(q: &dyn Fn(usize, usize) -> f64, p: &[f64], y: &[f64], c: &[f64]) -> Solution {
+    let l = p.len();
+    let mut alpha = vec![0.0; l];
+    let mut g = p.to_vec();
+    let diag: Vec<f64> = (0..l).map(|i| q(i, i)).collect();
+    let cap = (l * 100).clamp(10_000, 2_000_000);
+    let up = |a: f64, y: f64, c: f64| if y > 0.0 { a < c } else { a > 0.0 };
+    let low = |a: f64, y: f64, c: f64| if y > 0.0 { a > 0.0 } else { a < c };
+    let mut iterations = 0;
+    let mut converged = false;
+    while iterations < cap {
+        // i: the most violating index among those that can go up.
+        let mut gmax = f64::NEG_INFINITY;
+        let mut i = usize::MAX;
+        for t in 0..l {
+            if up(alpha[t], y[t], c[t]) && -y[t] * g[t] > gmax {
+                gmax = -y[t] * g[t];
+                i = t;
+            }
+        }
+        let mut gmax2 = f64::NEG_INFINITY;
+        let mut j = usize::MAX;
+        let mut best = f64::INFINITY;
+        for t in 0..l {
+            if !low(alpha[t], y[t], c[t]) {
+                continue;
+            }
+            gmax2 = gmax2.max(y[t] * g[t]);
+            if i == usize::MAX {
+                continue;
+            }
+            let b = gmax + y[t] * g[t];
+            if b > 0.0 {
+                let a = diag[i] + diag[t] - 2.0 * y[i] * y[t] * q(i, t);
+                let obj = -(b * b) / if a > 0.0 { a } else { TAU };
+                if obj < best {
+                    best = obj;
+                    j = t;
+                }
+            }
+        }
+        if i == usize::MAX || j == usize::MAX || gmax + gmax2 < EPS {
+            converged = true;
+            break;
+        }
+        iterations += 1;
+        let (ai, aj) = (alpha[i], alpha[j]);
+        let qij = q(i, j);
+        if y[i] != y[j] {
+            let quad = diag[i] + diag[j] + 2.0 * qij;
+            let delta = (-g[i] - g[j]) / if quad > 0.0 { quad } else { TAU };
+            let diff = ai - aj;
+            alpha[i] += delta;
+            alpha[j] += delta;
+            if diff > 0.0 {
+                if alpha[j] < 0.0 {
+                    alpha[j] = 0.0;
+                    alpha[i] = diff;
+                }
+            } else if alpha[i] < 0.0 {
+                alpha[i] = 0.0;
+                alpha[j] = -diff;
+            }
+            if diff > c[i] - c[j] {
+                if alpha[i] > c[i] {
+                    alpha[i] = c[i];
+                    alpha[j] = c[i] - diff;
+                }
+            } else if alpha[j] > c[j] {
+                alpha[j] = c[j];
+                alpha[i] = c[j] + diff;
+            }
+        } else {
+            let quad = diag[i] + diag[j] - 2.0 * qij;
+            let delta = (g[i] - g[j]) / if quad > 0.0 { quad } else { TAU };
+            let sum = ai + aj;
+            alpha[i] -= delta;
+            alpha[j] += delta;
+            if sum > c[i] {
+                if alpha[i] > c[i] {
+                    alpha[i] = c[i];
+                    alpha[j] = sum - c[i];
+                }
+            } else if alpha[j] < 0.0 {
+                alpha[j] = 0.0;
+                alpha[i] = sum;
+            }
+            if sum > c[j] {
+                if alpha[j] > c[j] {
+                    alpha[j] = c[j];
+                    alpha[i] = sum - c[j];
+                }
+            } else if alpha[i] < 0.0 {
+                alpha[i] = 0.0;
+                alpha[j] = sum;
+            }
+        }
+        let (di, dj) = (alpha[i] - ai, alpha[j] - aj);
+        for (t, gt) in g.iter_mut().enumerate() {
+            *gt += q(t, i) * di + q(t, j) * dj;
+        }
+    }
+    // ρ: the mean of yG over free variables, else the middle of the bounds.
+    let (mut ub, mut lb) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut sum, mut free) = (0.0, 0usize);
+    for t in 0..l {
+        let yg = y[t] * g[t];
+        if alpha[t] >= c[t] {
+            if y[t] > 0.0 {
+                lb = lb.max(yg);
+            } else {
+                ub = ub.min(yg);
+            }
+        } else if alpha[t] <= 0.0 {
+            if y[t] > 0.0 {
+                ub = ub.min(yg);
+            } else {
+                lb = lb.max(yg);
+            }
+        } else {
+            free += 1;
+            sum += yg;
+        }
+    }
+    let rho = if free > 0 {
+        sum / free as f64
+    } else if ub.is_finite() && lb.is_finite() {
+        (ub + lb) / 2.0
+    } else {
+        0.0
+    };
+    Solution {
+        alpha,
+        rho,
+        iterations,
+        converged,
+    }
+}
+
+/// A trained binary machine: Σ coefᵢ K(xᵢ, x) − ρ, coefᵢ = yᵢαᵢ.
+#[derive(Clone, Debug)]
+pub struct Dual {
+    pub coef: Vec<f64>,
+    pub rho: f64,
+    pub converged: bool,
+}
+
+/// C-SVC on a kernel matrix: `positive[i]` is sample i's class. The two
+/// classes' penalties are balanced (C·n / 2nₖ) so a one-vs-rest machine
+/// for a small class is not swamped by the rest.
+pub fn train_svc(gram: &Gram, positive: &[bool], c: f64) -> Dual {
+    let n = gram.n;
+    let n_pos = positive.iter().filter(|p| **p).count().max(1) as f64;
+    let n_neg = (n as f64 - n_pos).max(1.0);
+    let y: Vec<f64> = positive
+        .iter()
+        .map(|&p| if p { 1.0 } else { -1.0 })
+        .collect();
+    let cs: Vec<f64> = positive
+        .iter()
+        .map(|&p| c * n as f64 / (2.0 * if p { n_pos } else { n_neg }))
+        .collect();
+    let p = vec![-1.0; n];
+    let s = solve(&|i, j| y[i] * y[j] * gram.at(i, j), &p, &y, &cs);
+    Dual {
+        coef: s.alpha.iter().zip(&y).map(|(a, y)| a * y).collect(),
+        rho: s.rho,
+        converged: s.converged,
+    }
+}
+
+/// ε-SVR on a kernel matrix with targets `z`.
+pub fn train_svr(gram: &Gram, z: &[f64], c: f64, epsilon: f64) -> Dual {
+    let n = gram.n;
+    let y: Vec<f64> = (0..2 * n).map(|i| if i < n { 1.0 } else { -1.0 }).collect();
+    let p: Vec<f64> = (0..2 * n)
+        .map(|i| {
+            if i < n {
+                epsilon - z[i]
+            } else {
+                epsilon + z[i - n]
+            }
+        })
+        .collect();
+    let cs = vec![c; 2 * n];
+    let s = solve(&|i, j| y[i] * y[j] * gram.at(i % n, j % n), &p, &y, &cs);
+    Dual {
+        coef: (0..n).map(|i| s.alpha[i] - s.alpha[i + n]).collect(),
+        rho: s.rho,
+        converged: s.converged,
+    }
+}
+
+/// A linear machine w·x − ρ, folded from a dual one on the linear kernel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Linear {
+    pub w: Vec<f32>,
+    pub rho: f32,
+}
+
+impl Linear {
+    pub fn from_dual(d: &Dual, rows: &[Vec<f32>]) -> Linear {
+        let dim = rows.first().map_or(0, |r| r.len());
+        let mut w = vec![0f64; dim];
+        for (c, r) in d.coef.iter().zip(rows) {
+            if *c != 0.0 {
+                for (wi, x) in w.iter_mut().zip(r) {
+                    *wi += c * *x as f64;
+                }
+            }
+        }
+        Linear {
+            w: w.into_iter().map(|v| v as f32).collect(),
+            rho: d.rho as f32,
+        }
+    }
+
+    pub fn decision(&self, x: &[f32]) -> f64 {
+        dot(&self.w, x) - self.rho as f64
+    }
+}
+
+/// One-vs-rest linear classifiers: the class whose machine scores highest.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OneVsRest {
+    pub classes: Vec<u16>,
+    pub machines: Vec<Linear>,
+}
+
+impl OneVsRest {
+    /// Trains one machine per class present in `labels`, on the linear
+    /// kernel matrix of `rows`.
+    pub fn train(gram: &Gram, rows: &[Vec<f32>], labels: &[u16], c: f64) -> OneVsRest {
+        let mut classes: Vec<u16> = labels.to_vec();
+        classes.sort_unstable();
+        classes.dedup();
+        let machines = classes
+            .iter()
+            .map(|&k| {
+                let pos: Vec<bool> = labels.iter().map(|&l| l == k).collect();
+                Linear::from_dual(&train_svc(gram, &pos, c), rows)
+            })
+            .collect();
+        OneVsRest { classes, machines }
+    }
+
+    /// Each class's score, in `classes` order.
+    pub fn scores(&self, x: &[f32]) -> Vec<f64> {
+        self.machines.iter().map(|m| m.decision(x)).collect()
+    }
+
+    /// The predicted class (the first of equal scores).
+    pub fn predict(&self, x: &[f32]) -> u16 {
+        let s = self.scores(x);
+        let best = (0..s.len()).fold(0, |b, i| if s[i] > s[b] { i } else { b });
+        self.classes.get(best).copied().unwrap_or(0)
+    }
+}
+
+/// A Gaussian-kernel regression: Σ coefᵢ exp(−γ‖svᵢ − x‖²) − ρ, keeping
+/// only the support vectors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Svr {
+    pub gamma: f32,
+    pub rho: f32,
+    pub support: Vec<Vec<f32>>,
+    pub coef: Vec<f32>,
+}
+
+impl Svr {
+    pub fn train(rows: &[Vec<f32>], z: &[f64], c: f64, epsilon: f64, gamma: f64) -> Svr {
+        let d = train_svr(&Gram::rbf(rows, gamma), z, c, epsilon);
+        let keep: Vec<usize> = (0..rows.len())
+            .filter(|&i| d.coef[i].abs() > 1e-12)
+            .collect();
+        Svr {
+            gamma: gamma as f32,
+            rho: d.rho as f32,
+            support: keep.iter().map(|&i| rows[i].clone()).collect(),
+            coef: keep.iter().map(|&i| d.coef[i] as f32).collect(),
+        }
+    }
+
+    pub fn predict(&self, x: &[f32]) -> f64 {
+        let s: f64 = self
+            .support
+            .iter()
+            .zip(&self.coef)
+            .map(|(sv, c)| *c as f64 * rbf(sv, x, self.gamma as f64))
+            .sum();
+        s - self.rho as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::rng::Rng;
+
+    /// Two Gaussian blobs per class in 5-D; classes separated along one axis.
+    fn blobs(n: usize, seed: u64, classes: u16) -> (Vec<Vec<f32>>, Vec<u16>) {
+        let mut r = Rng::new(seed);
+        let mut rows = Vec::new();
+        let mut labels = Vec::new();
+        for i in 0..n {
+            let k = (i % classes as usize) as u16;
+            let mut x: Vec<f32> = (0..5).map(|_| (r.f64() - 0.5) as f32).collect();
+            x[k as usize % 5] += 2.0;
+            rows.push(x);
+            labels.push(k);
+        }
+        (rows, labels)
+    }
+
+    #[test]
+    fn svc_separates_separable_classes_and_converges() {
+        let (rows, labels) = blobs(80, 1, 2);
+        let gram = Gram::linear(&rows);
+        let pos: Vec<bool> = labels.iter().map(|&l| l == 1).collect();
+        let d = train_svc(&gram, &pos, 10.0);
+        assert!(d.converged);
+        let m = Linear::from_dual(&d, &rows);
+        for (x, p) in rows.iter().zip(&pos) {
+            assert_eq!(m.decision(x) > 0.0, *p);
+        }
+    }
+
+    #[test]
+    fn one_vs_rest_generalises_to_held_out_samples() {
+        let (rows, labels) = blobs(150, 2, 4);
+        let (test, tlabels) = blobs(100, 3, 4);
+        let ovr = OneVsRest::train(&Gram::linear(&rows), &rows, &labels, 1.0);
+        let right = test
+            .iter()
+            .zip(&tlabels)
+            .filter(|(x, l)| ovr.predict(x) == **l)
+            .count();
+        assert!(right >= 95, "{right}/100 right");
+    }
+
+    /// The KKT conditions hold at the solution: free α's have margin 1.
+    #[test]
+    fn svc_solution_satisfies_the_margin_conditions() {
+        let (rows, labels) = blobs(60, 4, 2);
+        let gram = Gram::rbf(&rows, 0.5);
+        let pos: Vec<bool> = labels.iter().map(|&l| l == 0).collect();
+        let c = 1.0;
+        let d = train_svc(&gram, &pos, c);
+        // Balanced bounds: C·n / 2nₖ, and the classes have 30 samples each.
+        let bound = c * 60.0 / (2.0 * 30.0);
+        for (i, &p) in pos.iter().enumerate() {
+            let a = d.coef[i].abs();
+            let f: f64 = (0..60).map(|j| d.coef[j] * gram.at(i, j)).sum::<f64>() - d.rho;
+            let yf = if p { f } else { -f };
+            if a > 1e-6 && a < bound - 1e-6 {
+                assert!((yf - 1.0).abs() < 0.01, "free sample {i}: y·f = {yf}");
+            } else if a <= 1e-6 {
+                assert!(yf > 1.0 - 0.01, "sample {i} at 0 inside the margin: {yf}");
+            }
+        }
+    }
+
+    #[test]
+    fn svr_fits_a_smooth_function_within_epsilon() {
+        let rows: Vec<Vec<f32>> = (0..60).map(|i| vec![i as f32 / 59.0]).collect();
+        let z: Vec<f64> = rows.iter().map(|x| (x[0] as f64 * 5.0).sin()).collect();
+        let m = Svr::train(&rows, &z, 100.0, 0.01, 10.0);
+        for x in [0.13f32, 0.5, 0.77] {
+            let want = (x as f64 * 5.0).sin();
+            assert!(
+                (m.predict(&[x]) - want).abs() < 0.05,
+                "at {x}: {} vs {want}",
+                m.predict(&[x])
+            );
+        }
+        assert!(
+            m.support.len() < 60,
+            "ε-insensitivity leaves some samples out"
+        );
+    }
+}
