@@ -3,10 +3,10 @@
 //! once: each request's `Default`. Errors name the field at fault (`scene`,
 //! `width`, `camera.fov`, ...); scene errors carry the node path and, for
 //! JSON mistakes, the line and column.
+use super::glsl;
 use super::render::{self, Camera, Rays, Shade, Shading, Stats, StepMode, Trace};
 use super::scene::{self, Scene};
 use crate::core::error::{Error, Result};
-use super::glsl;
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::limits::{MAX_MICRO_PIXELS, MAX_MICRO_SIDE, MAX_MICRO_STEPS};
 use crate::core::request_limits as lim;
@@ -343,9 +343,7 @@ impl RenderJob {
                 .wrapping_add(px.wrapping_mul(0x9E37_79B9))
                 ^ k.wrapping_mul(0xD1B5_4A32_D192_ED03),
         );
-        let d = self
-            .rays
-            .dir_at(x as f64 + rng.f64(), y as f64 + rng.f64());
+        let d = self.rays.dir_at(x as f64 + rng.f64(), y as f64 + rng.f64());
         let l = render::path_radiance(
             &self.scene,
             self.rays.origin,

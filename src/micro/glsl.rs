@@ -79,7 +79,12 @@ fn lit(x: f64) -> Result<String> {
 }
 
 fn v3(v: [f64; 3]) -> Result<String> {
-    Ok(format!("vec3({}, {}, {})", lit(v[0])?, lit(v[1])?, lit(v[2])?))
+    Ok(format!(
+        "vec3({}, {}, {})",
+        lit(v[0])?,
+        lit(v[1])?,
+        lit(v[2])?
+    ))
 }
 
 fn field(f: &Field, p: &str) -> Result<String> {
@@ -248,11 +253,7 @@ impl Gen {
     /// Emit node `op` (children first); return its function's name.
     fn node(&mut self, op: &Op) -> Result<String> {
         let body = match op {
-            Op::Sphere(c, r) => format!(
-                "return length(p - {}) - {};",
-                v3(c.to_array())?,
-                lit(*r)?
-            ),
+            Op::Sphere(c, r) => format!("return length(p - {}) - {};", v3(c.to_array())?, lit(*r)?),
             Op::Box(c, h, r) => format!(
                 "return sd_cuboid(p - {}, max({} - {}, 0.0)) - {};",
                 v3(c.to_array())?,
@@ -324,12 +325,7 @@ impl Gen {
         let pn = self.name();
         let d = &c.c;
         let seed_key = c.seed.wrapping_mul(GOLDEN) ^ GOLDEN;
-        let draw = |k: u64| {
-            format!(
-                "draw(s0, {})",
-                u64c(GOLDEN.wrapping_mul(k + 1))
-            )
-        };
+        let draw = |k: u64| format!("draw(s0, {})", u64c(GOLDEN.wrapping_mul(k + 1)));
         let mut b = format!("uvec2 s0 = cell_hash(q) ^ {};\n", u64c(seed_key));
         if c.jitter > 0.0 {
             let _ = writeln!(
@@ -557,9 +553,9 @@ fn shape_sdf(s: &Shape, u: &str) -> Result<String> {
             let r = 1.0 / (c * c + aspect * aspect).sqrt();
             format!("sd_hex_prism({u}, {}, {})", lit(r)?, lit(r * aspect)?)
         }
-        Shape::RedBloodCell => format!(
-            "smin(sd_torus({u}, 0.72, 0.26), sd_cylinder({u}, 0.72, 0.1), 0.12)"
-        ),
+        Shape::RedBloodCell => {
+            format!("smin(sd_torus({u}, 0.72, 0.26), sd_cylinder({u}, 0.72, 0.1), 0.12)")
+        }
     })
 }
 
@@ -872,7 +868,13 @@ mod tests {
             let p = program(&s, &settings()).unwrap();
             assert!(p.fragment.contains("float scene(vec3 p)"), "{}", e.name);
             // Particles emit a per-cell function too, selections one more.
-            assert!(p.functions >= s.nodes, "{}: {} < {}", e.name, p.functions, s.nodes);
+            assert!(
+                p.functions >= s.nodes,
+                "{}: {} < {}",
+                e.name,
+                p.functions,
+                s.nodes
+            );
             for bad in ["NaN", "inf,", "inf)", "inf;"] {
                 assert!(!p.fragment.contains(bad), "{}: {bad}", e.name);
             }

@@ -367,7 +367,8 @@ pub fn surface(sh: &Shade, n: DVec3, d: DVec3) -> (f64, f64) {
             let alpha = sh.roughness * sh.roughness;
             let h = (v + l).normalize_or(n);
             let f = fresnel_schlick(sh.specular, v.dot(h).max(0.0));
-            let spec = ggx_specular(n, v, l, alpha, sh.specular) * n_l * LIGHT * std::f64::consts::PI;
+            let spec =
+                ggx_specular(n, v, l, alpha, sh.specular) * n_l * LIGHT * std::f64::consts::PI;
             ((AMBIENT + LIGHT * n_l) * (1.0 - f), spec)
         }
     }
@@ -402,7 +403,11 @@ pub fn shade(
     let (k, spec) = surface(sh, n, d);
     let t0 = clip(o, d, s.bounds * (1.0 + 1e-9) + 1e-12).map_or(t, |c| c.0);
     let absorb = beer_lambert(sh.absorption, t - t0);
-    let c = |v: u8| ((v as f64 * k + 255.0 * spec) * absorb).round().clamp(0.0, 255.0) as u8;
+    let c = |v: u8| {
+        ((v as f64 * k + 255.0 * spec) * absorb)
+            .round()
+            .clamp(0.0, 255.0) as u8
+    };
     [c(sh.color[0]), c(sh.color[1]), c(sh.color[2]), 255]
 }
 
@@ -468,7 +473,11 @@ pub fn path_radiance(
     st: &mut Stats,
 ) -> DVec3 {
     let albedo = DVec3::new(sh.color[0] as f64, sh.color[1] as f64, sh.color[2] as f64) / 255.0;
-    let bg = DVec3::new(sh.background[0] as f64, sh.background[1] as f64, sh.background[2] as f64) / 255.0;
+    let bg = DVec3::new(
+        sh.background[0] as f64,
+        sh.background[1] as f64,
+        sh.background[2] as f64,
+    ) / 255.0;
     let b = s.bounds * (1.0 + 1e-9) + 1e-12;
     let (mut o, mut d) = (o, d);
     let mut beta = DVec3::ONE;
@@ -478,8 +487,16 @@ pub fn path_radiance(
         let Some(t) = trace(scene, o, d, s, st) else {
             // Left the sample: the sky (through the medium up to the box's exit).
             let exit = clip(o, d, b).map_or(0.0, |c| c.1 - c.0);
-            let sky = if depth == 0 { bg } else { DVec3::splat(AMBIENT) };
-            let tr = if depth == 0 { 1.0 } else { beer_lambert(sh.absorption, exit) };
+            let sky = if depth == 0 {
+                bg
+            } else {
+                DVec3::splat(AMBIENT)
+            };
+            let tr = if depth == 0 {
+                1.0
+            } else {
+                beer_lambert(sh.absorption, exit)
+            };
             sum += beta * sky * tr;
             break;
         };
@@ -646,13 +663,28 @@ mod tests {
             let mut acc = DVec3::ZERO;
             for k in 0..64 {
                 let mut r = Rng::new(seed * 1000 + k);
-                acc += path_radiance(&scene, o, d, &tr, &sh, &PathSettings { max_depth: depth, roulette_after: 100 }, &mut r, &mut st);
+                acc += path_radiance(
+                    &scene,
+                    o,
+                    d,
+                    &tr,
+                    &sh,
+                    &PathSettings {
+                        max_depth: depth,
+                        roulette_after: 100,
+                    },
+                    &mut r,
+                    &mut st,
+                );
             }
             acc / 64.0
         };
         assert_eq!(run(4, 1), run(4, 1));
         let (d1, d4) = (run(1, 3), run(4, 3));
-        assert!(d4.x >= d1.x && d4.min_element() > d1.min_element() * 1.01, "{d1} {d4}");
+        assert!(
+            d4.x >= d1.x && d4.min_element() > d1.min_element() * 1.01,
+            "{d1} {d4}"
+        );
         assert!(d4.max_element() < 2.0);
     }
 
