@@ -524,6 +524,11 @@ fn write_seeds() {
         json!({"scene": scene, "width": 8, "height": 6, "z": 0.3}),
     );
     req("micro-examples.json", "micro-examples", json!({}));
+    req(
+        "micro-glsl.json",
+        "micro-glsl",
+        json!({"scene": scene, "width": 8, "height": 6, "steps": "bisection"}),
+    );
     req("texture-models.json", "texture-models", json!({}));
     req(
         "texture-render.json",

@@ -7,6 +7,13 @@
 // rendered at a quarter of its size; it is rendered at full size once the
 // gesture pauses. A new render cancels the one before.
 //
+// With WebGL2 the interactive view runs on the GPU instead (www/micro-gl.js,
+// a shader the core generates from the same scene, `micro-glsl`): every
+// camera change draws a coarse frame at once (its size adapted to keep
+// frames short), then, once the camera rests, finer frames and the full size
+// in bands of rows. Slices, exports, views deeper than 32-bit floats resolve,
+// and browsers without WebGL2 (said in plain words) use the CPU path.
+//
 // The document is {example, scene, camera, steps, view, z}; its schema is
 // src/micro/state.rs. History, autosave, project files and links come from
 // the document controller (document.js).
@@ -14,6 +21,7 @@ import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
 import { mountReconstruct } from './micro-fit.js';
+import { MicroGl, unavailable, usable } from './micro-gl.js';
 
 const RUN_DELAY_MS = 60;
 const TYPING_DELAY_MS = 600;
@@ -22,6 +30,9 @@ const FULL_SIDE = 384; // full render, pixels a side (at most)
 const PREVIEW_DIV = 4; // while dragging: 1/4 of the full side
 const ZOOM_STEP = 1.5; // one + / − press multiplies the distance by this
 const ORBIT_DEG_PER_PX = 0.4;
+const GPU_REFINE_DELAY_MS = 120; // the camera rests this long before refining
+const GPU_FRAME_MS = 30; // aim for frames (and refinement slices) this long
+const GPU_MAX_DIV = 16;
 const DEFAULT_CAMERA = { yaw: 35, pitch: 28, distance: 3.6, target: [0, 0, 0] };
 const DISTANCE = [1e-6, 1e5];
 const STEP_MODES = [
@@ -57,6 +68,7 @@ const html = `
         <canvas data-testid="micro-canvas" tabindex="0" role="img" aria-label="microstructure: drag or arrow keys to orbit, wheel or + and − to zoom"></canvas>
       </div>
       <div class="status muted" data-testid="micro-status" aria-live="polite"></div>
+      <div class="status muted" data-testid="micro-gpu-note" hidden></div>
     </section>
     <aside class="card micro-side">
       <h3>Scene</h3>
@@ -176,6 +188,7 @@ function mount(el, ctx) {
     ctx.clearTimeout(runTimer);
     runTimer = null;
     if (!small) { ctx.clearTimeout(sharpTimer); sharpTimer = null; }
+    stopGpu();
     running?.abort();
     const ctrl = new AbortController();
     running = ctrl;
@@ -199,7 +212,7 @@ function mount(el, ctx) {
       if (running !== ctrl || !ctx.alive()) { bmp.close?.(); return; }
       bitmap?.close?.();
       bitmap = bmp;
-      last = { png, width: r.width, height: r.height, kind, preview: small, stats: r.stats, r };
+      last = { png, width: r.width, height: r.height, kind, preview: small, stats: r.stats, r, gpu: false };
       paint();
       ctx.clearError('run');
       editor?.clearError();
@@ -225,6 +238,185 @@ function mount(el, ctx) {
     }
   }
 
+
+  // ---- the GPU view ----------------------------------------------------------------------
+
+  const gpuNote = q('[data-testid=micro-gpu-note]');
+  const noteGpu = (t) => { gpuNote.hidden = !t; gpuNote.textContent = t || ''; };
+  let gpu = null;
+  {
+    const why = unavailable();
+    if (why) noteGpu(`GPU view off: ${why}; the pictures are drawn on the CPU (slower).`);
+    else {
+      try { gpu = new MicroGl(); } catch (err) { noteGpu(`GPU view off: ${err.message}; the pictures are drawn on the CPU (slower).`); }
+    }
+  }
+  const shaders = new Map(); // shader request JSON → Promise<response>
+  const gpuFailed = new Map(); // shader request JSON → message
+  let gpuJob = null; // {doc, token, ...} the GPU frame sequence in flight
+  let gpuToken = 0;
+  let gpuFrame = 0; // requestAnimationFrame id
+  let gpuTimer = null;
+  let gpuDiv = PREVIEW_DIV; // coarse frames: 1/gpuDiv of the full side
+  let msPerPixel = 0; // measured
+  const scratch = document.createElement('canvas');
+
+  const shaderRequest = (doc) => ({ scene: doc.scene, steps: doc.steps, width: 16, height: 16 });
+  const shaderKey = (doc) => JSON.stringify(shaderRequest(doc));
+
+  /** Whether the GPU draws this document. */
+  function onGpu(doc) {
+    return !!gpu && !gpu.lost && doc.view === 'render' && !gpuFailed.has(shaderKey(doc)) && usable(doc.camera, fullSide());
+  }
+
+  function stopGpu() {
+    gpuToken++;
+    gpuJob = null;
+    if (gpuFrame) cancelAnimationFrame(gpuFrame);
+    gpuFrame = 0;
+    ctx.clearTimeout(gpuTimer);
+    gpuTimer = null;
+  }
+
+  /** Draw `doc` on the GPU: a coarse frame in the next animation frame, refined once it rests. */
+  function gpuRun(doc) {
+    running?.abort();
+    running = null;
+    ctx.clearTimeout(runTimer);
+    runTimer = null;
+    stopGpu();
+    const token = gpuToken;
+    gpuJob = { doc, token, t0: performance.now() };
+    gpuFrame = requestAnimationFrame(() => { gpuFrame = 0; gpuCoarse(token); });
+  }
+
+  async function gpuShader(doc) {
+    const key = shaderKey(doc);
+    if (!shaders.has(key)) {
+      if (shaders.size > 8) shaders.clear();
+      const p = ctx.run('micro-glsl', shaderRequest(doc));
+      shaders.set(key, p);
+      p.catch(() => shaders.delete(key));
+    }
+    const sh = await shaders.get(key);
+    gpu.use(sh); // throws when the GPU cannot compile it
+    return sh;
+  }
+
+  /** The GPU could not draw: say why (a compile failure) and draw on the CPU. */
+  function gpuFallback(doc, err) {
+    stopGpu();
+    // A compile failure, or numbers beyond 32-bit floats (the CPU still draws those).
+    if (err && (!err.kind || /32-bit/.test(err.message || ''))) {
+      gpuFailed.set(shaderKey(doc), err.message);
+      noteGpu(`GPU view off for this scene: ${err.message}; drawing on the CPU.`);
+    }
+    run(false);
+  }
+
+  function paintRows(rgba, w, y0, rows) {
+    const side = fullSide();
+    if (canvas.width !== side || canvas.height !== side) { canvas.width = side; canvas.height = side; }
+    g.putImageData(new ImageData(rgba, w, rows), 0, y0);
+  }
+
+  async function gpuCoarse(token) {
+    const job = gpuJob;
+    if (!job || job.token !== token) return;
+    const doc = job.doc;
+    try {
+      await gpuShader(doc);
+    } catch (err) {
+      if (gpuJob?.token === token) gpuFallback(doc, err);
+      return;
+    }
+    if (gpuJob?.token !== token || !ctx.alive()) return;
+    const full = fullSide();
+    const side = Math.max(8, Math.round(full / gpuDiv));
+    let r;
+    const t = performance.now();
+    try {
+      r = gpu.draw(doc.camera, side, side);
+    } catch (err) {
+      gpuFallback(doc, err);
+      return;
+    }
+    const ms = performance.now() - t;
+    msPerPixel = ms / (side * side);
+    // Keep the next coarse frame near GPU_FRAME_MS.
+    if (ms > GPU_FRAME_MS && gpuDiv < GPU_MAX_DIV) gpuDiv *= 2;
+    else if (ms < GPU_FRAME_MS / 4 && gpuDiv > 1) gpuDiv /= 2;
+    scratch.width = side;
+    scratch.height = side;
+    scratch.getContext('2d').putImageData(new ImageData(r.rgba, side, side), 0, 0);
+    if (canvas.width !== full || canvas.height !== full) { canvas.width = full; canvas.height = full; }
+    g.imageSmoothingEnabled = true;
+    g.drawImage(scratch, 0, 0, full, full);
+    bitmap?.close?.();
+    bitmap = null;
+    last = { kind: 'micro-render', width: side, height: side, preview: side < full, stats: null, gpu: true };
+    status(`${side}×${side} (preview, GPU) in ${Math.round(ms)} ms`);
+    statusEl.dataset.previews = String(Number(statusEl.dataset.previews || 0) + 1);
+    ctx.clearError('run');
+    editor?.clearError();
+    if (side >= full) { gpuDone(job, r.stats, ms, full); return; }
+    // Refine once the camera rests.
+    gpuTimer = ctx.setTimeout(() => {
+      gpuTimer = null;
+      if (gpuJob?.token !== token) return;
+      job.y = 0;
+      job.stats = null;
+      job.ms = 0;
+      gpuFrame = requestAnimationFrame(() => { gpuFrame = 0; gpuRefine(token); });
+    }, gesture ? GPU_REFINE_DELAY_MS * 2 : GPU_REFINE_DELAY_MS);
+  }
+
+  /** One slice of rows of the full-size picture per animation frame. */
+  function gpuRefine(token) {
+    const job = gpuJob;
+    if (!job || job.token !== token || !ctx.alive()) return;
+    const full = fullSide();
+    const rows = clamp(Math.floor(GPU_FRAME_MS / Math.max(msPerPixel, 1e-6) / full), 1, full - job.y);
+    const t = performance.now();
+    let r;
+    try {
+      r = gpu.draw(job.doc.camera, full, full, { y0: job.y, y1: job.y + rows, stats: true });
+    } catch (err) {
+      gpuFallback(job.doc, err);
+      return;
+    }
+    const ms = performance.now() - t;
+    msPerPixel = 0.5 * msPerPixel + 0.5 * ms / (rows * full);
+    job.ms += ms;
+    paintRows(r.rgba, full, job.y, rows);
+    job.stats = addStats(job.stats, r.stats);
+    job.y += rows;
+    if (job.y < full) {
+      status(`refining on the GPU: ${Math.round((job.y / full) * 100)}%`);
+      gpuFrame = requestAnimationFrame(() => { gpuFrame = 0; gpuRefine(token); });
+      return;
+    }
+    gpuDone(job, job.stats, job.ms, full);
+  }
+
+  function gpuDone(job, stats, ms, full) {
+    const doc = job.doc;
+    gpuJob = null;
+    last = { kind: 'micro-render', width: full, height: full, preview: false, stats, gpu: true };
+    const s = stats;
+    status(`${full}×${full} on the GPU, ${doc.steps} steps: ${s.hits.toLocaleString('en')} of ${s.rays.toLocaleString('en')} rays hit, `
+      + `${s.steps.toLocaleString('en')} steps (${(s.steps / s.rays).toFixed(1)} per ray), ${s.sdf_evals.toLocaleString('en')} field evaluations`
+      + `${s.gradient_checks ? `, ${s.gradient_checks.toLocaleString('en')} gradient checks` : ''}`
+      + `${s.exhausted ? `, ${s.exhausted.toLocaleString('en')} rays out of steps` : ''} in ${Math.round(ms)} ms of GPU frames — zoom ×${(DEFAULT_CAMERA.distance / doc.camera.distance).toPrecision(3)}`);
+    statusEl.dataset.runs = String(Number(statusEl.dataset.runs || 0) + 1);
+  }
+
+  function addStats(a, b) {
+    if (!a) return { ...b };
+    for (const k of Object.keys(b)) a[k] += b[k];
+    return a;
+  }
+
   function markSceneError(err) {
     if (err?.field !== 'scene' && err?.kind !== 'syntax') return false;
     const m = /line (\d+), column (\d+)/.exec(err.message || '');
@@ -245,7 +437,10 @@ function mount(el, ctx) {
     g.imageSmoothingEnabled = true;
     g.drawImage(bitmap, 0, 0, side, side);
   }
-  const ro = new ResizeObserver(() => { if (bitmap) paint(); });
+  const ro = new ResizeObserver(() => {
+    if (bitmap) paint();
+    else if (last?.gpu && state() && onGpu(state()) && canvas.width !== fullSide()) gpuRun(state());
+  });
   ro.observe(viewport);
 
   // ---- orbit and zoom -------------------------------------------------------------------
@@ -283,7 +478,7 @@ function mount(el, ctx) {
     const moved = gesture.moved;
     gesture = null;
     ctx.seal();
-    if (moved) { ctx.clearTimeout(sharpTimer); sharpTimer = null; run(false); }
+    if (moved && !(state() && onGpu(state()))) { ctx.clearTimeout(sharpTimer); sharpTimer = null; run(false); }
   };
   canvas.addEventListener('pointerup', endGesture);
   canvas.addEventListener('pointercancel', endGesture);
@@ -372,8 +567,9 @@ function mount(el, ctx) {
   // For tests and the console.
   const hooks = {
     state,
-    last: () => (last ? { kind: last.kind, width: last.width, height: last.height, preview: last.preview, stats: last.stats } : null),
-    pending: () => runTimer !== null || running !== null || typingTimer !== null || sharpTimer !== null,
+    last: () => (last ? { kind: last.kind, width: last.width, height: last.height, preview: last.preview, stats: last.stats, gpu: last.gpu } : null),
+    pending: () => runTimer !== null || running !== null || typingTimer !== null || sharpTimer !== null || gpuJob !== null,
+    gpu: () => (gpu && !gpu.lost ? { note: gpuNote.hidden ? null : gpuNote.textContent } : null),
   };
   window.filigreeMicro = hooks;
 
@@ -390,6 +586,7 @@ function mount(el, ctx) {
       zInput.nextElementSibling.textContent = s.z.toFixed(2);
       markExample(s);
       if (!prev || !samePicture(s, prev)) {
+        if (onGpu(s)) { gpuRun(s); return; }
         const cameraOnly = prev && s.scene === prev.scene && s.steps === prev.steps && s.view === prev.view && s.z === prev.z;
         if (cameraOnly && gesture) preview();
         else scheduleRun();
@@ -405,6 +602,7 @@ function mount(el, ctx) {
       recon.unmount();
       ro.disconnect();
       running?.abort();
+      stopGpu();
       bitmap?.close?.();
       if (window.filigreeMicro === hooks) delete window.filigreeMicro;
     },

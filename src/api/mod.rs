@@ -78,6 +78,7 @@ pub const KINDS: &[&str] = &[
     "texture-analyse",
     "texture-retrieve",
     "micro-fit",
+    "micro-glsl",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -100,6 +101,7 @@ pub enum Response {
     Tangle(Box<tangle::TangleResponse>),
     TangleExamples(&'static [crate::tangle::examples::Example]),
     MicroRender(Box<micro::MicroRenderResponse>),
+    MicroGlsl(Box<micro::MicroGlslResponse>),
     MicroSlice(Box<micro::MicroSliceResponse>),
     MicroExamples(&'static [crate::micro::examples::Example]),
     TextureModels(Vec<texture::ModelInfo>),
@@ -215,7 +217,7 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "texture-analyse" => D::TextureAnalyse(Default::default()),
         "texture-retrieve" => D::TextureRetrieve(Default::default()),
         "tangle" => D::Tangle(Default::default()),
-        "micro-render" => D::MicroRender(Default::default()),
+        "micro-render" | "micro-glsl" => D::MicroRender(Default::default()),
         "micro-slice" => D::MicroSlice(Default::default()),
         "micro-fit" => D::MicroFit(Default::default()),
         other => return Err(unknown_kind(other).at("tool")),
@@ -271,6 +273,9 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         }),
         "micro-render" => boxed(micro::start_render(request(kind, payload)?)?, |r| {
             Response::MicroRender(Box::new(r))
+        }),
+        "micro-glsl" => boxed(micro::start_glsl(request(kind, payload)?)?, |r| {
+            Response::MicroGlsl(Box::new(r))
         }),
         "micro-slice" => boxed(micro::start_slice(request(kind, payload)?)?, |r| {
             Response::MicroSlice(Box::new(r))

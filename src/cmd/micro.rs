@@ -127,6 +127,14 @@ pub struct RenderArgs {
     /// Absorption per world unit inside the sample.
     #[arg(long)]
     absorption: Option<f64>,
+    /// Surface model: lambert or ggx (with --roughness).
+    #[arg(long)]
+    shading: Option<String>,
+    #[arg(long)]
+    roughness: Option<f64>,
+    /// Path trace with N samples per pixel (0: direct shading).
+    #[arg(long)]
+    spp: Option<u32>,
     /// Print the work counters as JSON.
     #[arg(long)]
     json: bool,
@@ -394,6 +402,9 @@ fn render(a: RenderArgs) -> Result<(), String> {
     put(&mut o, "max_steps", "--max-steps", a.max_steps)?;
     put(&mut o, "bounds", "--bounds", a.bounds)?;
     put(&mut o, "absorption", "--absorption", a.absorption)?;
+    put(&mut o, "shading", "--shading", a.shading)?;
+    put(&mut o, "roughness", "--roughness", a.roughness)?;
+    put(&mut o, "spp", "--spp", a.spp)?;
     let mut cam = Map::new();
     put(&mut cam, "distance", "--distance", a.distance)?;
     put(&mut cam, "yaw", "--yaw", a.yaw)?;

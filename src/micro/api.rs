@@ -1,12 +1,13 @@
 //! Micro's requests as typed data, shared by `filigree micro` and the
-//! browser worker (`micro-render`, `micro-slice`). Defaults are defined
+//! browser worker (`micro-render`, `micro-glsl`, `micro-slice`). Defaults are defined
 //! once: each request's `Default`. Errors name the field at fault (`scene`,
 //! `width`, `camera.fov`, ...); scene errors carry the node path and, for
 //! JSON mistakes, the line and column.
-use super::render::{self, Camera, Rays, Shade, Stats, StepMode, Trace};
+use super::glsl;
+use super::render::{self, Camera, Rays, Shade, Shading, Stats, StepMode, Trace};
 use super::scene::{self, Scene};
 use crate::core::error::{Error, Result};
-use crate::core::job::{Job, Progress, Step};
+use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::limits::{MAX_MICRO_PIXELS, MAX_MICRO_SIDE, MAX_MICRO_STEPS};
 use crate::core::request_limits as lim;
 use crate::raster::{encode_png, Rgba8Image};
@@ -47,6 +48,19 @@ pub struct MicroRenderRequest {
     pub light: [f64; 3],
     /// Absorption per world unit inside the sample.
     pub absorption: f64,
+    /// Surface model: `lambert` or `ggx`.
+    pub shading: Shading,
+    /// GGX: perceptual roughness in 0.02..=1 (α = roughness²).
+    pub roughness: f64,
+    /// GGX: reflectance at normal incidence in 0..=1.
+    pub specular: f64,
+    /// Path tracing: samples per pixel (0: the direct shading above).
+    /// Diffuse surfaces, the light by shadow rays, a white sky, Russian
+    /// roulette after two bounces; deterministic by `seed`.
+    pub spp: u32,
+    /// Path tracing: most bounces of one path.
+    pub max_depth: u32,
+    pub seed: u64,
 }
 
 impl Default for MicroRenderRequest {
@@ -69,6 +83,12 @@ impl Default for MicroRenderRequest {
             background: [24, 26, 30],
             light: [0.45, -0.35, 0.82],
             absorption: 0.0,
+            shading: Shading::Lambert,
+            roughness: 0.35,
+            specular: 0.04,
+            spp: 0,
+            max_depth: 4,
+            seed: 1,
         }
     }
 }
@@ -151,6 +171,12 @@ pub struct RenderJob {
     next: u64,
     rgba: Vec<u8>,
     stats: Stats,
+    /// Path tracing: samples per pixel (0: off), pass-major (every pixel's
+    /// k-th sample before any pixel's (k+1)-th), summed radiance per pixel.
+    spp: u32,
+    seed: u64,
+    path: render::PathSettings,
+    sum: Vec<DVec3>,
 }
 
 impl RenderJob {
@@ -160,8 +186,16 @@ impl RenderJob {
     }
 }
 
-/// Check a render request and set the job up (no tracing yet).
-pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
+/// A checked render request: the scene and everything a trace needs.
+struct Checked {
+    scene: Scene,
+    rays: Rays,
+    trace: Trace,
+    shade: Shade,
+}
+
+/// Check every field of a render request (no tracing yet).
+fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
     check_size(req.width, req.height)?;
     let c = &req.camera;
     for (i, v) in c.target.iter().enumerate() {
@@ -180,6 +214,20 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
     lim::finite_in("pixel_fraction", req.pixel_fraction, (1e-6, 10.0))?;
     lim::finite_in("bounds", req.bounds, (1e-9, 1e6))?;
     lim::finite_in("absorption", req.absorption, (0.0, 1e6))?;
+    lim::finite_in("roughness", req.roughness, (0.02, 1.0))?;
+    lim::finite_in("specular", req.specular, (0.0, 1.0))?;
+    lim::int_in("spp", req.spp, (0, MAX_MICRO_SPP))?;
+    lim::int_in("max_depth", req.max_depth, (1, 64))?;
+    if req.spp as u64 * req.width as u64 * req.height as u64 > MAX_MICRO_PIXELS * 64 {
+        return Err(Error::limit(format!(
+            "{} samples per pixel at {}×{} is more than {} samples in all",
+            req.spp,
+            req.width,
+            req.height,
+            MAX_MICRO_PIXELS * 64
+        ))
+        .at("spp"));
+    }
     for (i, v) in req.light.iter().enumerate() {
         lim::finite_in(&format!("light.{i}"), *v, (-1e6, 1e6))?;
     }
@@ -189,8 +237,7 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
     }
     let scene = scene::parse(&req.scene)?;
     let rays = Rays::new(&req.camera, req.width, req.height);
-    let n = req.width as usize * req.height as usize * 4;
-    Ok(RenderJob {
+    Ok(Checked {
         scene,
         trace: Trace {
             mode: req.steps,
@@ -209,16 +256,107 @@ pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
             background: req.background,
             light: light.normalize(),
             absorption: req.absorption,
+            shading: req.shading,
+            roughness: req.roughness,
+            specular: req.specular,
         },
+    })
+}
+
+/// Check a render request and set the job up (no tracing yet).
+pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
+    let c = check_render(&req)?;
+    let n = req.width as usize * req.height as usize * 4;
+    Ok(RenderJob {
+        scene: c.scene,
+        trace: c.trace,
+        rays: c.rays,
+        shade: c.shade,
         width: req.width,
         height: req.height,
         next: 0,
         rgba: vec![0; n],
         stats: Stats::default(),
+        spp: req.spp,
+        seed: req.seed,
+        path: render::PathSettings {
+            max_depth: req.max_depth,
+            roulette_after: 2,
+        },
+        sum: if req.spp > 0 {
+            vec![DVec3::ZERO; n / 4]
+        } else {
+            vec![]
+        },
     })
 }
 
+/// `micro-glsl`: the WebGL2 shader pair drawing what `micro-render` would
+/// draw for the same request. The camera and the image size are uniforms
+/// the page sets per frame (`u_origin`, `u_forward`, `u_right`, `u_up`,
+/// `u_tan_half`, `u_res`). Output 0 is the picture; output 1 (RGBA32UI)
+/// counts each ray's work like [`Stats`]: steps, field evaluations,
+/// hit | out-of-steps << 1 | undone steps << 2, gradient checks.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MicroGlslResponse {
+    pub vertex: String,
+    pub fragment: String,
+    /// GLSL functions generated for the scene's nodes.
+    pub functions: usize,
+}
+
+/// Check a render request (the same checks as `micro-render`) and generate
+/// its shader; one step, no tracing.
+pub fn start_glsl(req: MicroRenderRequest) -> Result<impl Job<Output = MicroGlslResponse>> {
+    let c = check_render(&req)?;
+    let p = glsl::program(
+        &c.scene,
+        &glsl::Settings {
+            trace: c.trace,
+            pixel_fraction: req.pixel_fraction,
+            shade: c.shade,
+        },
+    )?;
+    Ok(OneShot::new(move || {
+        Ok(MicroGlslResponse {
+            vertex: p.vertex,
+            fragment: p.fragment,
+            functions: p.functions,
+        })
+    }))
+}
+
+/// Most path-tracing samples per pixel.
+pub const MAX_MICRO_SPP: u32 = 4096;
+
 impl RenderJob {
+    /// Path-trace work item `i`: sample `i / pixels` of pixel `i % pixels`,
+    /// from its own generator (so the bytes do not depend on how the job
+    /// is stepped).
+    fn sample(&mut self, i: u64) {
+        let n = self.width as u64 * self.height as u64;
+        let (k, px) = (i / n, i % n);
+        let (x, y) = (px % self.width as u64, px / self.width as u64);
+        let mut rng = crate::core::rng::Rng::new(
+            self.seed
+                .wrapping_mul(0x2545_F491_4F6C_DD1D)
+                .wrapping_add(px.wrapping_mul(0x9E37_79B9))
+                ^ k.wrapping_mul(0xD1B5_4A32_D192_ED03),
+        );
+        let d = self.rays.dir_at(x as f64 + rng.f64(), y as f64 + rng.f64());
+        let l = render::path_radiance(
+            &self.scene,
+            self.rays.origin,
+            d,
+            &self.trace,
+            &self.shade,
+            &self.path,
+            &mut rng,
+            &mut self.stats,
+        );
+        self.sum[px as usize] += l;
+    }
+
     /// Render pixel `i` (row order) and store it.
     fn pixel(&mut self, i: u64) {
         let (x, y) = (
@@ -245,17 +383,35 @@ impl RenderJob {
 impl Job for RenderJob {
     type Output = MicroRenderResponse;
     fn step(&mut self) -> Result<Step<MicroRenderResponse>> {
-        let total = self.width as u64 * self.height as u64;
+        let pixels = self.width as u64 * self.height as u64;
+        let total = pixels * self.spp.max(1) as u64;
         let budget = self.stats.sdf_evals + EVALS_PER_STEP;
         while self.next < total && self.stats.sdf_evals < budget {
-            self.pixel(self.next);
+            if self.spp > 0 {
+                self.sample(self.next);
+            } else {
+                self.pixel(self.next);
+            }
             self.next += 1;
         }
         if self.next < total {
             return Ok(Step::Running(Progress::new(
                 self.next as f64 / total as f64,
-                "sphere tracing",
+                if self.spp > 0 {
+                    "path tracing"
+                } else {
+                    "sphere tracing"
+                },
             )));
+        }
+        if self.spp > 0 {
+            // Average, then to 8 bits (linear, like the direct shading).
+            let inv = 1.0 / self.spp as f64;
+            for (px, l) in self.sum.iter().enumerate() {
+                let c = *l * inv * 255.0;
+                let q = |v: f64| v.round().clamp(0.0, 255.0) as u8;
+                self.rgba[px * 4..px * 4 + 4].copy_from_slice(&[q(c.x), q(c.y), q(c.z), 255]);
+            }
         }
         let img = Rgba8Image {
             width: self.width,

@@ -290,16 +290,16 @@ pub struct Particles {
     /// Random orientation of each particle (else all aligned).
     pub random_orientation: bool,
     #[serde(skip)]
-    c: Derived,
+    pub(crate) c: Derived,
 }
 
 /// What checking a grid node derives once.
 #[derive(Debug, Clone, Default, PartialEq)]
-struct Derived {
-    weights: Vec<f64>,
-    r_max: f64,
-    margin: f64,
-    inv_lip: f64,
+pub(crate) struct Derived {
+    pub(crate) weights: Vec<f64>,
+    pub(crate) r_max: f64,
+    pub(crate) margin: f64,
+    pub(crate) inv_lip: f64,
 }
 
 impl Default for Particles {
@@ -669,7 +669,7 @@ pub struct Lattice {
     pub smooth: f64,
     pub offset: Field,
     #[serde(skip)]
-    c: Derived,
+    pub(crate) c: Derived,
 }
 
 impl Default for Lattice {
@@ -783,9 +783,9 @@ pub struct Pile {
     /// gradient bound of `R_θ(p) p` grows with |p|.
     pub extent: f64,
     #[serde(skip)]
-    c: Derived,
+    pub(crate) c: Derived,
     #[serde(skip)]
-    axis_n: DVec3,
+    pub(crate) axis_n: DVec3,
 }
 
 impl Default for Pile {

@@ -44,6 +44,31 @@ pub const EXAMPLES: &[Example] = &[
         about: "Particles of mixed shapes with a graded density, over a finer structure",
         scene: include_str!("../../assets/micro/multiscale.json"),
     },
+    Example {
+        name: "ice",
+        about: "Ice with air bubbles: large and sparse at the top, small and dense below",
+        scene: include_str!("../../assets/micro/ice.json"),
+    },
+    Example {
+        name: "blood",
+        about: "A cloud of randomly oriented red blood cells",
+        scene: include_str!("../../assets/micro/blood.json"),
+    },
+    Example {
+        name: "fibre-agglomerate",
+        about: "Fibres grown from lattice spheres picked along lines by congruences and fused by smooth-min",
+        scene: include_str!("../../assets/micro/fibre-agglomerate.json"),
+    },
+    Example {
+        name: "rock-pile",
+        about: "A rock pile whose grains deform from convex at the bottom to concave at the top",
+        scene: include_str!("../../assets/micro/rock-pile.json"),
+    },
+    Example {
+        name: "gyroid-paper",
+        about: "Paper fibres: a gyroid stretched along x, cut to a sheet",
+        scene: include_str!("../../assets/micro/gyroid-paper.json"),
+    },
 ];
 
 /// The shipped scene called `name`.

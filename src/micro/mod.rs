@@ -13,7 +13,9 @@
 //!   products of sines and cosines.
 //! - [`render`]: sphere tracing with fixed, bisection and adaptive steps,
 //!   normals, shading, the orbit camera and slices.
-//! - [`api`]: the `micro-render` and `micro-slice` requests and their jobs.
+//! - [`glsl`]: the same scene as a WebGL2 fragment-shader sphere tracer
+//!   (`micro-glsl`), the browser's interactive view.
+//! - [`api`]: the `micro-render`, `micro-glsl` and `micro-slice` requests.
 //! - [`fit`]: the Fourier loss (§6.1, Eq. 36, 39); [`fit_api`]: the
 //!   `micro-fit` request and its job (reconstruction, Table 3).
 //! - [`examples`]: the shipped scenes (`micro-examples`); [`state`]: the
@@ -23,6 +25,7 @@ pub mod cells;
 pub mod examples;
 pub mod fit;
 pub mod fit_api;
+pub mod glsl;
 pub mod periodic;
 pub mod render;
 pub mod scene;

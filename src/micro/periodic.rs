@@ -33,9 +33,9 @@ pub struct Tpms {
     #[serde(default)]
     pub thickness: f64,
     #[serde(skip)]
-    k: f64,
+    pub(crate) k: f64,
     #[serde(skip)]
-    inv_bound: f64,
+    pub(crate) inv_bound: f64,
 }
 
 impl Tpms {
@@ -130,7 +130,7 @@ pub struct Periodic {
     #[serde(default)]
     pub thickness: f64,
     #[serde(skip)]
-    inv_bound: f64,
+    pub(crate) inv_bound: f64,
 }
 
 const MAX_POWER: u32 = 8;

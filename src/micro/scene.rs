@@ -134,7 +134,7 @@ pub(crate) enum Op {
 /// A checked, compiled scene.
 #[derive(Debug, Clone)]
 pub struct Scene {
-    root: Op,
+    pub(crate) root: Op,
     /// The node tree it was compiled from.
     pub node: Node,
     /// Node count.

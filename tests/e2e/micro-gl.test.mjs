@@ -1,0 +1,192 @@
+// Micro's WebGL2 sphere tracer (issue 12 item 7, MISSION M7) against the
+// CPU reference: every shipped scene is rendered both ways in Chromium's
+// SwiftShader — `micro-glsl` compiled by www/micro-gl.js and `micro-render`
+// in a worker — from the same request, and the pictures must agree: at most
+// MAX_HIT_MISS of the pixels may disagree on hit or miss, the mean absolute
+// difference over all channels is at most MAX_MEAN levels of 255, and the
+// summed work counters (steps per ray) stay within 10% of the CPU's. The
+// test prints SwiftShader frame times and the average steps per ray.
+//
+// Then the panel: the interactive view runs on the GPU (coarse frames while
+// the camera moves, refined to full size when idle), and without WebGL2 it
+// says so in plain words and draws on the CPU.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { launch } from './harness.mjs';
+
+const MAX_HIT_MISS = 0.02;
+const MAX_MEAN = 4;
+const SIDE = 64;
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+/** In the page: render every shipped scene both ways, return the comparison per scene. */
+async function compareAll(page, { side, steps, cameras, extra = {} }) {
+  return page.evaluate(async ({ side, steps, cameras, extra }) => {
+    const { MicroGl } = await import('/www/micro-gl.js');
+    const pool = window.filigree.pool;
+    const examples = await pool.run('micro-examples', {});
+    const gl = new MicroGl();
+    const decode = async (png) => {
+      const bmp = await createImageBitmap(new Blob([png], { type: 'image/png' }));
+      const c = new OffscreenCanvas(bmp.width, bmp.height);
+      const g = c.getContext('2d');
+      g.drawImage(bmp, 0, 0);
+      return g.getImageData(0, 0, bmp.width, bmp.height).data;
+    };
+    const out = [];
+    for (const ex of examples) {
+      for (const camera of cameras) {
+        const req = { scene: ex.scene, width: side, height: side, steps, camera, ...extra };
+        const [shader, cpu] = await Promise.all([pool.run('micro-glsl', req), pool.run('micro-render', req)]);
+        const t0 = performance.now();
+        gl.use(shader);
+        const compileMs = performance.now() - t0;
+        // One warm-up frame, then timed frames.
+        gl.draw(camera, side, side, { stats: true });
+        const times = [];
+        let last;
+        for (let i = 0; i < 1; i++) {
+          const t = performance.now();
+          last = gl.draw(camera, side, side, { stats: true });
+          times.push(performance.now() - t);
+        }
+        const a = await decode(cpu.png);
+        const b = last.rgba;
+        const bg = extra.background || [24, 26, 30];
+        const isBg = (d, i) => d[i] === bg[0] && d[i + 1] === bg[1] && d[i + 2] === bg[2];
+        let hitMiss = 0, sum = 0, cpuHits = 0;
+        for (let i = 0; i < a.length; i += 4) {
+          if (isBg(a, i) !== isBg(b, i)) hitMiss++;
+          if (!isBg(a, i)) cpuHits++;
+          sum += Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) + Math.abs(a[i + 2] - b[i + 2]);
+        }
+        const n = a.length / 4;
+        out.push({
+          name: ex.name, camera, functions: shader.functions, fragmentBytes: shader.fragment.length,
+          hitMiss: hitMiss / n, mean: sum / (3 * n), cpuHitFraction: cpuHits / n,
+          cpuStats: cpu.stats, glStats: last.stats,
+          compileMs, frameMs: Math.min(...times),
+        });
+      }
+    }
+    return out;
+  }, { side, steps, cameras, extra });
+}
+
+const VIEWS = [
+  { yaw: 35, pitch: 28, distance: 3.6, target: [0, 0, 0], fov: 40 },
+  { yaw: 200, pitch: -15, distance: 0.9, target: [0.1, 0.2, 0.3], fov: 40 },
+];
+
+test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fixed steps, two views)', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  const rows = await compareAll(page, { side: SIDE, steps: 'fixed', cameras: VIEWS });
+  assert.ok(rows.length >= 2 * 6, `${rows.length} renders`);
+  for (const r of rows) {
+    const steps = { cpu: r.cpuStats.steps / r.cpuStats.rays, gl: r.glStats.steps / r.glStats.rays };
+    console.log(`[micro-gl] ${r.name} d=${r.camera.distance}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `
+      + `coverage ${(r.cpuHitFraction * 100).toFixed(1)}%, steps/ray cpu ${steps.cpu.toFixed(1)} gpu ${steps.gl.toFixed(1)}, `
+      + `SwiftShader ${SIDE}² frame ${r.frameMs.toFixed(0)} ms (compile ${r.compileMs.toFixed(0)} ms, ${r.functions} functions, ${r.fragmentBytes} bytes)`);
+    assert.ok(r.hitMiss <= MAX_HIT_MISS, `${r.name}: ${(r.hitMiss * 100).toFixed(2)}% of pixels disagree on hit or miss`);
+    assert.ok(r.mean <= MAX_MEAN, `${r.name}: mean absolute difference ${r.mean.toFixed(2)}`);
+    assert.equal(r.glStats.rays, SIDE * SIDE);
+    assert.ok(Math.abs(r.glStats.hits - r.cpuStats.hits) <= MAX_HIT_MISS * SIDE * SIDE, `${r.name}: hits ${r.glStats.hits} vs ${r.cpuStats.hits}`);
+    assert.ok(Math.abs(steps.gl - steps.cpu) <= 0.1 * steps.cpu + 0.5, `${r.name}: steps per ray ${steps.gl} vs ${steps.cpu}`);
+  }
+  // The comparison is not vacuous: the scenes cover a good part of the pictures.
+  assert.ok(rows.filter((r) => r.cpuHitFraction > 0.2).length >= rows.length / 2);
+  await page.context().close();
+});
+
+test('micro-gl: adaptive and bisection steps, GGX shading and absorption agree with the CPU too', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  const ggx = { shading: 'ggx', roughness: 0.3, specular: 0.04, absorption: 0.8 };
+  for (const [steps, extra] of [['adaptive', {}], ['bisection', {}], ['fixed', ggx]]) {
+    const rows = await compareAll(page, { side: 64, steps, cameras: [VIEWS[0]], extra });
+    for (const r of rows) {
+      console.log(`[micro-gl] ${steps}${extra.shading ? ' ggx' : ''} ${r.name}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `
+        + `gradient checks cpu ${r.cpuStats.gradient_checks} gpu ${r.glStats.gradient_checks}`);
+      assert.ok(r.hitMiss <= MAX_HIT_MISS, `${steps} ${r.name}: ${(r.hitMiss * 100).toFixed(2)}% hit/miss`);
+      assert.ok(r.mean <= MAX_MEAN, `${steps} ${r.name}: mean ${r.mean.toFixed(2)}`);
+      if (steps === 'adaptive') assert.ok(r.glStats.gradient_checks > 0);
+    }
+  }
+  await page.context().close();
+});
+
+const runs = (page) => page.$eval('[data-testid=micro-status]', (el) => Number(el.dataset.runs || 0));
+async function waitForRender(page, previous, timeout = 120000) {
+  await page.waitForFunction((prev) => Number(document.querySelector('[data-testid=micro-status]').dataset.runs || 0) > prev
+    && !window.filigreeMicro.pending(), previous, { timeout });
+  return runs(page);
+}
+
+test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slice stays on the CPU', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
+  let n = await waitForRender(page, 0);
+  assert.ok(await page.evaluate(() => window.filigreeMicro.gpu()), 'WebGL2 is used');
+  assert.equal(await page.isHidden('[data-testid=micro-gpu-note]'), true);
+  let last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, true);
+  assert.equal(last.preview, false);
+  assert.match(await page.textContent('[data-testid=micro-status]'), /on the GPU.*rays hit.*per ray.*field evaluations/);
+  // Drag: coarse frames while the camera moves, then the full picture.
+  const previews0 = Number(await page.$eval('[data-testid=micro-status]', (el) => el.dataset.previews || 0));
+  const box = await page.locator('[data-testid=micro-canvas]').boundingBox();
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  for (let i = 1; i <= 6; i++) {
+    await page.mouse.move(cx + i * 10, cy + i * 4);
+    await page.waitForTimeout(40);
+  }
+  await page.mouse.up();
+  n = await waitForRender(page, n);
+  const previews = Number(await page.$eval('[data-testid=micro-status]', (el) => el.dataset.previews || 0));
+  assert.ok(previews > previews0, 'coarse frames while dragging');
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, true);
+  assert.equal(last.preview, false, 'refined to full size once the camera rests');
+  const fg = await page.evaluate(() => {
+    const c = document.querySelector('[data-testid=micro-canvas]');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let k = 0;
+    for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 24) + Math.abs(d[i + 1] - 26) + Math.abs(d[i + 2] - 30) > 6) k++;
+    return k / (d.length / 4);
+  });
+  assert.ok(fg > 0.2, `the gyroid is drawn (${fg})`);
+  // The slice view is the CPU's.
+  await page.check('[data-testid=micro-slice-toggle]');
+  n = await waitForRender(page, n);
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.kind, 'micro-slice');
+  assert.equal(last.gpu, false);
+  await page.context().close();
+});
+
+test('micro-gl: without WebGL2 the panel says so and draws on the CPU', async () => {
+  const page = await env.newPage({ path: null });
+  await page.addInitScript(() => {
+    const get = HTMLCanvasElement.prototype.getContext;
+    HTMLCanvasElement.prototype.getContext = function (type, ...rest) {
+      return type === 'webgl2' ? null : get.call(this, type, ...rest);
+    };
+  });
+  await page.goto(`${env.url}#tool=micro`);
+  await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
+  await waitForRender(page, 0);
+  assert.equal(await page.evaluate(() => window.filigreeMicro.gpu()), null);
+  const note = await page.textContent('[data-testid=micro-gpu-note]');
+  assert.match(note, /GPU view off: this browser has no WebGL2.*CPU/);
+  assert.equal(await page.isVisible('[data-testid=micro-gpu-note]'), true);
+  const last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, false);
+  assert.equal(last.kind, 'micro-render');
+  assert.match(await page.textContent('[data-testid=micro-status]'), /rays hit.*field evaluations/);
+  await page.context().close();
+});
