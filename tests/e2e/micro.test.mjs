@@ -3,7 +3,8 @@
 // previews while dragging, the full image once the gesture ends), zooming
 // by the camera distance, JSON errors marked in the scene editor at the
 // core's line, the slice view (`micro-slice`), and the document kept by the
-// autosave across a reload.
+// autosave across a reload. WebGL2 is hidden here so the worker path is
+// what runs; the GPU view has its own tests (micro-gl.test.mjs).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
@@ -53,8 +54,23 @@ const changed = (page) => page.evaluate(() => {
 
 const state = (page) => page.evaluate(() => window.filigreeMicro.state());
 
+/** The panel with WebGL2 hidden: the worker (CPU) path this file is about.
+ * The GPU view has its own tests (micro-gl.test.mjs). */
+async function cpuPage(path) {
+  const page = await env.newPage({ path: null });
+  await page.addInitScript(() => {
+    const get = HTMLCanvasElement.prototype.getContext;
+    HTMLCanvasElement.prototype.getContext = function (type, ...rest) {
+      return type === 'webgl2' ? null : get.call(this, type, ...rest);
+    };
+  });
+  await page.goto(`${env.url}${path}`);
+  await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+  return page;
+}
+
 test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, slice view, autosave', async () => {
-  const page = await env.newPage({ path: '#tool=micro' });
+  const page = await cpuPage('#tool=micro');
   await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
   let n = await runs(page);
   // Pick another scene first so that picking the gyroid is a real change.
@@ -147,7 +163,7 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
 });
 
 test('micro: a share link carries the scene by name and the camera; undo steps back through zooms', async () => {
-  const a = await env.newPage({ path: '#tool=micro' });
+  const a = await cpuPage('#tool=micro');
   await a.waitForSelector('[data-testid=micro-examples] [data-example=piled]', { timeout: 30000 });
   let n = await waitForRender(a, await runs(a));
   await a.click('[data-example=piled]');
@@ -174,7 +190,7 @@ test('micro: a share link carries the scene by name and the camera; undo steps b
   const link = await a.$eval('.toast[data-link]', (t) => t.dataset.link);
   assert.match(link, /#tool=micro&share=[A-Za-z0-9_-]+$/);
   assert.ok(link.length < 400, `a shipped scene travels by name (${link.length} characters)`);
-  const b = await env.newPage({ path: link.slice(link.indexOf('#')) });
+  const b = await cpuPage(link.slice(link.indexOf('#')));
   await b.waitForFunction(() => window.filigreeMicro?.state()?.example === 'piled', null, { timeout: 30000 });
   await waitForRender(b, 0);
   assert.deepEqual(await state(b), want);
