@@ -2,8 +2,8 @@
 # Runs every check CI runs, in the same order, from a fresh clone on a fresh
 # Debian machine with Rust: installs what is missing (Chromium via apt, npm dev
 # dependencies, the wasm target and the matching wasm-bindgen-cli), then
-# fmt, clippy (native and wasm32, -D warnings), cargo tests, the release wasm
-# build, and the browser end-to-end tests in headless Chromium.
+# fmt, clippy (native and wasm32, -D warnings), cargo tests, the texture
+# index rebuilt and compared with the committed one, the release wasm build, and the browser end-to-end tests in headless Chromium.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 step() { printf '\n== %s\n' "$*"; }
@@ -32,6 +32,9 @@ cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --featu
 
 step "cargo test"
 cargo test
+
+step "the committed texture index rebuilds to the same bytes"
+bash scripts/check-texture-index.sh
 
 step "release wasm build (and the test-hooks core for the crash tests)"
 FILIGREE_TEST_HOOKS=1 bash scripts/build.sh   # pkg/ and the test-only pkg-test/

@@ -311,6 +311,9 @@ fn pca_filters(mut cov: Vec<f64>, taps: usize, l: usize, count: usize) -> Result
         .collect())
 }
 
+/// Outputs computed together in [`convolve`].
+const LANES: usize = 16;
+
 /// Zero-padded convolution of `m` with each filter, patch means removed:
 /// `out[f](x, y) = Σ_t filter[f][t] · (p_t − mean(p))` over the patch `p`
 /// centred on (x, y).
@@ -346,12 +349,29 @@ fn convolve(m: &Map, filters: &[Vec<f32>], k1: usize, k2: usize) -> Vec<Map> {
             let mut out = vec![0f32; w * h];
             for y in 0..h {
                 let row = &mut out[y * w..(y + 1) * w];
-                for dy in 0..k1 {
-                    for dx in 0..k2 {
-                        let c = f[dy * k2 + dx];
-                        let src = &pad[(y + dy) * pw + dx..(y + dy) * pw + dx + w];
-                        for (o, s) in row.iter_mut().zip(src) {
-                            *o += c * *s;
+                // Sixteen outputs at a time stay in registers while the
+                // taps are summed (in tap order, so every output is the
+                // same sum as the plain loop's, bit for bit).
+                let mut x = 0;
+                while x + LANES <= w {
+                    let mut acc = [0f32; LANES];
+                    for dy in 0..k1 {
+                        let base = (y + dy) * pw + x;
+                        for dx in 0..k2 {
+                            let c = f[dy * k2 + dx];
+                            let src = &pad[base + dx..base + dx + LANES];
+                            for l in 0..LANES {
+                                acc[l] += c * src[l];
+                            }
+                        }
+                    }
+                    row[x..x + LANES].copy_from_slice(&acc);
+                    x += LANES;
+                }
+                for (xo, o) in row.iter_mut().enumerate().skip(x) {
+                    for dy in 0..k1 {
+                        for dx in 0..k2 {
+                            *o += f[dy * k2 + dx] * pad[(y + dy) * pw + dx + xo];
                         }
                     }
                 }
@@ -362,6 +382,77 @@ fn convolve(m: &Map, filters: &[Vec<f32>], k1: usize, k2: usize) -> Vec<Map> {
             }
             Map { w, h, v: out }
         })
+        .collect()
+}
+
+/// The same convolution as im2col + one matrix product: the mean-removed
+/// patches as the columns of a `taps × pixels` matrix, times the
+/// `filters × taps` bank (nalgebra, whose f32 products run on
+/// matrixmultiply's CPU-dispatched kernels). This is the reference
+/// formulation, kept as the baseline `bench texture` times [`convolve`]
+/// against, and tested to agree with it; the index never uses it, because
+/// its sums are ordered by whichever kernel the CPU gets.
+pub fn convolve_im2col(
+    width: usize,
+    height: usize,
+    data: &[f32],
+    filters: &[Vec<f32>],
+    k1: usize,
+    k2: usize,
+) -> Vec<Vec<f32>> {
+    let (w, h) = (width, height);
+    let (oy, ox) = (k1 / 2, k2 / 2);
+    let taps = k1 * k2;
+    let mut cols = DMatrix::<f32>::zeros(taps, w * h);
+    let mut patch = vec![0f32; taps];
+    for y in 0..h {
+        for x in 0..w {
+            for dy in 0..k1 {
+                for dx in 0..k2 {
+                    let (sy, sx) = (
+                        (y + dy) as isize - oy as isize,
+                        (x + dx) as isize - ox as isize,
+                    );
+                    patch[dy * k2 + dx] =
+                        if sy >= 0 && sx >= 0 && (sy as usize) < h && (sx as usize) < w {
+                            data[sy as usize * w + sx as usize]
+                        } else {
+                            0.0
+                        };
+                }
+            }
+            let mean = patch.iter().sum::<f32>() / taps as f32;
+            let mut col = cols.column_mut(y * w + x);
+            for (o, v) in col.iter_mut().zip(&patch) {
+                *o = v - mean;
+            }
+        }
+    }
+    let bank = DMatrix::<f32>::from_fn(filters.len(), taps, |f, t| filters[f][t]);
+    let out = bank * cols;
+    (0..filters.len())
+        .map(|f| (0..w * h).map(|p| out[(f, p)]).collect())
+        .collect()
+}
+
+/// [`convolve`] on a bare image, for the bench's comparison with
+/// [`convolve_im2col`].
+pub fn convolve_direct(
+    width: usize,
+    height: usize,
+    data: &[f32],
+    filters: &[Vec<f32>],
+    k1: usize,
+    k2: usize,
+) -> Vec<Vec<f32>> {
+    let m = Map {
+        w: width,
+        h: height,
+        v: data.to_vec(),
+    };
+    convolve(&m, filters, k1, k2)
+        .into_iter()
+        .map(|m| m.v)
         .collect()
 }
 
@@ -610,6 +701,27 @@ mod tests {
                     let v = out.v[y * m.w + x] as f64;
                     assert!((v - want).abs() < 1e-5, "({x}, {y}): {v} vs {want}");
                 }
+            }
+        }
+    }
+
+    /// The bench's im2col + matrix-product baseline computes the same
+    /// convolution (up to the kernel's rounding).
+    #[test]
+    fn im2col_baseline_agrees_with_the_direct_convolution() {
+        let img = noise(37, 4);
+        let filters: Vec<Vec<f32>> = (0..5)
+            .map(|f| {
+                (0..49)
+                    .map(|t| ((f * 49 + t) as f32 * 0.37).sin())
+                    .collect()
+            })
+            .collect();
+        let a = convolve_direct(37, 37, &img.data, &filters, 7, 7);
+        let b = convolve_im2col(37, 37, &img.data, &filters, 7, 7);
+        for (fa, fb) in a.iter().zip(&b) {
+            for (x, y) in fa.iter().zip(fb) {
+                assert!((x - y).abs() < 1e-4, "{x} vs {y}");
             }
         }
     }
