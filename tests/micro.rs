@@ -659,3 +659,40 @@ fn tile_errors_name_their_field() {
     .unwrap_err();
     assert_eq!(e.field(), Some("sample_start"));
 }
+
+/// The native core's PNG bytes for the shared requests of
+/// `tests/fixtures/micro-native/requests.json` (one per step mode, a path
+/// traced image, a path-traced tile of a later pass, a slice) are the files
+/// beside it; the browser e2e (`micro.test.mjs`) asks the wasm worker for
+/// the same requests and compares with the same files, so wasm = native
+/// byte for byte. `FILIGREE_BLESS=1` rewrites the files after an intended
+/// change.
+#[test]
+fn wasm_and_native_give_the_same_bytes() {
+    let dir = format!("{}/tests/fixtures/micro-native", env!("CARGO_MANIFEST_DIR"));
+    let list: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{dir}/requests.json")).unwrap())
+            .unwrap();
+    let bless = std::env::var("FILIGREE_BLESS").is_ok_and(|v| v == "1");
+    let reqs = list["requests"].as_array().unwrap();
+    assert!(reqs.len() >= 5);
+    for r in reqs {
+        let name = r["name"].as_str().unwrap();
+        let mut req = r["request"].clone();
+        req["scene"] = json!(asset(r["scene"].as_str().unwrap()));
+        let out = run_json(r["kind"].as_str().unwrap(), &req.to_string()).unwrap();
+        let png: Vec<u8> = out["png"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as u8)
+            .collect();
+        let path = format!("{dir}/{name}.png");
+        if bless {
+            std::fs::write(&path, &png).unwrap();
+        }
+        let want = std::fs::read(&path)
+            .unwrap_or_else(|e| panic!("{path}: {e} (FILIGREE_BLESS=1 writes it)"));
+        assert!(png == want, "{name}: the native bytes differ from {path}");
+    }
+}

@@ -707,8 +707,8 @@ pub fn render_threads(
         })
         .collect();
     let next = AtomicUsize::new(0);
-    let parts: Mutex<Vec<Option<Result<(Tile, Rgba8Image, Stats)>>>> =
-        Mutex::new(vec![None; bands.len()]);
+    type Part = Result<(Tile, Rgba8Image, Stats)>;
+    let parts: Mutex<Vec<Option<Part>>> = Mutex::new(vec![None; bands.len()]);
     std::thread::scope(|s| {
         for _ in 0..threads.clamp(1, bands.len().max(1)) {
             s.spawn(|| loop {
