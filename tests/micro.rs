@@ -460,7 +460,7 @@ fn tiles_are_bit_identical_to_the_whole_image() {
                 x: 5,
                 y: 0,
                 w: 1,
-                h: h,
+                h,
             },
         ];
         let (xs, ys) = ([0, 10, 21, w], [0, 12, h]);
