@@ -479,7 +479,7 @@ fn tiles_are_bit_identical_to_the_whole_image() {
         let mut total = Stats::default();
         for (n, t) in rects.iter().enumerate() {
             let (px, st) = rgba(MicroRenderRequest {
-                tile: Some(*t),
+                tile: Some(Box::new(*t)),
                 ..req.clone()
             });
             assert_eq!(px.len(), (t.w * t.h * 4) as usize);
@@ -541,7 +541,7 @@ fn threads_give_the_bytes_of_one_job() {
             h: 9,
         };
         let req_t = MicroRenderRequest {
-            tile: Some(t),
+            tile: Some(Box::new(t)),
             ..req.clone()
         };
         let one_t =

@@ -70,7 +70,8 @@ pub struct MicroRenderRequest {
     pub radiance: bool,
     /// Render only this rectangle of the `width`×`height` image (default:
     /// all of it). Its pixels are bit for bit those of the whole image.
-    pub tile: Option<Tile>,
+    /// (Boxed: the request is a variant of `micro-fit`'s sampler.)
+    pub tile: Option<Box<Tile>>,
 }
 
 /// A rectangle of an image: `w`×`h` pixels from column `x`, row `y`.
@@ -278,7 +279,7 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
         req.sample_start,
         (0, MAX_MICRO_SAMPLE_START),
     )?;
-    if let Some(t) = req.tile {
+    if let Some(&t) = req.tile.as_deref() {
         if t.w == 0
             || t.h == 0
             || t.x as u64 + t.w as u64 > req.width as u64
@@ -339,7 +340,7 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
 /// Check a render request and set the job up (no tracing yet).
 pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
     let c = check_render(&req)?;
-    let tile = req.tile.unwrap_or(Tile {
+    let tile = req.tile.as_deref().copied().unwrap_or(Tile {
         x: 0,
         y: 0,
         w: req.width,
@@ -715,7 +716,7 @@ pub fn render_threads(
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(&t) = bands.get(i) else { break };
                 let r = start_render(MicroRenderRequest {
-                    tile: Some(t),
+                    tile: Some(Box::new(t)),
                     ..req.clone()
                 })
                 .and_then(|job| job.run_rgba(cancel))
