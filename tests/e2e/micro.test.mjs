@@ -61,8 +61,10 @@ const state = (page) => page.evaluate(() => window.filigreeMicro.state());
 /** The panel with WebGL2 hidden: the worker (CPU) path this file is about.
  * The GPU view has its own tests (micro-gl.test.mjs). */
 async function cpuPage(path) {
-  // Half the device pixels: a quarter of the pixels to trace, the same checks.
-  const page = await env.newPage({ path: null, deviceScaleFactor: 0.5 });
+  // A quarter of the device pixels a side (the panel's picture is its
+  // width in device pixels, at most 384): about 1/6 of the pixels to trace,
+  // the same checks.
+  const page = await env.newPage({ path: null, deviceScaleFactor: 0.25 });
   await page.addInitScript(() => {
     const get = HTMLCanvasElement.prototype.getContext;
     HTMLCanvasElement.prototype.getContext = function (type, ...rest) {
