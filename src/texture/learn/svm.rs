@@ -346,10 +346,7 @@ pub fn train_linear_svc(rows: &[Vec<f32>], positive: &[bool], c: f64, seed: u64)
     let dim = rows.first().map_or(0, |r| r.len());
     let n_pos = positive.iter().filter(|p| **p).count().max(1) as f64;
     let n_neg = (n as f64 - n_pos).max(1.0);
-    let y: Vec<f64> = positive
-        .iter()
-        .map(|&p| if p { 1.0 } else { -1.0 })
-        .collect();
+    let y: Vec<f64> = positive.iter().map(|&p| if p { 1.0 } else { -1.0 }).collect();
     let upper: Vec<f64> = positive
         .iter()
         .map(|&p| c * n as f64 / (2.0 * if p { n_pos } else { n_neg }))
@@ -410,11 +407,7 @@ pub fn train_linear_svc(rows: &[Vec<f32>], positive: &[bool], c: f64, seed: u64)
             continue;
         }
         pg_max_old = if pg_max <= 0.0 { f64::INFINITY } else { pg_max };
-        pg_min_old = if pg_min >= 0.0 {
-            f64::NEG_INFINITY
-        } else {
-            pg_min
-        };
+        pg_min_old = if pg_min >= 0.0 { f64::NEG_INFINITY } else { pg_min };
     }
     Linear {
         w: w.into_iter().map(|v| v as f32).collect(),
