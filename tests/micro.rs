@@ -2,8 +2,10 @@
 //! normalisation, sphere tracing agrees with dense ray marching, requests
 //! are deterministic, and errors name their field.
 use filigree::api::run_json;
+use filigree::core::job::{run_to_end, Cancel};
 use filigree::core::rng::Rng;
-use filigree::micro::render::{self, Stats, StepMode, Trace};
+use filigree::micro::api::{render_threads, start_render, MicroRenderRequest, Tile};
+use filigree::micro::render::{self, Shading, Stats, StepMode, Trace};
 use filigree::micro::{parse, Scene};
 use glam::DVec3;
 use serde_json::json;
@@ -391,5 +393,306 @@ fn the_camera_zooms_to_microscale() {
         let st = &r["stats"];
         assert!(st["hits"].as_u64().unwrap() > 100, "{distance}: {st}");
         assert!(st["exhausted"].as_u64().unwrap() < 24, "{distance}: {st}");
+    }
+}
+
+/// A render request for the tiling tests: a small image of a shipped scene.
+fn tiling_request(scene: &str, steps: StepMode, spp: u32) -> MicroRenderRequest {
+    MicroRenderRequest {
+        scene: asset(scene),
+        width: 29,
+        height: 23,
+        steps,
+        check_every: 3,
+        spp,
+        absorption: 0.4,
+        ..Default::default()
+    }
+}
+
+/// The pixels of one job (the request's tile or the whole image).
+fn rgba(req: MicroRenderRequest) -> (Vec<u8>, Stats) {
+    let job = start_render(req).unwrap();
+    let (img, st) = job.run_rgba(&Cancel::new()).unwrap();
+    (img.data, st)
+}
+
+/// A tile's pixels are bit for bit the same pixels of the whole image, for
+/// every step mode, GGX and path tracing (whose generators are seeded per
+/// pixel and sample, not per job): rectangles anywhere, at the edges, one
+/// pixel, and a 3×2 tiling whose stats add up to the whole image's.
+#[test]
+fn tiles_are_bit_identical_to_the_whole_image() {
+    let cases = [
+        tiling_request("spheres", StepMode::Fixed, 0),
+        tiling_request("piled", StepMode::Bisection, 0),
+        MicroRenderRequest {
+            shading: Shading::Ggx,
+            ..tiling_request("gyroid", StepMode::Adaptive, 0)
+        },
+        tiling_request("spheres", StepMode::Fixed, 3),
+    ];
+    for req in cases {
+        let (w, h) = (req.width, req.height);
+        let (whole, whole_stats) = rgba(req.clone());
+        let at =
+            |x: u32, y: u32| &whole[((y * w + x) * 4) as usize..((y * w + x) * 4 + 4) as usize];
+        let mut rects = vec![
+            Tile {
+                x: 13,
+                y: 9,
+                w: 7,
+                h: 5,
+            },
+            Tile {
+                x: 0,
+                y: 0,
+                w: 1,
+                h: 1,
+            },
+            Tile {
+                x: w - 3,
+                y: h - 4,
+                w: 3,
+                h: 4,
+            },
+            Tile {
+                x: 5,
+                y: 0,
+                w: 1,
+                h,
+            },
+        ];
+        let (xs, ys) = ([0, 10, 21, w], [0, 12, h]);
+        let mut grid = vec![];
+        for j in 0..2 {
+            for i in 0..3 {
+                grid.push(Tile {
+                    x: xs[i],
+                    y: ys[j],
+                    w: xs[i + 1] - xs[i],
+                    h: ys[j + 1] - ys[j],
+                });
+            }
+        }
+        rects.extend(grid.iter().copied());
+        let mut total = Stats::default();
+        for (n, t) in rects.iter().enumerate() {
+            let (px, st) = rgba(MicroRenderRequest {
+                tile: Some(Box::new(*t)),
+                ..req.clone()
+            });
+            assert_eq!(px.len(), (t.w * t.h * 4) as usize);
+            for y in 0..t.h {
+                for x in 0..t.w {
+                    let k = ((y * t.w + x) * 4) as usize;
+                    assert_eq!(
+                        &px[k..k + 4],
+                        at(t.x + x, t.y + y),
+                        "{:?} spp {}: pixel ({}, {}) of tile {t:?}",
+                        req.steps,
+                        req.spp,
+                        t.x + x,
+                        t.y + y
+                    );
+                }
+            }
+            if n >= 4 {
+                total.add(&st);
+            }
+        }
+        assert_eq!(
+            total, whole_stats,
+            "the tiles' work adds up to the whole image's"
+        );
+        // The response says where the tile goes.
+        let r = run_json(
+            "micro-render",
+            &json!({"scene": req.scene, "width": w, "height": h, "tile": {"x": 2, "y": 3, "w": 4, "h": 5}}).to_string(),
+        )
+        .unwrap();
+        assert_eq!(
+            (r["width"].clone(), r["height"].clone()),
+            (json!(4), json!(5))
+        );
+        assert_eq!(r["tile"], json!({"x": 2, "y": 3, "w": 4, "h": 5}));
+    }
+}
+
+/// `render_threads` (the CLI's `--threads`) gives the bytes of one job for
+/// any number of threads and bands, also for a tile and for path tracing;
+/// the CLI itself writes the same file with `--threads 2` as without.
+#[test]
+fn threads_give_the_bytes_of_one_job() {
+    for req in [
+        tiling_request("piled", StepMode::Adaptive, 0),
+        tiling_request("spheres", StepMode::Fixed, 2),
+    ] {
+        let one = run_to_end(start_render(req.clone()).unwrap(), &Cancel::new(), |_| {}).unwrap();
+        for (threads, bands) in [(1, 1), (1, 5), (2, 2), (2, 8), (3, 23), (4, 100)] {
+            let r = render_threads(&req, threads, bands, &Cancel::new()).unwrap();
+            assert_eq!(r.png, one.png, "{threads} threads, {bands} bands");
+            assert_eq!(r.stats, one.stats);
+        }
+        let t = Tile {
+            x: 3,
+            y: 4,
+            w: 11,
+            h: 9,
+        };
+        let req_t = MicroRenderRequest {
+            tile: Some(Box::new(t)),
+            ..req.clone()
+        };
+        let one_t =
+            run_to_end(start_render(req_t.clone()).unwrap(), &Cancel::new(), |_| {}).unwrap();
+        let r = render_threads(&req_t, 2, 4, &Cancel::new()).unwrap();
+        assert_eq!((r.png, r.tile), (one_t.png, t));
+    }
+    // The CLI.
+    let dir = std::env::temp_dir().join(format!("filigree-micro-threads-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = format!("{}/assets/micro/piled.json", env!("CARGO_MANIFEST_DIR"));
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.join(out);
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_filigree"))
+            .args([
+                "micro", "render", "--scene", &scene, "--size", "48x40", "--steps", "adaptive",
+                "--out",
+            ])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        std::fs::read(out).unwrap()
+    };
+    let a = run(&[], "one.png");
+    let b = run(&["--threads", "2"], "two.png");
+    let c = run(&["--threads", "1"], "one-thread.png");
+    assert_eq!(a, b);
+    assert_eq!(a, c);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Progressive path tracing: passes of samples `sample_start ..` whose
+/// summed radiance (`radiance: true`) is added up and averaged, as the panel
+/// does, give one job's picture with all the samples (to within one level
+/// where a float sum rounds the other way); a pass starting at 0 is the
+/// one-job render with that many samples, a later one draws other samples.
+#[test]
+fn progressive_passes_average_to_one_job() {
+    let req = tiling_request("spheres", StepMode::Fixed, 4);
+    let (whole, _) = rgba(req.clone());
+    let mut acc = vec![0.0f64; whole.len() / 4 * 3];
+    for (start, spp) in [(0, 1), (1, 1), (2, 2)] {
+        let r = run_to_end(
+            start_render(MicroRenderRequest {
+                sample_start: start,
+                spp,
+                radiance: true,
+                ..req.clone()
+            })
+            .unwrap(),
+            &Cancel::new(),
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(r.radiance.len(), acc.len() * 4);
+        for (a, b) in acc.iter_mut().zip(r.radiance.chunks(4)) {
+            *a += f32::from_le_bytes(b.try_into().unwrap()) as f64;
+        }
+    }
+    let mut off = 0;
+    for (i, a) in acc.iter().enumerate() {
+        let v = whole[i / 3 * 4 + i % 3] as f64;
+        let mine = (a / 4.0 * 255.0).round().clamp(0.0, 255.0);
+        assert!((mine - v).abs() <= 1.0, "channel {i}: {mine} vs {v}");
+        off += (mine != v) as usize;
+    }
+    assert!(
+        off * 100 < acc.len(),
+        "nearly every level agrees exactly ({off} differ)"
+    );
+    let (first, _) = rgba(MicroRenderRequest {
+        spp: 1,
+        ..req.clone()
+    });
+    let (pass1, _) = rgba(MicroRenderRequest {
+        spp: 1,
+        sample_start: 1,
+        ..req.clone()
+    });
+    assert_ne!(first, pass1, "a later pass draws other samples");
+    // No radiance unless asked for.
+    let r = run_to_end(start_render(req).unwrap(), &Cancel::new(), |_| {}).unwrap();
+    assert!(r.radiance.is_empty());
+}
+
+/// A tile outside the image, an empty one, and a too-late first sample are
+/// refused with the field named.
+#[test]
+fn tile_errors_name_their_field() {
+    let s = asset("spheres");
+    for (tile, want) in [
+        (json!({"x": 0, "y": 0, "w": 0, "h": 4}), "tile"),
+        (json!({"x": 30, "y": 0, "w": 4, "h": 4}), "tile"),
+        (json!({"x": 0, "y": 4294967295u64, "w": 4, "h": 4}), "tile"),
+        (json!({"x": 0, "y": 0, "w": 4}), "tile"),
+    ] {
+        let e = run_json(
+            "micro-render",
+            &json!({"scene": s, "width": 32, "height": 32, "tile": tile}).to_string(),
+        )
+        .unwrap_err();
+        assert_eq!(e.field(), Some(want), "{tile}: {e}");
+    }
+    let e = run_json(
+        "micro-render",
+        &json!({"scene": s, "width": 8, "height": 8, "spp": 1, "sample_start": 1u64 << 21})
+            .to_string(),
+    )
+    .unwrap_err();
+    assert_eq!(e.field(), Some("sample_start"));
+}
+
+/// The native core's PNG bytes for the shared requests of
+/// `tests/fixtures/micro-native/requests.json` (one per step mode, a path
+/// traced image, a path-traced tile of a later pass, a slice) are the files
+/// beside it; the browser e2e (`micro.test.mjs`) asks the wasm worker for
+/// the same requests and compares with the same files, so wasm = native
+/// byte for byte. `FILIGREE_BLESS=1` rewrites the files after an intended
+/// change.
+#[test]
+fn wasm_and_native_give_the_same_bytes() {
+    let dir = format!("{}/tests/fixtures/micro-native", env!("CARGO_MANIFEST_DIR"));
+    let list: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{dir}/requests.json")).unwrap())
+            .unwrap();
+    let bless = std::env::var("FILIGREE_BLESS").is_ok_and(|v| v == "1");
+    let reqs = list["requests"].as_array().unwrap();
+    assert!(reqs.len() >= 5);
+    for r in reqs {
+        let name = r["name"].as_str().unwrap();
+        let mut req = r["request"].clone();
+        req["scene"] = json!(asset(r["scene"].as_str().unwrap()));
+        let out = run_json(r["kind"].as_str().unwrap(), &req.to_string()).unwrap();
+        let png: Vec<u8> = out["png"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as u8)
+            .collect();
+        let path = format!("{dir}/{name}.png");
+        if bless {
+            std::fs::write(&path, &png).unwrap();
+        }
+        let want = std::fs::read(&path)
+            .unwrap_or_else(|e| panic!("{path}: {e} (FILIGREE_BLESS=1 writes it)"));
+        assert!(png == want, "{name}: the native bytes differ from {path}");
     }
 }

@@ -14,7 +14,16 @@
 // in bands of rows. Slices, exports, views deeper than 32-bit floats resolve,
 // and browsers without WebGL2 (said in plain words) use the CPU path.
 //
-// The document is {example, scene, camera, steps, view, z}; its schema is
+// The CPU picture is rendered in tiles (`micro-render` with `tile`), one
+// job per tile over the worker pool, each drawn as it arrives; a tile's
+// pixels are bit for bit those of the one-job render. Path tracing (spp >
+// 0, CPU only) runs in progressive passes of 1, 1, 2, 4, … samples per pixel
+// (`sample_start`), each pass's summed radiance added in and the average
+// shown with the pass count.
+//
+// The document is {example, scene, camera, steps, view, z, shading,
+// roughness, specular, absorption, spp, max_depth} (version 2; version 1
+// documents get the request's defaults); its schema is
 // src/micro/state.rs. History, autosave, project files and links come from
 // the document controller (document.js).
 import { shippedExamples, shareByExample } from './examples.js';
@@ -35,6 +44,10 @@ const GPU_FRAME_MS = 30; // aim for frames (and refinement slices) this long
 const GPU_MAX_DIV = 16;
 const DEFAULT_CAMERA = { yaw: 35, pitch: 28, distance: 3.6, target: [0, 0, 0] };
 const DISTANCE = [1e-6, 1e5];
+const TILE_GRID = 4; // the full CPU picture: TILE_GRID² tiles
+const PASS_MAX = 256; // most samples per pixel in one progressive pass
+const SHADING_DEFAULTS = { shading: 'lambert', roughness: 0.35, specular: 0.04, absorption: 0, spp: 0, max_depth: 4 };
+const SPP_CHOICES = [0, 4, 16, 64, 256, 1024];
 const STEP_MODES = [
   ['fixed', 'Fixed steps'],
   ['bisection', 'Bisection'],
@@ -64,11 +77,27 @@ const html = `
           <button type="button" data-act="export-png">Export PNG</button>
         </span>
       </div>
+      <div class="toolbar micro-shading" role="group" aria-label="Shading">
+        <span class="group">
+          <label class="inline">Surface <select name="shading" data-field="shading" data-testid="micro-shading">
+            <option value="lambert">Lambert</option><option value="ggx">GGX</option></select></label>
+          <label class="inline" data-ggx>Roughness <input type="range" name="roughness" min="0.02" max="1" step="0.01" data-field="roughness" data-testid="micro-roughness"><output></output></label>
+          <label class="inline" data-ggx>Specular <input type="range" name="specular" min="0" max="1" step="0.01" data-field="specular" data-testid="micro-specular"><output></output></label>
+        </span>
+        <span class="group">
+          <label class="inline">Absorption <input type="range" name="absorption" min="0" max="5" step="0.05" data-field="absorption" data-testid="micro-absorption"><output></output></label>
+        </span>
+        <span class="group">
+          <label class="inline">Path tracing <select name="spp" data-field="spp" data-testid="micro-spp"></select></label>
+          <label class="inline">Max depth <input type="number" name="max_depth" min="1" max="64" step="1" data-field="max_depth" data-testid="micro-max-depth"></label>
+        </span>
+      </div>
       <div class="micro-viewport" data-testid="micro-viewport">
         <canvas data-testid="micro-canvas" tabindex="0" role="img" aria-label="microstructure: drag or arrow keys to orbit, wheel or + and − to zoom"></canvas>
       </div>
       <div class="status muted" data-testid="micro-status" aria-live="polite"></div>
       <div class="status muted" data-testid="micro-gpu-note" hidden></div>
+      <div class="status muted" data-testid="micro-cpu-note" hidden></div>
     </section>
     <aside class="card micro-side">
       <h3>Scene</h3>
@@ -83,13 +112,14 @@ const html = `
 
 
 const microState = {
-  version: 1,
+  version: 2,
   async defaults(ctx) {
     const list = await examples(ctx.run);
     const ex = list.find((e) => e.name === 'gyroid') || list[0];
-    return { example: ex.name, scene: ex.scene, camera: { ...DEFAULT_CAMERA, target: [...DEFAULT_CAMERA.target] }, steps: 'fixed', view: 'render', z: 0 };
+    return { example: ex.name, scene: ex.scene, camera: { ...DEFAULT_CAMERA, target: [...DEFAULT_CAMERA.target] }, steps: 'fixed', view: 'render', z: 0, ...SHADING_DEFAULTS };
   },
-  migrate: (raw) => raw,
+  // Version 1 had no shading fields: the request's defaults (what it drew).
+  migrate: (raw, version) => (version < 2 && raw && typeof raw === 'object' && !Array.isArray(raw) ? { ...SHADING_DEFAULTS, ...raw } : raw),
   fileName: (s) => s.example || 'micro',
   // A shipped scene travels by name.
   ...shareByExample(examples, 'scene', { tool: 'Micro', what: 'scene' }),
@@ -99,8 +129,35 @@ const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
 const sameCamera = (a, b) => a === b || (a.yaw === b.yaw && a.pitch === b.pitch && a.distance === b.distance
   && a.target.every((v, i) => v === b.target[i]));
 /** Whether documents a and b draw the same picture. */
+const sameShading = (a, b) => a.shading === b.shading && a.roughness === b.roughness && a.specular === b.specular
+  && a.absorption === b.absorption && a.spp === b.spp && a.max_depth === b.max_depth;
 const samePicture = (a, b) => a.scene === b.scene && a.steps === b.steps && a.view === b.view
-  && (a.view === 'render' ? sameCamera(a.camera, b.camera) : a.z === b.z && sameCamera(a.camera, b.camera));
+  && (a.view === 'render' ? sameCamera(a.camera, b.camera) && sameShading(a, b) : a.z === b.z && sameCamera(a.camera, b.camera));
+/** The shading fields of a `micro-render` request. */
+const shadingOf = (doc) => ({
+  shading: doc.shading ?? 'lambert', roughness: doc.roughness ?? 0.35, specular: doc.specular ?? 0.04, absorption: doc.absorption ?? 0,
+});
+
+/** TILE_GRID × TILE_GRID tiles covering a side × side image (fewer when it is tiny). */
+export function tilesOf(side, grid = TILE_GRID) {
+  const n = Math.max(1, Math.min(grid, side));
+  const cut = (i) => Math.floor((side * i) / n);
+  const out = [];
+  for (let j = 0; j < n; j++) for (let i = 0; i < n; i++) out.push({ x: cut(i), y: cut(j), w: cut(i + 1) - cut(i), h: cut(j + 1) - cut(j) });
+  return out;
+}
+
+/** Progressive passes for `spp` samples: [first sample, samples] of 1, 1, 2, 4, … (at most PASS_MAX). */
+export function passesOf(spp) {
+  const out = [];
+  let start = 0;
+  while (start < spp) {
+    const n = Math.min(spp - start, Math.max(1, Math.min(start, PASS_MAX)));
+    out.push([start, n]);
+    start += n;
+  }
+  return out;
+}
 
 function mount(el, ctx) {
   el.innerHTML = html;
@@ -179,8 +236,17 @@ function mount(el, ctx) {
     return ['micro-render', {
       scene: doc.scene, width: side, height: side, steps: doc.steps,
       camera: { yaw: doc.camera.yaw, pitch: doc.camera.pitch, distance: doc.camera.distance, target: doc.camera.target },
+      ...shadingOf(doc), spp: doc.spp ?? 0, max_depth: doc.max_depth ?? 4,
     }];
   }
+
+  const renderStatus = (doc, r, extra, ms) => {
+    const s = r.stats;
+    return `${r.width}×${r.height}${extra}, ${doc.steps} steps: ${s.hits.toLocaleString('en')} of ${s.rays.toLocaleString('en')} rays hit, `
+      + `${s.steps.toLocaleString('en')} steps, ${s.sdf_evals.toLocaleString('en')} field evaluations`
+      + `${s.gradient_checks ? `, ${s.gradient_checks.toLocaleString('en')} gradient checks` : ''}`
+      + `${s.exhausted ? `, ${s.exhausted.toLocaleString('en')} rays out of steps` : ''} in ${Math.round(ms)} ms — zoom ×${(DEFAULT_CAMERA.distance / doc.camera.distance).toPrecision(3)}`;
+  };
 
   async function run(small) {
     const doc = state();
@@ -195,6 +261,10 @@ function mount(el, ctx) {
     const full = fullSide();
     const side = small ? Math.max(8, Math.round(full / PREVIEW_DIV)) : full;
     const [kind, payload] = requestOf(doc, side);
+    noteCpu(doc);
+    // A preview while dragging: one sample per pixel when path tracing.
+    if (small && payload.spp > 1) payload.spp = 1;
+    if (!small && kind === 'micro-render') return runTiles(doc, payload, ctrl);
     if (!small) status(kind === 'micro-slice' ? 'slicing…' : 'tracing…');
     const t0 = performance.now();
     try {
@@ -210,7 +280,7 @@ function mount(el, ctx) {
       const png = r.png instanceof Uint8Array ? r.png : new Uint8Array(r.png);
       const bmp = await createImageBitmap(new Blob([png], { type: 'image/png' }));
       if (running !== ctrl || !ctx.alive()) { bmp.close?.(); return; }
-      bitmap?.close?.();
+      if (bitmap !== comp) bitmap?.close?.();
       bitmap = bmp;
       last = { png, width: r.width, height: r.height, kind, preview: small, stats: r.stats, r, gpu: false };
       paint();
@@ -220,11 +290,7 @@ function mount(el, ctx) {
       if (kind === 'micro-slice') {
         status(`slice z = ${doc.z}: ${size}, field from ${r.min.toPrecision(3)} to ${r.max.toPrecision(3)}, ${(r.inside * 100).toFixed(1)}% inside${small ? ' (preview)' : ''} in ${Math.round(ms)} ms`);
       } else {
-        const s = r.stats;
-        status(`${size}${small ? ' (preview)' : ''}, ${doc.steps} steps: ${s.hits.toLocaleString('en')} of ${s.rays.toLocaleString('en')} rays hit, `
-          + `${s.steps.toLocaleString('en')} steps, ${s.sdf_evals.toLocaleString('en')} field evaluations`
-          + `${s.gradient_checks ? `, ${s.gradient_checks.toLocaleString('en')} gradient checks` : ''}`
-          + `${s.exhausted ? `, ${s.exhausted.toLocaleString('en')} rays out of steps` : ''} in ${Math.round(ms)} ms — zoom ×${(DEFAULT_CAMERA.distance / doc.camera.distance).toPrecision(3)}`);
+        status(renderStatus(doc, r, small ? ' (preview)' : '', ms));
       }
       if (!small) statusEl.dataset.runs = String(Number(statusEl.dataset.runs || 0) + 1);
       statusEl.dataset.previews = String(Number(statusEl.dataset.previews || 0) + (small ? 1 : 0));
@@ -238,6 +304,101 @@ function mount(el, ctx) {
     }
   }
 
+  // ---- the CPU picture in tiles over the worker pool --------------------------------------
+
+  const comp = document.createElement('canvas'); // the full picture, tile by tile
+  const compG = comp.getContext('2d', { willReadFrequently: true });
+  const tileCanvas = document.createElement('canvas');
+  const tileG = tileCanvas.getContext('2d', { willReadFrequently: true });
+
+  /** A tile's PNG as pixels (RGBA, row order). */
+  async function pngPixels(bytes, w, h) {
+    const bmp = await createImageBitmap(new Blob([bytes], { type: 'image/png' }), { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
+    tileCanvas.width = w;
+    tileCanvas.height = h;
+    tileG.clearRect(0, 0, w, h);
+    tileG.drawImage(bmp, 0, 0);
+    bmp.close?.();
+    return tileG.getImageData(0, 0, w, h).data;
+  }
+
+  /**
+   * The full picture as TILE_GRID² `micro-render` jobs over the pool, each
+   * tile painted as it arrives; path tracing in progressive passes whose
+   * summed radiance is added up here and shown averaged.
+   */
+  async function runTiles(doc, payload, ctrl) {
+    const side = payload.width;
+    const tiles = tilesOf(side);
+    const spp = payload.spp;
+    const passes = spp > 0 ? passesOf(spp) : [[0, 0]];
+    const frame = new ImageData(side, side);
+    const acc = spp > 0 ? new Float64Array(side * side * 3) : null;
+    // Keep what is shown until the tiles replace it.
+    if (comp.width !== side || comp.height !== side) { comp.width = side; comp.height = side; }
+    if (bitmap && bitmap !== comp) { compG.imageSmoothingEnabled = true; compG.drawImage(bitmap, 0, 0, side, side); bitmap.close?.(); }
+    bitmap = comp;
+    const t0 = performance.now();
+    let stats = null;
+    let tilesDone = 0;
+    statusEl.dataset.passes = '0';
+    status(spp > 0 ? `path tracing on the CPU: pass 1 of ${passes.length}…` : `tracing ${tiles.length} tiles…`);
+    try {
+      for (let p = 0; p < passes.length; p++) {
+        const [start, n] = passes[p];
+        const total = start + n;
+        await Promise.all(tiles.map(async (t) => {
+          const r = await ctx.run('micro-render', { ...payload, tile: t, spp: n, sample_start: start, radiance: n > 0 }, { signal: ctrl.signal });
+          if (running !== ctrl || !ctx.alive()) return;
+          if (n > 0) {
+            const rad = r.radiance instanceof Uint8Array ? r.radiance : new Uint8Array(r.radiance);
+            const dv = new DataView(rad.buffer, rad.byteOffset, rad.byteLength);
+            const k = 255 / total;
+            for (let y = 0; y < t.h; y++) {
+              for (let x = 0; x < t.w; x++) {
+                const px = (t.y + y) * side + t.x + x;
+                const src = ((y * t.w + x) * 3) * 4;
+                for (let c = 0; c < 3; c++) {
+                  const v = (acc[px * 3 + c] += dv.getFloat32(src + c * 4, true));
+                  frame.data[px * 4 + c] = Math.min(255, Math.max(0, Math.round(v * k)));
+                }
+                frame.data[px * 4 + 3] = 255;
+              }
+            }
+          } else {
+            const png = r.png instanceof Uint8Array ? r.png : new Uint8Array(r.png);
+            const px = await pngPixels(png, t.w, t.h);
+            if (running !== ctrl || !ctx.alive()) return;
+            for (let y = 0; y < t.h; y++) frame.data.set(px.subarray(y * t.w * 4, (y + 1) * t.w * 4), ((t.y + y) * side + t.x) * 4);
+          }
+          compG.putImageData(frame, 0, 0, t.x, t.y, t.w, t.h);
+          if (bitmap === comp) paint();
+          stats = addStats(stats, r.stats);
+          tilesDone++;
+          if (!spp) status(`tracing on the CPU: ${tilesDone} of ${tiles.length} tiles`);
+        }));
+        if (running !== ctrl || !ctx.alive()) return;
+        statusEl.dataset.passes = String(p + 1);
+        if (spp > 0 && p + 1 < passes.length) {
+          status(`path tracing on the CPU: pass ${p + 1} of ${passes.length} done, ${total} of ${spp} samples per pixel…`);
+        }
+      }
+      const ms = performance.now() - t0;
+      last = { width: side, height: side, kind: 'micro-render', preview: false, stats, gpu: false, tiles: tiles.length, passes: passes.length, frame };
+      ctx.clearError('run');
+      editor?.clearError();
+      const extra = spp > 0 ? `, path traced on the CPU, ${spp} samples per pixel in ${passes.length} passes` : `, on the CPU in ${tiles.length} tiles`;
+      status(renderStatus(doc, { width: side, height: side, stats }, extra, ms));
+      statusEl.dataset.runs = String(Number(statusEl.dataset.runs || 0) + 1);
+    } catch (err) {
+      if (running !== ctrl) return;
+      if (err?.kind === 'cancelled') { status('cancelled'); return; }
+      status('the scene could not be rendered (see above)');
+      ctx.error(err, { prefix: 'Micro', source: 'run' });
+    } finally {
+      if (running === ctrl) { running = null; ctrl.abort(); }
+    }
+  }
 
   // ---- the GPU view ----------------------------------------------------------------------
 
@@ -261,12 +422,25 @@ function mount(el, ctx) {
   let msPerPixel = 0; // measured
   const scratch = document.createElement('canvas');
 
-  const shaderRequest = (doc) => ({ scene: doc.scene, steps: doc.steps, width: 16, height: 16 });
+  const shaderRequest = (doc) => ({ scene: doc.scene, steps: doc.steps, width: 16, height: 16, ...shadingOf(doc) });
   const shaderKey = (doc) => JSON.stringify(shaderRequest(doc));
 
   /** Whether the GPU draws this document. */
   function onGpu(doc) {
-    return !!gpu && !gpu.lost && doc.view === 'render' && !gpuFailed.has(shaderKey(doc)) && usable(doc.camera, fullSide());
+    return !!gpu && !gpu.lost && doc.view === 'render' && !(doc.spp > 0) && !gpuFailed.has(shaderKey(doc)) && usable(doc.camera, fullSide());
+  }
+
+  /** Say why a render is drawn on the CPU although the GPU view is on. */
+  const cpuNote = q('[data-testid=micro-cpu-note]');
+  function noteCpu(doc) {
+    let why = null;
+    if (gpu && !gpu.lost && doc.view === 'render') {
+      if (doc.spp > 0) why = 'path tracing runs on the CPU only';
+      else if (gpuFailed.has(shaderKey(doc))) why = 'the GPU cannot draw this scene';
+      else if (!usable(doc.camera, fullSide())) why = 'this zoom is deeper than the GPU’s 32-bit floats resolve';
+    }
+    cpuNote.hidden = !why;
+    cpuNote.textContent = why ? `Drawn on the CPU (in tiles over the workers): ${why}.` : '';
   }
 
   function stopGpu() {
@@ -285,6 +459,7 @@ function mount(el, ctx) {
     ctx.clearTimeout(runTimer);
     runTimer = null;
     stopGpu();
+    noteCpu(doc);
     const token = gpuToken;
     gpuJob = { doc, token, t0: performance.now() };
     gpuFrame = requestAnimationFrame(() => { gpuFrame = 0; gpuCoarse(token); });
@@ -514,6 +689,30 @@ function mount(el, ctx) {
   zInput.oninput = () => { const doc = state(); if (doc) ctx.commit({ ...doc, z: Number(zInput.value) }, { coalesce: 'micro-z' }); };
   zInput.onchange = () => ctx.seal();
 
+  const shadingSel = q('[name=shading]');
+  const sppSel = q('[name=spp]');
+  const depthInput = q('[name=max_depth]');
+  const sliders = ['roughness', 'specular', 'absorption'].map((k) => q(`[name=${k}]`));
+  const sppLabel = (n) => (n ? `${n} samples per pixel` : 'off (direct shading)');
+  const sppOptions = (cur) => {
+    const want = [...new Set([...SPP_CHOICES, cur])].sort((a, b) => a - b);
+    if (sppSel.options.length === want.length && [...sppSel.options].every((o, i) => Number(o.value) === want[i])) return;
+    sppSel.replaceChildren(...want.map((n) => { const o = document.createElement('option'); o.value = String(n); o.textContent = sppLabel(n); return o; }));
+  };
+  sppOptions(0);
+  const commitField = (k, v, coalesce) => { const doc = state(); if (doc && doc[k] !== v) ctx.commit({ ...doc, [k]: v }, coalesce ? { coalesce } : undefined); };
+  shadingSel.onchange = () => commitField('shading', shadingSel.value);
+  sppSel.onchange = () => commitField('spp', Number(sppSel.value));
+  depthInput.onchange = () => {
+    const v = Math.round(Number(depthInput.value));
+    if (Number.isFinite(v)) commitField('max_depth', clamp(v, 1, 64));
+    else depthInput.value = String(state()?.max_depth ?? 4);
+  };
+  for (const el of sliders) {
+    el.oninput = () => commitField(el.name, Number(el.value), `micro-${el.name}`);
+    el.onchange = () => ctx.seal();
+  }
+
   // ---- scene picker -------------------------------------------------------------------
 
   const list = q('[data-testid=micro-examples]');
@@ -553,7 +752,8 @@ function mount(el, ctx) {
     if (!doc) return;
     try {
       // Always the full-size picture of the current document.
-      const side = FULL_SIDE * 2;
+      // (Path tracing at the panel's size: samples × pixels are bounded.)
+      const side = doc.view === 'render' && doc.spp > 0 ? FULL_SIDE : FULL_SIDE * 2;
       const [kind, payload] = requestOf(doc, side);
       status('exporting PNG…');
       const r = await ctx.run(kind, payload);
@@ -567,7 +767,17 @@ function mount(el, ctx) {
   // For tests and the console.
   const hooks = {
     state,
-    last: () => (last ? { kind: last.kind, width: last.width, height: last.height, preview: last.preview, stats: last.stats, gpu: last.gpu } : null),
+    last: () => (last ? { kind: last.kind, width: last.width, height: last.height, preview: last.preview, stats: last.stats, gpu: last.gpu, tiles: last.tiles ?? 1, passes: last.passes ?? 1 } : null),
+    /** The `micro-render` request of the full picture now (what the tiles split). */
+    request: () => (state() ? requestOf(state(), fullSide())[1] : null),
+    /** The last tiled CPU picture's pixels (RGBA) as base64, for tests. */
+    frame: () => {
+      const d = last?.frame?.data;
+      if (!d) return null;
+      let bin = '';
+      for (let i = 0; i < d.length; i += 0x8000) bin += String.fromCharCode.apply(null, d.subarray(i, i + 0x8000));
+      return btoa(bin);
+    },
     pending: () => runTimer !== null || running !== null || typingTimer !== null || sharpTimer !== null || gpuJob !== null,
     gpu: () => (gpu && !gpu.lost ? { note: gpuNote.hidden ? null : gpuNote.textContent } : null),
   };
@@ -584,10 +794,20 @@ function mount(el, ctx) {
       zInput.disabled = s.view !== 'slice';
       if (Number(zInput.value) !== s.z) zInput.value = String(s.z);
       zInput.nextElementSibling.textContent = s.z.toFixed(2);
+      shadingSel.value = s.shading;
+      for (const el of sliders) {
+        if (Number(el.value) !== s[el.name]) el.value = String(s[el.name]);
+        el.nextElementSibling.textContent = String(s[el.name]);
+      }
+      for (const l of el.querySelectorAll('[data-ggx]')) l.hidden = s.shading !== 'ggx';
+      sppOptions(s.spp);
+      sppSel.value = String(s.spp);
+      depthInput.value = String(s.max_depth);
+      depthInput.disabled = !(s.spp > 0);
       markExample(s);
       if (!prev || !samePicture(s, prev)) {
         if (onGpu(s)) { gpuRun(s); return; }
-        const cameraOnly = prev && s.scene === prev.scene && s.steps === prev.steps && s.view === prev.view && s.z === prev.z;
+        const cameraOnly = prev && s.scene === prev.scene && s.steps === prev.steps && s.view === prev.view && s.z === prev.z && sameShading(s, prev);
         if (cameraOnly && gesture) preview();
         else scheduleRun();
       }

@@ -4,7 +4,9 @@ use super::{drive, print_request, put, request, Origins};
 use clap::Subcommand;
 use filigree::core::job::Cancel;
 use filigree::core::parallel::run_sharded_threads;
-use filigree::micro::api::{start_render, start_slice, MicroRenderRequest, MicroSliceRequest};
+use filigree::micro::api::{
+    render_threads, start_render, start_slice, MicroRenderRequest, MicroSliceRequest,
+};
 use filigree::micro::fit_api::{start_fit, FitParam, FitTarget, MicroFitRequest};
 use serde_json::{json, Map, Value};
 use std::path::{Path, PathBuf};
@@ -135,6 +137,18 @@ pub struct RenderArgs {
     /// Path trace with N samples per pixel (0: direct shading).
     #[arg(long)]
     spp: Option<u32>,
+    /// Path tracing: most bounces of one path.
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// GGX: reflectance at normal incidence (0..1).
+    #[arg(long)]
+    specular: Option<f64>,
+    /// Path tracing: the seed of every pixel's samples.
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Render in bands on N threads (the same bytes as one thread).
+    #[arg(long)]
+    threads: Option<usize>,
     /// Print the work counters as JSON.
     #[arg(long)]
     json: bool,
@@ -405,6 +419,9 @@ fn render(a: RenderArgs) -> Result<(), String> {
     put(&mut o, "shading", "--shading", a.shading)?;
     put(&mut o, "roughness", "--roughness", a.roughness)?;
     put(&mut o, "spp", "--spp", a.spp)?;
+    put(&mut o, "max_depth", "--max-depth", a.max_depth)?;
+    put(&mut o, "specular", "--specular", a.specular)?;
+    put(&mut o, "seed", "--seed", a.seed)?;
     let mut cam = Map::new();
     put(&mut cam, "distance", "--distance", a.distance)?;
     put(&mut cam, "yaw", "--yaw", a.yaw)?;
@@ -431,8 +448,19 @@ fn render(a: RenderArgs) -> Result<(), String> {
     if a.print_request {
         return print_request(&req);
     }
-    let job = start_render(req).map_err(|e| super::explain(e, &origins))?;
-    let out = drive(job, a.json, &origins)?;
+    let out = match a.threads {
+        // One job, with progress.
+        None => {
+            let job = start_render(req).map_err(|e| super::explain(e, &origins))?;
+            drive(job, a.json, &origins)?
+        }
+        // Bands on scoped threads (four per thread, for balance).
+        Some(n) => {
+            let n = super::threads(Some(n))?;
+            render_threads(&req, n, n as u32 * 4, &Cancel::new())
+                .map_err(|e| super::explain(e, &origins))?
+        }
+    };
     write(&a.out, &out.png)?;
     if a.json {
         println!(

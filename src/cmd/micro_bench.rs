@@ -61,6 +61,38 @@ fn render(req: &MicroRenderRequest, repeats: usize) -> Result<(f64, MicroRenderR
     Ok((median * 1e3, last.expect("one repeat")))
 }
 
+/// M5's tiles: the multiscale scene at 512² in 16 bands on 1 and on 2
+/// scoped threads (`render_threads`, the CLI's `--threads`); the bytes are
+/// the same, the ratio is the speed-up (2 cores here).
+fn tile_scaling(repeats: usize) -> Result<Value, String> {
+    let req = MicroRenderRequest {
+        scene: MULTISCALE.to_string(),
+        width: 512,
+        height: 512,
+        ..Default::default()
+    };
+    let mut ms = vec![];
+    let mut png = None;
+    for threads in [1usize, 2] {
+        let mut secs = vec![];
+        for _ in 0..repeats.max(1) {
+            let t = Instant::now();
+            let out = filigree::micro::api::render_threads(&req, threads, 16, &Cancel::new())
+                .map_err(|e| e.to_string())?;
+            secs.push(t.elapsed().as_secs_f64());
+            if *png.get_or_insert_with(|| out.png.clone()) != out.png {
+                return Err("bench micro: the tiled render's bytes depend on the threads".into());
+            }
+        }
+        ms.push(super::min_median(secs).1 * 1e3);
+    }
+    Ok(json!({
+        "scene": "assets/micro/multiscale.json", "image": "512x512", "tiles": 16,
+        "threads_1_ms": ms[0], "threads_2_ms": ms[1], "speedup_2_threads": ms[0] / ms[1],
+        "cores": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+    }))
+}
+
 fn stats(out: &MicroRenderResponse) -> Value {
     serde_json::to_value(out.stats).unwrap_or(Value::Null)
 }
@@ -164,9 +196,11 @@ pub fn run(repeats: usize, size: u32, parts: Parts) -> Result<(), String> {
         }
         fib.push(row);
     }
+    let tiles = tile_scaling(repeats)?;
     let out = json!({
         "bench": "micro",
         "image": format!("{size}x{size}"),
+        "tile_scaling": tiles,
         "repeats": repeats.max(1),
         "table2_step_strategies": table2,
         "paper_note": "paper: OptiX on an RTX 4090, 1500 steps, Lambertian particles; \

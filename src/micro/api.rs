@@ -61,6 +61,48 @@ pub struct MicroRenderRequest {
     /// Path tracing: most bounces of one path.
     pub max_depth: u32,
     pub seed: u64,
+    /// Path tracing: index of the first sample (progressive passes render
+    /// samples `sample_start .. sample_start + spp`; each sample has its own
+    /// generator seeded by `seed`, the pixel and the sample index).
+    pub sample_start: u32,
+    /// Path tracing: also return the summed linear radiance of this
+    /// request's samples (`radiance`), for pages that average passes.
+    pub radiance: bool,
+    /// Render only this rectangle of the `width`×`height` image (default:
+    /// all of it). Its pixels are bit for bit those of the whole image.
+    /// (Boxed: the request is a variant of `micro-fit`'s sampler.)
+    pub tile: Option<Box<Tile>>,
+}
+
+/// A rectangle of an image: `w`×`h` pixels from column `x`, row `y`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tile {
+    pub x: u32,
+    pub y: u32,
+    pub w: u32,
+    pub h: u32,
+}
+
+impl Tile {
+    /// `n` horizontal bands of a `width`×`height` image (at most one per row),
+    /// top to bottom, heights differing by at most one.
+    pub fn bands(width: u32, height: u32, n: u32) -> Vec<Tile> {
+        let n = n.clamp(1, height.max(1));
+        (0..n)
+            .map(|k| {
+                let y0 = (height as u64 * k as u64 / n as u64) as u32;
+                let y1 = (height as u64 * (k as u64 + 1) / n as u64) as u32;
+                Tile {
+                    x: 0,
+                    y: y0,
+                    w: width,
+                    h: y1 - y0,
+                }
+            })
+            .filter(|t| t.h > 0)
+            .collect()
+    }
 }
 
 impl Default for MicroRenderRequest {
@@ -89,6 +131,9 @@ impl Default for MicroRenderRequest {
             spp: 0,
             max_depth: 4,
             seed: 1,
+            sample_start: 0,
+            radiance: false,
+            tile: None,
         }
     }
 }
@@ -122,14 +167,22 @@ impl Default for MicroSliceRequest {
     }
 }
 
-/// A rendered image with its work counters.
+/// A rendered image (the whole image or its tile) with its work counters.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MicroRenderResponse {
+    /// The PNG's size: the tile's when the request names one.
     pub width: u32,
     pub height: u32,
+    /// Where the PNG goes in the whole image (the whole image by default).
+    pub tile: Tile,
     #[serde(with = "serde_bytes")]
     pub png: Vec<u8>,
     pub stats: Stats,
+    /// With `radiance` and `spp` > 0: per pixel of the PNG, row order, the
+    /// sum of its samples' linear R, G, B (1 = full colour) as 32-bit
+    /// little-endian floats; else empty.
+    #[serde(with = "serde_bytes")]
+    pub radiance: Vec<u8>,
 }
 
 /// A slice image with the field's range on it.
@@ -167,13 +220,16 @@ pub struct RenderJob {
     trace: Trace,
     shade: Shade,
     width: u32,
-    height: u32,
+    /// The rectangle rendered; `next` counts its pixels in row order.
+    tile: Tile,
     next: u64,
     rgba: Vec<u8>,
     stats: Stats,
     /// Path tracing: samples per pixel (0: off), pass-major (every pixel's
     /// k-th sample before any pixel's (k+1)-th), summed radiance per pixel.
     spp: u32,
+    sample_start: u32,
+    want_radiance: bool,
     seed: u64,
     path: render::PathSettings,
     sum: Vec<DVec3>,
@@ -218,6 +274,24 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
     lim::finite_in("specular", req.specular, (0.0, 1.0))?;
     lim::int_in("spp", req.spp, (0, MAX_MICRO_SPP))?;
     lim::int_in("max_depth", req.max_depth, (1, 64))?;
+    lim::int_in(
+        "sample_start",
+        req.sample_start,
+        (0, MAX_MICRO_SAMPLE_START),
+    )?;
+    if let Some(&t) = req.tile.as_deref() {
+        if t.w == 0
+            || t.h == 0
+            || t.x as u64 + t.w as u64 > req.width as u64
+            || t.y as u64 + t.h as u64 > req.height as u64
+        {
+            return Err(Error::input(format!(
+                "tile {}×{} at ({}, {}) must be a non-empty rectangle inside the {}×{} image",
+                t.w, t.h, t.x, t.y, req.width, req.height
+            ))
+            .at("tile"));
+        }
+    }
     if req.spp as u64 * req.width as u64 * req.height as u64 > MAX_MICRO_PIXELS * 64 {
         return Err(Error::limit(format!(
             "{} samples per pixel at {}×{} is more than {} samples in all",
@@ -266,18 +340,26 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
 /// Check a render request and set the job up (no tracing yet).
 pub fn start_render(req: MicroRenderRequest) -> Result<RenderJob> {
     let c = check_render(&req)?;
-    let n = req.width as usize * req.height as usize * 4;
+    let tile = req.tile.as_deref().copied().unwrap_or(Tile {
+        x: 0,
+        y: 0,
+        w: req.width,
+        h: req.height,
+    });
+    let n = tile.w as usize * tile.h as usize * 4;
     Ok(RenderJob {
         scene: c.scene,
         trace: c.trace,
         rays: c.rays,
         shade: c.shade,
         width: req.width,
-        height: req.height,
+        tile,
         next: 0,
         rgba: vec![0; n],
         stats: Stats::default(),
         spp: req.spp,
+        sample_start: req.sample_start,
+        want_radiance: req.radiance,
         seed: req.seed,
         path: render::PathSettings {
             max_depth: req.max_depth,
@@ -328,15 +410,25 @@ pub fn start_glsl(req: MicroRenderRequest) -> Result<impl Job<Output = MicroGlsl
 
 /// Most path-tracing samples per pixel.
 pub const MAX_MICRO_SPP: u32 = 4096;
+/// Highest index of a first sample (progressive passes).
+pub const MAX_MICRO_SAMPLE_START: u32 = 1 << 20;
 
 impl RenderJob {
-    /// Path-trace work item `i`: sample `i / pixels` of pixel `i % pixels`,
-    /// from its own generator (so the bytes do not depend on how the job
-    /// is stepped).
+    /// Pixel `i` of the tile (row order): its column and row in the whole image.
+    fn at(&self, i: u64) -> (u32, u32) {
+        let w = self.tile.w as u64;
+        (self.tile.x + (i % w) as u32, self.tile.y + (i / w) as u32)
+    }
+
+    /// Path-trace work item `i`: sample `sample_start + i / pixels` of tile
+    /// pixel `i % pixels`, from its own generator seeded by the sample index
+    /// and the pixel's index in the whole image (so the bytes depend neither
+    /// on how the job is stepped nor on the tiling).
     fn sample(&mut self, i: u64) {
-        let n = self.width as u64 * self.height as u64;
-        let (k, px) = (i / n, i % n);
-        let (x, y) = (px % self.width as u64, px / self.width as u64);
+        let n = self.tile.w as u64 * self.tile.h as u64;
+        let (k, j) = (self.sample_start as u64 + i / n, i % n);
+        let (x, y) = self.at(j);
+        let px = y as u64 * self.width as u64 + x as u64;
         let mut rng = crate::core::rng::Rng::new(
             self.seed
                 .wrapping_mul(0x2545_F491_4F6C_DD1D)
@@ -354,15 +446,12 @@ impl RenderJob {
             &mut rng,
             &mut self.stats,
         );
-        self.sum[px as usize] += l;
+        self.sum[j as usize] += l;
     }
 
-    /// Render pixel `i` (row order) and store it.
+    /// Render pixel `i` of the tile (row order) and store it.
     fn pixel(&mut self, i: u64) {
-        let (x, y) = (
-            (i % self.width as u64) as u32,
-            (i / self.width as u64) as u32,
-        );
+        let (x, y) = self.at(i);
         let d = self.rays.dir(x, y);
         let o = self.rays.origin;
         let t = render::trace(&self.scene, o, d, &self.trace, &mut self.stats);
@@ -378,12 +467,11 @@ impl RenderJob {
         let k = i as usize * 4;
         self.rgba[k..k + 4].copy_from_slice(&px);
     }
-}
 
-impl Job for RenderJob {
-    type Output = MicroRenderResponse;
-    fn step(&mut self) -> Result<Step<MicroRenderResponse>> {
-        let pixels = self.width as u64 * self.height as u64;
+    /// Work a bounded slice (a few milliseconds); the fraction done, or
+    /// `None` once every pixel is rendered.
+    fn advance(&mut self) -> Option<f64> {
+        let pixels = self.tile.w as u64 * self.tile.h as u64;
         let total = pixels * self.spp.max(1) as u64;
         let budget = self.stats.sdf_evals + EVALS_PER_STEP;
         while self.next < total && self.stats.sdf_evals < budget {
@@ -394,16 +482,11 @@ impl Job for RenderJob {
             }
             self.next += 1;
         }
-        if self.next < total {
-            return Ok(Step::Running(Progress::new(
-                self.next as f64 / total as f64,
-                if self.spp > 0 {
-                    "path tracing"
-                } else {
-                    "sphere tracing"
-                },
-            )));
-        }
+        (self.next < total).then(|| self.next as f64 / total as f64)
+    }
+
+    /// The finished tile's pixels (after [`Self::advance`] returned `None`).
+    fn take_rgba(&mut self) -> Rgba8Image {
         if self.spp > 0 {
             // Average, then to 8 bits (linear, like the direct shading).
             let inv = 1.0 / self.spp as f64;
@@ -413,16 +496,108 @@ impl Job for RenderJob {
                 self.rgba[px * 4..px * 4 + 4].copy_from_slice(&[q(c.x), q(c.y), q(c.z), 255]);
             }
         }
-        let img = Rgba8Image {
-            width: self.width,
-            height: self.height,
+        Rgba8Image {
+            width: self.tile.w,
+            height: self.tile.h,
             data: std::mem::take(&mut self.rgba),
+        }
+    }
+
+    /// The tile this job renders.
+    pub fn tile(&self) -> Tile {
+        self.tile
+    }
+
+    /// Render to the end without encoding: the tile's pixels and the work
+    /// counters (for drivers that assemble tiles, such as the CLI's
+    /// `--threads`). Checks `cancel` between slices.
+    pub fn run_rgba(mut self, cancel: &crate::core::job::Cancel) -> Result<(Rgba8Image, Stats)> {
+        while self.advance().is_some() {
+            if cancel.is_cancelled() {
+                return Err(Error::Cancelled);
+            }
+        }
+        Ok((self.take_rgba(), self.stats))
+    }
+}
+
+/// Put tiles rendered by [`RenderJob::run_rgba`] together into the whole
+/// `width`×`height` image's response (PNG bytes equal to one job's).
+pub fn assemble(
+    width: u32,
+    height: u32,
+    parts: &[(Tile, Rgba8Image, Stats)],
+) -> Result<MicroRenderResponse> {
+    let mut data = vec![0u8; width as usize * height as usize * 4];
+    let mut stats = Stats::default();
+    let mut covered = 0u64;
+    for (t, img, st) in parts {
+        if t.x + t.w > width || t.y + t.h > height || img.width != t.w || img.height != t.h {
+            return Err(Error::input("a tile does not fit its image").at("tile"));
+        }
+        let row = t.w as usize * 4;
+        for r in 0..t.h as usize {
+            let dst = ((t.y as usize + r) * width as usize + t.x as usize) * 4;
+            data[dst..dst + row].copy_from_slice(&img.data[r * row..(r + 1) * row]);
+        }
+        covered += t.w as u64 * t.h as u64;
+        stats.add(st);
+    }
+    if covered != width as u64 * height as u64 {
+        return Err(Error::input("the tiles do not cover the image").at("tile"));
+    }
+    let img = Rgba8Image {
+        width,
+        height,
+        data,
+    };
+    Ok(MicroRenderResponse {
+        width,
+        height,
+        tile: Tile {
+            x: 0,
+            y: 0,
+            w: width,
+            h: height,
+        },
+        png: encode_png(&img)?,
+        stats,
+        radiance: vec![],
+    })
+}
+
+impl Job for RenderJob {
+    type Output = MicroRenderResponse;
+    fn step(&mut self) -> Result<Step<MicroRenderResponse>> {
+        if let Some(f) = self.advance() {
+            return Ok(Step::Running(Progress::new(
+                f,
+                if self.spp > 0 {
+                    "path tracing"
+                } else {
+                    "sphere tracing"
+                },
+            )));
+        }
+        let img = self.take_rgba();
+        let radiance = if self.want_radiance {
+            let mut b = Vec::with_capacity(self.sum.len() * 12);
+            for l in &self.sum {
+                for v in [l.x, l.y, l.z] {
+                    b.extend_from_slice(&(v as f32).to_le_bytes());
+                }
+            }
+            b
+        } else {
+            vec![]
         };
         Ok(Step::Done(MicroRenderResponse {
-            width: self.width,
-            height: self.height,
+            width: img.width,
+            height: img.height,
+            tile: self.tile,
             png: encode_png(&img)?,
             stats: self.stats,
+            radiance,
         }))
     }
 }
@@ -506,4 +681,75 @@ impl Job for SliceJob {
             inside: inside as f64 / total as f64,
         }))
     }
+}
+
+/// Render a request in `tiles` horizontal bands on `threads` scoped threads
+/// (each takes the next band until none is left) and assemble the bands:
+/// the PNG bytes equal one job's for the same request (`tests/micro.rs`).
+/// A request naming a tile renders that tile in bands the same way.
+#[cfg(not(target_arch = "wasm32"))]
+pub fn render_threads(
+    req: &MicroRenderRequest,
+    threads: usize,
+    tiles: u32,
+    cancel: &crate::core::job::Cancel,
+) -> Result<MicroRenderResponse> {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Mutex;
+    // Check once (errors name the request's fields), then one job per band.
+    let whole = start_render(req.clone())?.tile();
+    let bands: Vec<Tile> = Tile::bands(whole.w, whole.h, tiles)
+        .into_iter()
+        .map(|b| Tile {
+            x: whole.x,
+            y: whole.y + b.y,
+            w: whole.w,
+            h: b.h,
+        })
+        .collect();
+    let next = AtomicUsize::new(0);
+    type Part = Result<(Tile, Rgba8Image, Stats)>;
+    let parts: Mutex<Vec<Option<Part>>> = Mutex::new(vec![None; bands.len()]);
+    std::thread::scope(|s| {
+        for _ in 0..threads.clamp(1, bands.len().max(1)) {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&t) = bands.get(i) else { break };
+                let r = start_render(MicroRenderRequest {
+                    tile: Some(Box::new(t)),
+                    ..req.clone()
+                })
+                .and_then(|job| job.run_rgba(cancel))
+                .map(|(img, st)| (t, img, st));
+                let failed = r.is_err();
+                parts.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(r);
+                if failed {
+                    break;
+                }
+            });
+        }
+    });
+    let parts = parts.into_inner().unwrap_or_else(|e| e.into_inner());
+    let mut done = Vec::with_capacity(parts.len());
+    for p in parts {
+        done.push(p.unwrap_or(Err(Error::Cancelled))?);
+    }
+    // Shift the bands to the tile's own corner before assembling.
+    let local: Vec<_> = done
+        .into_iter()
+        .map(|(t, img, st)| {
+            (
+                Tile {
+                    x: t.x - whole.x,
+                    y: t.y - whole.y,
+                    ..t
+                },
+                img,
+                st,
+            )
+        })
+        .collect();
+    let mut out = assemble(whole.w, whole.h, &local)?;
+    out.tile = whole;
+    Ok(out)
 }

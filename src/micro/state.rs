@@ -6,22 +6,30 @@
 //! { example: name | null, scene: text,
 //!   camera: {yaw, pitch, distance, target: [x, y, z]},
 //!   steps: "fixed" | "bisection" | "adaptive",
-//!   view: "render" | "slice", z }
+//!   view: "render" | "slice", z,
+//!   shading: "lambert" | "ggx", roughness, specular, absorption,
+//!   spp, max_depth }
 //! ```
 //!
-//! `camera` and `steps` are the `micro-render` request's fields
+//! Version 2 added the shading fields and `spp` (0: direct shading; N:
+//! path tracing, N samples in progressive passes) and `max_depth`; the page
+//! migrates version 1 documents by adding the request's defaults, and a
+//! document without them is read with those defaults here too.
+//!
+//! `camera`, `steps` and the shading fields are the `micro-render` request's fields
 //! ([`super::api::MicroRenderRequest`]) and `z` the `micro-slice` one's:
 //! the ranges here are the requests' own. The scene text is kept as typed,
 //! even when it does not parse (the page marks the error in the editor).
+use super::api::{MicroRenderRequest, MAX_MICRO_SPP};
 use super::examples::EXAMPLES;
-use super::render::StepMode;
+use super::render::{Shading, StepMode};
 use crate::api::project::{invalid, nullish, Value};
 use crate::core::error::Result;
 use crate::core::limits::MAX_MICRO_SCENE_BYTES;
 use serde::Serialize;
 
 /// Schema version of the Micro state (the page's `state.version`).
-pub const STATE_VERSION: u32 = 1;
+pub const STATE_VERSION: u32 = 2;
 /// Ranges of the camera (`micro-render` checks the same).
 pub const YAW: (f64, f64) = (-1e5, 1e5);
 pub const PITCH: (f64, f64) = (-89.9, 89.9);
@@ -29,6 +37,11 @@ pub const DISTANCE: (f64, f64) = (1e-9, 1e6);
 pub const TARGET: (f64, f64) = (-1e6, 1e6);
 /// Range of the slice plane (`micro-slice` checks the same).
 pub const Z: (f64, f64) = (-1e6, 1e6);
+/// Ranges of the shading fields (`micro-render` checks the same).
+pub const ROUGHNESS: (f64, f64) = (0.02, 1.0);
+pub const SPECULAR: (f64, f64) = (0.0, 1.0);
+pub const ABSORPTION: (f64, f64) = (0.0, 1e6);
+pub const MAX_DEPTH: (u32, u32) = (1, 64);
 
 /// The view's camera, as the page orbits and zooms it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -56,6 +69,34 @@ pub struct MicroState {
     pub steps: StepMode,
     pub view: View,
     pub z: f64,
+    pub shading: Shading,
+    pub roughness: f64,
+    pub specular: f64,
+    pub absorption: f64,
+    /// Path tracing: samples per pixel (0: direct shading).
+    pub spp: u32,
+    pub max_depth: u32,
+}
+
+/// A number field that may be left out (then `default`).
+fn number_or(raw: &Value, field: &str, range: (f64, f64), default: f64) -> Result<f64> {
+    if nullish(raw.get(field)) {
+        Ok(default)
+    } else {
+        number_in(raw.get(field), field, range)
+    }
+}
+
+/// A whole-number field that may be left out (then `default`).
+fn count_or(raw: &Value, field: &str, (lo, hi): (u32, u32), default: u32) -> Result<u32> {
+    if nullish(raw.get(field)) {
+        return Ok(default);
+    }
+    raw.get(field)
+        .and_then(Value::finite)
+        .filter(|x| x.fract() == 0.0 && *x >= lo as f64 && *x <= hi as f64)
+        .map(|x| x as u32)
+        .ok_or_else(|| invalid(field, format!("must be a whole number from {lo} to {hi}")))
 }
 
 fn number_in(v: Option<&Value>, field: &str, (lo, hi): (f64, f64)) -> Result<f64> {
@@ -157,6 +198,13 @@ pub fn check(raw: &Value) -> Result<MicroState> {
     } else {
         number_in(raw.get("z"), "z", Z)?
     };
+    let d = MicroRenderRequest::default();
+    let shading = match raw.get("shading") {
+        None | Some(Value::Null) => d.shading,
+        Some(Value::Text(v)) if v == "lambert" => Shading::Lambert,
+        Some(Value::Text(v)) if v == "ggx" => Shading::Ggx,
+        Some(_) => return Err(invalid("shading", "must be lambert or ggx")),
+    };
     Ok(MicroState {
         example,
         scene,
@@ -164,6 +212,12 @@ pub fn check(raw: &Value) -> Result<MicroState> {
         steps,
         view,
         z,
+        shading,
+        roughness: number_or(raw, "roughness", ROUGHNESS, d.roughness)?,
+        specular: number_or(raw, "specular", SPECULAR, d.specular)?,
+        absorption: number_or(raw, "absorption", ABSORPTION, d.absorption)?,
+        spp: count_or(raw, "spp", (0, MAX_MICRO_SPP), d.spp)?,
+        max_depth: count_or(raw, "max_depth", MAX_DEPTH, d.max_depth)?,
     })
 }
 
@@ -182,6 +236,8 @@ mod tests {
             "example": "gyroid", "scene": EXAMPLES[0].scene,
             "camera": {"yaw": 35, "pitch": 28, "distance": 3.6, "target": [0, 0, 0]},
             "steps": "adaptive", "view": "slice", "z": 0.25,
+            "shading": "ggx", "roughness": 0.5, "specular": 0.1, "absorption": 0.7,
+            "spp": 16, "max_depth": 3,
         })
     }
 
@@ -218,6 +274,40 @@ mod tests {
         d.as_object_mut().unwrap().remove("z");
         let s = check(&value(&d)).unwrap();
         assert_eq!((s.view, s.z), (View::Render, 0.0));
+        // Version 1 documents (no shading fields) read with the request's defaults.
+        let mut d = doc();
+        for k in [
+            "shading",
+            "roughness",
+            "specular",
+            "absorption",
+            "spp",
+            "max_depth",
+        ] {
+            d.as_object_mut().unwrap().remove(k);
+        }
+        let s = check(&value(&d)).unwrap();
+        let r = MicroRenderRequest::default();
+        assert_eq!(
+            (
+                s.shading,
+                s.roughness,
+                s.specular,
+                s.absorption,
+                s.spp,
+                s.max_depth
+            ),
+            (
+                r.shading,
+                r.roughness,
+                r.specular,
+                r.absorption,
+                r.spp,
+                r.max_depth
+            )
+        );
+        let s = check(&value(&doc())).unwrap();
+        assert_eq!((s.shading, s.spp, s.max_depth), (Shading::Ggx, 16, 3));
     }
 
     #[test]
@@ -244,6 +334,13 @@ mod tests {
         assert_eq!(field_of("steps", json!(null)), "steps");
         assert_eq!(field_of("view", json!("both")), "view");
         assert_eq!(field_of("z", json!(2e6)), "z");
+        assert_eq!(field_of("shading", json!("phong")), "shading");
+        assert_eq!(field_of("roughness", json!(0.0)), "roughness");
+        assert_eq!(field_of("specular", json!(1.5)), "specular");
+        assert_eq!(field_of("absorption", json!(-1)), "absorption");
+        assert_eq!(field_of("spp", json!(1.5)), "spp");
+        assert_eq!(field_of("spp", json!(MAX_MICRO_SPP + 1)), "spp");
+        assert_eq!(field_of("max_depth", json!(0)), "max_depth");
     }
 
     #[test]
@@ -257,9 +354,17 @@ mod tests {
             d["camera"] =
                 json!({"yaw": yaw, "pitch": pitch, "distance": distance, "target": [t, t, t]});
             d["z"] = json!(t);
+            let lo = yaw == YAW.0;
+            d["roughness"] = json!(if lo { ROUGHNESS.0 } else { ROUGHNESS.1 });
+            d["specular"] = json!(if lo { SPECULAR.0 } else { SPECULAR.1 });
+            d["absorption"] = json!(if lo { ABSORPTION.0 } else { ABSORPTION.1 });
+            d["spp"] = json!(if lo { 0 } else { MAX_MICRO_SPP });
+            d["max_depth"] = json!(if lo { MAX_DEPTH.0 } else { MAX_DEPTH.1 });
             let s = check(&value(&d)).unwrap();
             let req: MicroRenderRequest = serde_json::from_value(json!({
                 "scene": s.scene, "width": 2, "height": 2, "steps": s.steps,
+                "shading": s.shading, "roughness": s.roughness, "specular": s.specular,
+                "absorption": s.absorption, "spp": s.spp, "max_depth": s.max_depth,
                 "camera": {"yaw": s.camera.yaw, "pitch": s.camera.pitch,
                            "distance": s.camera.distance, "target": s.camera.target},
             }))

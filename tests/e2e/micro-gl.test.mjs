@@ -23,8 +23,8 @@ before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 /** In the page: render every shipped scene both ways, return the comparison per scene. */
-async function compareAll(page, { side, steps, cameras, extra = {} }) {
-  return page.evaluate(async ({ side, steps, cameras, extra }) => {
+async function compareAll(page, { side, steps, cameras, extra = {}, only = null }) {
+  return page.evaluate(async ({ side, steps, cameras, extra, only }) => {
     const { MicroGl } = await import('/www/micro-gl.js');
     const pool = window.filigree.pool;
     const examples = await pool.run('micro-examples', {});
@@ -37,7 +37,7 @@ async function compareAll(page, { side, steps, cameras, extra = {} }) {
       return g.getImageData(0, 0, bmp.width, bmp.height).data;
     };
     const out = [];
-    for (const ex of examples) {
+    for (const ex of examples.filter((e) => !only || only.includes(e.name))) {
       for (const camera of cameras) {
         const req = { scene: ex.scene, width: side, height: side, steps, camera, ...extra };
         const [shader, cpu] = await Promise.all([pool.run('micro-glsl', req), pool.run('micro-render', req)]);
@@ -73,7 +73,7 @@ async function compareAll(page, { side, steps, cameras, extra = {} }) {
       }
     }
     return out;
-  }, { side, steps, cameras, extra });
+  }, { side, steps, cameras, extra, only });
 }
 
 const VIEWS = [
@@ -101,11 +101,15 @@ test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fi
   await page.context().close();
 });
 
+// One scene per step mode and shading here (every scene with fixed steps
+// above): the shader's step loops are the same code for every scene, and
+// every scene's generated GLSL is checked natively (src/micro/glsl.rs tests).
 test('micro-gl: adaptive and bisection steps, GGX shading and absorption agree with the CPU too', async () => {
   const page = await env.newPage({ path: '#tool=micro' });
   const ggx = { shading: 'ggx', roughness: 0.3, specular: 0.04, absorption: 0.8 };
-  for (const [steps, extra] of [['adaptive', {}], ['bisection', {}], ['fixed', ggx]]) {
-    const rows = await compareAll(page, { side: 64, steps, cameras: [VIEWS[0]], extra });
+  for (const [steps, extra, only] of [['adaptive', {}, ['piled']], ['bisection', {}, ['spheres']], ['fixed', ggx, ['gyroid']]]) {
+    const rows = await compareAll(page, { side: 64, steps, cameras: [VIEWS[0]], extra, only });
+    assert.equal(rows.length, 1, `${only}: one scene`);
     for (const r of rows) {
       console.log(`[micro-gl] ${steps}${extra.shading ? ' ggx' : ''} ${r.name}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `
         + `gradient checks cpu ${r.cpuStats.gradient_checks} gpu ${r.glStats.gradient_checks}`);
@@ -125,7 +129,8 @@ async function waitForRender(page, previous, timeout = 120000) {
 }
 
 test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slice stays on the CPU', async () => {
-  const page = await env.newPage({ path: '#tool=micro' });
+  // Half the device pixels: a quarter of the pixels to refine in SwiftShader.
+  const page = await env.newPage({ path: '#tool=micro', deviceScaleFactor: 0.5 });
   await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
   let n = await waitForRender(page, 0);
   assert.ok(await page.evaluate(() => window.filigreeMicro.gpu()), 'WebGL2 is used');
@@ -159,6 +164,17 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
     return k / (d.length / 4);
   });
   assert.ok(fg > 0.2, `the gyroid is drawn (${fg})`);
+  assert.equal(await page.isHidden('[data-testid=micro-cpu-note]'), true);
+  // Path tracing is the CPU's: the panel says so; back to direct shading, the GPU again.
+  await page.selectOption('[data-testid=micro-spp]', '4');
+  n = await waitForRender(page, n);
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.gpu, false);
+  assert.equal(last.passes, 3);
+  assert.match(await page.textContent('[data-testid=micro-cpu-note]'), /Drawn on the CPU.*path tracing runs on the CPU only/);
+  await page.selectOption('[data-testid=micro-spp]', '0');
+  n = await waitForRender(page, n);
+  assert.equal((await page.evaluate(() => window.filigreeMicro.last())).gpu, true);
   // The slice view is the CPU's.
   await page.check('[data-testid=micro-slice-toggle]');
   n = await waitForRender(page, n);
@@ -169,7 +185,7 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
 });
 
 test('micro-gl: without WebGL2 the panel says so and draws on the CPU', async () => {
-  const page = await env.newPage({ path: null });
+  const page = await env.newPage({ path: null, deviceScaleFactor: 0.5 });
   await page.addInitScript(() => {
     const get = HTMLCanvasElement.prototype.getContext;
     HTMLCanvasElement.prototype.getContext = function (type, ...rest) {

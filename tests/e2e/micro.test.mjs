@@ -7,7 +7,10 @@
 // what runs; the GPU view has its own tests (micro-gl.test.mjs).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { launch } from './harness.mjs';
+import fs from 'node:fs';
+import path from 'node:path';
+import zlib from 'node:zlib';
+import { launch, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -29,16 +32,17 @@ const pixels = (page) => page.evaluate(() => {
   const c = document.querySelector('[data-testid=micro-canvas]');
   const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
   const bg = [d[0], d[1], d[2]];
-  let fg = 0, lo = 255, hi = 0;
+  let fg = 0, lo = 255, hi = 0, sum = 0;
   for (let i = 0; i < d.length; i += 4) {
     if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) <= 6) continue;
     fg++;
     const y = 0.299 * d[i] + 0.587 * d[i + 1] + 0.114 * d[i + 2];
+    sum += y;
     lo = Math.min(lo, y);
     hi = Math.max(hi, y);
   }
   window.microBefore = d;
-  return { width: c.width, height: c.height, fg, spread: hi - lo, total: d.length / 4 };
+  return { width: c.width, height: c.height, fg, spread: hi - lo, mean: fg ? sum / fg : 0, total: d.length / 4 };
 });
 
 /** Fraction of pixels that differ from the last `pixels` call's picture. */
@@ -57,7 +61,10 @@ const state = (page) => page.evaluate(() => window.filigreeMicro.state());
 /** The panel with WebGL2 hidden: the worker (CPU) path this file is about.
  * The GPU view has its own tests (micro-gl.test.mjs). */
 async function cpuPage(path) {
-  const page = await env.newPage({ path: null });
+  // A quarter of the device pixels a side (the panel's picture is its
+  // width in device pixels, at most 384): about 1/6 of the pixels to trace,
+  // the same checks.
+  const page = await env.newPage({ path: null, deviceScaleFactor: 0.25 });
   await page.addInitScript(() => {
     const get = HTMLCanvasElement.prototype.getContext;
     HTMLCanvasElement.prototype.getContext = function (type, ...rest) {
@@ -165,7 +172,8 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
 test('micro: a share link carries the scene by name and the camera; undo steps back through zooms', async () => {
   const a = await cpuPage('#tool=micro');
   await a.waitForSelector('[data-testid=micro-examples] [data-example=piled]', { timeout: 30000 });
-  let n = await waitForRender(a, await runs(a));
+  // The first picture (it may be done already: more than 0 runs, nothing due).
+  let n = await waitForRender(a, 0);
   await a.click('[data-example=piled]');
   n = await waitForRender(a, n);
   await a.selectOption('[data-testid=micro-steps]', 'adaptive');
@@ -196,4 +204,155 @@ test('micro: a share link carries the scene by name and the camera; undo steps b
   assert.deepEqual(await state(b), want);
   await a.context().close();
   await b.context().close();
+});
+
+/** Decode an 8-bit RGB or RGBA PNG (non-interlaced, as the core writes them) to RGBA. */
+function decodePng(buf) {
+  assert.equal(buf.toString('latin1', 1, 4), 'PNG');
+  let off = 8, w = 0, h = 0, bpp = 0;
+  const idat = [];
+  while (off < buf.length) {
+    const len = buf.readUInt32BE(off);
+    const type = buf.toString('latin1', off + 4, off + 8);
+    const data = buf.subarray(off + 8, off + 8 + len);
+    if (type === 'IHDR') {
+      w = data.readUInt32BE(0);
+      h = data.readUInt32BE(4);
+      assert.equal(data[8], 8, '8-bit');
+      assert.equal(data[12], 0, 'not interlaced');
+      bpp = { 2: 3, 6: 4 }[data[9]];
+      assert.ok(bpp, `colour type ${data[9]}`);
+    } else if (type === 'IDAT') idat.push(data);
+    else if (type === 'IEND') break;
+    off += 12 + len;
+  }
+  const raw = zlib.inflateSync(Buffer.concat(idat));
+  const stride = w * bpp;
+  const out = Buffer.alloc(w * h * 4);
+  let prev = Buffer.alloc(stride);
+  for (let y = 0; y < h; y++) {
+    const f = raw[y * (stride + 1)];
+    const line = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
+    const cur = Buffer.alloc(stride);
+    for (let i = 0; i < stride; i++) {
+      const a = i >= bpp ? cur[i - bpp] : 0, b = prev[i], c = i >= bpp ? prev[i - bpp] : 0;
+      let pred = 0;
+      if (f === 1) pred = a;
+      else if (f === 2) pred = b;
+      else if (f === 3) pred = (a + b) >> 1;
+      else if (f === 4) {
+        const p = a + b - c, pa = Math.abs(p - a), pb = Math.abs(p - b), pc = Math.abs(p - c);
+        pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      }
+      cur[i] = (line[i] + pred) & 255;
+    }
+    for (let x = 0; x < w; x++) {
+      for (let k = 0; k < 3; k++) out[(y * w + x) * 4 + k] = cur[x * bpp + k];
+      out[(y * w + x) * 4 + 3] = bpp === 4 ? cur[x * bpp + 3] : 255;
+    }
+    prev = cur;
+  }
+  return { width: w, height: h, data: out };
+}
+
+/** Run one request in the page's worker pool (the wasm core); its PNG bytes. */
+const workerPng = (page, kind, req) => page.evaluate(async ({ kind, req }) => {
+  const r = await window.filigree.pool.run(kind, req);
+  const png = r.png instanceof Uint8Array ? r.png : new Uint8Array(r.png);
+  let bin = '';
+  for (let i = 0; i < png.length; i += 0x8000) bin += String.fromCharCode.apply(null, png.subarray(i, i + 0x8000));
+  return btoa(bin);
+}, { kind, req }).then((b) => Buffer.from(b, 'base64'));
+
+/** The panel's last tiled picture (RGBA). */
+const frame = async (page) => Buffer.from(await page.evaluate(() => window.filigreeMicro.frame()), 'base64');
+
+test('micro: the picture in tiles over the pool equals one job; shading controls; progressive path tracing; wasm = native bytes', async () => {
+  const page = await cpuPage('#tool=micro');
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=piled]', { timeout: 30000 });
+  let n = await waitForRender(page, 0);
+  await page.click('[data-example=piled]');
+  n = await waitForRender(page, n);
+  // Tiles: every tile drawn as it came; together, pixel for pixel, the one-job PNG.
+  let last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.tiles, 16);
+  assert.match(await page.textContent('[data-testid=micro-status]'), /on the CPU in 16 tiles/);
+  let req = await page.evaluate(() => window.filigreeMicro.request());
+  assert.equal(req.tile, undefined);
+  let one = decodePng(await workerPng(page, 'micro-render', req));
+  assert.equal(one.width, last.width);
+  let tiled = await frame(page);
+  assert.equal(tiled.length, one.data.length);
+  assert.ok(tiled.equals(one.data), 'the tiled picture is the one-job picture, pixel for pixel');
+
+  // Shading: GGX with its roughness and specular, then absorption; undo goes back.
+  await pixels(page);
+  await page.selectOption('[data-testid=micro-shading]', 'ggx');
+  n = await waitForRender(page, n);
+  assert.equal((await state(page)).shading, 'ggx');
+  assert.equal(await page.isVisible('[data-testid=micro-roughness]'), true);
+  assert.ok(await changed(page) > 0.05, 'GGX changed the picture');
+  await page.$eval('[data-testid=micro-roughness]', (el) => { el.value = '0.15'; el.dispatchEvent(new Event('input', { bubbles: true })); el.dispatchEvent(new Event('change', { bubbles: true })); });
+  n = await waitForRender(page, n);
+  assert.equal((await state(page)).roughness, 0.15);
+  const bright = await pixels(page);
+  await page.$eval('[data-testid=micro-absorption]', (el) => { el.value = '2'; el.dispatchEvent(new Event('input', { bubbles: true })); el.dispatchEvent(new Event('change', { bubbles: true })); });
+  n = await waitForRender(page, n);
+  assert.equal((await state(page)).absorption, 2);
+  assert.ok(await changed(page) > 0.05, 'absorption changed the picture');
+  const dark = await pixels(page);
+  assert.ok(dark.mean < bright.mean, `absorbed: darker (mean brightness ${dark.mean.toFixed(1)} < ${bright.mean.toFixed(1)})`);
+  await page.click('button[data-act=undo]');
+  n = await waitForRender(page, n);
+  assert.equal((await state(page)).absorption, 0);
+  assert.equal((await state(page)).roughness, 0.15);
+
+  // Progressive path tracing: 4 samples in passes of 1, 1, 2, the pass count shown.
+  await page.evaluate(() => {
+    const el = document.querySelector('[data-testid=micro-status]');
+    window.microPasses = [];
+    new MutationObserver(() => window.microPasses.push(Number(el.dataset.passes || 0))).observe(el, { attributes: true, attributeFilter: ['data-passes'] });
+  });
+  await page.selectOption('[data-testid=micro-spp]', '4');
+  n = await waitForRender(page, n);
+  const doc = await state(page);
+  assert.equal(doc.spp, 4);
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.equal(last.passes, 3);
+  assert.deepEqual((await page.evaluate(() => window.microPasses)).filter((p) => p > 0), [1, 2, 3], 'one pass after another');
+  assert.match(await page.textContent('[data-testid=micro-status]'), /path traced on the CPU, 4 samples per pixel in 3 passes/);
+  assert.equal(await page.isEnabled('[data-testid=micro-max-depth]'), true);
+  // The passes average to the one-job render with all the samples (float sums: within one level).
+  req = await page.evaluate(() => window.filigreeMicro.request());
+  one = decodePng(await workerPng(page, 'micro-render', req));
+  tiled = await frame(page);
+  let off = 0;
+  for (let i = 0; i < tiled.length; i++) {
+    const d = Math.abs(tiled[i] - one.data[i]);
+    assert.ok(d <= 1, `byte ${i}: ${tiled[i]} vs ${one.data[i]}`);
+    off += d > 0;
+  }
+  assert.ok(off < tiled.length / 100, `nearly all levels equal (${off} differ)`);
+  // A share link carries the shading and the path tracing.
+  await page.click('button[data-act=copy-link]');
+  await page.waitForSelector('.toast[data-link]');
+  const link = await page.$eval('.toast[data-link]', (t) => t.dataset.link);
+  const b = await cpuPage(link.slice(link.indexOf('#')));
+  await b.waitForFunction(() => window.filigreeMicro?.state()?.spp === 4, null, { timeout: 30000 });
+  const bs = await state(b);
+  assert.deepEqual(bs, doc);
+  await b.context().close();
+
+  // wasm = native: the worker's bytes for the shared requests are the native core's files.
+  const dir = path.join(ROOT, 'tests/fixtures/micro-native');
+  const list = JSON.parse(fs.readFileSync(path.join(dir, 'requests.json'), 'utf8')).requests;
+  assert.ok(list.some((r) => r.kind === 'micro-slice') && list.some((r) => r.request.spp > 0));
+  for (const steps of ['fixed', 'bisection', 'adaptive']) assert.ok(list.some((r) => r.request.steps === steps), steps);
+  for (const r of list) {
+    const scene = fs.readFileSync(path.join(ROOT, 'assets/micro', `${r.scene}.json`), 'utf8');
+    const got = await workerPng(page, r.kind, { ...r.request, scene });
+    const want = fs.readFileSync(path.join(dir, `${r.name}.png`));
+    assert.ok(got.equals(want), `${r.name}: wasm bytes equal the native core's (${got.length} vs ${want.length} bytes)`);
+  }
+  await page.context().close();
 });
