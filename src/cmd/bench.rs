@@ -109,7 +109,8 @@ pub enum Which {
         /// Image side in pixels.
         #[arg(long, default_value_t = 160)]
         size: u32,
-        /// Only `render` (Tables 1 and 2) or `fit` (Table 3).
+        /// Only `render` (Tables 1 and 2), `fit` (Table 3) or `loss` (one
+        /// loss evaluation at 32³ and its split).
         #[arg(long)]
         only: Option<String>,
         /// Table 3: two problems, one seed, a short budget.
@@ -186,12 +187,13 @@ pub fn run(w: Which) -> Result<(), String> {
             ..
         } => {
             let only = only.as_deref();
-            if !matches!(only, None | Some("render") | Some("fit")) {
-                return Err("--only: expected `render` or `fit`".into());
+            if !matches!(only, None | Some("render") | Some("fit") | Some("loss")) {
+                return Err("--only: expected `render`, `fit` or `loss`".into());
             }
             let parts = super::micro_bench::Parts {
-                render: only != Some("fit"),
-                fit: only != Some("render"),
+                render: only.is_none() || only == Some("render"),
+                fit: only.is_none() || only == Some("fit"),
+                loss: only == Some("loss"),
                 quick,
                 seeds,
                 threads: super::threads(threads)?,

@@ -123,12 +123,18 @@ fn fibres(eta: f64) -> [(&'static str, String); 3] {
 pub struct Parts {
     pub render: bool,
     pub fit: bool,
+    /// `--only loss`: one loss evaluation's cost and its split.
+    pub loss: bool,
     pub quick: bool,
     pub seeds: u64,
     pub threads: usize,
 }
 
 pub fn run(repeats: usize, size: u32, parts: Parts) -> Result<(), String> {
+    if parts.loss {
+        println!("{}", json!({"bench": "micro", "loss_eval": loss_eval()?}));
+        return Ok(());
+    }
     let table3 = if parts.fit {
         Some(table3(parts.quick, parts.seeds, parts.threads)?)
     } else {
@@ -403,6 +409,71 @@ fn problems() -> Vec<(
     ]
 }
 
+/// The issue's figures: a pycma + NumPy FFT version on a 32³ grid (ms per
+/// loss evaluation; seconds to recover gyroid 1D) and the goal here.
+const PYCMA_MS_PER_EVAL: f64 = 0.9;
+const PYCMA_GYROID_1D_SECONDS: f64 = 0.8;
+const GOAL_MS_PER_EVAL: f64 = 0.2;
+
+/// `--only loss`: what one `micro-fit` loss evaluation costs on a 32³ grid
+/// for gyroid 1D (the issue's yardstick), whole and split into its parts:
+/// the scene at the candidate (JSON edit + compile), sampling (the lattice
+/// path, and point by point as before it, same values), FFT + loss
+/// (half spectrum against the target's, computed once). Single-threaded.
+fn loss_eval() -> Result<Value, String> {
+    use filigree::core::job::Job;
+    let (_, start, target, params, _, c, half) =
+        problems().into_iter().next().ok_or("no problems")?;
+    let mut job = start_fit(MicroFitRequest {
+        scene: start,
+        params,
+        target: FitTarget::Scene { scene: target },
+        grid: 32,
+        center: [c; 3],
+        half,
+        budget: 10,
+        ..Default::default()
+    })
+    .map_err(|e| e.to_string())?;
+    job.step().map_err(|e| e.to_string())?; // samples the target
+                                            // A candidate near the truth (η ≈ 101 of 10..400).
+    let u = [(101.0 - 10.0) / 390.0];
+    let scene = job.scene_for(&u).ok_or("invalid candidate")?;
+    let values = job.sample(&scene, false).map_err(|e| e.to_string())?;
+    let n = 200;
+    let compile_ms = ms_per(n, || {
+        std::hint::black_box(job.scene_for(&u));
+    });
+    let sample_ms = ms_per(n, || {
+        std::hint::black_box(job.sample(&scene, false).expect("sample"));
+    });
+    let pointwise_ms = ms_per(n / 10, || {
+        std::hint::black_box(job.sample(&scene, true).expect("sample"));
+    });
+    let fft_ms = ms_per(n, || {
+        std::hint::black_box(job.loss_of_samples(&values).expect("loss"));
+    });
+    let whole_ms = ms_per(n, || {
+        let s = job.scene_for(&u).expect("scene");
+        let v = job.sample(&s, false).expect("sample");
+        std::hint::black_box(job.loss_of_samples(&v).expect("loss"));
+    });
+    Ok(json!({
+        "grid": "32^3", "problem": "gyroid-1d", "threads": 1,
+        "ms_per_eval": whole_ms,
+        "split_ms": {"scene_compile": compile_ms, "sampling": sample_ms,
+            "fft_and_loss": fft_ms},
+        "sampling_pointwise_ms": pointwise_ms,
+        "sampling_lattice_over_pointwise": sample_ms / pointwise_ms,
+        "goal_ms_per_eval": GOAL_MS_PER_EVAL,
+        "pycma_numpy_ms_per_eval": PYCMA_MS_PER_EVAL,
+        "ratio_to_pycma_numpy": whole_ms / PYCMA_MS_PER_EVAL,
+        "note": "the old path (before the one FFT and the lattice sampling) is timed by an \
+            older binary's `bench micro --only fit --quick`: loss_eval_ms_32 and gyroid-1d's \
+            ms_per_eval",
+    }))
+}
+
 /// Milliseconds per call of `f` (median of 5 batches of `n`).
 fn ms_per(n: usize, mut f: impl FnMut()) -> f64 {
     let mut v = vec![];
@@ -512,14 +583,29 @@ pub fn table3(quick: bool, seeds: u64, threads: usize) -> Result<Value, String> 
                 let v: Vec<f64> = runs.iter().filter_map(|r| r[key].as_f64()).collect();
                 (!v.is_empty()).then(|| super::min_median(v).1)
             };
+            // Per run, the largest relative error of a parameter; median.
+            let worst: Vec<f64> = runs
+                .iter()
+                .filter_map(|r| {
+                    let a = r["relative_error"].as_array()?;
+                    Some(a.iter().filter_map(Value::as_f64).fold(0.0, f64::max))
+                })
+                .collect();
+            let worst_rel = (!worst.is_empty()).then(|| super::min_median(worst).1);
             by_opt.push(json!({
                 "optimizer": opt, "median_validation": med("validation"),
                 "median_seconds": med("seconds"), "median_ms_per_eval": med("ms_per_eval"),
+                "median_evaluations": med("evaluations"),
+                "median_relative_error_max": worst_rel,
                 "runs": runs,
             }));
         }
+        let reference = (name == "gyroid-1d").then(|| {
+            json!({"what": "pycma + NumPy FFT, 32^3 (issue 12)", "ms_per_eval": PYCMA_MS_PER_EVAL,
+                "seconds": PYCMA_GYROID_1D_SECONDS, "val_error": 0.0})
+        });
         rows.push(json!({
-            "problem": name, "truth": truth,
+            "problem": name, "truth": truth, "reference": reference,
             "start": params.iter().map(|p| p.pointer.clone()).collect::<Vec<_>>(),
             "ours": by_opt, "paper": paper,
         }));
@@ -528,7 +614,7 @@ pub fn table3(quick: bool, seeds: u64, threads: usize) -> Result<Value, String> 
         "grid": "32^3", "budget": budget, "seeds": seeds, "threads": threads,
         "loss_eval_ms_32": {"fft_and_loss": fft_ms, "fft_and_loss_whole_spectrum": whole_ms,
             "whole_over_half": whole_ms / fft_ms, "sampling_gyroid": sample_ms,
-            "goal_per_eval": 0.2, "pycma_numpy_reference": 0.9},
+            "goal_per_eval": GOAL_MS_PER_EVAL, "pycma_numpy_reference": PYCMA_MS_PER_EVAL},
         "validation_note": "MSE of the fitted field against the target on a grid shifted by \
             half a cell, over the target's variance (paper: 'Val. Error'); paper columns are \
             SciPy/pycma on their machine with a ~20 min limit; -S columns fit rendered images",

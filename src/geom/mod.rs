@@ -21,6 +21,7 @@
 //! `n = (p − q)/d`.
 pub mod bezier;
 pub mod distance_transform;
+pub mod fft;
 pub mod mvc;
 pub mod noise;
 pub mod polygon;

@@ -5,49 +5,16 @@
 //!
 //! over the N coefficients of the 3-D DFT (amplitudes A, phases θ), and
 //! the synthetic structures of the paper's dataset (gyroid 1D, Eq. 40).
-//! The DFT is an in-place radix-2 FFT along each axis (n a power of two);
-//! twiddles come from `libm`, so native and wasm agree bit for bit
-//! ([`Fourier`] keeps them and its scratch between calls). The image loss
+//! The DFT is the crate's one FFT ([`crate::geom::fft`], realfft's
+//! real-to-complex transform: the half spectrum, whose other half is its
+//! conjugate); plans, buffers and the spectrum are reused between calls
+//! ([`Fourier`]), and [`Fourier::half_loss`] compares with a target spectrum
+//! computed once without allocating. The image loss
 //! of analysis by synthesis (Eq. 39) compares amplitudes only
 //! ([`amplitude_loss`]). The fit itself (request, job, optimisers) is in
 //! [`super::fit_api`].
 use crate::core::error::{Error, Result};
-use std::f64::consts::TAU;
-
-/// A complex number as `[re, im]`.
-type C = [f64; 2];
-
-/// In-place radix-2 FFT of `buf` (length a power of two).
-fn fft(buf: &mut [C], tw: &[C]) {
-    let n = buf.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            buf.swap(i, j);
-        }
-    }
-    let mut len = 2;
-    while len <= n {
-        let step = n / len;
-        for start in (0..n).step_by(len) {
-            for k in 0..len / 2 {
-                let w = tw[k * step];
-                let a = buf[start + k];
-                let b = buf[start + k + len / 2];
-                let t = [b[0] * w[0] - b[1] * w[1], b[0] * w[1] + b[1] * w[0]];
-                buf[start + k] = [a[0] + t[0], a[1] + t[1]];
-                buf[start + k + len / 2] = [a[0] - t[0], a[1] - t[1]];
-            }
-        }
-        len <<= 1;
-    }
-}
+use crate::geom::fft::{RealFft3, C64};
 
 /// Amplitudes and phases of the 3-D DFT of an n³ volume (x fastest).
 #[derive(Debug, Clone, PartialEq)]
@@ -62,24 +29,34 @@ pub struct Spectrum {
 }
 
 /// A reusable DFT of volumes of one shape `[nx, ny, nz]` (each a power of
-/// two, or 1 for a flat axis: a 2-D image is `[w, h, 1]`): twiddles and
-/// scratch are kept between calls, so a fit's thousands of transforms
-/// allocate only their spectra.
+/// two, or 1 for a flat axis: a 2-D image is `[w, h, 1]`): plans, scratch
+/// and the amplitudes are kept between calls, so a fit's thousands of
+/// transforms allocate nothing ([`Fourier::half_loss`]).
 #[derive(Debug, Clone)]
 pub struct Fourier {
-    dims: [usize; 3],
-    tw: [Vec<C>; 3],
-    data: Vec<C>,
-    line: Vec<C>,
+    fft: RealFft3,
+    amp: Vec<f64>,
 }
 
-fn twiddles(n: usize) -> Vec<C> {
-    (0..n / 2)
-        .map(|k| {
-            let a = -TAU * k as f64 / n as f64;
-            [libm::cos(a), libm::sin(a)]
-        })
-        .collect()
+/// Below this fraction of the largest amplitude a coefficient's phase is
+/// rounding noise: it counts as 0.
+const PHASE_FLOOR: f64 = 1e-9;
+
+fn phase_of(c: C64, a: f64, floor: f64) -> f64 {
+    if a > floor {
+        libm::atan2(c.im, c.re)
+    } else {
+        0.0
+    }
+}
+
+/// The weight of half-spectrum coefficient `kx` (see [`Spectrum::weight`]).
+fn weight_of(kx: usize, nx: usize) -> f64 {
+    if kx == 0 || 2 * kx == nx {
+        1.0
+    } else {
+        2.0
+    }
 }
 
 impl Fourier {
@@ -95,94 +72,44 @@ impl Fourier {
                 dims[0], dims[1], dims[2]
             )));
         }
-        let len = dims.iter().product();
+        let fft = RealFft3::new(dims)?;
+        let m = fft.half() * dims[1] * dims[2];
         Ok(Fourier {
-            dims,
-            tw: [twiddles(dims[0]), twiddles(dims[1]), twiddles(dims[2])],
-            data: vec![[0.0; 2]; len],
-            line: vec![[0.0; 2]; dims.iter().copied().max().unwrap_or(1)],
+            fft,
+            amp: vec![0.0; m],
         })
     }
 
     /// The shape this transform takes.
     pub fn dims(&self) -> [usize; 3] {
-        self.dims
+        self.fft.dims()
     }
 
     /// Values per volume.
     pub fn len(&self) -> usize {
-        self.data.len()
+        self.dims().iter().product()
     }
 
     /// Whether the volume is empty (never: at least two values).
     pub fn is_empty(&self) -> bool {
-        self.data.is_empty()
+        self.len() == 0
     }
 
-    /// The DFT coefficients of `values` (x fastest), in place in the scratch.
-    fn transform(&mut self, values: &[f64]) -> Result<&[C]> {
-        if values.len() != self.data.len() {
-            return Err(Error::input(format!(
-                "a {}×{}×{} transform needs {} values (got {})",
-                self.dims[0],
-                self.dims[1],
-                self.dims[2],
-                self.data.len(),
-                values.len()
-            )));
-        }
-        for (d, &v) in self.data.iter_mut().zip(values) {
-            *d = [v, 0.0];
-        }
-        let [nx, ny, nz] = self.dims;
-        // x: contiguous lines.
-        if nx > 1 {
-            for chunk in self.data.chunks_exact_mut(nx) {
-                fft(chunk, &self.tw[0]);
-            }
-        }
-        // y and z: gather a strided line, transform, scatter.
-        for (axis, n, stride) in [(1usize, ny, nx), (2, nz, nx * ny)] {
-            if n < 2 {
-                continue;
-            }
-            let line = &mut self.line[..n];
-            for base in 0..self.data.len() {
-                // Lines start where the axis coordinate is 0.
-                if !(base / stride).is_multiple_of(n) {
-                    continue;
-                }
-                for (i, l) in line.iter_mut().enumerate() {
-                    *l = self.data[base + i * stride];
-                }
-                fft(line, &self.tw[axis]);
-                for (i, l) in line.iter().enumerate() {
-                    self.data[base + i * stride] = *l;
-                }
-            }
-        }
-        Ok(&self.data)
+    /// The whole DFT of `values` (x fastest).
+    fn transform(&mut self, values: &[f64]) -> Result<Vec<C64>> {
+        let half = self.fft.forward(values)?.to_vec();
+        Ok(self.fft.whole(&half))
     }
 
     /// Amplitudes and phases of the DFT of `values`.
     pub fn spectrum(&mut self, values: &[f64]) -> Result<Spectrum> {
         let data = self.transform(values)?;
-        let amp: Vec<f64> = data
-            .iter()
-            .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
-            .collect();
-        // The phase of a coefficient at rounding-noise level is noise: 0.
-        let floor = amp.iter().copied().fold(0.0, f64::max) * 1e-9;
+        let amp: Vec<f64> = data.iter().map(|c| c.norm_sqr().sqrt()).collect();
+        let floor = amp.iter().copied().fold(0.0, f64::max) * PHASE_FLOOR;
         let phase = data
             .iter()
             .zip(&amp)
-            .map(|(c, &a)| {
-                if a > floor {
-                    libm::atan2(c[1], c[0])
-                } else {
-                    0.0
-                }
-            })
+            .map(|(c, &a)| phase_of(*c, a, floor))
             .collect();
         Ok(Spectrum {
             amp,
@@ -191,95 +118,62 @@ impl Fourier {
         })
     }
 
-    /// The DFT of real `values` on the coefficients with `kx ≤ nx/2` only:
-    /// the others are their complex conjugates (same amplitude, opposite
-    /// phase), so a loss over these, weighted, equals the loss over all
-    /// while the y and z passes and the phases cost about half.
-    fn transform_half(&mut self, values: &[f64]) -> Result<usize> {
-        if values.len() != self.data.len() {
-            return Err(Error::input(format!(
-                "a {}×{}×{} transform needs {} values (got {})",
-                self.dims[0],
-                self.dims[1],
-                self.dims[2],
-                self.data.len(),
-                values.len()
-            )));
-        }
-        for (d, &v) in self.data.iter_mut().zip(values) {
-            *d = [v, 0.0];
-        }
-        let [nx, ny, nz] = self.dims;
-        if nx > 1 {
-            for chunk in self.data.chunks_exact_mut(nx) {
-                fft(chunk, &self.tw[0]);
-            }
-        }
-        let h = if nx > 1 { nx / 2 + 1 } else { 1 };
-        for (axis, n, stride) in [(1usize, ny, nx), (2, nz, nx * ny)] {
-            if n < 2 {
-                continue;
-            }
-            let line = &mut self.line[..n];
-            for base in 0..self.data.len() {
-                if base % nx >= h || !(base / stride).is_multiple_of(n) {
-                    continue;
-                }
-                for (i, l) in line.iter_mut().enumerate() {
-                    *l = self.data[base + i * stride];
-                }
-                fft(line, &self.tw[axis]);
-                for (i, l) in line.iter().enumerate() {
-                    self.data[base + i * stride] = *l;
-                }
-            }
-        }
-        Ok(h)
-    }
-
     /// The half spectrum of real `values` with its weights (see
-    /// [`Spectrum::weight`]); [`fourier_loss`] of two half spectra equals
-    /// that of the whole ones up to rounding.
+    /// [`Spectrum::weight`]): the coefficients with `kx ≤ nx/2`; the others
+    /// are their complex conjugates (same amplitude, opposite phase), so
+    /// [`fourier_loss`] of two half spectra equals that of the whole ones
+    /// up to rounding.
     pub fn half_spectrum(&mut self, values: &[f64]) -> Result<Spectrum> {
-        let h = self.transform_half(values)?;
-        let nx = self.dims[0];
-        let m = h * self.dims[1] * self.dims[2];
-        let (mut amp, mut re_im, mut weight) = (
-            Vec::with_capacity(m),
-            Vec::with_capacity(m),
-            Vec::with_capacity(m),
-        );
-        for (i, c) in self.data.iter().enumerate() {
-            let kx = i % nx;
-            if kx >= h {
-                continue;
-            }
-            amp.push((c[0] * c[0] + c[1] * c[1]).sqrt());
-            re_im.push(*c);
-            weight.push(if kx == 0 || 2 * kx == nx { 1.0 } else { 2.0 });
-        }
-        let floor = amp.iter().copied().fold(0.0, f64::max) * 1e-9;
-        let phase = re_im
+        let nx = self.dims()[0];
+        let h = self.fft.half();
+        let data = self.fft.forward(values)?;
+        let amp: Vec<f64> = data.iter().map(|c| c.norm_sqr().sqrt()).collect();
+        let floor = amp.iter().copied().fold(0.0, f64::max) * PHASE_FLOOR;
+        let phase = data
             .iter()
             .zip(&amp)
-            .map(|(c, &a)| {
-                if a > floor {
-                    libm::atan2(c[1], c[0])
-                } else {
-                    0.0
-                }
-            })
+            .map(|(c, &a)| phase_of(*c, a, floor))
             .collect();
+        let weight = (0..amp.len()).map(|i| weight_of(i % h, nx)).collect();
         Ok(Spectrum { amp, phase, weight })
+    }
+
+    /// `fourier_loss(&self.half_spectrum(values)?, target)`, bit for bit,
+    /// without building the spectrum: the loss of one fit evaluation.
+    /// `target` must be a half spectrum of this shape.
+    pub fn half_loss(&mut self, values: &[f64], target: &Spectrum) -> Result<f64> {
+        let nx = self.dims()[0];
+        let h = self.fft.half();
+        let data = self.fft.forward(values)?;
+        let m = data.len();
+        if target.amp.len() != m || target.phase.len() != m || target.weight.len() != m {
+            return Err(Error::input(format!(
+                "the target spectrum has {} coefficients; this transform's half spectrum has {m}",
+                target.amp.len()
+            )));
+        }
+        let mut max = 0.0f64;
+        for (a, c) in self.amp.iter_mut().zip(data) {
+            *a = c.norm_sqr().sqrt();
+            max = max.max(*a);
+        }
+        let floor = max * PHASE_FLOOR;
+        let (mut s, mut count) = (0.0, 0.0);
+        for (i, (c, &a)) in data.iter().zip(&self.amp).enumerate() {
+            let da = a - target.amp[i];
+            let dp = phase_of(*c, a, floor) - target.phase[i];
+            let w = weight_of(i % h, nx);
+            debug_assert_eq!(w, target.weight[i]);
+            s += w * (da * da + dp * dp);
+            count += w;
+        }
+        Ok(loss_of_sum(s, count))
     }
 
     /// Amplitudes alone (the image loss, Eq. 39, compares only these).
     pub fn amplitudes(&mut self, values: &[f64]) -> Result<Vec<f64>> {
         let data = self.transform(values)?;
-        Ok(data
-            .iter()
-            .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
-            .collect())
+        Ok(data.iter().map(|c| c.norm_sqr().sqrt()).collect())
     }
 }
 
@@ -314,6 +208,10 @@ pub fn fourier_loss(a: &Spectrum, b: &Spectrum) -> f64 {
         s += w * (da * da + dp * dp);
         count += w;
     }
+    loss_of_sum(s, count)
+}
+
+fn loss_of_sum(s: f64, count: f64) -> f64 {
     libm::log(s / (2.0 * count.max(1.0)) + 1e-12)
 }
 
@@ -337,6 +235,7 @@ mod tests {
     use super::*;
     use crate::core::rng::Rng;
     use crate::optim::{AskTell, Cmaes, CmaesOptions};
+    use std::f64::consts::TAU;
 
     #[test]
     fn fft_matches_a_direct_dft() {
@@ -376,6 +275,50 @@ mod tests {
             let half = fourier_loss(&f.half_spectrum(&a).unwrap(), &f.half_spectrum(&b).unwrap());
             assert!((whole - half).abs() < 1e-9, "{dims:?}: {whole} vs {half}");
         }
+    }
+
+    #[test]
+    fn the_fused_half_loss_is_the_loss_of_the_half_spectra_bit_for_bit() {
+        for dims in [[32, 32, 32], [8, 4, 2], [1, 8, 2], [16, 16, 1]] {
+            let len: usize = dims.iter().product();
+            let a: Vec<f64> = (0..len).map(|i| libm::sin(i as f64 * 0.71) + 0.2).collect();
+            let b: Vec<f64> = (0..len).map(|i| libm::cos(i as f64 * 0.37 + 1.0)).collect();
+            let mut f = Fourier::new(dims).unwrap();
+            let t = f.half_spectrum(&b).unwrap();
+            let want = fourier_loss(&f.half_spectrum(&a).unwrap(), &t);
+            assert_eq!(
+                f.half_loss(&a, &t).unwrap().to_bits(),
+                want.to_bits(),
+                "{dims:?}"
+            );
+            // Reusing the buffers changes nothing.
+            assert_eq!(
+                f.half_loss(&a, &t).unwrap().to_bits(),
+                want.to_bits(),
+                "{dims:?}"
+            );
+        }
+        let mut f = Fourier::new([4, 4, 4]).unwrap();
+        let t = f.half_spectrum(&[0.0; 64]).unwrap();
+        assert!(f.half_loss(&[0.0; 8], &t).is_err());
+        let mut g = Fourier::new([8, 4, 4]).unwrap();
+        assert!(g.half_loss(&[0.0; 128], &t).is_err());
+    }
+
+    /// At the truth the loss sum is exactly 0 (the loss is log ε, its
+    /// floor); a perturbed parameter scores higher, more so further away.
+    #[test]
+    fn the_loss_is_zero_at_the_truth_and_grows_with_a_perturbation() {
+        let (n, h) = (32, 0.25 / 32.0);
+        let mut f = Fourier::new([n, n, n]).unwrap();
+        let t = f.half_spectrum(&gyroid_1d(100.0, n, h)).unwrap();
+        let at = |f: &mut Fourier, eta: f64| f.half_loss(&gyroid_1d(eta, n, h), &t).unwrap();
+        let zero = at(&mut f, 100.0);
+        assert_eq!(zero, libm::log(1e-12));
+        let near = at(&mut f, 101.0);
+        let far = at(&mut f, 150.0);
+        assert!(near > zero + 10.0, "{near} vs {zero}");
+        assert!(far > near, "{far} vs {near}");
     }
 
     /// The paper's Gyroid [1D] reconstruction: CMA-ES with the Fourier

@@ -34,8 +34,9 @@
 //! The response carries no time (the core reads no clock): the CLI and the
 //! page measure seconds around the job.
 use super::api::{start_render, MicroRenderRequest, RenderJob};
-use super::fit::{amplitude_loss, fourier_loss, Fourier, Spectrum};
-use super::scene::{self, Node, Scene};
+use super::fit::{amplitude_loss, Fourier, Spectrum};
+use super::periodic::Wave;
+use super::scene::{self, Node, Op, Scene};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::request_limits as lim;
@@ -201,10 +202,13 @@ struct Param {
 /// What an evaluation samples.
 #[derive(Clone)]
 enum Sampler {
-    /// The field at `points`; clamped to ±R when `clamp` is set.
+    /// The field at `points`; clamped to ±R when `clamp` is set. `axes`:
+    /// the lattice's coordinates along x, y and z when `points` is that
+    /// lattice (x fastest), for [`sample_grid`].
     Volume {
         points: Vec<DVec3>,
         clamp: Option<f64>,
+        axes: Option<Box<[Vec<f64>; 3]>>,
     },
     /// A grey rendering of `width × height` with these settings.
     Image(MicroRenderRequest),
@@ -224,17 +228,124 @@ enum Work {
 /// Scene evaluations (or their equivalent) per job step.
 const WORK_PER_STEP: usize = 60_000;
 
+/// The value a sample stores: clamped to `±clamp` when set, and finite.
+#[inline(always)]
+fn stored(v: f64, clamp: Option<f64>) -> f64 {
+    let v = match clamp {
+        Some(r) => v.clamp(-r, r),
+        None => v,
+    };
+    if v.is_finite() {
+        v
+    } else {
+        MAX_VALUE
+    }
+}
+
+/// Sample `scene` on the lattice `axes` (x fastest) into `out` at once when
+/// its root is a periodic function (Eq. 11): each factor depends on one
+/// coordinate, so its values along its axis are computed once (n sines, not
+/// n³) and every point multiplies them in the order [`Periodic::raw`]
+/// does, which gives the values of [`Scene::eval`] bit for bit. `false`
+/// (and `out` untouched) for any other scene.
+fn sample_grid(
+    scene: &Scene,
+    axes: &[Vec<f64>; 3],
+    clamp: Option<f64>,
+    out: &mut Vec<f64>,
+) -> bool {
+    let Op::Periodic(t) = &scene.root else {
+        return false;
+    };
+    let [nx, ny, nz] = [axes[0].len(), axes[1].len(), axes[2].len()];
+    // Per term, per factor: its axis and its values along that axis.
+    let tables: Vec<Vec<(usize, Vec<f64>)>> = t
+        .terms
+        .iter()
+        .map(|term| {
+            term.iter()
+                .map(|f| {
+                    let a = f.axis as usize;
+                    let vals = axes[a]
+                        .iter()
+                        .map(|&c| {
+                            let x = f.freq * c + f.phase;
+                            let w = match f.wave {
+                                Wave::Sin => libm::sin(x),
+                                Wave::Cos => libm::cos(x),
+                            };
+                            let mut r = 1.0;
+                            for _ in 0..f.power {
+                                r *= f.amp * w;
+                            }
+                            r
+                        })
+                        .collect();
+                    (a, vals)
+                })
+                .collect()
+        })
+        .collect();
+    out.clear();
+    out.reserve(nx * ny * nz);
+    let (mut sum, mut prod) = (vec![0.0; nx], vec![0.0; nx]);
+    for z in 0..nz {
+        for y in 0..ny {
+            sum.fill(t.constant);
+            for term in &tables {
+                prod.fill(1.0);
+                for (a, vals) in term {
+                    match a {
+                        0 => prod.iter_mut().zip(vals).for_each(|(p, v)| *p *= v),
+                        1 => {
+                            let v = vals[y];
+                            prod.iter_mut().for_each(|p| *p *= v);
+                        }
+                        _ => {
+                            let v = vals[z];
+                            prod.iter_mut().for_each(|p| *p *= v);
+                        }
+                    }
+                }
+                sum.iter_mut().zip(&prod).for_each(|(s, p)| *s += p);
+            }
+            out.extend(sum.iter().map(|&v| {
+                let v = if t.thickness > 0.0 {
+                    v.abs() - t.thickness
+                } else {
+                    v
+                };
+                let v = v * t.inv_bound;
+                stored(if v.is_nan() { f64::INFINITY } else { v }, clamp)
+            }));
+        }
+    }
+    true
+}
+
 impl Work {
-    fn new(sampler: &Sampler, scene: Scene, text: &str) -> Result<Work> {
+    /// Start sampling `scene`; `text` renders it (image samplers only);
+    /// `buffer` is reused for the samples.
+    fn new(
+        sampler: &Sampler,
+        scene: Scene,
+        text: impl FnOnce() -> String,
+        buffer: Vec<f64>,
+    ) -> Result<Work> {
         Ok(match sampler {
-            Sampler::Volume { points, clamp } => Work::Volume {
-                scene: Box::new(scene),
-                values: Vec::with_capacity(points.len()),
-                points: points.len(),
-                clamp: *clamp,
-            },
+            Sampler::Volume { points, clamp, .. } => {
+                let mut values = buffer;
+                values.clear();
+                values.reserve(points.len());
+                Work::Volume {
+                    scene: Box::new(scene),
+                    values,
+                    points: points.len(),
+                    clamp: *clamp,
+                }
+            }
             Sampler::Image(r) => Work::Render(Box::new(start_render(MicroRenderRequest {
-                scene: text.to_string(),
+                scene: text(),
                 ..r.clone()
             })?)),
         })
@@ -249,19 +360,26 @@ impl Work {
                 points,
                 clamp,
             } => {
-                let Sampler::Volume { points: pts, .. } = sampler else {
+                let Sampler::Volume {
+                    points: pts, axes, ..
+                } = sampler
+                else {
                     return Err(Error::input("micro-fit: sampler mismatch"));
                 };
-                let stop = (values.len() + budget).min(*points);
                 let from = values.len();
-                for p in &pts[from..stop] {
-                    let v = scene.eval(*p);
-                    let v = match clamp {
-                        Some(r) => v.clamp(-*r, *r),
-                        None => v,
-                    };
-                    values.push(if v.is_finite() { v } else { MAX_VALUE });
-                }
+                let separable = from == 0
+                    && axes
+                        .as_deref()
+                        .is_some_and(|a| sample_grid(scene, a, *clamp, values));
+                let stop = if separable {
+                    *points
+                } else {
+                    let stop = (from + budget).min(*points);
+                    for p in &pts[from..stop] {
+                        values.push(stored(scene.eval(*p), *clamp));
+                    }
+                    stop
+                };
                 let done = stop - from;
                 Ok(if values.len() == *points {
                     (done, Some(std::mem::take(values)))
@@ -330,6 +448,8 @@ pub struct MicroFitJob {
     rng: Rng,
     phase: Phase,
     work: Option<Work>,
+    /// The last samples' buffer, reused by the next sampling.
+    spare: Vec<f64>,
     batch: Vec<Vec<f64>>,
     losses: Vec<f64>,
     next: usize,
@@ -354,6 +474,16 @@ fn is_pow2(v: u32) -> bool {
 /// Cell centres of an `nx × ny × nz` lattice over `center ± half` (x fastest),
 /// shifted by `shift` cells.
 fn lattice(dims: [usize; 3], center: [f64; 3], half: f64, shift: f64) -> Vec<DVec3> {
+    lattice_and_axes(dims, center, half, shift).0
+}
+
+/// [`lattice`] and its coordinates along each axis (the same numbers).
+fn lattice_and_axes(
+    dims: [usize; 3],
+    center: [f64; 3],
+    half: f64,
+    shift: f64,
+) -> (Vec<DVec3>, Box<[Vec<f64>; 3]>) {
     let c = DVec3::from_array(center);
     let mut out = Vec::with_capacity(dims.iter().product());
     let coord = |i: usize, n: usize| -half + (i as f64 + 0.5 + shift) * 2.0 * half / n as f64;
@@ -364,7 +494,22 @@ fn lattice(dims: [usize; 3], center: [f64; 3], half: f64, shift: f64) -> Vec<DVe
             }
         }
     }
-    out
+    let axes = [0, 1, 2].map(|a| {
+        (0..dims[a])
+            .map(|i| center[a] + coord(i, dims[a]))
+            .collect()
+    });
+    (out, Box::new(axes))
+}
+
+/// The fitting sampler of a lattice.
+fn volume_sampler(dims: [usize; 3], req: &MicroFitRequest, clamp: Option<f64>) -> Sampler {
+    let (points, axes) = lattice_and_axes(dims, req.center, req.half, 0.0);
+    Sampler::Volume {
+        points,
+        clamp,
+        axes: Some(axes),
+    }
 }
 
 fn decode_grey(bytes: &[u8], field: &str) -> Result<(u32, u32, Vec<f64>)> {
@@ -504,14 +649,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
             let s = scene::parse(text).map_err(|e| retarget(e, "target.scene"))?;
             target_scene = Some((s, text.clone()));
             let dims = [n, n, n];
-            (
-                Sampler::Volume {
-                    points: lattice(dims, req.center, req.half, 0.0),
-                    clamp: None,
-                },
-                Fourier::new(dims)?,
-                None,
-            )
+            (volume_sampler(dims, &req, None), Fourier::new(dims)?, None)
         }
         FitTarget::Volume { values } => {
             if values.len() != n * n * n {
@@ -531,14 +669,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
             let dims = [n, n, n];
             let mut f = Fourier::new(dims)?;
             let t = TargetSpectrum::Full(f.half_spectrum(values)?);
-            (
-                Sampler::Volume {
-                    points: lattice(dims, req.center, req.half, 0.0),
-                    clamp: None,
-                },
-                f,
-                Some(t),
-            )
+            (volume_sampler(dims, &req, None), f, Some(t))
         }
         FitTarget::Slices { pngs, range } => {
             lim::finite_in("target.range", *range, (1e-12, 1e6))?;
@@ -571,14 +702,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
             let dims = [n, n, c];
             let mut f = Fourier::new(dims)?;
             let t = TargetSpectrum::Full(f.half_spectrum(&values)?);
-            (
-                Sampler::Volume {
-                    points: lattice(dims, req.center, req.half, 0.0),
-                    clamp: Some(*range),
-                },
-                f,
-                Some(t),
-            )
+            (volume_sampler(dims, &req, Some(*range)), f, Some(t))
         }
         FitTarget::Image { png, scene: text } => {
             let mut render = req.render.clone();
@@ -680,6 +804,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
             Phase::Target
         },
         work: None,
+        spare: vec![],
         batch: vec![start.clone()],
         losses: vec![f64::NAN],
         next: 0,
@@ -766,19 +891,16 @@ impl MicroFitJob {
     }
 
     /// The compiled scene at `u`, or `None` where the values are invalid.
-    fn scene_at(&self, u: &[f64]) -> Option<(Scene, String)> {
+    fn scene_at(&self, u: &[f64]) -> Option<(Scene, Value)> {
         let v = self.scene_value(u);
-        let node: Node = serde_json::from_value(v.clone()).ok()?;
+        let node = Node::deserialize(&v).ok()?;
         let s = scene::compile(node).ok()?;
-        Some((s, v.to_string()))
+        Some((s, v))
     }
 
     fn loss_of(&mut self, values: &[f64]) -> Result<f64> {
         let l = match &self.target {
-            Some(TargetSpectrum::Full(t)) => {
-                let s = self.fourier.half_spectrum(values)?;
-                fourier_loss(&s, t)
-            }
+            Some(TargetSpectrum::Full(t)) => self.fourier.half_loss(values, t)?,
             Some(TargetSpectrum::Amplitudes(t)) => {
                 let a = self.fourier.amplitudes(values)?;
                 amplitude_loss(&a, t)
@@ -786,6 +908,45 @@ impl MicroFitJob {
             None => return Err(Error::input("micro-fit: no target yet")),
         };
         Ok(if l.is_nan() { f64::INFINITY } else { l })
+    }
+
+    /// The scene at the normalised point `u` (`None` where its values are
+    /// invalid). With [`MicroFitJob::sample`] and
+    /// [`MicroFitJob::loss_of_samples`] these are the three parts of one
+    /// evaluation, public so `bench micro --only loss` can time each.
+    pub fn scene_for(&self, u: &[f64]) -> Option<Scene> {
+        self.scene_at(u).map(|(s, _)| s)
+    }
+
+    /// The fitting samples of `scene` (volume targets): on the lattice at
+    /// once where the scene allows ([`sample_grid`]), else point by point;
+    /// `pointwise` forces the latter (same values, bit for bit).
+    pub fn sample(&self, scene: &Scene, pointwise: bool) -> Result<Vec<f64>> {
+        let Sampler::Volume {
+            points,
+            clamp,
+            axes,
+        } = &self.sampler
+        else {
+            return Err(Error::input(
+                "micro-fit: only volume targets are sampled on a lattice",
+            ));
+        };
+        let mut out = Vec::with_capacity(points.len());
+        let done = !pointwise
+            && axes
+                .as_deref()
+                .is_some_and(|a| sample_grid(scene, a, *clamp, &mut out));
+        if !done {
+            out.extend(points.iter().map(|p| stored(scene.eval(*p), *clamp)));
+        }
+        Ok(out)
+    }
+
+    /// The loss of fitting samples against the target (once it is sampled:
+    /// after the job's first step for a scene target).
+    pub fn loss_of_samples(&mut self, values: &[f64]) -> Result<f64> {
+        self.loss_of(values)
     }
 
     fn progress(&self, stage: &str) -> Progress {
@@ -806,7 +967,12 @@ impl MicroFitJob {
             let u = self.batch[self.next].clone();
             match self.scene_at(&u) {
                 None => return Ok((1, Some(f64::INFINITY))),
-                Some((s, text)) => match Work::new(&self.sampler, s, &text) {
+                Some((s, v)) => match Work::new(
+                    &self.sampler,
+                    s,
+                    || v.to_string(),
+                    std::mem::take(&mut self.spare),
+                ) {
                     Ok(w) => self.work = Some(w),
                     Err(_) => return Ok((1, Some(f64::INFINITY))),
                 },
@@ -825,7 +991,9 @@ impl MicroFitJob {
             Some(v) => {
                 self.work = None;
                 let n = v.len();
-                Ok((done + n, Some(self.loss_of(&v)?)))
+                let loss = self.loss_of(&v)?;
+                self.spare = v;
+                Ok((done + n, Some(loss)))
             }
         }
     }
@@ -880,7 +1048,7 @@ impl MicroFitJob {
                 return Err(Error::input("micro-fit: no target scene"));
             };
             let sampler = self.active_sampler();
-            self.work = Some(Work::new(&sampler, s.clone(), text)?);
+            self.work = Some(Work::new(&sampler, s.clone(), || text.clone(), vec![])?);
         }
         let sampler = self.active_sampler();
         let work = self.work.as_mut().expect("work");
@@ -897,6 +1065,7 @@ impl MicroFitJob {
             Sampler::Volume {
                 points: self.validation_points.clone(),
                 clamp: None,
+                axes: None,
             }
         } else {
             self.sampler.clone()

@@ -25,7 +25,6 @@
 //! which dataset textures are.
 use crate::core::error::{Error, Result};
 use crate::texture::image::Gray;
-use crate::texture::models::common::fft;
 use serde::{Deserialize, Serialize};
 
 /// The number of perceptual scales.
@@ -228,25 +227,7 @@ fn fft2(w: &[f64], inverse: bool, im_in: Option<&[f32]>) -> (Vec<f32>, Vec<f32>)
     let mut im: Vec<f32> = im_in
         .map(|v| v.to_vec())
         .unwrap_or_else(|| vec![0.0; n * n]);
-    for row in 0..n {
-        fft(
-            &mut re[row * n..(row + 1) * n],
-            &mut im[row * n..(row + 1) * n],
-            inverse,
-        );
-    }
-    let (mut r, mut i) = (vec![0.0f32; n], vec![0.0f32; n]);
-    for col in 0..n {
-        for k in 0..n {
-            r[k] = re[k * n + col];
-            i[k] = im[k * n + col];
-        }
-        fft(&mut r, &mut i, inverse);
-        for k in 0..n {
-            re[k * n + col] = r[k];
-            im[k * n + col] = i[k];
-        }
-    }
+    crate::geom::fft::fft2(&mut re, &mut im, n, n, inverse).expect("WORK is a power of two");
     (re, im)
 }
 

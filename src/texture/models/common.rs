@@ -1,6 +1,6 @@
 //! Building blocks the models share: tileable gradient and value noise,
 //! Worley distances, texton stamping, triangle-wave folding, wrapped blurs
-//! and resampling, and a radix-2 FFT for spectral synthesis.
+//! and resampling, and the inverse 2-D FFT of spectral synthesis.
 //!
 //! Every coordinate is in image units (the image is the unit torus
 //! `[0, 1)²`), so a model looks the same at 128² and 256²; everything that
@@ -359,70 +359,11 @@ pub fn scatter(count: usize, rng: &mut Rng) -> Vec<(f32, f32)> {
         .collect()
 }
 
-/// In-place radix-2 complex FFT (`re`, `im` of length a power of two);
-/// `inverse` flips the sign of the exponent (no 1/n scaling).
-pub fn fft(re: &mut [f32], im: &mut [f32], inverse: bool) {
-    let n = re.len();
-    debug_assert!(n.is_power_of_two() && im.len() == n);
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
-    let sign = if inverse { 1.0 } else { -1.0 };
-    let mut len = 2;
-    while len <= n {
-        let ang = sign * std::f64::consts::TAU / len as f64;
-        let tw: Vec<(f32, f32)> = (0..len / 2)
-            .map(|k| {
-                let a = ang * k as f64;
-                (libm::cos(a) as f32, libm::sin(a) as f32)
-            })
-            .collect();
-        for start in (0..n).step_by(len) {
-            for (k, &(wr, wi)) in tw.iter().enumerate() {
-                let (a, b) = (start + k, start + k + len / 2);
-                let xr = re[b] * wr - im[b] * wi;
-                let xi = re[b] * wi + im[b] * wr;
-                re[b] = re[a] - xr;
-                im[b] = im[a] - xi;
-                re[a] += xr;
-                im[a] += xi;
-            }
-        }
-        len <<= 1;
-    }
-}
-
-/// 2-D inverse FFT of an `m`×`m` spectrum (m a power of two), in place.
+/// 2-D inverse FFT of an `m`×`m` spectrum (m a power of two), in place,
+/// unscaled: the crate's one FFT ([`crate::geom::fft::fft2`]).
 pub fn ifft2(re: &mut [f32], im: &mut [f32], m: usize) {
-    let (mut r, mut i) = (vec![0.0f32; m], vec![0.0f32; m]);
-    for row in 0..m {
-        fft(
-            &mut re[row * m..(row + 1) * m],
-            &mut im[row * m..(row + 1) * m],
-            true,
-        );
-    }
-    for col in 0..m {
-        for k in 0..m {
-            r[k] = re[k * m + col];
-            i[k] = im[k * m + col];
-        }
-        fft(&mut r, &mut i, true);
-        for k in 0..m {
-            re[k * m + col] = r[k];
-            im[k * m + col] = i[k];
-        }
-    }
+    crate::geom::fft::fft2(re, im, m, m, true)
+        .expect("spectral synthesis works on power-of-two squares");
 }
 
 #[cfg(test)]
@@ -441,14 +382,17 @@ mod tests {
     }
 
     #[test]
-    fn fft_round_trip_recovers_the_signal() {
-        let mut re: Vec<f32> = (0..16).map(|i| (i as f32 * 0.7).sin()).collect();
-        let orig = re.clone();
-        let mut im = vec![0.0; 16];
-        fft(&mut re, &mut im, false);
-        fft(&mut re, &mut im, true);
-        for (a, b) in re.iter().zip(&orig) {
-            assert!((a / 16.0 - b).abs() < 1e-4);
+    fn ifft2_of_a_single_coefficient_is_a_plane_wave() {
+        let m = 8;
+        let (mut re, mut im) = (vec![0.0f32; m * m], vec![0.0f32; m * m]);
+        re[1] = 1.0; // kx = 1, ky = 0
+        ifft2(&mut re, &mut im, m);
+        for y in 0..m {
+            for x in 0..m {
+                let a = std::f64::consts::TAU * x as f64 / m as f64;
+                assert!((re[y * m + x] as f64 - a.cos()).abs() < 1e-6);
+                assert!((im[y * m + x] as f64 - a.sin()).abs() < 1e-6);
+            }
         }
     }
 
