@@ -232,7 +232,7 @@ const html = `
       <div class="texture-view"><canvas data-testid="texture-canvas" role="img" aria-label="the retrieved texture"></canvas></div>
       <p class="texture-retrieved muted" data-testid="texture-retrieved" aria-live="polite"></p>
       <canvas class="texture-chart" data-testid="texture-chart" role="img" aria-label="requested and retrieved scales"></canvas>
-      <p class="muted texture-legend"><span class="key req"></span> requested <span class="key got"></span> retrieved · <span data-testid="texture-cosine"></span></p>
+      <p class="muted texture-legend"><span class="key req"></span> requested <span class="key got"></span> retrieved <span data-testid="texture-cosine"></span></p>
     </section>
     <section class="card texture-controls" aria-label="Perceptual scales">
       <h3>Perceptual scales</h3>
@@ -687,7 +687,7 @@ function mount(el, ctx) {
     if (r) {
       retrievedEl.textContent = `${nameOf(r.model)}, seed ${r.seed}${r.sample === null ? '' : ` (sample ${r.sample})`}${r.edited ? ' — parameters edited' : ''}`;
       retrievedEl.dataset.model = r.model;
-      cosineEl.textContent = r.cosine === null ? '' : `cosine similarity ${r.cosine.toFixed(3)}${r.edited ? ' (before your edits)' : ''}`;
+      cosineEl.textContent = r.cosine === null ? '' : `· cosine similarity ${r.cosine.toFixed(3)}${r.edited ? ' (before your edits)' : ''}`;
     } else {
       retrievedEl.textContent = 'Nothing retrieved yet.';
       delete retrievedEl.dataset.model;

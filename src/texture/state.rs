@@ -404,7 +404,7 @@ mod tests {
         let again = check(&value(&serde_json::to_value(&s).unwrap())).unwrap();
         assert_eq!(again, s);
         // A fresh document: nothing but the scales.
-        let s = check(&value(&json!({"scales": [5; 12]}))).unwrap();
+        let s = check(&value(&json!({"scales": vec![5; 12]}))).unwrap();
         assert_eq!((s.source, s.predicted, s.retrieved, s.same_model), (None, None, None, false));
         // A dropped image, kept as a small PNG.
         let mut d = doc();
@@ -445,7 +445,7 @@ mod tests {
         assert_eq!(field_of("/source/seed", json!(1.5)), "source.seed");
         assert_eq!(field_of("/source/seed", json!(2f64.powi(60))), "source.seed");
         assert_eq!(field_of("/predicted/model", json!(1)), "predicted.model");
-        assert_eq!(field_of("/predicted/scales", json!([5; 11])), "predicted.scales");
+        assert_eq!(field_of("/predicted/scales", json!(vec![5; 11])), "predicted.scales");
         assert_eq!(field_of("/predicted/scales/3", json!(0)), "predicted.scales.3");
         assert_eq!(field_of("/predicted/scales/3", json!(4.5)), "predicted.scales.3");
         assert_eq!(field_of("/scales", json!(null)), "scales");
@@ -460,7 +460,7 @@ mod tests {
         let mut d = doc();
         d["source"] = json!({"kind": "image", "name": "a.png", "png": [1, 2]});
         assert_eq!(check(&value(&d)).unwrap_err().field(), Some("source.png"));
-        let mut v = value(&json!({"scales": [5; 12], "source": {"kind": "image", "name": "a.png", "png": null}}));
+        let mut v = value(&json!({"scales": vec![5; 12], "source": {"kind": "image", "name": "a.png", "png": null}}));
         if let Value::Object(kv) = &mut v {
             if let Value::Object(s) = &mut kv[1].1 {
                 let mut big = PNG_MAGIC.to_vec();

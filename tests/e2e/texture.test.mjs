@@ -130,7 +130,7 @@ test('a corrupt, wrong-version or missing index is said in the panel; models sti
     await page.waitForSelector('[data-testid=doc-error]:not([hidden])', { timeout: 30000 });
     assert.match(await page.textContent('[data-testid=doc-error]'), message, what);
     // The page keeps working: a model renders as the example.
-    await page.waitForSelector('[data-testid=texture-model-select] option[value=islamic]');
+    await page.waitForSelector('[data-testid=texture-model-select] option[value=islamic]', { state: 'attached' });
     await page.selectOption('[data-testid=texture-model-select]', 'islamic');
     await page.click('button[data-act=render-example]');
     await page.waitForFunction(() => {
