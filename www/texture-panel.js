@@ -527,7 +527,7 @@ function mount(el, ctx) {
         return row;
       }), (() => {
         const row = document.createElement('label');
-        row.className = 'texture-param';
+        row.className = 'texture-param texture-seed';
         const span = document.createElement('span');
         span.textContent = 'seed';
         const input = document.createElement('input');

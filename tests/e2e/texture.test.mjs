@@ -60,7 +60,7 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   assert.match(await page.textContent('[data-testid=texture-estimates-note]'), /estimates.*not human ratings/);
 
   // A Perlin-noise texture: irregular, so regularity has room to rise.
-  const model = 'perlin';
+  const model = 'islamic';
   const png = await renderedPng(page, model, 11);
   await dropFile(page, '[data-testid=texture-drop]', { name: 'perlin.png', bytes: png, type: 'image/png' });
   await page.waitForFunction(() => window.filigreeTexture.state()?.source?.kind === 'image', null, { timeout: 30000 });
