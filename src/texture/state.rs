@@ -111,22 +111,19 @@ fn model_of(v: Option<&Value>, field: &str) -> Result<&'static Model> {
     let id = v
         .and_then(Value::as_text)
         .ok_or_else(|| invalid(field, "must be a texture model id"))?;
-    models::MODELS
-        .iter()
-        .find(|m| m.id == id)
-        .ok_or_else(|| {
-            invalid(
-                field,
-                format!(
-                    "must be one of the texture models ({})",
-                    models::MODELS
-                        .iter()
-                        .map(|m| m.id)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            )
-        })
+    models::MODELS.iter().find(|m| m.id == id).ok_or_else(|| {
+        invalid(
+            field,
+            format!(
+                "must be one of the texture models ({})",
+                models::MODELS
+                    .iter()
+                    .map(|m| m.id)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        )
+    })
 }
 
 /// A model's parameters: one finite number each, clamped to the ranges.
@@ -147,7 +144,8 @@ fn params_of(model: &Model, v: Option<&Value>, field: &str) -> Result<Vec<f64>> 
             format!(
                 "must hold {} numbers ({}) for model '{}', not {}",
                 model.params.len(),
-                model.params
+                model
+                    .params
                     .iter()
                     .map(|p| p.name)
                     .collect::<Vec<_>>()
@@ -182,7 +180,12 @@ fn likert(v: Option<&Value>, field: &str) -> Result<[u8; 12]> {
     let list = v
         .and_then(Value::as_list)
         .filter(|l| l.len() == 12)
-        .ok_or_else(|| invalid(field, "must be the 12 scales, each a whole number from 1 to 9"))?;
+        .ok_or_else(|| {
+            invalid(
+                field,
+                "must be the 12 scales, each a whole number from 1 to 9",
+            )
+        })?;
     let mut out = [0u8; 12];
     for (i, (o, x)) in out.iter_mut().zip(list).enumerate() {
         *o = x
@@ -202,7 +205,12 @@ fn requested(v: Option<&Value>) -> Result<[f64; 12]> {
     let list = v
         .and_then(Value::as_list)
         .filter(|l| l.len() == 12)
-        .ok_or_else(|| invalid("scales", "must be the 12 requested scales, numbers from 1 to 9"))?;
+        .ok_or_else(|| {
+            invalid(
+                "scales",
+                "must be the 12 requested scales, numbers from 1 to 9",
+            )
+        })?;
     let mut out = [0.0; 12];
     for (i, (o, x)) in out.iter_mut().zip(list).enumerate() {
         *o = x
@@ -219,7 +227,11 @@ fn requested(v: Option<&Value>) -> Result<[f64; 12]> {
 }
 
 fn source(v: &Value) -> Result<Source> {
-    let s = object(v, "source", "null or an example {kind: \"model\" | \"image\", ...}")?;
+    let s = object(
+        v,
+        "source",
+        "null or an example {kind: \"model\" | \"image\", ...}",
+    )?;
     match s.get("kind").and_then(Value::as_text) {
         Some("model") => {
             let model = model_of(s.get("model"), "source.model")?;
@@ -399,13 +411,19 @@ mod tests {
         assert_eq!(s.scales[11], 8.5);
         assert_eq!(s.predicted.as_ref().unwrap().scales[11], 8);
         let r = s.retrieved.as_ref().unwrap();
-        assert_eq!((r.model.as_str(), r.seed, r.sample), ("cellular", 9_007_199_254_740_991, Some(12)));
+        assert_eq!(
+            (r.model.as_str(), r.seed, r.sample),
+            ("cellular", 9_007_199_254_740_991, Some(12))
+        );
         // Checking the normalised state again changes nothing.
         let again = check(&value(&serde_json::to_value(&s).unwrap())).unwrap();
         assert_eq!(again, s);
         // A fresh document: nothing but the scales.
         let s = check(&value(&json!({"scales": vec![5; 12]}))).unwrap();
-        assert_eq!((s.source, s.predicted, s.retrieved, s.same_model), (None, None, None, false));
+        assert_eq!(
+            (s.source, s.predicted, s.retrieved, s.same_model),
+            (None, None, None, false)
+        );
         // A dropped image, kept as a small PNG.
         let mut d = doc();
         d["source"] = json!({"kind": "image", "name": "bark.jpg", "png": null});
@@ -417,7 +435,9 @@ mod tests {
             }
         }
         let s = check(&v).unwrap();
-        assert!(matches!(s.source, Some(Source::Image { ref name, ref png }) if name == "bark.jpg" && png.starts_with(PNG_MAGIC)));
+        assert!(
+            matches!(s.source, Some(Source::Image { ref name, ref png }) if name == "bark.jpg" && png.starts_with(PNG_MAGIC))
+        );
     }
 
     #[test]
@@ -431,7 +451,10 @@ mod tests {
         let s = check(&value(&d)).unwrap();
         assert_eq!(s.retrieved.unwrap().params[0], cellular.params[0].hi);
         // The wrong count names the list.
-        assert_eq!(field_of("/retrieved/params", json!([1])), "retrieved.params");
+        assert_eq!(
+            field_of("/retrieved/params", json!([1])),
+            "retrieved.params"
+        );
         assert_eq!(field_of("/source/params", json!([])), "source.params");
         assert_eq!(field_of("/source/params/0", json!("x")), "source.params.0");
     }
@@ -443,11 +466,23 @@ mod tests {
         assert_eq!(field_of("/source/model", json!("nope")), "source.model");
         assert_eq!(field_of("/source/seed", json!(-1)), "source.seed");
         assert_eq!(field_of("/source/seed", json!(1.5)), "source.seed");
-        assert_eq!(field_of("/source/seed", json!(2f64.powi(60))), "source.seed");
+        assert_eq!(
+            field_of("/source/seed", json!(2f64.powi(60))),
+            "source.seed"
+        );
         assert_eq!(field_of("/predicted/model", json!(1)), "predicted.model");
-        assert_eq!(field_of("/predicted/scales", json!(vec![5; 11])), "predicted.scales");
-        assert_eq!(field_of("/predicted/scales/3", json!(0)), "predicted.scales.3");
-        assert_eq!(field_of("/predicted/scales/3", json!(4.5)), "predicted.scales.3");
+        assert_eq!(
+            field_of("/predicted/scales", json!(vec![5; 11])),
+            "predicted.scales"
+        );
+        assert_eq!(
+            field_of("/predicted/scales/3", json!(0)),
+            "predicted.scales.3"
+        );
+        assert_eq!(
+            field_of("/predicted/scales/3", json!(4.5)),
+            "predicted.scales.3"
+        );
         assert_eq!(field_of("/scales", json!(null)), "scales");
         assert_eq!(field_of("/scales/9", json!(9.5)), "scales.9");
         assert_eq!(field_of("/scales/0", json!(f64::NAN)), "scales.0");
@@ -456,11 +491,16 @@ mod tests {
         assert_eq!(field_of("/retrieved/sample", json!(-2)), "retrieved.sample");
         assert_eq!(field_of("/retrieved/cosine", json!(2)), "retrieved.cosine");
         assert_eq!(field_of("/retrieved/edited", json!(1)), "retrieved.edited");
-        assert_eq!(field_of("/retrieved/scales/0", json!(10)), "retrieved.scales.0");
+        assert_eq!(
+            field_of("/retrieved/scales/0", json!(10)),
+            "retrieved.scales.0"
+        );
         let mut d = doc();
         d["source"] = json!({"kind": "image", "name": "a.png", "png": [1, 2]});
         assert_eq!(check(&value(&d)).unwrap_err().field(), Some("source.png"));
-        let mut v = value(&json!({"scales": vec![5; 12], "source": {"kind": "image", "name": "a.png", "png": null}}));
+        let mut v = value(
+            &json!({"scales": vec![5; 12], "source": {"kind": "image", "name": "a.png", "png": null}}),
+        );
         if let Value::Object(kv) = &mut v {
             if let Value::Object(s) = &mut kv[1].1 {
                 let mut big = PNG_MAGIC.to_vec();
@@ -471,13 +511,21 @@ mod tests {
         let e = check(&v).unwrap_err();
         assert_eq!(e.field(), Some("source.png"));
         assert!(e.to_string().contains("at most"), "{e}");
-        assert_eq!(check(&value(&json!([1]))).unwrap_err().field(), Some("state"));
+        assert_eq!(
+            check(&value(&json!([1]))).unwrap_err().field(),
+            Some("state")
+        );
     }
 
     #[test]
     fn a_checked_document_makes_requests_the_core_accepts() {
         let s = check(&value(&doc())).unwrap();
-        let Some(Source::Model { model, params, seed }) = &s.source else {
+        let Some(Source::Model {
+            model,
+            params,
+            seed,
+        }) = &s.source
+        else {
             panic!("a model source")
         };
         assert!(render(&TextureRenderRequest {
