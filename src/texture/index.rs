@@ -23,7 +23,7 @@
 //! or other-version file is a clear error, never a panic or a huge
 //! allocation.
 use super::learn::isomap::{isomap, pearson};
-use super::learn::svm::{Gram, Linear, OneVsRest, Svr};
+use super::learn::svm::{Linear, OneVsRest, Svr};
 use super::pcn::{Pcn, PcnConfig};
 use super::Gray;
 use crate::core::error::{Error, Result};
@@ -150,25 +150,6 @@ pub fn par_map<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync) -> Vec
     items.iter().map(f).collect()
 }
 
-/// The linear kernel matrix, rows in parallel.
-fn linear_gram(rows: &[Vec<f32>]) -> Gram {
-    let n = rows.len();
-    let idx: Vec<usize> = (0..n).collect();
-    let upper = par_map(&idx, |&i| {
-        (i..n)
-            .map(|j| super::learn::svm::dot(&rows[i], &rows[j]))
-            .collect::<Vec<f64>>()
-    });
-    let mut k = vec![0.0; n * n];
-    for (i, row) in upper.iter().enumerate() {
-        for (o, v) in row.iter().enumerate() {
-            k[i * n + i + o] = *v;
-            k[(i + o) * n + i] = *v;
-        }
-    }
-    Gram { n, k }
-}
-
 fn to_unit(s: &[u8; 12], subset: &[u8]) -> Vec<f32> {
     subset
         .iter()
@@ -226,13 +207,12 @@ impl Index {
         let features: Vec<Vec<f32>> = par_map(training, |t| pcn.features(&t.image))
             .into_iter()
             .collect::<Result<_>>()?;
-        let gram = linear_gram(&features);
         let models: Vec<u16> = training.iter().map(|t| t.model).collect();
-        let model_classifier = OneVsRest::train(&gram, &features, &models, config.c_class);
+        let model_classifier = OneVsRest::train(&features, &models, config.c_class);
         let scale_ids: Vec<usize> = (0..12).collect();
         let scale_classifiers = par_map(&scale_ids, |&k| {
             let labels: Vec<u16> = training.iter().map(|t| t.scales[k] as u16).collect();
-            OneVsRest::train(&gram, &features, &labels, config.c_class)
+            OneVsRest::train(&features, &labels, config.c_class)
         });
         let (axes, coords) = Self::space(&base, config)?;
         let samples = base
