@@ -115,6 +115,15 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
     return [lo, hi];
   }, bytes.toString('base64'));
   assert.ok(range[1] - range[0] > 20, `the exported PNG is a picture (${range})`);
+
+  // Export JSON: the model, its named parameters, the seed and the scales shown.
+  const [jd] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-json]')]);
+  const json = JSON.parse(fs.readFileSync(await jd.path(), 'utf8'));
+  s = await state(page);
+  assert.equal(json.model, s.retrieved.model);
+  assert.equal(json.seed, s.retrieved.seed);
+  assert.deepEqual(Object.values(json.params), s.retrieved.params);
+  assert.equal(json.scales.regularity, s.scales[REGULARITY]);
 });
 
 test('a corrupt, wrong-version or missing index is said in the panel; models still render', async () => {
