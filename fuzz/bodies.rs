@@ -352,6 +352,19 @@ pub fn project(data: &[u8]) {
             assert!((DISTANCE.0..=DISTANCE.1).contains(&c.distance));
             assert!(c.target.iter().all(|v| v.is_finite()) && s.z.is_finite());
         }
+        ToolState::Texture(s) => {
+            use filigree::texture::state::{Source, MAX_SOURCE_PNG};
+            assert!(s.scales.iter().all(|v| (1.0..=9.0).contains(v)));
+            if let Some(Source::Image { png, .. }) = &s.source {
+                assert!(png.len() <= MAX_SOURCE_PNG);
+            }
+            // The parameters kept are ones the render request takes.
+            if let Some(r) = &s.retrieved {
+                let m = filigree::texture::models::lookup(&r.model).expect("a checked model");
+                assert_eq!(m.check(&r.params).expect("checked params"), r.params);
+                assert!(r.seed < (1 << 53));
+            }
+        }
         ToolState::Inspect(_) => {}
     }
     let again = project_text(&opened.tool, opened.state_version, state).expect("saves");

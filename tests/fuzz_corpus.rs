@@ -459,6 +459,12 @@ fn write_seeds() {
         "saved-by-app-fish.filigree.json",
         &file("tests/fixtures/fish.filigree.json"),
     );
+    for (name, image) in [("texture-model", false), ("texture-image", true)] {
+        text(
+            &format!("{name}.filigree.json"),
+            app_projects::project_text("texture", 1, app_projects::texture_doc(image)),
+        );
+    }
     let v1 = json!({"format": "filigree-project", "version": 1, "tool": "inspect",
                     "state": {"name": null, "bytes": null}});
     text("format-1.filigree.json", v1.to_string());

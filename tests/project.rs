@@ -61,6 +61,23 @@ fn fit_and_inspect_projects_saved_by_the_app_round_trip() {
 /// A project file downloaded from the running app (Save project on the
 /// fish example, `tests/fixtures/fish.filigree.json`) opens unchanged.
 #[test]
+fn texture_projects_saved_by_the_app_round_trip() {
+    for image in [true, false] {
+        let saved = norm(&texture_doc(image));
+        let (p, got) = opened_state(&project_text("texture", 1, saved.clone()));
+        assert_eq!((p.tool.as_str(), p.state_version), ("texture", 1));
+        assert_eq!(got, saved, "image source: {image}");
+        let (_, again) = opened_state(&project::project_text("texture", 1, &p.state).unwrap());
+        assert_eq!(again, got);
+    }
+    // A bad field is named with its path.
+    let mut d = texture_doc(false);
+    d["retrieved"]["params"] = serde_json::json!([1, 2]);
+    let e = project::open_project(&project_text("texture", 1, d)).unwrap_err();
+    assert_eq!(e.field(), Some("retrieved.params"), "{e}");
+}
+
+#[test]
 fn a_file_saved_by_the_app_opens() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/fish.filigree.json");
     let text = std::fs::read_to_string(path).unwrap();

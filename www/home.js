@@ -34,6 +34,11 @@ const CARDS = {
     alt: 'The gyroid scene sphere-traced by the core',
     preview: previewMicro,
   },
+  texture: {
+    blurb: 'Find a procedural texture from an example and steer it with twelve perceptual sliders (estimated, not human-rated).',
+    alt: 'A regular texton texture rendered by the core, tiled 2×2',
+    preview: previewTexture,
+  },
 };
 
 async function bytesOf(rel, signal) {
@@ -117,6 +122,22 @@ async function previewMicro(pool, box, signal) {
   canvas.height = r.height;
   canvas.getContext('2d').drawImage(bmp, 0, 0);
   bmp.close();
+  box.replaceChildren(canvas);
+}
+
+// A Texture model rendered small and tiled 2×2 (the models tile); the
+// index the Texture panel uses is not fetched here.
+async function previewTexture(pool, box, signal) {
+  const side = 128;
+  const r = await pool.run('texture-render', { model: 'texton-regular', seed: 1, size: side }, { signal });
+  const canvas = document.createElement('canvas');
+  canvas.width = side * 2;
+  canvas.height = side * 2;
+  const rgba = new Uint8ClampedArray(side * side * 4);
+  r.gray.forEach((v, i) => { rgba[4 * i] = v; rgba[4 * i + 1] = v; rgba[4 * i + 2] = v; rgba[4 * i + 3] = 255; });
+  const img = new ImageData(rgba, side, side);
+  const g = canvas.getContext('2d');
+  for (const [x, y] of [[0, 0], [side, 0], [0, side], [side, side]]) g.putImageData(img, x, y);
   box.replaceChildren(canvas);
 }
 

@@ -9,10 +9,11 @@ import pixelTool from './pixel-panel.js';
 import fitTool from './fit-panel.js';
 import tangleTool from './tangle-panel.js';
 import microTool from './micro-panel.js';
+import textureTool from './texture-panel.js';
 import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 import { mountHome } from './home.js';
 
-const TOOLS = [pixelTool, fitTool, inspectTool, tangleTool, microTool];
+const TOOLS = [pixelTool, fitTool, inspectTool, tangleTool, microTool, textureTool];
 
 const $ = (sel) => document.querySelector(sel);
 

@@ -487,6 +487,11 @@ pub const TOOLS: &[ToolSchema] = &[
         version: crate::micro::state::STATE_VERSION,
     },
     ToolSchema {
+        id: "texture",
+        title: "Texture",
+        version: crate::texture::state::STATE_VERSION,
+    },
+    ToolSchema {
         id: "inspect",
         title: "Inspect image",
         version: inspect_state::STATE_VERSION,
@@ -506,6 +511,7 @@ pub enum ToolState {
     Fit(Box<crate::pattern::state::FitState>),
     Tangle(Box<crate::tangle::state::TangleState>),
     Micro(Box<crate::micro::state::MicroState>),
+    Texture(Box<crate::texture::state::TextureState>),
     Inspect(inspect_state::InspectState),
 }
 
@@ -524,6 +530,7 @@ pub fn check_state(tool_id: &str, version: u64, state: &Value) -> Result<ToolSta
         "fit" => ToolState::Fit(Box::new(crate::pattern::state::check(state)?)),
         "tangle" => ToolState::Tangle(Box::new(crate::tangle::state::check(state)?)),
         "micro" => ToolState::Micro(Box::new(crate::micro::state::check(state)?)),
+        "texture" => ToolState::Texture(Box::new(crate::texture::state::check(state)?)),
         _ => ToolState::Inspect(inspect_state::check(state)?),
     })
 }

@@ -202,7 +202,10 @@ pub fn plan(config: &DatasetConfig) -> Result<Vec<BaseSpec>> {
                 base: out.len(),
                 model: mi,
                 params,
-                seed: rng.next_u64(),
+                // 53 bits: a page's number holds the seed exactly (the
+                // browser gets it from `texture-retrieve` and keeps it in
+                // the document; serde-wasm-bindgen refuses a larger u64).
+                seed: rng.next_u64() >> 11,
             });
         }
     }

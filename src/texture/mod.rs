@@ -10,6 +10,7 @@
 //! - [`learn`]: support vector machines and Isomap.
 //! - [`scales`]: estimators of the twelve perceptual scales, 1–9.
 //! - [`index`]: the trained index the browser loads, and retrieval.
+//! - [`state`]: the Texture document (the page's state) and its checks.
 pub mod api;
 pub mod build;
 pub mod dataset;
@@ -19,5 +20,6 @@ pub mod learn;
 pub mod models;
 pub mod pcn;
 pub mod scales;
+pub mod state;
 
 pub use image::Gray;

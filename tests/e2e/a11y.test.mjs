@@ -16,6 +16,7 @@ const READY = {
   inspect: () => !!document.querySelector('[data-testid=drop-zone] button'),
   tangle: () => Number(document.querySelector('[data-testid=tangle-status]')?.dataset.runs) > 0,
   micro: () => Number(document.querySelector('[data-testid=micro-status]')?.dataset.runs) > 0,
+  texture: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending(),
 };
 
 async function open(tool) {
@@ -51,7 +52,7 @@ async function tabThrough(page, max = 200) {
 }
 
 test('every button and control has an accessible name; the Fit tab and the Run fit button differ', async () => {
-  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro']) {
+  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture']) {
     const page = await open(tool);
     const unnamed = await page.evaluate((src) => new Function(`return (${src})`)()().filter((e) => {
       const label = e.getAttribute('aria-label') || e.getAttribute('aria-labelledby') || (e.labels && e.labels.length && [...e.labels].map((l) => l.textContent).join(''))
@@ -72,7 +73,7 @@ test('every button and control has an accessible name; the Fit tab and the Run f
 });
 
 test('keyboard alone: Tab reaches every control of each panel, and key actions work', async () => {
-  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro']) {
+  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture']) {
     const page = await open(tool);
     // The program editor too (it sits in a closed <details> at first).
     if (tool === 'fit') {

@@ -11,10 +11,11 @@ after(async () => { await env?.close(); });
 
 const PHONE = { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true, deviceScaleFactor: 2 };
 const VIEWS = {
-  home: { path: '', ready: () => document.querySelectorAll('.home-preview[data-ready]').length === 5 },
+  home: { path: '', ready: () => document.querySelectorAll('.home-preview[data-ready]').length === 6 },
   pixel: { path: '#tool=pixel', ready: () => Number(document.querySelector('[data-testid=pixel-status]')?.dataset.runs) > 0 },
   fit: { path: '#tool=fit', ready: () => !!document.querySelector('[data-testid=fit-sliders] input') },
   inspect: { path: '#tool=inspect', ready: () => !!document.querySelector('[data-testid=drop-zone] button') },
+  texture: { path: '#tool=texture', ready: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending() },
 };
 
 // Whether the card's canvas shows more than one colour (a real picture, not a blank).
@@ -33,10 +34,10 @@ test('home: no hash shows what Filigree is and a card per tool with a live examp
   assert.equal(await page.textContent('h1'), 'Filigree');
   assert.match(await page.textContent('.home-intro'), /browser/);
   const cards = await page.$$eval('.home-card', (as) => as.map((a) => [a.dataset.tool, a.getAttribute('href')]));
-  assert.deepEqual(cards, [['pixel', '#tool=pixel'], ['fit', '#tool=fit'], ['inspect', '#tool=inspect'], ['tangle', '#tool=tangle'], ['micro', '#tool=micro']]);
+  assert.deepEqual(cards, [['pixel', '#tool=pixel'], ['fit', '#tool=fit'], ['inspect', '#tool=inspect'], ['tangle', '#tool=tangle'], ['micro', '#tool=micro'], ['texture', '#tool=texture']]);
   await page.waitForFunction(VIEWS.home.ready, null, { timeout: 30000 });
   // Each preview was computed by the core: a picture, not a blank.
-  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro']) {
+  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture']) {
     assert.ok(await page.$eval(`.home-card[data-tool=${tool}]`, varied), `${tool} preview`);
   }
   await page.click('.home-card[data-tool=pixel]');
@@ -77,6 +78,15 @@ test('desktop 1280×800: each panel shows its whole main canvas and its actions 
     const v = await inView(fit, sel);
     assert.ok(v.ok, `${sel} visible at 1280×800: ${v.r}`);
   }
+
+  const tex = await env.newPage({ path: VIEWS.texture.path });
+  await tex.waitForFunction(VIEWS.texture.ready, null, { timeout: 60000 });
+  for (const sel of ['[data-testid=texture-canvas]', '[data-testid=texture-chart]', '[data-testid=texture-example]', '[data-testid=texture-scale-uniformity]',
+    '[data-testid=texture-same-model]', 'button[data-act=export-png]', 'button[data-act=export-json]', '[data-testid=texture-drop] button.pick']) {
+    const v = await inView(tex, sel);
+    assert.ok(v.ok, `${sel} visible at 1280×800: ${v.r}`);
+  }
+  assert.deepEqual(await tex.evaluate(() => [document.documentElement.scrollHeight <= innerHeight, document.documentElement.scrollWidth <= innerWidth]), [true, true], 'the Texture panel does not scroll');
 });
 
 test('phone 390×844: no sideways overflow on the home view or any panel', async () => {

@@ -89,3 +89,23 @@ pub fn fit_doc(g: &str, fitted: bool) -> Json {
 pub fn inspect_doc() -> Json {
     json!({"name": "fish.png", "bytes": bytes(&asset("fish.png"))})
 }
+
+/// A Texture document as the page saves it: a dropped example kept as a
+/// small grey PNG (`image: true`) or a rendered model, its analysis, the
+/// requested scales and an edited retrieval.
+pub fn texture_doc(image: bool) -> Json {
+    use filigree::texture::models::find;
+    let source = if image {
+        json!({"kind": "image", "name": "fish.png", "png": bytes(&asset("fish.png"))})
+    } else {
+        json!({"kind": "model", "model": "texton-regular", "params": find("texton-regular").unwrap().defaults(), "seed": 3})
+    };
+    json!({
+        "source": source,
+        "predicted": {"model": "texton-regular", "scales": [3, 8, 4, 2, 5, 5, 6, 4, 5, 8, 6, 7]},
+        "scales": [3, 8, 4, 2, 5, 5, 6, 4, 5, 9, 6, 7.5],
+        "sameModel": false,
+        "retrieved": {"model": "perlin", "params": find("perlin").unwrap().defaults(), "seed": 4_503_599_627_370_497u64,
+                      "sample": 17, "scales": [3, 8, 4, 2, 5, 5, 6, 4, 5, 9, 6, 7], "cosine": 0.99, "edited": true},
+    })
+}

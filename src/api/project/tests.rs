@@ -514,7 +514,7 @@ fn versions_and_tools() {
     says(
         &e,
         "tool",
-        "Filigree has no tool 'paint' (it has pixel, fit, tangle, micro, inspect)",
+        "Filigree has no tool 'paint' (it has pixel, fit, tangle, micro, texture, inspect)",
     );
     for t in TOOLS {
         assert_eq!(
