@@ -7,7 +7,8 @@
 # loops are not vectorised and the build takes many minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --bin filigree
+# (check.sh has built it already and runs this beside the wasm build.)
+cargo build --quiet --bin filigree
 out=target/texture-index.rebuilt.bin
 start=$(date +%s)
 target/debug/filigree build-index --out "$out" > target/texture-index.rebuilt.json
