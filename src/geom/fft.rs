@@ -432,24 +432,36 @@ mod tests {
             .is_err());
     }
 
+    /// A random `w × h` signal's [`fft2`] against the naive DFT, within
+    /// `tol`: (input re, input im, output re, output im).
+    fn fft2_against_naive(
+        r: &mut Rng,
+        w: usize,
+        h: usize,
+        tol: f64,
+    ) -> (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) {
+        let re0: Vec<f32> = (0..w * h).map(|_| r.f64() as f32 - 0.5).collect();
+        let im0: Vec<f32> = (0..w * h).map(|_| r.f64() as f32 - 0.5).collect();
+        let (mut re, mut im) = (re0.clone(), im0.clone());
+        fft2(&mut re, &mut im, w, h, false).unwrap();
+        let c: Vec<C64> = re0
+            .iter()
+            .zip(&im0)
+            .map(|(&a, &b)| C64::new(a as f64, b as f64))
+            .collect();
+        let want = naive(&c, [w, h, 1], -1.0);
+        for i in 0..w * h {
+            let d = C64::new(re[i] as f64, im[i] as f64) - want[i];
+            assert!(d.norm() < tol, "{w}×{h} at {i}: {d}");
+        }
+        (re0, im0, re, im)
+    }
+
     #[test]
     fn the_2d_fft_matches_a_naive_dft_and_round_trips() {
         let mut r = Rng::new(3);
         for (w, h) in [(4, 4), (8, 2), (1, 4), (16, 8)] {
-            let re0: Vec<f32> = (0..w * h).map(|_| r.f64() as f32 - 0.5).collect();
-            let im0: Vec<f32> = (0..w * h).map(|_| r.f64() as f32 - 0.5).collect();
-            let (mut re, mut im) = (re0.clone(), im0.clone());
-            fft2(&mut re, &mut im, w, h, false).unwrap();
-            let c: Vec<C64> = re0
-                .iter()
-                .zip(&im0)
-                .map(|(&a, &b)| C64::new(a as f64, b as f64))
-                .collect();
-            let want = naive(&c, [w, h, 1], -1.0);
-            for i in 0..w * h {
-                let d = C64::new(re[i] as f64, im[i] as f64) - want[i];
-                assert!(d.norm() < 1e-5, "{w}×{h} at {i}");
-            }
+            let (re0, im0, mut re, mut im) = fft2_against_naive(&mut r, w, h, 1e-5);
             fft2(&mut re, &mut im, w, h, true).unwrap();
             let n = (w * h) as f32;
             for i in 0..w * h {
@@ -484,20 +496,7 @@ mod tests {
     fn long_transforms_match_a_naive_dft() {
         let mut r = Rng::new(11);
         for (w, h) in [(64, 2), (128, 1), (2, 256)] {
-            let re0: Vec<f32> = (0..w * h).map(|_| r.f64() as f32 - 0.5).collect();
-            let im0: Vec<f32> = (0..w * h).map(|_| r.f64() as f32 - 0.5).collect();
-            let (mut re, mut im) = (re0.clone(), im0.clone());
-            fft2(&mut re, &mut im, w, h, false).unwrap();
-            let c: Vec<C64> = re0
-                .iter()
-                .zip(&im0)
-                .map(|(&a, &b)| C64::new(a as f64, b as f64))
-                .collect();
-            let want = naive(&c, [w, h, 1], -1.0);
-            for i in 0..w * h {
-                let d = C64::new(re[i] as f64, im[i] as f64) - want[i];
-                assert!(d.norm() < 1e-4, "{w}×{h} at {i}: {d}");
-            }
+            fft2_against_naive(&mut r, w, h, 1e-4);
         }
         let dims = [64, 2, 64];
         let v: Vec<f64> = (0..64 * 2 * 64).map(|_| r.f64() - 0.5).collect();

@@ -233,21 +233,30 @@ pub struct Dual {
     pub converged: bool,
 }
 
+/// Labels ±1 and each sample's penalty, balanced between the classes
+/// (C·n / 2nₖ) so a one-vs-rest machine for a small class is not swamped
+/// by the rest.
+fn balanced(positive: &[bool], c: f64) -> (Vec<f64>, Vec<f64>) {
+    let n = positive.len() as f64;
+    let n_pos = positive.iter().filter(|p| **p).count().max(1) as f64;
+    let n_neg = (n - n_pos).max(1.0);
+    let y = positive
+        .iter()
+        .map(|&p| if p { 1.0 } else { -1.0 })
+        .collect();
+    let bounds = positive
+        .iter()
+        .map(|&p| c * n / (2.0 * if p { n_pos } else { n_neg }))
+        .collect();
+    (y, bounds)
+}
+
 /// C-SVC on a kernel matrix: `positive[i]` is sample i's class. The two
 /// classes' penalties are balanced (C·n / 2nₖ) so a one-vs-rest machine
 /// for a small class is not swamped by the rest.
 pub fn train_svc(gram: &Gram, positive: &[bool], c: f64) -> Dual {
     let n = gram.n;
-    let n_pos = positive.iter().filter(|p| **p).count().max(1) as f64;
-    let n_neg = (n as f64 - n_pos).max(1.0);
-    let y: Vec<f64> = positive
-        .iter()
-        .map(|&p| if p { 1.0 } else { -1.0 })
-        .collect();
-    let cs: Vec<f64> = positive
-        .iter()
-        .map(|&p| c * n as f64 / (2.0 * if p { n_pos } else { n_neg }))
-        .collect();
+    let (y, cs) = balanced(positive, c);
     let p = vec![-1.0; n];
     let s = solve(&|i, j| y[i] * y[j] * gram.at(i, j), &p, &y, &cs);
     Dual {
@@ -344,16 +353,7 @@ const BIAS: f64 = 1.0;
 pub fn train_linear_svc(rows: &[Vec<f32>], positive: &[bool], c: f64, seed: u64) -> Linear {
     let n = rows.len();
     let dim = rows.first().map_or(0, |r| r.len());
-    let n_pos = positive.iter().filter(|p| **p).count().max(1) as f64;
-    let n_neg = (n as f64 - n_pos).max(1.0);
-    let y: Vec<f64> = positive
-        .iter()
-        .map(|&p| if p { 1.0 } else { -1.0 })
-        .collect();
-    let upper: Vec<f64> = positive
-        .iter()
-        .map(|&p| c * n as f64 / (2.0 * if p { n_pos } else { n_neg }))
-        .collect();
+    let (y, upper) = balanced(positive, c);
     let qd: Vec<f64> = rows
         .iter()
         .map(|r| r.iter().map(|v| *v as f64 * *v as f64).sum::<f64>() + BIAS * BIAS)
