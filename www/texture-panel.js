@@ -544,7 +544,9 @@ function mount(el, ctx) {
     const inputs = paramList.querySelectorAll('input');
     inputs.forEach((input, i) => {
       const v = i < r.params.length ? r.params[i] : r.seed;
-      if (document.activeElement !== input && Number(input.value) !== v) input.value = String(+v.toPrecision(6));
+      // Parameters at six significant digits; the seed exactly (an integer ≤ 2⁵³).
+      const shown = i < r.params.length ? String(+v.toPrecision(6)) : String(v);
+      if (document.activeElement !== input && Number(input.value) !== v) input.value = shown;
     });
   }
 
