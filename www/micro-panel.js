@@ -511,7 +511,9 @@ function mount(el, ctx) {
     let r;
     const t = performance.now();
     try {
-      r = gpu.draw(doc.camera, side, side);
+      // A full-size frame is the final picture: it needs its counters too.
+      // A full-size frame is the final picture: it needs its counters too.
+      r = gpu.draw(doc.camera, side, side, { stats: side >= full });
     } catch (err) {
       gpuFallback(doc, err);
       return;
@@ -780,6 +782,8 @@ function mount(el, ctx) {
     },
     pending: () => runTimer !== null || running !== null || typingTimer !== null || sharpTimer !== null || gpuJob !== null,
     gpu: () => (gpu && !gpu.lost ? { note: gpuNote.hidden ? null : gpuNote.textContent } : null),
+    /** Coarse GPU frames at 1/n of the full side (1: what a fast GPU reaches). */
+    gpuPreviewDiv: (n) => { gpuDiv = n; },
   };
   window.filigreeMicro = hooks;
 

@@ -165,6 +165,20 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
   });
   assert.ok(fg > 0.2, `the gyroid is drawn (${fg})`);
   assert.equal(await page.isHidden('[data-testid=micro-cpu-note]'), true);
+  // A fast GPU draws its "coarse" frame at full size: that frame is the final
+  // picture and must carry its counters (it once had none and threw).
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  await page.evaluate(() => window.filigreeMicro.gpuPreviewDiv(1));
+  await page.mouse.move(cx, cy);
+  await page.mouse.wheel(0, -120);
+  n = await waitForRender(page, n);
+  last = await page.evaluate(() => window.filigreeMicro.last());
+  assert.deepEqual(errors, []);
+  assert.equal(last.gpu, true);
+  assert.equal(last.preview, false);
+  assert.equal(last.stats.rays, last.width * last.height, 'counters of the full-size frame');
+  assert.match(await page.textContent('[data-testid=micro-status]'), /on the GPU.*rays hit/);
   // Path tracing is the CPU's: the panel says so; back to direct shading, the GPU again.
   await page.selectOption('[data-testid=micro-spp]', '4');
   n = await waitForRender(page, n);
