@@ -512,7 +512,6 @@ function mount(el, ctx) {
     const t = performance.now();
     try {
       // A full-size frame is the final picture: it needs its counters too.
-      // A full-size frame is the final picture: it needs its counters too.
       r = gpu.draw(doc.camera, side, side, { stats: side >= full });
     } catch (err) {
       gpuFallback(doc, err);
