@@ -14,6 +14,11 @@
 //! path(stroke: "#e00", width: 0.01) { move(0.1, 0.1); quad(0.5, 0.0, 0.9, 0.1); }
 //! ```
 //!
+//! `tile(px, py) { … }` / `tile(px, py, shear) { … }` repeats its block
+//! over the canvas on the lattice `(col·px + row·shear, row·py)`, with `row`
+//! and `col` defined inside; the copies are those that can touch the canvas
+//! for any parameter values in range (see `record::tile`).
+//!
 //! Statements: `let x = e;`, `x = e;`, `if c { } else { }`, `for i in a..b { }`,
 //! `return e;`, calls (shapes, transforms, user functions) optionally followed
 //! by a `{ block }`. Expressions: numbers, strings, `+ - * / %`, `^` (power),

@@ -123,6 +123,157 @@ pub fn apply(op: Op, v: &[f64]) -> f64 {
     }
 }
 
+/// Smallest and largest of some values (NaN counts as unbounded).
+fn hull(v: &[f64]) -> (f64, f64) {
+    if v.iter().any(|x| x.is_nan()) {
+        return (f64::NEG_INFINITY, f64::INFINITY);
+    }
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo, hi)
+}
+
+/// `sin` over `[lo, hi]`: the ends, and ±1 where a peak lies inside.
+fn sin_interval((lo, hi): (f64, f64)) -> (f64, f64) {
+    use std::f64::consts::{FRAC_PI_2, TAU};
+    if !(hi - lo).is_finite() || hi - lo >= TAU {
+        return (-1.0, 1.0);
+    }
+    let (mut a, mut b) = hull(&[libm::sin(lo), libm::sin(hi)]);
+    // Peaks at π/2 + 2kπ, troughs at -π/2 + 2kπ.
+    if ((lo - FRAC_PI_2) / TAU).ceil() <= ((hi - FRAC_PI_2) / TAU).floor() {
+        b = 1.0;
+    }
+    if ((lo + FRAC_PI_2) / TAU).ceil() <= ((hi + FRAC_PI_2) / TAU).floor() {
+        a = -1.0;
+    }
+    // libm's rounding may put an end a hair past the exact value.
+    (a - 1e-12, b + 1e-12)
+}
+
+/// Interval extension of one non-leaf op over its operands' bounds `b`.
+fn interval(op: Op, b: &[(f64, f64)]) -> (f64, f64) {
+    const ALL: (f64, f64) = (f64::NEG_INFINITY, f64::INFINITY);
+    let g = |i: u32| b[i as usize];
+    let mono = |f: fn(f64) -> f64, (lo, hi): (f64, f64)| hull(&[f(lo), f(hi)]);
+    match op {
+        Op::Const | Op::Param(_) => unreachable!("leaf op has no operands"),
+        Op::Add(x, y) => (g(x).0 + g(y).0, g(x).1 + g(y).1),
+        Op::Sub(x, y) => (g(x).0 - g(y).1, g(x).1 - g(y).0),
+        Op::Mul(x, y) => {
+            let (a, c) = (g(x), g(y));
+            // 0·inf is NaN: an unbounded operand times an interval holding 0.
+            hull(&[a.0 * c.0, a.0 * c.1, a.1 * c.0, a.1 * c.1])
+        }
+        Op::Div(x, y) => {
+            let (a, c) = (g(x), g(y));
+            if c.0 <= 0.0 && c.1 >= 0.0 {
+                ALL
+            } else {
+                hull(&[a.0 / c.0, a.0 / c.1, a.1 / c.0, a.1 / c.1])
+            }
+        }
+        Op::Neg(x) => (-g(x).1, -g(x).0),
+        Op::Sin(x) => sin_interval(g(x)),
+        Op::Cos(x) => sin_interval((
+            g(x).0 + std::f64::consts::FRAC_PI_2,
+            g(x).1 + std::f64::consts::FRAC_PI_2,
+        )),
+        Op::Tan(x) => {
+            let (lo, hi) = g(x);
+            use std::f64::consts::{FRAC_PI_2, PI};
+            // An asymptote at π/2 + kπ inside: unbounded.
+            if !(hi - lo).is_finite()
+                || ((lo - FRAC_PI_2) / PI).ceil() <= ((hi - FRAC_PI_2) / PI).floor()
+            {
+                ALL
+            } else {
+                mono(libm::tan, g(x))
+            }
+        }
+        Op::Atan(x) => mono(libm::atan, g(x)),
+        Op::Atan2(..) => (-std::f64::consts::PI, std::f64::consts::PI),
+        Op::Sqrt(x) => mono(|v| v.max(0.0).sqrt(), g(x)),
+        Op::Abs(x) => {
+            let (lo, hi) = g(x);
+            if lo >= 0.0 {
+                (lo, hi)
+            } else if hi <= 0.0 {
+                (-hi, -lo)
+            } else {
+                (0.0, (-lo).max(hi))
+            }
+        }
+        Op::Exp(x) => mono(libm::exp, g(x)),
+        Op::Ln(x) => {
+            let (lo, hi) = g(x);
+            if hi <= 0.0 {
+                ALL
+            } else {
+                (
+                    if lo <= 0.0 {
+                        f64::NEG_INFINITY
+                    } else {
+                        libm::log(lo)
+                    },
+                    libm::log(hi),
+                )
+            }
+        }
+        Op::Pow(x, y) => {
+            let (a, e) = (g(x), g(y));
+            let corners = [
+                libm::pow(a.0, e.0),
+                libm::pow(a.0, e.1),
+                libm::pow(a.1, e.0),
+                libm::pow(a.1, e.1),
+            ];
+            if a.0 > 0.0 {
+                // Monotone in each argument for a positive base.
+                hull(&corners)
+            } else if e.0 == e.1 && e.0.fract() == 0.0 && e.0 >= 0.0 {
+                // An integer power: the ends and 0 (if the base crosses it).
+                let (lo, hi) = hull(&corners);
+                if a.0 <= 0.0 && a.1 >= 0.0 {
+                    (lo.min(0.0), hi.max(0.0))
+                } else {
+                    (lo, hi)
+                }
+            } else {
+                ALL
+            }
+        }
+        Op::Min(x, y) => (g(x).0.min(g(y).0), g(x).1.min(g(y).1)),
+        Op::Max(x, y) => (g(x).0.max(g(y).0), g(x).1.max(g(y).1)),
+        Op::Mod(_, y) => {
+            let (lo, hi) = g(y);
+            if lo > 0.0 {
+                (0.0, hi)
+            } else if hi < 0.0 {
+                (lo, 0.0)
+            } else {
+                ALL
+            }
+        }
+        Op::Step(f, x, _) => match f {
+            StepFn::Floor => mono(f64::floor, g(x)),
+            StepFn::Ceil => mono(f64::ceil, g(x)),
+            StepFn::Round => mono(f64::round, g(x)),
+            _ => (0.0, 1.0),
+        },
+        Op::Select(c, x, y) => {
+            let cb = g(c);
+            if cb.0 == cb.1 && cb.0 != 0.0 {
+                g(x)
+            } else if cb == (0.0, 0.0) {
+                g(y)
+            } else {
+                (g(x).0.min(g(y).0), g(x).1.max(g(y).1))
+            }
+        }
+    }
+}
+
 /// A recorded straight-line program over the float parameters.
 #[derive(Debug, Clone, Default)]
 pub struct Tape {
@@ -162,6 +313,34 @@ impl Tape {
     /// The record-time value of node `i`.
     pub fn init_value(&self, i: u32) -> f64 {
         self.init[i as usize]
+    }
+
+    /// Drop every node from `len` on (undoing a trial recording).
+    pub fn truncate(&mut self, len: usize) {
+        self.ops.truncate(len);
+        self.init.truncate(len);
+    }
+
+    /// Interval bounds of every node when each float parameter `k` may take
+    /// any value in `ranges[k]` (interval arithmetic: every bound holds, but
+    /// correlated operands make it wider than the exact range). A node that
+    /// cannot be bounded gets `(-inf, inf)`.
+    pub fn bounds(&self, ranges: &[(f64, f64)]) -> Vec<(f64, f64)> {
+        let mut b: Vec<(f64, f64)> = Vec::with_capacity(self.ops.len());
+        for (i, &op) in self.ops.iter().enumerate() {
+            let r = match op {
+                Op::Const => (self.init[i], self.init[i]),
+                Op::Param(k) => ranges[k as usize],
+                _ => interval(op, &b),
+            };
+            let r = if r.0.is_nan() || r.1.is_nan() || r.0 > r.1 {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                r
+            };
+            b.push(r);
+        }
+        b
     }
 
     /// Replay with `params` (one value per float parameter); `vals` is
@@ -314,5 +493,50 @@ mod tests {
             let fd = (eval(&a) - eval(&b)) / (2.0 * h);
             assert!((fd - g[k]).abs() < 1e-6, "param {k}: fd {fd} vs {}", g[k]);
         }
+    }
+
+    /// Interval bounds hold: for every shipped generator, the tape's value
+    /// of every node at random parameters within the ranges lies inside its
+    /// bounds.
+    #[test]
+    fn interval_bounds_hold_at_random_parameters() {
+        use crate::pattern::generators::GENERATORS;
+        use crate::pattern::record::{Program, RecordLimits};
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for g in GENERATORS {
+            let p = Program::parse(g.source).unwrap();
+            let r = p.record(&p.defaults(), &RecordLimits::default()).unwrap();
+            let ranges: Vec<(f64, f64)> = r.float_decls().iter().map(|d| (d.lo, d.hi)).collect();
+            let b = r.tape.bounds(&ranges);
+            let mut vals = vec![];
+            for _ in 0..200 {
+                let q: Vec<f64> = ranges
+                    .iter()
+                    .map(|&(lo, hi)| lo + (hi - lo) * rnd())
+                    .collect();
+                r.tape.forward(&q, &mut vals);
+                for (i, (&v, &(lo, hi))) in vals.iter().zip(&b).enumerate() {
+                    assert!(
+                        lo <= v && v <= hi,
+                        "{}: node {i} = {v} outside [{lo}, {hi}]",
+                        g.name
+                    );
+                }
+            }
+        }
+        // Peaks inside an interval are found.
+        let mut t = Tape::new();
+        let p = t.push(Op::Param(0), 0.0);
+        let s = t.push(Op::Sin(p), 0.0);
+        let c = t.push(Op::Cos(p), 0.0);
+        let b = t.bounds(&[(1.0, 2.0)]);
+        assert!(b[s as usize].1 >= 1.0 && b[s as usize].0 <= 1f64.sin());
+        assert!(b[c as usize].0 <= 2f64.cos() && b[c as usize].1 >= 1f64.cos());
     }
 }

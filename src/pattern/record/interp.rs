@@ -45,6 +45,7 @@ pub(super) fn is_statement_name(n: &str) -> bool {
             | "translate"
             | "rotate"
             | "scale"
+            | "tile"
             | "move"
             | "quad"
             | "cubic"
@@ -87,6 +88,8 @@ pub(super) struct Rec<'a> {
     pub(super) prims: Vec<Prim>,
     pub(super) shapes: Vec<Shape>,
     pub(super) colours: Vec<Rgb>,
+    /// Range of each float parameter (tape `Param(k)`), for `tile` bounds.
+    pub(super) ranges: Vec<(f64, f64)>,
 }
 
 impl<'a> Rec<'a> {
@@ -108,6 +111,7 @@ impl<'a> Rec<'a> {
             prims: vec![],
             shapes: vec![],
             colours: vec![[255, 255, 255]],
+            ranges: vec![],
         }
     }
 

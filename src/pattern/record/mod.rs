@@ -26,6 +26,7 @@ mod path;
 mod shapes;
 #[cfg(test)]
 mod tests;
+mod tile;
 mod transform;
 
 /// Largest accepted program text.
@@ -193,6 +194,7 @@ impl Program {
             } else {
                 let k = float_params.len() as u32;
                 float_params.push(i);
+                r.ranges.push((d.lo, d.hi));
                 V::N(r.tape.push(Op::Param(k), v))
             };
             vals.push(if d.integer { v.round() } else { v });

@@ -197,7 +197,14 @@ impl Rec<'_> {
         }
         let needs_block = matches!(
             c.name.as_str(),
-            "path" | "union" | "intersect" | "difference" | "translate" | "rotate" | "scale"
+            "path"
+                | "union"
+                | "intersect"
+                | "difference"
+                | "translate"
+                | "rotate"
+                | "scale"
+                | "tile"
         );
         if needs_block != c.block.is_some() {
             return Err(c.pos.err(if needs_block {
@@ -301,6 +308,7 @@ impl Rec<'_> {
                 self.emit(c, Geom::Bool(op, children), &named, true)
             }
             "translate" | "rotate" | "scale" => self.transform_block(c),
+            "tile" => self.tile_block(c),
             _ => unreachable!("statement names are listed in is_statement_name"),
         }
     }
