@@ -114,3 +114,18 @@ test('draw a target by hand and fit it; a broken program is reported with its li
   assert.match(await page.textContent('[data-testid=doc-error]'), /line 2, column \d+/);
   assert.equal(await page.$$eval('[data-testid=fit-sliders] .row', (r) => r.length), before);
 });
+
+test('the generator picker offers the designer examples, written with tile()', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await page.waitForSelector('[data-testid=fit-sliders] .row');
+  const names = await page.$$eval('[data-testid=fit-generator] option', (os) => os.map((o) => o.value));
+  for (const n of ['dots', 'checkers', 'crosses', 'waves', 'scales', 'graph-paper', 'stripes', 'honeycomb']) {
+    assert.ok(names.includes(n), `the picker offers ${n} (it has ${names.join(', ')})`);
+  }
+  await pickGenerator(page, 'scales');
+  assert.match(await page.evaluate(() => window.filigreeFit.state().program), /tile\(dx, dy, 0\.5 \* dx\)/);
+  // Its target is drawn in the browser as natively: the tile's copies cover the canvas.
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
+});
