@@ -223,7 +223,9 @@ impl Rec<'_> {
             o.1 + s.1 + e.1 >= 0.0 && o.0 + s.0 + e.0 <= 1.0
         };
         let (j0, j1) = candidates(pyb, (0.0, 0.0), ye);
-        if j1 - j0 > limit as f64 {
+        // Non-finite ends (pitches near 0 or huge extents) are refused too,
+        // so the loops below always end.
+        if !(j0.is_finite() && j1.is_finite() && j1 - j0 <= limit as f64) {
             return Err(too_many(j1 - j0));
         }
         let mut copies: Vec<(f64, f64)> = vec![];
@@ -232,7 +234,9 @@ impl Rec<'_> {
             if touches(j, pyb, (0.0, 0.0), ye) {
                 let s = scale_iv(j, shb);
                 let (i0, i1) = candidates(pxb, s, xe);
-                if i1 - i0 + copies.len() as f64 > 2.0 * limit as f64 {
+                if !(i0.is_finite() && i1.is_finite())
+                    || i1 - i0 + copies.len() as f64 > 2.0 * limit as f64
+                {
                     return Err(too_many(i1 - i0 + copies.len() as f64));
                 }
                 let mut i = i0;
@@ -367,6 +371,18 @@ mod tests {
         located(
             "tile(0.001, 0.001) { circle(0, 0, 0.01); }",
             1,
+            "at most 5000",
+        );
+        // Pitches so small that the candidate rows overflow to infinity
+        // (on both ends) are refused, not looped over.
+        located(
+            "param p in [1e-310, 2e-310] = 1.5e-310;\ntile(p, p) { circle(2, 2, 0.01); }",
+            2,
+            "at most 5000",
+        );
+        located(
+            "param p in [1e-310, 2e-310] = 1.5e-310;\ntile(0.5, p) { circle(0.1, 0.1, 0.01); }",
+            2,
             "at most 5000",
         );
         located(
