@@ -225,6 +225,7 @@ export function prepareTangle(r, prev = null) {
   }
 
   let cached = null;
+  let heavy = null;
   const t = {
     r, n, pts, born, died, box, paths,
     /** The answer this one was linked to (until the panel drops it, once painted). */
@@ -237,6 +238,12 @@ export function prepareTangle(r, prev = null) {
       return c;
     },
     path: pathOf,
+    /** Vertices of shape i (all its rings). */
+    vertices(i) {
+      let v = 0;
+      for (let q = S.ringFirst[i], e = S.ringFirst[i + 1]; q < e; q++) v += S.rings[q];
+      return v;
+    },
     /** What step k shows, as `{k, parts, count}`: the batches of the nodes on its path. */
     batches(k) {
       if (cached?.k === k) return cached;
@@ -287,6 +294,22 @@ export function prepareTangle(r, prev = null) {
         }
       } else return false;
       return { added, removed };
+    },
+    /**
+     * The parts (step-tree nodes) with at least `min` vertices, heaviest
+     * first, as `{vertices, part()}` (part() builds the node's batches): what
+     * may be prepared as bitmaps before a slider move needs them.
+     */
+    heavyParts(min = LAYER_VERTICES) {
+      if (heavy?.min === min) return heavy.out;
+      const out = [];
+      for (const [node, list] of members) {
+        let v = 0;
+        for (const i of list) v += t.vertices(i);
+        if (v >= min) out.push({ vertices: v, part: () => batchOf(node) });
+      }
+      heavy = { min, out: out.sort((a, b) => b.vertices - a.vertices) };
+      return heavy.out;
     },
     /** Shapes kept from the previous answer (`prepareTangle(r, prev)`), for tests. */
     get reused() { return linked ? linked.oldOf.reduce((a, j) => a + (j >= 0), 0) : 0; },
@@ -395,6 +418,13 @@ export function createLayers(budgetBytes = 96e6) {
       }
       return e.canvas;
     },
+    /** Whether `part`'s bitmap for view `key` on a w×h canvas is kept. */
+    has(part, key, w, h) {
+      const e = cache.get(part);
+      return !!e && e.key === key && e.canvas.width === w && e.canvas.height === h;
+    },
+    /** How many w×h bitmaps the budget keeps. */
+    capacity: (w, h) => Math.max(2, Math.floor(budgetBytes / (4 * w * h))),
     clear: () => cache.clear(),
     get size() { return cache.size; },
   };
@@ -404,11 +434,14 @@ export function createLayers(budgetBytes = 96e6) {
  * Draw what `batches(k)` returned, part by part (a part's lines cover its
  * own fills; parts do not overlap, and a shared edge is drawn by both
  * sides). `g` maps drawing units to the canvas. With `layers`
- * (createLayers), heavy parts are copied from bitmaps of view `key`.
+ * (createLayers), heavy parts are copied from bitmaps of view `key`; with
+ * `keep(part)` too, a heavy part without a bitmap gets one only when keep
+ * says so (else it is drawn directly: a bitmap costs a second pass).
  */
-export function paintBatches(g, { parts }, lineWidth, layers = null, key = '') {
+export function paintBatches(g, { parts }, lineWidth, layers = null, key = '', keep = null) {
   for (const b of parts) {
-    if (!layers || b.vertices < LAYER_VERTICES) {
+    if (!layers || b.vertices < LAYER_VERTICES
+      || (keep && !keep(b) && !layers.has(b, key, g.canvas.width, g.canvas.height))) {
       paintPart(g, b, lineWidth);
       continue;
     }
@@ -422,6 +455,19 @@ export function paintBatches(g, { parts }, lineWidth, layers = null, key = '') {
     g.drawImage(bitmap, 0, 0);
     g.restore();
   }
+}
+
+/**
+ * Draw `part`'s bitmap for view `key` into `layers` ahead of need (idle
+ * time), with transform `m` (a DOMMatrix) and pen `lineWidth`, and have the
+ * browser rasterise it now rather than when a slider move first shows it.
+ */
+export function prebuildLayer(layers, part, key, w, h, m, lineWidth) {
+  const c = layers.get(part, key, w, h, (lg) => {
+    lg.setTransform(m);
+    paintPart(lg, part, lineWidth);
+  });
+  c.getContext('2d').getImageData(0, 0, 1, 1);
 }
 
 /** The final shapes of `r` fitted into `canvas` (white paper, thin black lines). */

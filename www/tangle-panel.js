@@ -25,7 +25,7 @@
 import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
-import { prepareTangle, paintBatches, drawThumbnail, createLayers } from './tangle-draw.js';
+import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer } from './tangle-draw.js';
 
 const RUN_DELAY_MS = 120;
 const TYPING_DELAY_MS = 600;
@@ -214,6 +214,7 @@ function mount(el, ctx) {
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
+  let lastParts = new Set(); // the step-tree parts the last full paint showed
   // `incremental: false` is the old path (a full repaint each time, no shape
   // kept from the last answer): the latency bench measures both in one run.
   const options = { incremental: true };
@@ -402,6 +403,15 @@ function mount(el, ctx) {
     const hls = h === shown.hl ? [] : [shown.hl, h].filter(Boolean);
     if (!ch.added.length && !ch.removed.length && !hls.length) return null;
     timing.why = 'big';
+    // When the changed shapes are a good part of the picture, a full repaint (which copies
+    // the heavy parts from bitmaps) is cheaper than finding and clipping the region.
+    const vertsOf = (t, list) => {
+      let v = 0;
+      for (const i of list) v += t.vertices(i);
+      return v;
+    };
+    if (vertsOf(T, ch.added) + vertsOf(shown.T, ch.removed) > 0.25 * T.batches(k).parts.reduce((a, b) => a + b.vertices, 0)
+      + 4000) return false;
     const cols = Math.ceil(canvas.width / TILE), rows = Math.ceil(canvas.height / TILE);
     if (maskCanvas.width !== cols || maskCanvas.height !== rows) { maskCanvas.width = cols; maskCanvas.height = rows; }
     const mg = maskCanvas.getContext('2d', { willReadFrequently: true });
@@ -413,9 +423,11 @@ function mount(el, ctx) {
     mg.lineWidth = lineWidth() + 4 / (dpr * view.s);
     mg.lineJoin = 'round';
     mg.fillStyle = mg.strokeStyle = '#000';
-    const mark = (p) => { mg.fill(p, 'nonzero'); mg.stroke(p); };
-    for (const i of ch.added) mark(T.path(i));
-    for (const j of ch.removed) mark(shown.T.path(j));
+    const changed = new Path2D();
+    for (const i of ch.added) changed.addPath(T.path(i));
+    for (const j of ch.removed) changed.addPath(shown.T.path(j));
+    mg.fill(changed, 'nonzero');
+    mg.stroke(changed);
     for (const x of hls) {
       mg.fill(x.path, 'nonzero');
       if (x.box) mg.strokeRect(x.box[0], x.box[1], x.box[2] - x.box[0], x.box[3] - x.box[1]);
@@ -501,6 +513,7 @@ function mount(el, ctx) {
     g.restore();
     snapStale = true;
     recordShown();
+    schedulePrebuild();
     timing.region = count / (cols * rows);
     timing.paint = performance.now() - t0;
   }
@@ -515,7 +528,11 @@ function mount(el, ctx) {
       const tb = performance.now();
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
-      paintBatches(g, b, lineWidth(), layers, viewKey());
+      // A heavy part gets its bitmap when two paints in a row show it (a slider drag);
+      // others are drawn directly, and idle time makes their bitmaps (schedulePrebuild).
+      const before = lastParts;
+      lastParts = new Set(b.parts);
+      paintBatches(g, b, lineWidth(), layers, viewKey(), options.incremental ? (part) => before.has(part) : null);
       paintHighlight();
     }
     paintDrawing();
@@ -525,11 +542,43 @@ function mount(el, ctx) {
     snapStale = true;
     if (!options.incremental) takeSnap(); // the old path: a copy at every paint
     recordShown();
+    schedulePrebuild();
     timing.region = 1;
     timing.paint = performance.now() - t0;
   }
 
   /** During a pan or zoom: move the last picture, and redraw it sharp when the gesture pauses. */
+  // In idle time after a sharp paint, the heaviest parts of the step tree are drawn as
+  // bitmaps of the current view (heaviest first, while the layer budget has room), so a
+  // slider jump to a far step copies them instead of rasterising them (tangle-draw.js).
+  let prebuildHandle = 0;
+  const idle = window.requestIdleCallback
+    ? (fn) => window.requestIdleCallback(fn)
+    : (fn) => setTimeout(() => fn({ didTimeout: true, timeRemaining: () => 0 }), 50);
+  const cancelIdle = (h) => (window.cancelIdleCallback ? window.cancelIdleCallback(h) : clearTimeout(h));
+  function schedulePrebuild() {
+    if (prebuildHandle) cancelIdle(prebuildHandle);
+    prebuildHandle = 0;
+    timing.prebuilt = 0;
+    if (!options.incremental || !T || !T.n || !ctx.alive()) return;
+    const key = viewKey(), w = canvas.width, h = canvas.height, from = T;
+    const m = new DOMMatrix([dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty]);
+    const todo = T.heavyParts();
+    let at = 0;
+    const work = (deadline) => {
+      prebuildHandle = 0;
+      if (T !== from || viewKey() !== key || canvas.width !== w || canvas.height !== h || !ctx.alive()) return;
+      // One part at a time while the idle period lasts (a part is at most a few tens of ms).
+      do {
+        if (at >= todo.length || layers.size >= layers.capacity(w, h) - 2) { timing.prebuilt = at; return; }
+        const part = todo[at++].part();
+        if (!layers.has(part, key, w, h)) prebuildLayer(layers, part, key, w, h, m, lineWidth());
+      } while (deadline.timeRemaining() > 10);
+      prebuildHandle = idle(work);
+    };
+    prebuildHandle = idle(work);
+  }
+
   function takeSnap() {
     if (snap.width !== canvas.width || snap.height !== canvas.height) { snap.width = canvas.width; snap.height = canvas.height; }
     snap.getContext('2d').drawImage(canvas, 0, 0);
@@ -1102,6 +1151,8 @@ function mount(el, ctx) {
     options,
     /** Shapes the shown answer kept from the one before (their Path2Ds). */
     reused: () => T?.reused ?? 0,
+    /** Whether idle-time layer building is done (or off) for the current view. */
+    prebuilt: () => prebuildHandle === 0,
     /** Vertices per part of what step `at` shows (tangle-draw.js batches). */
     parts: (at) => (T ? T.batches(at).parts.map((b) => b.vertices) : []),
     step: () => k,
@@ -1201,6 +1252,7 @@ function mount(el, ctx) {
     unmount() {
       ro.disconnect();
       stopPlay();
+      if (prebuildHandle) cancelIdle(prebuildHandle);
       cancelAnimationFrame(frame);
       running?.abort();
       if (window.filigreeTangle === hooks) delete window.filigreeTangle;

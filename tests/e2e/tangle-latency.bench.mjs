@@ -100,6 +100,26 @@ async function sliderAndPan(incremental) {
     paints.push(t.timing().paint);
     batches.push(t.timing().batches);
   }
+  // The same kind of jumps as a person makes them: the panel has had idle time since the
+  // last paint (up to 3 s, until its idle work is done) before each one. On a new view
+  // (zoomed in a step), so no bitmap of the jumps above is of use.
+  document.querySelector('[data-act=zoom-in]').click();
+  await new Promise((r) => setTimeout(r, 400));
+  const settledMoves = [];
+  const settle = async () => {
+    const until = performance.now() + 3000;
+    await new Promise((r) => setTimeout(r, 100));
+    while (!t.prebuilt() && performance.now() < until) await new Promise((r) => setTimeout(r, 50));
+  };
+  for (let i = 0; i < 12; i++) {
+    const k = Math.round(steps * (i % 2 ? 0.5 + i / 30 : 1 - i / 30));
+    await settle();
+    const start = performance.now();
+    slider.value = String(k);
+    slider.dispatchEvent(new Event('input', { bubbles: true }));
+    await frame();
+    settledMoves.push(performance.now() - start);
+  }
   // Back to the end: the final tangle, then pan frames (the bitmap of the last paint, moved).
   slider.value = String(steps);
   slider.dispatchEvent(new Event('input', { bubbles: true }));
@@ -126,7 +146,7 @@ async function sliderAndPan(incremental) {
   await frame();
   return {
     steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.count,
-    worker_ms: Math.round(t.timing().run), moves, paints, batches, drags, dragPaints, pans, panWork, sharp_paint: t.timing().paint,
+    worker_ms: Math.round(t.timing().run), moves, settledMoves, paints, batches, drags, dragPaints, pans, panWork, sharp_paint: t.timing().paint,
   };
   }, incremental);
 }
@@ -212,6 +232,7 @@ console.log(JSON.stringify({
     slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
     slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
     slider_jump_batches_ms: both(village.batches, villageBefore.batches),
+    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
     pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
     sharp_repaint_ms: round(village.sharp_paint),
   },
