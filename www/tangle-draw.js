@@ -263,12 +263,12 @@ export function prepareTangle(r, prev = null) {
      * region draws only the shapes that reach into it.
      */
     regionParts(k, keep) {
-      const parts = [];
-      for (const node of nodesOf(k)) {
+      const parts = [], nodes = [];
+      nodesOf(k).forEach((node, at) => {
         const b = batchOfList(members.get(node), keep);
-        if (b.count) parts.push(b);
-      }
-      return { k, parts };
+        if (b.count) { parts.push(b); nodes.push(at); }
+      });
+      return { k, parts, nodes }; // nodes[p]: the index in batches(k).parts that part p is cut from
     },
     /**
      * What differs between step `k` of this answer and step `kFrom` of

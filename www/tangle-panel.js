@@ -25,7 +25,7 @@
 import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
-import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer } from './tangle-draw.js';
+import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer, LAYER_VERTICES } from './tangle-draw.js';
 
 const RUN_DELAY_MS = 120;
 const TYPING_DELAY_MS = 600;
@@ -214,7 +214,6 @@ function mount(el, ctx) {
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
-  let lastParts = new Set(); // the step-tree parts the last full paint showed
   // `incremental: false` is the old path (a full repaint each time, no shape
   // kept from the last answer): the latency bench measures both in one run.
   const options = { incremental: true };
@@ -396,6 +395,10 @@ function mount(el, ctx) {
     if (!options.incremental || !shown || !T || !T.n || drawing || shown.drawing || !shown.T) return false;
     timing.why = 'view';
     if (shown.key !== viewKey() || shown.w !== canvas.width || shown.h !== canvas.height) return false;
+    // A slider move repaints in full: its heavy parts come from bitmaps, which beats
+    // clipping (measured: a 2% region of the village cost more than the full repaint).
+    timing.why = 'step';
+    if (shown.T === T && shown.k !== k) return false;
     timing.why = 'unrelated';
     const ch = T.changes(k, shown.T === T ? T : shown.T, shown.k);
     if (!ch) return false;
@@ -462,6 +465,7 @@ function mount(el, ctx) {
 
   function paintChanged() {
     const region = changedRegion();
+    (window.__tlog ||= []).push([performance.now() | 0, timing.why, region === false ? 'full' : region ? 'part' : 'none', selectedStep(), state()?.selected, shownFor === state(), T?.steps]);
     if (region === false) paintNow();
     else if (region) paintRegion(region);
     else { timing.paint = 0; timing.region = 0; recordShown(); }
@@ -508,7 +512,15 @@ function mount(el, ctx) {
     const tb = performance.now();
     const parts = T.regionParts(k, touches);
     timing.batches = performance.now() - tb;
-    paintBatches(g, parts, lw);
+    // A heavy part with a bitmap of this view is copied from it (as a full repaint does:
+    // the same pixels); the rest is drawn.
+    const key = viewKey();
+    const full = T.batches(k).parts;
+    for (let p = 0; p < parts.parts.length; p++) {
+      const whole = full[parts.nodes[p]];
+      if (whole.vertices >= LAYER_VERTICES && layers.has(whole, key, canvas.width, canvas.height)) parts.parts[p] = whole;
+    }
+    paintBatches(g, parts, lw, layers, key, (part) => layers.has(part, key, canvas.width, canvas.height));
     paintHighlight();
     g.restore();
     snapStale = true;
@@ -528,11 +540,7 @@ function mount(el, ctx) {
       const tb = performance.now();
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
-      // A heavy part gets its bitmap when two paints in a row show it (a slider drag);
-      // others are drawn directly, and idle time makes their bitmaps (schedulePrebuild).
-      const before = lastParts;
-      lastParts = new Set(b.parts);
-      paintBatches(g, b, lineWidth(), layers, viewKey(), options.incremental ? (part) => before.has(part) : null);
+      paintBatches(g, b, lineWidth(), layers, viewKey());
       paintHighlight();
     }
     paintDrawing();
@@ -552,31 +560,37 @@ function mount(el, ctx) {
   // bitmaps of the current view (heaviest first, while the layer budget has room), so a
   // slider jump to a far step copies them instead of rasterising them (tangle-draw.js).
   let prebuildHandle = 0;
+  let prebuildTimer = null;
+  const PREBUILD_DELAY_MS = 250; // after the last paint: not while a slider or a pan is moving
   const idle = window.requestIdleCallback
     ? (fn) => window.requestIdleCallback(fn)
-    : (fn) => setTimeout(() => fn({ didTimeout: true, timeRemaining: () => 0 }), 50);
+    : (fn) => setTimeout(() => fn({ didTimeout: false, timeRemaining: () => 50 }), 50);
   const cancelIdle = (h) => (window.cancelIdleCallback ? window.cancelIdleCallback(h) : clearTimeout(h));
   function schedulePrebuild() {
     if (prebuildHandle) cancelIdle(prebuildHandle);
     prebuildHandle = 0;
+    ctx.clearTimeout(prebuildTimer);
+    prebuildTimer = null;
     timing.prebuilt = 0;
     if (!options.incremental || !T || !T.n || !ctx.alive()) return;
     const key = viewKey(), w = canvas.width, h = canvas.height, from = T;
     const m = new DOMMatrix([dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty]);
-    const todo = T.heavyParts();
+    let todo = null;
     let at = 0;
     const work = (deadline) => {
       prebuildHandle = 0;
       if (T !== from || viewKey() !== key || canvas.width !== w || canvas.height !== h || !ctx.alive()) return;
-      // One part at a time while the idle period lasts (a part is at most a few tens of ms).
-      do {
+      todo ??= T.heavyParts();
+      for (;;) {
         if (at >= todo.length || layers.size >= layers.capacity(w, h) - 2) { timing.prebuilt = at; return; }
+        // A part only when the idle period has room for it (software raster: ~8k vertices a ms).
+        if (deadline.timeRemaining() < Math.min(40, todo[at].vertices / 8000)) break;
         const part = todo[at++].part();
         if (!layers.has(part, key, w, h)) prebuildLayer(layers, part, key, w, h, m, lineWidth());
-      } while (deadline.timeRemaining() > 10);
+      }
       prebuildHandle = idle(work);
     };
-    prebuildHandle = idle(work);
+    prebuildTimer = ctx.setTimeout(() => { prebuildTimer = null; prebuildHandle = idle(work); }, PREBUILD_DELAY_MS);
   }
 
   function takeSnap() {
@@ -1145,6 +1159,8 @@ function mount(el, ctx) {
   const hooks = {
     state,
     result: () => T?.r ?? null,
+    /** The shown answer's points (a Float32Array). */
+    points: () => T?.pts ?? null,
     pending: () => runTimer !== null || running !== null || typingTimer !== null,
     timing: () => ({ ...timing }),
     /** `{incremental}`: false switches the old path on (full repaints, nothing kept from the last answer). */
@@ -1152,7 +1168,7 @@ function mount(el, ctx) {
     /** Shapes the shown answer kept from the one before (their Path2Ds). */
     reused: () => T?.reused ?? 0,
     /** Whether idle-time layer building is done (or off) for the current view. */
-    prebuilt: () => prebuildHandle === 0,
+    prebuilt: () => prebuildHandle === 0 && prebuildTimer === null,
     /** Vertices per part of what step `at` shows (tangle-draw.js batches). */
     parts: (at) => (T ? T.batches(at).parts.map((b) => b.vertices) : []),
     step: () => k,
