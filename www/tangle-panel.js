@@ -20,8 +20,14 @@
 // Drawing (tangle-draw.js): a step's picture is a few Path2D parts from a
 // segment tree over the steps, built lazily; heavy parts are kept as bitmaps
 // of the current view, so a slider drag redraws only the small parts that
-// changed. During a pan or zoom the last full picture is moved as a bitmap
-// and redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
+// changed, and idle time draws the heaviest parts' bitmaps ahead of a jump.
+// During a pan or zoom the last full picture is moved as a bitmap and
+// redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
+// An answer after an edit keeps the last answer's unchanged shapes (same
+// group, id and points: their Path2Ds), and a repaint after an edit or a
+// selection redraws only the canvas tiles the changed shapes touch
+// (`changedRegion`); `filigreeTangle.options.incremental = false` turns all
+// of that off (the latency bench's "before").
 import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
@@ -210,7 +216,9 @@ function mount(el, ctx) {
   let drawing = null; // the polyline being drawn: [[x, y], ...]
   let drawingFor = 'start'; // what it becomes: DRAW_PURPOSES
   let playing = 0;
-  const timing = { paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1 };
+  // Figures of the last paint/answer for tests and the latency bench: ms, `region` (the
+  // repainted fraction of the canvas), `why` (why the last repaint could not be partial).
+  const timing = { paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '' };
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
