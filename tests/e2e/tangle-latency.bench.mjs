@@ -201,8 +201,9 @@ for (let i = 0; i < 12; i++) {
         if (Number(status.dataset.runs || 0) > n) {
           mo.disconnect();
           requestAnimationFrame(() => {
+            const before = performance.now();
             document.querySelector('[data-testid=tangle-canvas]').getContext('2d').getImageData(0, 0, 1, 1); // rasterised
-            res(performance.now());
+            res([performance.now(), before]);
           });
         }
       });
@@ -212,9 +213,12 @@ for (let i = 0; i < 12; i++) {
     i.value = String(v);
     i.dispatchEvent(new Event('input', { bubbles: true }));
     i.dispatchEvent(new Event('change', { bubbles: true }));
-    const end = await done;
+    const [end, beforeFlush] = await done;
     const tm = t.timing();
-    return { total: end - start, run: tm.run, prepare: tm.prepare, paint: tm.paint, region: tm.region, reused: t.reused() };
+    return {
+      total: end - start, run: tm.run, prepare: tm.prepare, paint: tm.paint, region: tm.region, reused: t.reused(),
+      toPaint: tm.paintAt - tm.answeredAt, raster: end - beforeFlush,
+    };
   }, { v: 3 + (i >> 1), incremental });
   await page.waitForFunction(() => !window.filigreeTangle.pending());
   edits[incremental ? 'after' : 'before'].push(r);
@@ -240,6 +244,7 @@ console.log(JSON.stringify({
     final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes,
     param_edit_round_trip_ms: editFigure('total'),
     param_edit_worker_ms: editFigure('run'), prepare_ms: editFigure('prepare'), repaint_ms: editFigure('paint'),
+    answer_to_paint_ms: editFigure('toPaint'), raster_ms: editFigure('raster'),
     repainted_fraction: editFigure('region'), shapes_kept_from_last_answer: editFigure('reused'),
   },
 }, null, 1));
