@@ -573,7 +573,6 @@ function mount(el, ctx) {
     timing.paint = performance.now() - t0;
   }
 
-  /** During a pan or zoom: move the last picture, and redraw it sharp when the gesture pauses. */
   // In idle time after a sharp paint, the heaviest parts of the step tree are drawn as
   // bitmaps of the current view (heaviest first, while the layer budget has room), so a
   // slider jump to a far step copies them instead of rasterising them (tangle-draw.js).
@@ -618,6 +617,7 @@ function mount(el, ctx) {
     snapStale = false;
   }
 
+  /** During a pan or zoom: move the last picture, and redraw it sharp when the gesture pauses. */
   function quickPaint() {
     if (!sharpView) { paint(); return; }
     cancelAnimationFrame(frame);
@@ -654,12 +654,7 @@ function mount(el, ctx) {
       const list = k <= sel ? step.inputs : [...T.subtree(sel)].filter((i) => T.visible(i, k));
       const path = new Path2D();
       for (const i of list) path.addPath(T.path(i));
-      const box = T.bounds(step.inputs);
-      const covered = T.bounds(list);
-      // What it paints: the shapes and the dashed box (its line reaches past the box).
-      const extent = box && covered ? [Math.min(box[0], covered[0]), Math.min(box[1], covered[1]), Math.max(box[2], covered[2]), Math.max(box[3], covered[3])] : box || covered;
-      const e = 2 / view.s;
-      hl = { sel, k, T, path, box, extent: extent && [extent[0] - e, extent[1] - e, extent[2] + e, extent[3] + e] };
+      hl = { sel, k, T, path, box: T.bounds(step.inputs) };
     }
     return hl;
   }
