@@ -1180,6 +1180,8 @@ function mount(el, ctx) {
     options,
     /** Shapes the shown answer kept from the one before (their Path2Ds). */
     reused: () => T?.reused ?? 0,
+    /** Forget every kept bitmap (the latency bench starts each pass from none). */
+    clearLayers: () => layers.clear(),
     /** Whether idle-time layer building is done (or off) for the current view. */
     prebuilt: () => prebuildHandle === 0 && prebuildTimer === null,
     /** Vertices per part of what step `at` shows (tangle-draw.js batches). */

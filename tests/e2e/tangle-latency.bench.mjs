@@ -69,6 +69,7 @@ async function sliderAndPan(incremental) {
   return page.evaluate(async (incremental) => {
   const t = window.filigreeTangle;
   t.options.incremental = incremental;
+  t.clearLayers(); // each pass starts with no bitmap kept
   const r = t.result();
   const slider = document.querySelector('[data-testid=tangle-step]');
   const steps = r.steps.length;
@@ -104,6 +105,7 @@ async function sliderAndPan(incremental) {
   // last paint (up to 3 s, until its idle work is done) before each one. On a new view
   // (zoomed in a step), so no bitmap of the jumps above is of use.
   document.querySelector('[data-act=zoom-in]').click();
+  t.clearLayers();
   await new Promise((r) => setTimeout(r, 400));
   const settledMoves = [];
   const settle = async () => {
