@@ -154,6 +154,32 @@ async function sliderAndPan(incremental) {
 }
 const villageBefore = await sliderAndPan(false);
 const village = await sliderAndPan(true);
+// The same drags and jumps with the two paths taking turns move by move (the load of
+// the machine then weighs on both alike; the bitmaps kept are shared).
+const interleaved = await page.evaluate(async () => {
+  const t = window.filigreeTangle;
+  const slider = document.querySelector('[data-testid=tangle-step]');
+  const steps = t.result().steps.length;
+  const c = document.querySelector('[data-testid=tangle-canvas]');
+  const frame = () => new Promise((res) => requestAnimationFrame(() => { c.getContext('2d').getImageData(0, 0, 1, 1); res(); }));
+  const out = { drag: [[], []], jump: [[], []] };
+  const move = async (k, n, kind) => {
+    t.options.incremental = n % 2 === 1;
+    const start = performance.now();
+    slider.value = String(k);
+    slider.dispatchEvent(new Event('input', { bubbles: true }));
+    await frame();
+    out[kind][n % 2].push(performance.now() - start);
+  };
+  t.clearLayers();
+  t.paintNow();
+  await frame();
+  let n = 0;
+  for (const from of [0.95, 0.6, 0.3]) for (let i = 1; i < 13; i++) await move(Math.round(steps * from) - i * 2, n++, 'drag');
+  for (let i = 0; i < 24; i++) await move(Math.round(steps * (i % 2 ? 0.52 + i / 70 : 0.98 - i / 70)), n++, 'jump');
+  t.options.incremental = true;
+  return out;
+});
 
 
 // ---- leaf: a parameter edit round trip
@@ -238,6 +264,8 @@ console.log(JSON.stringify({
     slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
     slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
     slider_jump_batches_ms: both(village.batches, villageBefore.batches),
+    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
+    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
     slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
     pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
     sharp_repaint_ms: round(village.sharp_paint),
