@@ -71,26 +71,42 @@ fn tile_scaling(repeats: usize) -> Result<Value, String> {
         height: 512,
         ..Default::default()
     };
-    let mut ms = vec![];
+    // 1 and 2 threads alternate, so a change of the machine's load in the
+    // meantime weighs on both alike; the load average is printed beside.
+    let load_before = loadavg();
+    let mut secs = [vec![], vec![]];
     let mut png = None;
-    for threads in [1usize, 2] {
-        let mut secs = vec![];
-        for _ in 0..repeats.max(1) {
+    for _ in 0..repeats.max(1) {
+        for (i, threads) in [1usize, 2].into_iter().enumerate() {
             let t = Instant::now();
             let out = filigree::micro::api::render_threads(&req, threads, 16, &Cancel::new())
                 .map_err(|e| e.to_string())?;
-            secs.push(t.elapsed().as_secs_f64());
+            secs[i].push(t.elapsed().as_secs_f64());
             if *png.get_or_insert_with(|| out.png.clone()) != out.png {
                 return Err("bench micro: the tiled render's bytes depend on the threads".into());
             }
         }
-        ms.push(super::min_median(secs).1 * 1e3);
     }
+    let [a, b] = secs.map(|s| super::min_median(s).1 * 1e3);
     Ok(json!({
         "scene": "assets/micro/multiscale.json", "image": "512x512", "tiles": 16,
-        "threads_1_ms": ms[0], "threads_2_ms": ms[1], "speedup_2_threads": ms[0] / ms[1],
+        "threads_1_ms": a, "threads_2_ms": b, "speedup_2_threads": a / b,
+        "repeats_alternating": repeats.max(1),
         "cores": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        "loadavg_1m_before": load_before, "loadavg_1m_after": loadavg(),
+        "note": "same 16 tiles, same bytes; other processes on the machine (loadavg, runnable \
+            tasks averaged over a minute) take cores from the 2-thread run first",
     }))
+}
+
+/// The 1-minute load average from `/proc/loadavg` (None elsewhere).
+fn loadavg() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
 }
 
 fn stats(out: &MicroRenderResponse) -> Value {
@@ -454,9 +470,7 @@ fn loss_eval() -> Result<Value, String> {
         std::hint::black_box(job.loss_of_samples(&values).expect("loss"));
     });
     let whole_ms = ms_per(n, || {
-        let s = job.scene_for(&u).expect("scene");
-        let v = job.sample(&s, false).expect("sample");
-        std::hint::black_box(job.loss_of_samples(&v).expect("loss"));
+        std::hint::black_box(job.evaluate(&u).expect("loss"));
     });
     Ok(json!({
         "grid": "32^3", "problem": "gyroid-1d", "threads": 1,
@@ -468,9 +482,10 @@ fn loss_eval() -> Result<Value, String> {
         "goal_ms_per_eval": GOAL_MS_PER_EVAL,
         "pycma_numpy_ms_per_eval": PYCMA_MS_PER_EVAL,
         "ratio_to_pycma_numpy": whole_ms / PYCMA_MS_PER_EVAL,
-        "note": "the old path (before the one FFT and the lattice sampling) is timed by an \
-            older binary's `bench micro --only fit --quick`: loss_eval_ms_32 and gyroid-1d's \
-            ms_per_eval",
+        "note": "ms_per_eval: the job's own evaluation (scene, lattice samples into the \
+            reused buffer, FFT, loss); the split times each part alone (sampling into a fresh \
+            buffer). Compare with older code by running its binary's `bench micro --only loss` \
+            right before or after this one",
     }))
 }
 
