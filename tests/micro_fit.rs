@@ -609,7 +609,10 @@ fn fits_give_the_stored_native_results() {
     for f in fits {
         let name = f["name"].as_str().unwrap();
         let out = filigree::api::run_json("micro-fit", &f["request"].to_string()).unwrap();
-        assert!(out["loss"].as_f64().unwrap() < out["initial_loss"].as_f64().unwrap(), "{name}");
+        assert!(
+            out["loss"].as_f64().unwrap() < out["initial_loss"].as_f64().unwrap(),
+            "{name}"
+        );
         let got = serde_json::to_string_pretty(&out).unwrap() + "\n";
         let path = format!("{dir}/{name}.json");
         if bless {

@@ -26,8 +26,8 @@
 //! twiddles from the `libm` crate, computed the same way on every target.
 //! [`RealFft3`] does not use rustfft: its own passes (plain `f64` adds and
 //! multiplies, `libm` twiddles) give the same bytes everywhere by
-//! construction, and keep the loss of a fit evaluation fast (one 32³
-//! transform ≈ 4× quicker than over rustfft here, `bench micro --only loss`).
+//! construction (`bench micro --only loss` times it against the former
+//! rustfft path, kept in the bench).
 use crate::core::error::{Error, Result};
 use realfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
@@ -169,7 +169,10 @@ struct LaneFft {
 /// `(a, b) ← (a + b, (a − b)·w)` over lanes.
 #[inline(always)]
 fn butterfly(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64], wr: f64, wi: f64) {
-    let lanes = ar.iter_mut().zip(ai.iter_mut()).zip(br.iter_mut().zip(bi.iter_mut()));
+    let lanes = ar
+        .iter_mut()
+        .zip(ai.iter_mut())
+        .zip(br.iter_mut().zip(bi.iter_mut()));
     for ((ar, ai), (br, bi)) in lanes {
         let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
         *ar = xr + yr;
@@ -183,7 +186,10 @@ fn butterfly(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64], wr:
 /// [`butterfly`] with `w = 1`.
 #[inline(always)]
 fn butterfly_one(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64]) {
-    let lanes = ar.iter_mut().zip(ai.iter_mut()).zip(br.iter_mut().zip(bi.iter_mut()));
+    let lanes = ar
+        .iter_mut()
+        .zip(ai.iter_mut())
+        .zip(br.iter_mut().zip(bi.iter_mut()));
     for ((ar, ai), (br, bi)) in lanes {
         let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
         *ar = xr + yr;
@@ -196,7 +202,10 @@ fn butterfly_one(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64])
 /// [`butterfly`] with `w = −i`.
 #[inline(always)]
 fn butterfly_minus_i(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64]) {
-    let lanes = ar.iter_mut().zip(ai.iter_mut()).zip(br.iter_mut().zip(bi.iter_mut()));
+    let lanes = ar
+        .iter_mut()
+        .zip(ai.iter_mut())
+        .zip(br.iter_mut().zip(bi.iter_mut()));
     for ((ar, ai), (br, bi)) in lanes {
         let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
         *ar = xr + yr;

@@ -246,7 +246,10 @@ impl Fourier {
             let w = plane_weight(kz, nz);
             let r = kz * plane..(kz + 1) * plane;
             let terms = self.terms[r.clone()].iter_mut();
-            let got = self.amp[r.clone()].iter().zip(&re[r.clone()]).zip(&im[r.clone()]);
+            let got = self.amp[r.clone()]
+                .iter()
+                .zip(&re[r.clone()])
+                .zip(&im[r.clone()]);
             let want = target.amp[r.clone()].iter().zip(&target.phase[r]);
             for ((t, ((&a, &cr), &ci)), (&ta, &tp)) in terms.zip(got).zip(want) {
                 let da = a - ta;
@@ -361,7 +364,11 @@ mod tests {
         ] {
             let (a, b) = (atan2(y, x), libm::atan2(y, x));
             assert!((a - b).abs() <= 1e-15, "atan2({y}, {x}): {a} vs {b}");
-            assert_eq!(a.is_sign_negative(), b.is_sign_negative(), "atan2({y}, {x})");
+            assert_eq!(
+                a.is_sign_negative(),
+                b.is_sign_negative(),
+                "atan2({y}, {x})"
+            );
         }
         assert!(atan2(f64::NAN, 1.0).is_nan());
     }
