@@ -54,9 +54,11 @@ async function compareAll(page, { side, steps, cameras, extra = {}, only = null,
           times.push(performance.now() - t);
         }
         // The first view once more at bigSide (one frame, no warm-up: the
-        // shader is compiled), for the frame-time summary.
+        // shader is compiled), for the frame-time summary; only where the
+        // small frame was quick (a 256² frame costs ~16× a 64² one: tens of
+        // seconds in SwiftShader for the heavy scenes, too long for CI).
         let bigMs = null;
-        if (bigSide && camera === cameras[0]) {
+        if (bigSide && camera === cameras[0] && Math.min(...times) < 20) {
           const t = performance.now();
           gl.draw(camera, bigSide, bigSide);
           bigMs = performance.now() - t;
@@ -95,10 +97,11 @@ test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fi
   assert.ok(rows.length >= 2 * 6, `${rows.length} renders`);
   // One JSON line for the bench notes (issue 12): SwiftShader frame ms per
   // scene, first view, at 64² (best of the timed frames) and 256² (one frame).
-  const first = rows.filter((r) => r.bigMs !== null);
+  const first = rows.filter((r) => r.camera.distance === VIEWS[0].distance);
   console.log(JSON.stringify({
     bench: 'micro-gl', renderer: 'SwiftShader (software WebGL2)', steps: 'fixed', view: VIEWS[0],
-    frame_ms: Object.fromEntries(first.map((r) => [r.name, { [SIDE]: +r.frameMs.toFixed(1), 256: +r.bigMs.toFixed(1),
+    note: '256: one frame, timed only where the 64² frame took under 20 ms (null: skipped)',
+    frame_ms: Object.fromEntries(first.map((r) => [r.name, { [SIDE]: +r.frameMs.toFixed(1), 256: r.bigMs === null ? null : +r.bigMs.toFixed(1),
       steps_per_ray: +(r.glStats.steps / r.glStats.rays).toFixed(1) }])),
   }));
   for (const r of rows) {
