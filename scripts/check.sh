@@ -6,7 +6,9 @@
 # index rebuilt and compared with the committed one, the release wasm build, and the browser end-to-end tests in headless Chromium.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-step() { printf '\n== %s\n' "$*"; }
+# Each step says when it starts (seconds since the start), so a slow CI
+# run shows where its time went.
+step() { printf '\n== %s (at %d s)\n' "$*" "$SECONDS"; }
 
 step "installing what is missing"
 if [ ! -x "${CHROMIUM_PATH:-/usr/bin/chromium}" ]; then

@@ -52,7 +52,8 @@ pub enum Which {
         json: bool,
     },
     /// Texture: the paper's Tables 1–3 (model and scale accuracy on a
-    /// held-out quarter of every model's textures, space regressions' R²),
+    /// held-out quarter of every model's base textures and under the
+    /// paper's random image split, space regressions' R²),
     /// PCN-2 seconds per 256² texture, retrieval ms, index size.
     Texture {
         /// Base textures per model.

@@ -177,15 +177,22 @@ pub fn cosine(a: &[f32], b: &[f32]) -> f64 {
 }
 
 impl Index {
-    /// Trains everything from `training` (see [`Training`]).
+    /// Trains everything from `training` (see [`Training`]): the filters
+    /// ([`Index::train_pcn`]), every image's features, then the rest
+    /// ([`Index::fit`]).
     pub fn build(
         model_names: Vec<String>,
         training: &[Training],
         config: &IndexConfig,
     ) -> Result<Index> {
-        config.pcn.validate()?;
-        let base: Vec<&Training> = training.iter().filter(|t| t.base).collect();
-        if base.len() < 4 {
+        Self::check(&model_names, training)?;
+        let pcn = Self::train_pcn(training, config)?;
+        let features = Self::features(&pcn, training)?;
+        Self::fit(model_names, training, pcn, &features, config)
+    }
+
+    fn check(model_names: &[String], training: &[Training]) -> Result<()> {
+        if training.iter().filter(|t| t.base).count() < 4 {
             return Err(Error::input("an index needs at least four base samples"));
         }
         if let Some(t) = training.iter().find(|t| {
@@ -196,23 +203,49 @@ impl Index {
                 t.model
             )));
         }
-        // Filters from an even spread of the images.
+        Ok(())
+    }
+
+    /// The PCA filters, learnt from an even spread of at most
+    /// `filter_images` of the training images.
+    pub fn train_pcn(training: &[Training], config: &IndexConfig) -> Result<Pcn> {
+        config.pcn.validate()?;
         let stride = training.len().div_ceil(config.filter_images.max(1)).max(1);
         let filter_set: Vec<Gray> = training
             .iter()
             .step_by(stride)
             .map(|t| t.image.clone())
             .collect();
-        let pcn = Pcn::train(&filter_set, config.pcn.clone())?;
-        let features: Vec<Vec<f32>> = par_map(training, |t| pcn.features(&t.image))
+        Pcn::train(&filter_set, config.pcn.clone())
+    }
+
+    /// Every training image's PCN features, on all cores natively.
+    pub fn features(pcn: &Pcn, training: &[Training]) -> Result<Vec<Vec<f32>>> {
+        par_map(training, |t| pcn.features(&t.image))
             .into_iter()
-            .collect::<Result<_>>()?;
+            .collect()
+    }
+
+    /// Everything after the features: the classifiers on `features` (one
+    /// row per `training` record), the space and the samples.
+    pub fn fit(
+        model_names: Vec<String>,
+        training: &[Training],
+        pcn: Pcn,
+        features: &[Vec<f32>],
+        config: &IndexConfig,
+    ) -> Result<Index> {
+        Self::check(&model_names, training)?;
+        if features.len() != training.len() {
+            return Err(Error::input("one feature row per training image is needed"));
+        }
+        let base: Vec<&Training> = training.iter().filter(|t| t.base).collect();
         let models: Vec<u16> = training.iter().map(|t| t.model).collect();
-        let model_classifier = OneVsRest::train(&features, &models, config.c_class);
+        let model_classifier = OneVsRest::train(features, &models, config.c_class);
         let scale_ids: Vec<usize> = (0..12).collect();
         let scale_classifiers = par_map(&scale_ids, |&k| {
             let labels: Vec<u16> = training.iter().map(|t| t.scales[k] as u16).collect();
-            OneVsRest::train(&features, &labels, config.c_class)
+            OneVsRest::train(features, &labels, config.c_class)
         });
         let (axes, coords) = Self::space(&base, config)?;
         let samples = base

@@ -124,6 +124,10 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   assert.equal(json.seed, s.retrieved.seed);
   assert.deepEqual(Object.values(json.params), s.retrieved.params);
   assert.equal(json.scales.regularity, s.scales[REGULARITY]);
+  // The seed field shows the exact seed (dataset seeds run to 2⁵³ − 1; it
+  // once showed six significant digits).
+  assert.equal(await page.inputValue('input[data-param=seed]'), String(s.retrieved.seed));
+  assert.ok(s.retrieved.seed > 1e6, `a dataset seed (${s.retrieved.seed})`);
 });
 
 test('a corrupt, wrong-version or missing index is said in the panel; models still render', async () => {
