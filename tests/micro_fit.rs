@@ -590,3 +590,38 @@ fn lattice_sampling_equals_pointwise_sampling_bit_for_bit() {
         }
     }
 }
+
+/// The fits of `tests/fixtures/micro-native/fits.json` (one per optimiser,
+/// lattice- and point-sampled scenes) give the responses stored beside it
+/// (`<name>.json`), every number to the bit; the browser e2e
+/// (`micro-fit.test.mjs`) runs the same requests in the wasm worker and
+/// compares with the same files, so a fit gives the same bytes in wasm as
+/// natively. `FILIGREE_BLESS=1` rewrites the files after an intended change.
+#[test]
+fn fits_give_the_stored_native_results() {
+    let dir = format!("{}/tests/fixtures/micro-native", env!("CARGO_MANIFEST_DIR"));
+    let list: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{dir}/fits.json")).unwrap())
+            .unwrap();
+    let bless = std::env::var("FILIGREE_BLESS").is_ok_and(|v| v == "1");
+    let fits = list["fits"].as_array().unwrap();
+    assert!(fits.len() >= 3);
+    for f in fits {
+        let name = f["name"].as_str().unwrap();
+        let out = filigree::api::run_json("micro-fit", &f["request"].to_string()).unwrap();
+        assert!(
+            out["loss"].as_f64().unwrap() < out["initial_loss"].as_f64().unwrap(),
+            "{name}"
+        );
+        let got = serde_json::to_string_pretty(&out).unwrap() + "\n";
+        let path = format!("{dir}/{name}.json");
+        if bless {
+            std::fs::write(&path, &got).unwrap();
+        }
+        let want = std::fs::read_to_string(&path)
+            .unwrap_or_else(|e| panic!("{path}: {e} (FILIGREE_BLESS=1 writes it)"));
+        // serde_json prints each f64 as the shortest text that reads back
+        // as it: equal text, equal bits.
+        assert!(got == want, "{name}: the native result differs from {path}");
+    }
+}

@@ -2,12 +2,17 @@
 // canvas, pen-and-ink: black strokes on paper white, grey fills for `fill`,
 // black with white lines for `white_lines`, filled marks for `mark`.
 //
-//   const t = prepareTangle(response)   per-shape bounding boxes, styles, lazily built Path2Ds
+//   const t = prepareTangle(response, prev?)  per-shape bounding boxes, styles, lazily built Path2Ds;
+//                                       with `prev` (the last answer), its shapes that are unchanged
+//                                       (same group, id, ink and points) keep their Path2Ds
 //   t.visible(i, k)                     shape i shown after k steps (k = steps.length: final)
 //   t.batches(k) → {k, parts, count}    what step k shows: a few Path2D batches per ink style
 //                                       (a segment tree over steps, nodes built lazily, kept)
 //   paintBatches(g, batches, lineWidth, layers?, key?)  draws them (g already transformed);
 //                                       with createLayers(), heavy parts come from bitmaps
+//   t.changes(k, from, kFrom)           shapes shown at step k of t and not at step kFrom of `from`
+//                                       (t itself or the answer t was prepared from), and back
+//   t.regionParts(k, keep) → {parts}    batches(k) cut down to the shapes passing keep(i)
 //   t.pick(x, y, k, g) → shape index    the smallest shape shown at step k containing (x, y)
 //   t.subtree(s) → Set of shape indices made by step s or by steps that depend on it
 //   drawThumbnail(canvas, response)     the final shapes fitted into a small canvas
@@ -64,13 +69,68 @@ export function shapeColumns(c) {
   return S;
 }
 
-export function prepareTangle(r) {
+/**
+ * Which shapes of the answer (columns S, points pts) are shapes of the
+ * previous prepared answer P: the same group and id, tag, ink, rings and
+ * points (every coordinate compared, so a reused Path2D is exactly what
+ * tracing the shape again would give). `oldOf[i]`: P's index of shape i or
+ * -1; `newOf[j]`: the inverse.
+ */
+function link(S, pts, P) {
+  const PS = P.r.shapes, ppts = P.pts, m = PS.count, n = S.count;
+  // An open-addressing table of P's shapes by (group, id): integer work only,
+  // fast even before the JIT has warmed up (this runs once per answer).
+  let bits = 4;
+  while ((1 << bits) < 2 * m && bits < 30) bits++;
+  const mask = (1 << bits) - 1;
+  const table = new Int32Array(mask + 1).fill(-1);
+  const slot = (g, id) => (Math.imul(g, 0x9e3779b1) ^ Math.imul(id + 1, 0x85ebca77)) >>> (32 - bits);
+  for (let j = 0; j < m; j++) {
+    let h = slot(PS.group[j], PS.id[j]);
+    while (table[h] >= 0) h = (h + 1) & mask;
+    table[h] = j;
+  }
+  const oldOf = new Int32Array(n).fill(-1), newOf = new Int32Array(m).fill(-1);
+  for (let i = 0; i < n; i++) {
+    const g = S.group[i], id = S.id[i];
+    for (let h = slot(g, id); table[h] >= 0; h = (h + 1) & mask) {
+      const j = table[h];
+      if (PS.group[j] !== g || PS.id[j] !== id || newOf[j] >= 0) continue;
+      if (sameShape(S, pts, i, PS, ppts, j)) { oldOf[i] = j; newOf[j] = i; }
+      break;
+    }
+  }
+  return { oldOf, newOf };
+}
+
+/** Shape i of (S, pts) and shape j of (PS, ppts): the same tag, ink, rings and every coordinate. */
+function sameShape(S, pts, i, PS, ppts, j) {
+  if (S.tag[i] !== PS.tag[j] || S.fill[i] !== PS.fill[j] || S.flags[i] !== PS.flags[j]) return false;
+  const r0 = S.ringFirst[i], r1 = S.ringFirst[i + 1], q0 = PS.ringFirst[j];
+  if (r1 - r0 !== PS.ringFirst[j + 1] - q0) return false;
+  let len = 0;
+  for (let q = 0; q < r1 - r0; q++) {
+    if (S.rings[r0 + q] !== PS.rings[q0 + q]) return false;
+    len += S.rings[r0 + q];
+  }
+  return sameRange(pts, 2 * S.first[i], ppts, 2 * PS.first[j], 2 * len);
+}
+
+function sameRange(a, ao, b, bo, len) {
+  for (let k = 0; k < len; k++) if (a[ao + k] !== b[bo + k]) return false;
+  return true;
+}
+
+export function prepareTangle(r, prev = null) {
   const S = r.shapes = shapeColumns(r.shapes);
   const n = S.count;
   const pts = pointsOf(r.points);
   const { born, died, first } = S;
   const box = new Float32Array(4 * n);
   const paths = new Array(n);
+  // After an edit most shapes are the last answer's: they keep their Path2Ds.
+  const linked = prev && prev.n ? link(S, pts, prev) : null;
+  if (linked) for (let i = 0; i < n; i++) if (linked.oldOf[i] >= 0) paths[i] = prev.paths[linked.oldOf[i]];
   for (let i = 0; i < n; i++) {
     let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
     const outer = S.rings[S.ringFirst[i]] || 0; // the outer ring bounds the shape
@@ -123,18 +183,17 @@ export function prepareTangle(r) {
   }
   for (let i = 0; i < n; i++) insert(1, 0, nSteps, born[i] + 1, died[i] === -1 ? nSteps : died[i], i);
 
-  /** The batches of a node: one Path2D per ink style (fills by grey). */
-  function batchOf(node) {
-    let b = built.get(node);
-    if (b) return b;
-    b = { fills: new Map(), black: null, white: null, marks: null, count: 0, vertices: 0 };
+  /** Shapes `list` (those passing `keep`) as one batch: one Path2D per ink style (fills by grey). */
+  function batchOfList(list, keep = null) {
+    const b = { fills: new Map(), black: null, white: null, marks: null, count: 0, vertices: 0 };
     const add = (key, i) => {
       // Each shape's own Path2D is built once per answer; a batch copies it
       // natively (addPath), far cheaper than tracing every vertex again.
       if (!b[key]) b[key] = new Path2D();
       b[key].addPath(pathOf(i));
     };
-    for (const i of members.get(node) || []) {
+    for (const i of list) {
+      if (keep && !keep(i)) continue;
       b.count++;
       for (const len of S.ringsOf(i)) b.vertices += len;
       if (S.flags[i] & 2) { add('marks', i); continue; }
@@ -145,13 +204,32 @@ export function prepareTangle(r) {
       }
       add(S.flags[i] & 1 ? 'white' : 'black', i);
     }
-    built.set(node, b);
     return b;
+  }
+  /** The batches of a node, built once. */
+  function batchOf(node) {
+    let b = built.get(node);
+    if (!b) built.set(node, b = batchOfList(members.get(node) || []));
+    return b;
+  }
+  /** Nodes on the root-to-k path of the step tree that hold shapes. */
+  function nodesOf(k) {
+    const out = [];
+    for (let node = 1, lo = 0, hi = nSteps; ;) {
+      if (members.has(node)) out.push(node);
+      if (lo === hi) break;
+      const mid = (lo + hi) >> 1;
+      if (k <= mid) { node = 2 * node; hi = mid; } else { node = 2 * node + 1; lo = mid + 1; }
+    }
+    return out;
   }
 
   let cached = null;
+  let heavy = null;
   const t = {
-    r, n, pts, born, died, box,
+    r, n, pts, born, died, box, paths,
+    /** The answer this one was linked to (until the panel drops it, once painted). */
+    from: linked ? prev : null,
     steps: nSteps,
     visible: (i, k) => shownAt(born[i], died[i], k),
     count(k) {
@@ -160,24 +238,81 @@ export function prepareTangle(r) {
       return c;
     },
     path: pathOf,
+    /** Vertices of shape i (all its rings). */
+    vertices(i) {
+      let v = 0;
+      for (let q = S.ringFirst[i], e = S.ringFirst[i + 1]; q < e; q++) v += S.rings[q];
+      return v;
+    },
     /** What step k shows, as `{k, parts, count}`: the batches of the nodes on its path. */
     batches(k) {
       if (cached?.k === k) return cached;
       const parts = [];
       let count = 0;
-      for (let node = 1, lo = 0, hi = nSteps; ;) {
-        if (members.has(node)) {
-          const b = batchOf(node);
-          parts.push(b);
-          count += b.count;
-        }
-        if (lo === hi) break;
-        const mid = (lo + hi) >> 1;
-        if (k <= mid) { node = 2 * node; hi = mid; } else { node = 2 * node + 1; lo = mid + 1; }
+      for (const node of nodesOf(k)) {
+        const b = batchOf(node);
+        parts.push(b);
+        count += b.count;
       }
       cached = { k, parts, count };
       return cached;
     },
+    /**
+     * What `batches(k)` paints, cut down to the shapes passing `keep(i)`,
+     * part by part in the same order (not kept): repainting a clipped
+     * region draws only the shapes that reach into it.
+     */
+    regionParts(k, keep) {
+      const parts = [], nodes = [];
+      nodesOf(k).forEach((node, at) => {
+        const b = batchOfList(members.get(node), keep);
+        if (b.count) { parts.push(b); nodes.push(at); }
+      });
+      return { k, parts, nodes }; // nodes[p]: the index in batches(k).parts that part p is cut from
+    },
+    /**
+     * What differs between step `k` of this answer and step `kFrom` of
+     * `from`: `from` is this answer (a slider move) or the one it was
+     * prepared from (`prepareTangle(r, prev)`; an edit). `{added, removed}`:
+     * shapes of this answer shown now and not then, and shapes of `from`
+     * shown then and not now; false when `from` is unrelated.
+     */
+    changes(k, from, kFrom) {
+      const added = [], removed = [];
+      if (from === t) {
+        for (let i = 0; i < n; i++) {
+          const now = shownAt(born[i], died[i], k), then = shownAt(born[i], died[i], kFrom);
+          if (now && !then) added.push(i); else if (then && !now) removed.push(i);
+        }
+      } else if (linked && from === t.from) {
+        const { oldOf, newOf } = linked;
+        for (let i = 0; i < n; i++) {
+          if (shownAt(born[i], died[i], k) && (oldOf[i] < 0 || !from.visible(oldOf[i], kFrom))) added.push(i);
+        }
+        for (let j = 0; j < from.n; j++) {
+          if (from.visible(j, kFrom) && (newOf[j] < 0 || !shownAt(born[newOf[j]], died[newOf[j]], k))) removed.push(j);
+        }
+      } else return false;
+      return { added, removed };
+    },
+    /**
+     * The parts (step-tree nodes) with at least `min` vertices, heaviest
+     * first, as `{vertices, part()}` (part() builds the node's batches): what
+     * may be prepared as bitmaps before a slider move needs them.
+     */
+    heavyParts(min = LAYER_VERTICES) {
+      if (heavy?.min === min) return heavy.out;
+      const out = [];
+      for (const [node, list] of members) {
+        let v = 0;
+        for (const i of list) v += t.vertices(i);
+        if (v >= min) out.push({ vertices: v, part: () => batchOf(node) });
+      }
+      heavy = { min, out: out.sort((a, b) => b.vertices - a.vertices) };
+      return heavy.out;
+    },
+    /** Shapes kept from the previous answer (`prepareTangle(r, prev)`), for tests. */
+    get reused() { return linked ? linked.oldOf.reduce((a, j) => a + (j >= 0), 0) : 0; },
     /** The smallest shape shown at step k whose outline contains (x, y), or -1. */
     pick(x, y, k, g) {
       let best = -1, bestArea = Infinity;
@@ -283,6 +418,13 @@ export function createLayers(budgetBytes = 96e6) {
       }
       return e.canvas;
     },
+    /** Whether `part`'s bitmap for view `key` on a w×h canvas is kept. */
+    has(part, key, w, h) {
+      const e = cache.get(part);
+      return !!e && e.key === key && e.canvas.width === w && e.canvas.height === h;
+    },
+    /** How many w×h bitmaps the budget keeps. */
+    capacity: (w, h) => Math.max(2, Math.floor(budgetBytes / (4 * w * h))),
     clear: () => cache.clear(),
     get size() { return cache.size; },
   };
@@ -292,11 +434,14 @@ export function createLayers(budgetBytes = 96e6) {
  * Draw what `batches(k)` returned, part by part (a part's lines cover its
  * own fills; parts do not overlap, and a shared edge is drawn by both
  * sides). `g` maps drawing units to the canvas. With `layers`
- * (createLayers), heavy parts are copied from bitmaps of view `key`.
+ * (createLayers), heavy parts are copied from bitmaps of view `key`; with
+ * `keep(part)` too, a heavy part without a bitmap gets one only when keep
+ * says so (else it is drawn directly: a bitmap costs a second pass).
  */
-export function paintBatches(g, { parts }, lineWidth, layers = null, key = '') {
+export function paintBatches(g, { parts }, lineWidth, layers = null, key = '', keep = null) {
   for (const b of parts) {
-    if (!layers || b.vertices < LAYER_VERTICES) {
+    if (!layers || b.vertices < LAYER_VERTICES
+      || (keep && !keep(b) && !layers.has(b, key, g.canvas.width, g.canvas.height))) {
       paintPart(g, b, lineWidth);
       continue;
     }
@@ -310,6 +455,19 @@ export function paintBatches(g, { parts }, lineWidth, layers = null, key = '') {
     g.drawImage(bitmap, 0, 0);
     g.restore();
   }
+}
+
+/**
+ * Draw `part`'s bitmap for view `key` into `layers` ahead of need (idle
+ * time), with transform `m` (a DOMMatrix) and pen `lineWidth`, and have the
+ * browser rasterise it now rather than when a slider move first shows it.
+ */
+export function prebuildLayer(layers, part, key, w, h, m, lineWidth) {
+  const c = layers.get(part, key, w, h, (lg) => {
+    lg.setTransform(m);
+    paintPart(lg, part, lineWidth);
+  });
+  c.getContext('2d').getImageData(0, 0, 1, 1);
 }
 
 /** The final shapes of `r` fitted into `canvas` (white paper, thin black lines). */

@@ -20,12 +20,18 @@
 // Drawing (tangle-draw.js): a step's picture is a few Path2D parts from a
 // segment tree over the steps, built lazily; heavy parts are kept as bitmaps
 // of the current view, so a slider drag redraws only the small parts that
-// changed. During a pan or zoom the last full picture is moved as a bitmap
-// and redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
+// changed, and idle time draws the heaviest parts' bitmaps ahead of a jump.
+// During a pan or zoom the last full picture is moved as a bitmap and
+// redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
+// An answer after an edit keeps the last answer's unchanged shapes (same
+// group, id and points: their Path2Ds), and a repaint after an edit or a
+// selection redraws only the canvas tiles the changed shapes touch
+// (`changedRegion`); `filigreeTangle.options.incremental = false` turns all
+// of that off (the latency bench's "before").
 import { shippedExamples, shareByExample } from './examples.js';
 import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
 import { download } from './project.js';
-import { prepareTangle, paintBatches, drawThumbnail, createLayers } from './tangle-draw.js';
+import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer, LAYER_VERTICES } from './tangle-draw.js';
 
 const RUN_DELAY_MS = 120;
 const TYPING_DELAY_MS = 600;
@@ -198,6 +204,10 @@ function mount(el, ctx) {
   const snap = document.createElement('canvas');
   const layers = createLayers(); // bitmaps of the heavy parts of recent steps (tangle-draw.js)
   let snapView = null;
+  // The view of the last sharp paint; the canvas is copied to `snap` only when a pan starts
+  // (a copy at every paint would make the browser rasterise the canvas there and then).
+  let sharpView = null;
+  let snapStale = true;
   let hl = null; // {sel, k, path, box}
   let lastPick = -1;
   let drag = null; // a parameter drag: {key, base, step, predicted, group}
@@ -206,7 +216,17 @@ function mount(el, ctx) {
   let drawing = null; // the polyline being drawn: [[x, y], ...]
   let drawingFor = 'start'; // what it becomes: DRAW_PURPOSES
   let playing = 0;
-  const timing = { paint: 0, batches: 0, run: 0 };
+  // Figures of the last paint/answer for tests and the latency bench: ms, `region` (the
+  // repainted fraction of the canvas), `why` (why the last repaint could not be partial).
+  const timing = { paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '' };
+  // What the canvas shows (set by every sharp paint; null after a pan frame):
+  // a repaint then redraws only the rectangle where the picture differs.
+  let shown = null; // {T, k, key, w, h, hl, drawing}
+  // `incremental: false` is the old path (a full repaint each time, no shape
+  // kept from the last answer): the latency bench measures both in one run.
+  // `highlight: false` leaves the selected step's highlight out of a paint (tests compare
+  // the picture with a fresh answer's).
+  const options = { incremental: true, highlight: true };
 
   // ---- the grammar editor ------------------------------------------------------------
 
@@ -273,7 +293,12 @@ function mount(el, ctx) {
       });
       if (running !== ctrl) return;
       const t1 = performance.now();
-      T = prepareTangle(r);
+      timing.answeredAt = t1;
+      // Only the edits differ from the last answer: its unchanged shapes keep their Path2Ds,
+      // and the repaint covers only where the picture changed.
+      const related = options.incremental && T && shownFor && shownFor.grammar === doc.grammar
+        && shownFor.start === doc.start && shownFor.seed === doc.seed && shownFor.wobble === doc.wobble;
+      T = prepareTangle(r, related ? T : null);
       layers.clear();
       shownFor = doc;
       hl = null;
@@ -289,7 +314,14 @@ function mount(el, ctx) {
       statusEl.dataset.runs = String(Number(statusEl.dataset.runs || 0) + 1);
       resolveSelection();
       showSelected();
-      paint();
+      // Painted now, not at the next animation frame: the answer is what the user waits
+      // for, and a loaded machine may start that frame late (the browser shows the canvas
+      // at its next frame either way).
+      if (options.incremental) {
+        cancelAnimationFrame(frame);
+        frame = 0;
+        paintChanged();
+      } else paint();
       loadThumbnails();
     } catch (err) {
       if (running !== ctrl) return;
@@ -322,6 +354,7 @@ function mount(el, ctx) {
     if (canvas.width !== w || canvas.height !== h) {
       canvas.width = w;
       canvas.height = h;
+      sharpView = null; // a resized canvas is blank until its next paint
       if (refit || !T) fitView(); else paint();
     }
   }
@@ -344,10 +377,175 @@ function mount(el, ctx) {
   const toWorld = (cx, cy) => [(cx - view.tx) / view.s, (cy - view.ty) / view.s];
   const toCss = (x, y) => [x * view.s + view.tx, y * view.s + view.ty];
 
-  /** Repaint sharp at the next frame. */
+  /** Repaint sharp at the next frame: only the rectangle that changed when that is known. */
   function paint() {
     if (frame) return;
-    frame = requestAnimationFrame(() => { frame = 0; paintNow(); });
+    frame = requestAnimationFrame(() => { frame = 0; paintChanged(); });
+  }
+
+  const lineWidth = () => {
+    const sw = state()?.stroke_width ?? 1;
+    return sw > 0 ? Math.max(sw, 0.5 / view.s) : 0;
+  };
+  const viewKey = () => `${view.s} ${view.tx} ${view.ty} ${dpr} ${lineWidth()}`;
+
+  /** The canvas now shows the current step, view and highlight. */
+  function recordShown() {
+    if (T) T.from = null; // linked answers are compared once, then dropped
+    shown = { T, k, key: viewKey(), w: canvas.width, h: canvas.height, hl: T && T.n ? currentHl() : null, drawing: !!drawing };
+  }
+
+  // A repaint of part of the canvas works on tiles of TILE device pixels: a
+  // small mask canvas (one pixel a tile) gets the changed shapes drawn on it,
+  // grown by the pen and a margin; the tiles it touches are cleared and
+  // redrawn, clipped, from the shapes that reach into them.
+  const TILE = 8;
+  const maskCanvas = document.createElement('canvas');
+
+  /**
+   * Where the picture to paint differs from what the canvas shows:
+   * `{tiles, cols, rows, count, sum}` (tiles: 1 where it differs; sum: its
+   * summed-area table), null when nowhere, or false when that is unknown or
+   * most of the canvas (then everything is repainted).
+   */
+  function changedRegion() {
+    timing.why = 'state';
+    if (!options.incremental || !shown || !T || !T.n || drawing || shown.drawing || !shown.T) return false;
+    timing.why = 'view';
+    if (shown.key !== viewKey() || shown.w !== canvas.width || shown.h !== canvas.height) return false;
+    // A slider move repaints in full: its heavy parts come from bitmaps, which beats
+    // clipping (measured: a 2% region of the village cost more than the full repaint).
+    timing.why = 'step';
+    if (shown.T === T && shown.k !== k) return false;
+    timing.why = 'unrelated';
+    const ch = T.changes(k, shown.T === T ? T : shown.T, shown.k);
+    if (!ch) return false;
+    const h = currentHl();
+    const hls = h === shown.hl ? [] : [shown.hl, h].filter(Boolean);
+    if (!ch.added.length && !ch.removed.length && !hls.length) return null;
+    timing.why = 'big';
+    // When the changed shapes are a good part of the picture, a full repaint (which copies
+    // the heavy parts from bitmaps) is cheaper than finding and clipping the region.
+    const vertsOf = (t, list) => {
+      let v = 0;
+      for (const i of list) v += t.vertices(i);
+      return v;
+    };
+    if (vertsOf(T, ch.added) + vertsOf(shown.T, ch.removed) > 0.25 * T.batches(k).parts.reduce((a, b) => a + b.vertices, 0)
+      + 4000) return false;
+    const cols = Math.ceil(canvas.width / TILE), rows = Math.ceil(canvas.height / TILE);
+    if (maskCanvas.width !== cols || maskCanvas.height !== rows) { maskCanvas.width = cols; maskCanvas.height = rows; }
+    const mg = maskCanvas.getContext('2d', { willReadFrequently: true });
+    mg.setTransform(1, 0, 0, 1, 0, 0);
+    mg.clearRect(0, 0, cols, rows);
+    const s = (dpr * view.s) / TILE;
+    mg.setTransform(s, 0, 0, s, (dpr * view.tx) / TILE, (dpr * view.ty) / TILE);
+    // A pen's half width past the outline, and anti-aliasing: grown by a tile below.
+    mg.lineWidth = lineWidth() + 4 / (dpr * view.s);
+    mg.lineJoin = 'round';
+    mg.fillStyle = mg.strokeStyle = '#000';
+    const changed = new Path2D();
+    for (const i of ch.added) changed.addPath(T.path(i));
+    for (const j of ch.removed) changed.addPath(shown.T.path(j));
+    mg.fill(changed, 'nonzero');
+    mg.stroke(changed);
+    for (const x of hls) {
+      mg.fill(x.path, 'nonzero');
+      if (x.box) mg.strokeRect(x.box[0], x.box[1], x.box[2] - x.box[0], x.box[3] - x.box[1]);
+    }
+    const a = mg.getImageData(0, 0, cols, rows).data;
+    // Marked tiles, grown by one (the mask's own anti-aliasing may miss an edge).
+    const tiles = new Uint8Array(cols * rows);
+    let count = 0;
+    for (let y = 0; y < rows; y++) {
+      for (let x = 0; x < cols; x++) {
+        if (!a[4 * (y * cols + x) + 3]) continue;
+        for (let v = Math.max(0, y - 1); v <= Math.min(rows - 1, y + 1); v++) {
+          for (let u = Math.max(0, x - 1); u <= Math.min(cols - 1, x + 1); u++) {
+            if (!tiles[v * cols + u]) { tiles[v * cols + u] = 1; count++; }
+          }
+        }
+      }
+    }
+    if (!count) return null;
+    if (count > 0.9 * cols * rows) return false;
+    // Summed-area table: any marked tile within a box in O(1).
+    const sum = new Int32Array((cols + 1) * (rows + 1));
+    for (let y = 0; y < rows; y++) {
+      let run = 0;
+      for (let x = 0; x < cols; x++) {
+        run += tiles[y * cols + x];
+        sum[(y + 1) * (cols + 1) + x + 1] = sum[y * (cols + 1) + x + 1] + run;
+      }
+    }
+    return { tiles, cols, rows, count, sum };
+  }
+
+  function paintChanged() {
+    timing.paintAt = performance.now();
+    const region = changedRegion();
+    if (region === false) paintNow();
+    else if (region) paintRegion(region);
+    else { timing.paint = 0; timing.region = 0; recordShown(); }
+  }
+
+  /**
+   * Repaint the tiles of `region` only (changedRegion): clipped to them, the
+   * shapes that reach into them are drawn as a full repaint draws them (the
+   * same parts in the same order), then the highlight.
+   */
+  function paintRegion({ tiles, cols, rows, count, sum }) {
+    const t0 = performance.now();
+    const clip = new Path2D();
+    let x0 = cols, y0 = rows, x1 = 0, y1 = 0;
+    for (let y = 0; y < rows; y++) {
+      for (let x = 0; x < cols; x++) {
+        if (!tiles[y * cols + x]) continue;
+        let e = x;
+        while (e + 1 < cols && tiles[y * cols + e + 1]) e++;
+        clip.rect(x * TILE, y * TILE, (e - x + 1) * TILE, TILE);
+        x0 = Math.min(x0, x); x1 = Math.max(x1, e + 1); y0 = Math.min(y0, y); y1 = Math.max(y1, y + 1);
+        x = e;
+      }
+    }
+    const bx = x0 * TILE, by = y0 * TILE, bw = Math.min(canvas.width, x1 * TILE) - bx, bh = Math.min(canvas.height, y1 * TILE) - by;
+    g.save();
+    g.setTransform(1, 0, 0, 1, 0, 0);
+    g.clip(clip);
+    g.fillStyle = '#fff';
+    g.fillRect(bx, by, bw, bh);
+    g.setTransform(dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty);
+    const lw = lineWidth();
+    // A shape is drawn when its box, grown by half a pen and a pixel, touches a marked tile.
+    const m = lw / 2 + 1 / view.s;
+    const s = (dpr * view.s) / TILE, ox = (dpr * view.tx) / TILE, oy = (dpr * view.ty) / TILE;
+    const box = T.box;
+    const touches = (i) => {
+      const u0 = Math.max(0, Math.floor(s * (box[4 * i] - m) + ox)), v0 = Math.max(0, Math.floor(s * (box[4 * i + 1] - m) + oy));
+      const u1 = Math.min(cols, Math.floor(s * (box[4 * i + 2] + m) + ox) + 1), v1 = Math.min(rows, Math.floor(s * (box[4 * i + 3] + m) + oy) + 1);
+      if (u1 <= u0 || v1 <= v0) return false;
+      const w = cols + 1;
+      return sum[v1 * w + u1] - sum[v0 * w + u1] - sum[v1 * w + u0] + sum[v0 * w + u0] > 0;
+    };
+    const tb = performance.now();
+    const parts = T.regionParts(k, touches);
+    timing.batches = performance.now() - tb;
+    // A heavy part with a bitmap of this view is copied from it (as a full repaint does:
+    // the same pixels); the rest is drawn.
+    const key = viewKey();
+    const full = T.batches(k).parts;
+    for (let p = 0; p < parts.parts.length; p++) {
+      const whole = full[parts.nodes[p]];
+      if (whole.vertices >= LAYER_VERTICES && layers.has(whole, key, canvas.width, canvas.height)) parts.parts[p] = whole;
+    }
+    paintBatches(g, parts, lw, layers, key, (part) => layers.has(part, key, canvas.width, canvas.height));
+    paintHighlight();
+    g.restore();
+    snapStale = true;
+    recordShown();
+    schedulePrebuild();
+    timing.region = count / (cols * rows);
+    timing.paint = performance.now() - t0;
   }
 
   function paintNow() {
@@ -355,32 +553,79 @@ function mount(el, ctx) {
     g.setTransform(1, 0, 0, 1, 0, 0);
     g.fillStyle = '#fff';
     g.fillRect(0, 0, canvas.width, canvas.height);
-    const doc = state();
     if (T && T.n) {
       g.setTransform(dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty);
       const tb = performance.now();
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
-      const sw = doc?.stroke_width ?? 1;
-      const lw = sw > 0 ? Math.max(sw, 0.5 / view.s) : 0;
-      paintBatches(g, b, lw, layers, `${view.s} ${view.tx} ${view.ty} ${dpr} ${lw}`);
+      paintBatches(g, b, lineWidth(), layers, viewKey());
       paintHighlight();
     }
     paintDrawing();
     g.setTransform(1, 0, 0, 1, 0, 0);
-    // Kept for quick pans and zooms.
+    // Kept for quick pans and zooms (copied when one starts).
+    sharpView = { ...view };
+    snapStale = true;
+    if (!options.incremental) takeSnap(); // the old path: a copy at every paint
+    recordShown();
+    schedulePrebuild();
+    timing.region = 1;
+    timing.paint = performance.now() - t0;
+  }
+
+  // In idle time after a sharp paint, the heaviest parts of the step tree are drawn as
+  // bitmaps of the current view (heaviest first, while the layer budget has room), so a
+  // slider jump to a far step copies them instead of rasterising them (tangle-draw.js).
+  let prebuildHandle = 0;
+  let prebuildTimer = null;
+  const PREBUILD_DELAY_MS = 250; // after the last paint: not while a slider or a pan is moving
+  const idle = window.requestIdleCallback
+    ? (fn) => window.requestIdleCallback(fn)
+    : (fn) => setTimeout(() => fn({ didTimeout: false, timeRemaining: () => 50 }), 50);
+  const cancelIdle = (h) => (window.cancelIdleCallback ? window.cancelIdleCallback(h) : clearTimeout(h));
+  function schedulePrebuild() {
+    if (prebuildHandle) cancelIdle(prebuildHandle);
+    prebuildHandle = 0;
+    ctx.clearTimeout(prebuildTimer);
+    prebuildTimer = null;
+    timing.prebuilt = 0;
+    if (!options.incremental || !T || !T.n || !ctx.alive()) return;
+    const key = viewKey(), w = canvas.width, h = canvas.height, from = T;
+    const m = new DOMMatrix([dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty]);
+    let todo = null;
+    let at = 0;
+    const work = (deadline) => {
+      prebuildHandle = 0;
+      if (T !== from || viewKey() !== key || canvas.width !== w || canvas.height !== h || !ctx.alive()) return;
+      todo ??= T.heavyParts();
+      for (;;) {
+        if (at >= todo.length || layers.size >= layers.capacity(w, h) - 2) { timing.prebuilt = at; return; }
+        // A part only when the idle period has room for it (software raster: ~8k vertices a ms).
+        if (deadline.timeRemaining() < Math.min(40, todo[at].vertices / 8000)) break;
+        const part = todo[at++].part();
+        if (!layers.has(part, key, w, h)) prebuildLayer(layers, part, key, w, h, m, lineWidth());
+      }
+      prebuildHandle = idle(work);
+    };
+    prebuildTimer = ctx.setTimeout(() => { prebuildTimer = null; prebuildHandle = idle(work); }, PREBUILD_DELAY_MS);
+  }
+
+  function takeSnap() {
     if (snap.width !== canvas.width || snap.height !== canvas.height) { snap.width = canvas.width; snap.height = canvas.height; }
     snap.getContext('2d').drawImage(canvas, 0, 0);
-    snapView = { ...view };
-    timing.paint = performance.now() - t0;
+    snapView = sharpView;
+    snapStale = false;
   }
 
   /** During a pan or zoom: move the last picture, and redraw it sharp when the gesture pauses. */
   function quickPaint() {
-    if (!snapView) { paint(); return; }
+    if (!sharpView) { paint(); return; }
     cancelAnimationFrame(frame);
     frame = requestAnimationFrame(() => {
       frame = 0;
+      const t0 = performance.now();
+      if (snapStale) takeSnap(); // the canvas still shows the last sharp paint
+      shown = null;
       const r = view.s / snapView.s;
       g.setTransform(1, 0, 0, 1, 0, 0);
       g.fillStyle = '#fff';
@@ -388,6 +633,7 @@ function mount(el, ctx) {
       g.setTransform(r, 0, 0, r, dpr * (view.tx - snapView.tx * r), dpr * (view.ty - snapView.ty * r));
       g.drawImage(snap, 0, 0);
       g.setTransform(1, 0, 0, 1, 0, 0);
+      timing.pan = performance.now() - t0;
     });
     ctx.clearTimeout(sharpTimer);
     sharpTimer = ctx.setTimeout(() => { sharpTimer = null; paint(); }, SHARP_DELAY_MS);
@@ -398,24 +644,31 @@ function mount(el, ctx) {
     return T && s != null && s < T.steps && shownFor && sameRequest(shownFor, state()) ? s : null;
   }
 
-  function paintHighlight() {
+  /** The highlight of the selected step at the shown step (null: none): kept until either changes. */
+  function currentHl() {
     const sel = selectedStep();
-    if (sel === null) return;
-    if (!hl || hl.sel !== sel || hl.k !== k) {
+    if (sel === null) return null;
+    if (!hl || hl.sel !== sel || hl.k !== k || hl.T !== T) {
       // The step's inputs while it has not run yet, else what it grew (still shown at step k).
       const step = T.r.steps[sel];
       const list = k <= sel ? step.inputs : [...T.subtree(sel)].filter((i) => T.visible(i, k));
       const path = new Path2D();
       for (const i of list) path.addPath(T.path(i));
-      hl = { sel, k, path, box: T.bounds(step.inputs) };
+      hl = { sel, k, T, path, box: T.bounds(step.inputs) };
     }
+    return hl;
+  }
+
+  function paintHighlight() {
+    const h = currentHl();
+    if (!h || !options.highlight) return;
     g.fillStyle = HIGHLIGHT;
-    g.fill(hl.path, 'evenodd');
-    if (hl.box) {
+    g.fill(h.path, 'evenodd');
+    if (h.box) {
       g.strokeStyle = HIGHLIGHT_LINE;
       g.lineWidth = 1.5 / view.s;
       g.setLineDash([4 / view.s, 3 / view.s]);
-      const [x0, y0, x1, y1] = hl.box;
+      const [x0, y0, x1, y1] = h.box;
       g.strokeRect(x0, y0, x1 - x0, y1 - y0);
       g.setLineDash([]);
     }
@@ -919,8 +1172,18 @@ function mount(el, ctx) {
   const hooks = {
     state,
     result: () => T?.r ?? null,
+    /** The shown answer's points (a Float32Array). */
+    points: () => T?.pts ?? null,
     pending: () => runTimer !== null || running !== null || typingTimer !== null,
     timing: () => ({ ...timing }),
+    /** `{incremental}`: false switches the old path on (full repaints, nothing kept from the last answer). */
+    options,
+    /** Shapes the shown answer kept from the one before (their Path2Ds). */
+    reused: () => T?.reused ?? 0,
+    /** Forget every kept bitmap (the latency bench starts each pass from none). */
+    clearLayers: () => layers.clear(),
+    /** Whether idle-time layer building is done (or off) for the current view. */
+    prebuilt: () => prebuildHandle === 0 && prebuildTimer === null,
     /** Vertices per part of what step `at` shows (tangle-draw.js batches). */
     parts: (at) => (T ? T.batches(at).parts.map((b) => b.vertices) : []),
     step: () => k,
@@ -1020,6 +1283,7 @@ function mount(el, ctx) {
     unmount() {
       ro.disconnect();
       stopPlay();
+      if (prebuildHandle) cancelIdle(prebuildHandle);
       cancelAnimationFrame(frame);
       running?.abort();
       if (window.filigreeTangle === hooks) delete window.filigreeTangle;

@@ -71,26 +71,42 @@ fn tile_scaling(repeats: usize) -> Result<Value, String> {
         height: 512,
         ..Default::default()
     };
-    let mut ms = vec![];
+    // 1 and 2 threads alternate, so a change of the machine's load in the
+    // meantime weighs on both alike; the load average is printed beside.
+    let load_before = loadavg();
+    let mut secs = [vec![], vec![]];
     let mut png = None;
-    for threads in [1usize, 2] {
-        let mut secs = vec![];
-        for _ in 0..repeats.max(1) {
+    for _ in 0..repeats.max(1) {
+        for (i, threads) in [1usize, 2].into_iter().enumerate() {
             let t = Instant::now();
             let out = filigree::micro::api::render_threads(&req, threads, 16, &Cancel::new())
                 .map_err(|e| e.to_string())?;
-            secs.push(t.elapsed().as_secs_f64());
+            secs[i].push(t.elapsed().as_secs_f64());
             if *png.get_or_insert_with(|| out.png.clone()) != out.png {
                 return Err("bench micro: the tiled render's bytes depend on the threads".into());
             }
         }
-        ms.push(super::min_median(secs).1 * 1e3);
     }
+    let [a, b] = secs.map(|s| super::min_median(s).1 * 1e3);
     Ok(json!({
         "scene": "assets/micro/multiscale.json", "image": "512x512", "tiles": 16,
-        "threads_1_ms": ms[0], "threads_2_ms": ms[1], "speedup_2_threads": ms[0] / ms[1],
+        "threads_1_ms": a, "threads_2_ms": b, "speedup_2_threads": a / b,
+        "repeats_alternating": repeats.max(1),
         "cores": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        "loadavg_1m_before": load_before, "loadavg_1m_after": loadavg(),
+        "note": "same 16 tiles, same bytes; other processes on the machine (loadavg, runnable \
+            tasks averaged over a minute) take cores from the 2-thread run first",
     }))
+}
+
+/// The 1-minute load average from `/proc/loadavg` (None elsewhere).
+fn loadavg() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
 }
 
 fn stats(out: &MicroRenderResponse) -> Value {
@@ -427,7 +443,9 @@ fn loss_eval() -> Result<Value, String> {
     let mut job = start_fit(MicroFitRequest {
         scene: start,
         params,
-        target: FitTarget::Scene { scene: target },
+        target: FitTarget::Scene {
+            scene: target.clone(),
+        },
         grid: 32,
         center: [c; 3],
         half,
@@ -440,51 +458,90 @@ fn loss_eval() -> Result<Value, String> {
     let u = [(101.0 - 10.0) / 390.0];
     let scene = job.scene_for(&u).ok_or("invalid candidate")?;
     let values = job.sample(&scene, false).map_err(|e| e.to_string())?;
+    let target_scene = filigree::micro::parse(&target).map_err(|e| e.to_string())?;
+    let target_values = job
+        .sample(&target_scene, false)
+        .map_err(|e| e.to_string())?;
+    let mut old = legacy::OldLoss::new(32, &target_values)?;
     let n = 200;
-    let compile_ms = ms_per(n, || {
+    let compile = timed(n, || {
         std::hint::black_box(job.scene_for(&u));
     });
-    let sample_ms = ms_per(n, || {
+    let sample = timed(n, || {
         std::hint::black_box(job.sample(&scene, false).expect("sample"));
     });
-    let pointwise_ms = ms_per(n / 10, || {
+    let pointwise = timed(n / 10, || {
         std::hint::black_box(job.sample(&scene, true).expect("sample"));
     });
-    let fft_ms = ms_per(n, || {
+    let fft = timed(n, || {
         std::hint::black_box(job.loss_of_samples(&values).expect("loss"));
     });
-    let whole_ms = ms_per(n, || {
-        let s = job.scene_for(&u).expect("scene");
-        let v = job.sample(&s, false).expect("sample");
-        std::hint::black_box(job.loss_of_samples(&v).expect("loss"));
+    let old_fft = timed(n, || {
+        std::hint::black_box(old.loss(&values).expect("loss"));
     });
+    let whole = timed(n, || {
+        std::hint::black_box(job.evaluate(&u).expect("loss"));
+    });
+    let new_loss = job.loss_of_samples(&values).map_err(|e| e.to_string())?;
+    let old_loss = old.loss(&values)?;
+    let pick = |t: (f64, f64), i: usize| if i == 0 { t.0 } else { t.1 };
+    let split = |i: usize| {
+        json!({"scene_compile": pick(compile, i), "sampling": pick(sample, i),
+            "fft_and_loss": pick(fft, i), "fft_and_loss_before": pick(old_fft, i)})
+    };
     Ok(json!({
         "grid": "32^3", "problem": "gyroid-1d", "threads": 1,
-        "ms_per_eval": whole_ms,
-        "split_ms": {"scene_compile": compile_ms, "sampling": sample_ms,
-            "fft_and_loss": fft_ms},
-        "sampling_pointwise_ms": pointwise_ms,
-        "sampling_lattice_over_pointwise": sample_ms / pointwise_ms,
+        "ms_per_eval": whole.0, "cpu_ms_per_eval": whole.1,
+        "split_ms": split(0), "split_cpu_ms": split(1),
+        "fft_and_loss_before_over_now_cpu": old_fft.1 / fft.1,
+        "fft_and_loss_before_over_now_wall": old_fft.0 / fft.0,
+        "loss_now": new_loss, "loss_before": old_loss,
+        "sampling_pointwise_ms": pointwise.0,
+        "sampling_lattice_over_pointwise": sample.0 / pointwise.0,
         "goal_ms_per_eval": GOAL_MS_PER_EVAL,
         "pycma_numpy_ms_per_eval": PYCMA_MS_PER_EVAL,
-        "ratio_to_pycma_numpy": whole_ms / PYCMA_MS_PER_EVAL,
-        "note": "the old path (before the one FFT and the lattice sampling) is timed by an \
-            older binary's `bench micro --only fit --quick`: loss_eval_ms_32 and gyroid-1d's \
-            ms_per_eval",
+        "ratio_to_pycma_numpy": whole.0 / PYCMA_MS_PER_EVAL,
+        "loadavg_1m": loadavg(),
+        "note": "ms: wall clock, median of 5 batches; cpu_ms: this thread's time on a core \
+            (/proc/thread-self/schedstat), which a loaded machine does not inflate. \
+            ms_per_eval: the job's own evaluation (scene, lattice samples into the reused \
+            buffer, FFT, loss); the split times each part alone (sampling into a fresh buffer). \
+            fft_and_loss_before: the previous FFT (realfft/rustfft, four-step) and per-bin loop \
+            (libm atan2) on the same samples, kept in this bench for the comparison",
     }))
 }
 
-/// Milliseconds per call of `f` (median of 5 batches of `n`).
-fn ms_per(n: usize, mut f: impl FnMut()) -> f64 {
-    let mut v = vec![];
+/// This thread's time on a core so far, in ns (Linux; None elsewhere).
+fn thread_cpu_ns() -> Option<u64> {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// Milliseconds per call of `f`: wall clock and this thread's CPU time
+/// (medians of 5 batches of `n`).
+fn timed(n: usize, mut f: impl FnMut()) -> (f64, f64) {
+    let (mut wall, mut cpu) = (vec![], vec![]);
     for _ in 0..5 {
-        let t = Instant::now();
+        let (t, c) = (Instant::now(), thread_cpu_ns());
         for _ in 0..n {
             f();
         }
-        v.push(t.elapsed().as_secs_f64() * 1e3 / n as f64);
+        wall.push(t.elapsed().as_secs_f64() * 1e3 / n as f64);
+        let c = thread_cpu_ns()
+            .zip(c)
+            .map_or(f64::NAN, |(b, a)| (b - a) as f64 * 1e-6);
+        cpu.push(c / n as f64);
     }
-    super::min_median(v).1
+    (super::min_median(wall).1, super::min_median(cpu).1)
+}
+
+/// Milliseconds per call of `f` (median of 5 batches of `n`).
+fn ms_per(n: usize, f: impl FnMut()) -> f64 {
+    timed(n, f).0
 }
 
 /// (c) Table 3: reconstruction per problem × optimiser × seed.
@@ -620,4 +677,333 @@ pub fn table3(quick: bool, seeds: u64, threads: usize) -> Result<Value, String> 
             SciPy/pycma on their machine with a ~20 min limit; -S columns fit rendered images",
         "rows": rows,
     }))
+}
+
+/// The loss of one evaluation as it was before the lane FFT (session 8):
+/// the 3-D real FFT over realfft/rustfft (kernels ≤ 32, four-step split)
+/// and the per-bin loop with libm's atan2, kept here only so `bench micro
+/// --only loss` can time old and new in the same run. Same results up to
+/// rounding (`old_over_new_loss_difference`).
+mod legacy {
+    #![allow(dead_code)]
+    use realfft::num_complex::Complex;
+    use realfft::{RealFftPlanner, RealToComplex};
+    use rustfft::{Fft, FftPlanner};
+    use std::sync::Arc;
+    type C64 = Complex<f64>;
+    type Result<T> = std::result::Result<T, String>;
+    const LEAF: usize = 32;
+    const MAX_FFT_SIDE: usize = 4096;
+
+    /// A complex FFT of one power-of-two length and direction.
+    enum Plan {
+        /// rustfft's butterfly (length ≤ [`LEAF`]).
+        Leaf(Arc<dyn Fft<f64>>),
+        /// Four-step: `n = n1 · n2` with `n1 = LEAF`: `n2` transforms of
+        /// length `n1` on the transposed input, twiddles `W_n^(j2·k1)`, then
+        /// `n1` transforms of length `n2`, then a transpose.
+        Split {
+            n1: usize,
+            n2: usize,
+            first: Arc<dyn Fft<f64>>,
+            second: Box<Plan>,
+            twiddles: Vec<C64>,
+        },
+    }
+
+    impl Plan {
+        fn new(n: usize, inverse: bool, planner: &mut FftPlanner<f64>) -> Plan {
+            let leaf = |len: usize, planner: &mut FftPlanner<f64>| {
+                if inverse {
+                    planner.plan_fft_inverse(len)
+                } else {
+                    planner.plan_fft_forward(len)
+                }
+            };
+            if n <= LEAF {
+                return Plan::Leaf(leaf(n, planner));
+            }
+            let (n1, n2) = (LEAF, n / LEAF);
+            let sign = if inverse { 1.0 } else { -1.0 };
+            let mut twiddles = Vec::with_capacity(n);
+            for j2 in 0..n2 {
+                for k1 in 0..n1 {
+                    let a = sign * std::f64::consts::TAU * ((j2 * k1) % n) as f64 / n as f64;
+                    twiddles.push(C64::new(libm::cos(a), libm::sin(a)));
+                }
+            }
+            Plan::Split {
+                n1,
+                n2,
+                first: leaf(n1, planner),
+                second: Box::new(Plan::new(n2, inverse, planner)),
+                twiddles,
+            }
+        }
+
+        /// Transform `buf` in place: consecutive transforms of this length.
+        /// `tmp` is resized as needed.
+        fn process(&self, buf: &mut [C64], tmp: &mut Vec<C64>) {
+            match self {
+                Plan::Leaf(f) => {
+                    let need = f.get_inplace_scratch_len();
+                    if tmp.len() < need {
+                        tmp.resize(need, C64::default());
+                    }
+                    f.process_with_scratch(buf, &mut tmp[..need]);
+                }
+                Plan::Split {
+                    n1,
+                    n2,
+                    first,
+                    second,
+                    twiddles,
+                } => {
+                    let (n1, n2) = (*n1, *n2);
+                    let n = n1 * n2;
+                    let mut t = vec![C64::default(); n];
+                    for x in buf.chunks_exact_mut(n) {
+                        // t[j2·n1 + j1] = x[j1·n2 + j2]
+                        for j1 in 0..n1 {
+                            for j2 in 0..n2 {
+                                t[j2 * n1 + j1] = x[j1 * n2 + j2];
+                            }
+                        }
+                        first.process(&mut t);
+                        for (v, w) in t.iter_mut().zip(twiddles) {
+                            *v *= w;
+                        }
+                        // x[k1·n2 + j2] = t[j2·n1 + k1]
+                        for j2 in 0..n2 {
+                            for k1 in 0..n1 {
+                                x[k1 * n2 + j2] = t[j2 * n1 + k1];
+                            }
+                        }
+                        second.process(x, tmp);
+                        // X[k1 + n1·k2] = x[k1·n2 + k2]
+                        t.copy_from_slice(x);
+                        for k1 in 0..n1 {
+                            for k2 in 0..n2 {
+                                x[k1 + n1 * k2] = t[k1 * n2 + k2];
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A forward 3-D FFT of real `nx × ny × nz` volumes (x fastest) giving the
+    /// coefficients with `kx ≤ nx/2` (the others are their complex conjugates:
+    /// `X[kx, ky, kz] = conj X[nx − kx, −ky, −kz]`). Plans, scratch and the
+    /// output are kept between calls: a fit's thousands of transforms
+    /// allocate nothing.
+    struct RealFft3 {
+        dims: [usize; 3],
+        half: usize,
+        r2c: Option<Arc<dyn RealToComplex<f64>>>,
+        /// x when longer than [`LEAF`]: a complex transform of the real row.
+        fx: Option<Plan>,
+        fy: Option<Plan>,
+        fz: Option<Plan>,
+        row: Vec<f64>,
+        crow: Vec<C64>,
+        scratch: Vec<C64>,
+        lines: Vec<C64>,
+        out: Vec<C64>,
+    }
+
+    impl RealFft3 {
+        /// A transform of `dims` volumes: each side a power of two up to
+        /// [`MAX_FFT_SIDE`] (1 allowed), at least two values in all.
+        fn new(dims: [usize; 3]) -> Result<RealFft3> {
+            if dims.iter().product::<usize>() < 2 {
+                return Err(std::convert::identity(format!(
+                    "an FFT needs sides that are powers of two up to {MAX_FFT_SIDE} \
+                 (got {}×{}×{})",
+                    dims[0], dims[1], dims[2]
+                )));
+            }
+            let [nx, ny, nz] = dims;
+            let half = if nx > 1 { nx / 2 + 1 } else { 1 };
+            let r2c =
+                (nx > 1 && nx <= LEAF).then(|| RealFftPlanner::<f64>::new().plan_fft_forward(nx));
+            let mut planner = FftPlanner::<f64>::new();
+            let fx = (nx > LEAF).then(|| Plan::new(nx, false, &mut planner));
+            let fy = (ny > 1).then(|| Plan::new(ny, false, &mut planner));
+            let fz = (nz > 1).then(|| Plan::new(nz, false, &mut planner));
+            let scratch_len = r2c.as_ref().map_or(0, |p| p.get_scratch_len());
+            Ok(RealFft3 {
+                dims,
+                half,
+                r2c,
+                fx,
+                fy,
+                fz,
+                row: vec![0.0; nx],
+                crow: vec![C64::default(); nx],
+                scratch: vec![C64::default(); scratch_len],
+                lines: vec![C64::default(); half * ny.max(nz)],
+                out: vec![C64::default(); half * ny * nz],
+            })
+        }
+
+        /// The shape this transform takes.
+        fn dims(&self) -> [usize; 3] {
+            self.dims
+        }
+
+        /// Coefficients kept along x: `nx/2 + 1` (1 for a flat x).
+        fn half(&self) -> usize {
+            self.half
+        }
+
+        /// The half spectrum of `values` (`nx·ny·nz` of them, x fastest), laid
+        /// out as `kx + half·(ky + ny·kz)`.
+        fn forward(&mut self, values: &[f64]) -> Result<&[C64]> {
+            let [nx, ny, nz] = self.dims;
+            if values.len() != nx * ny * nz {
+                return Err(std::convert::identity(format!(
+                    "a {nx}×{ny}×{nz} transform needs {} values (got {})",
+                    nx * ny * nz,
+                    values.len()
+                )));
+            }
+            let h = self.half;
+            // x: one real-to-complex transform per row.
+            match &self.r2c {
+                Some(r2c) => {
+                    for (src, dst) in values.chunks_exact(nx).zip(self.out.chunks_exact_mut(h)) {
+                        self.row.copy_from_slice(src);
+                        let need = r2c.get_scratch_len();
+                        if self.scratch.len() < need {
+                            self.scratch.resize(need, C64::default());
+                        }
+                        r2c.process_with_scratch(&mut self.row, dst, &mut self.scratch[..need])
+                            .map_err(|e| std::convert::identity(format!("FFT: {e}")))?;
+                    }
+                }
+                None => match &self.fx {
+                    Some(fx) => {
+                        for (src, dst) in values.chunks_exact(nx).zip(self.out.chunks_exact_mut(h))
+                        {
+                            for (c, &v) in self.crow.iter_mut().zip(src) {
+                                *c = C64::new(v, 0.0);
+                            }
+                            fx.process(&mut self.crow, &mut self.scratch);
+                            dst.copy_from_slice(&self.crow[..h]);
+                        }
+                    }
+                    None => {
+                        for (d, &v) in self.out.iter_mut().zip(values) {
+                            *d = C64::new(v, 0.0);
+                        }
+                    }
+                },
+            }
+            // y: per z plane, gather the h lines (kx fixed) contiguously.
+            if let Some(fy) = &self.fy {
+                let lines = &mut self.lines[..h * ny];
+                for plane in self.out.chunks_exact_mut(h * ny) {
+                    for y in 0..ny {
+                        for kx in 0..h {
+                            lines[kx * ny + y] = plane[kx + h * y];
+                        }
+                    }
+                    fy.process(lines, &mut self.scratch);
+                    for y in 0..ny {
+                        for kx in 0..h {
+                            plane[kx + h * y] = lines[kx * ny + y];
+                        }
+                    }
+                }
+            }
+            // z: per y row, gather the h lines along z.
+            if let Some(fz) = &self.fz {
+                let lines = &mut self.lines[..h * nz];
+                let plane = h * ny;
+                for y in 0..ny {
+                    for z in 0..nz {
+                        let base = z * plane + y * h;
+                        for kx in 0..h {
+                            lines[kx * nz + z] = self.out[base + kx];
+                        }
+                    }
+                    fz.process(lines, &mut self.scratch);
+                    for z in 0..nz {
+                        let base = z * plane + y * h;
+                        for kx in 0..h {
+                            self.out[base + kx] = lines[kx * nz + z];
+                        }
+                    }
+                }
+            }
+            Ok(&self.out)
+        }
+    }
+
+    /// The old `Fourier::half_loss` (libm atan2, a modulo per bin).
+    pub struct OldLoss {
+        fft: RealFft3,
+        amp: Vec<f64>,
+        target_amp: Vec<f64>,
+        target_phase: Vec<f64>,
+    }
+
+    fn phase_of(c: C64, a: f64, floor: f64) -> f64 {
+        if a > floor {
+            libm::atan2(c.im, c.re)
+        } else {
+            0.0
+        }
+    }
+
+    fn weight_of(kx: usize, nx: usize) -> f64 {
+        if kx == 0 || 2 * kx == nx {
+            1.0
+        } else {
+            2.0
+        }
+    }
+
+    impl OldLoss {
+        pub fn new(n: usize, target: &[f64]) -> Result<OldLoss> {
+            let mut fft = RealFft3::new([n, n, n])?;
+            let data = fft.forward(target)?.to_vec();
+            let amp: Vec<f64> = data.iter().map(|c| c.norm_sqr().sqrt()).collect();
+            let floor = amp.iter().copied().fold(0.0, f64::max) * 1e-9;
+            let phase = data
+                .iter()
+                .zip(&amp)
+                .map(|(c, &a)| phase_of(*c, a, floor))
+                .collect();
+            Ok(OldLoss {
+                fft,
+                amp: vec![0.0; amp.len()],
+                target_amp: amp,
+                target_phase: phase,
+            })
+        }
+
+        pub fn loss(&mut self, values: &[f64]) -> Result<f64> {
+            let nx = self.fft.dims[0];
+            let h = self.fft.half;
+            let data = self.fft.forward(values)?;
+            let mut max = 0.0f64;
+            for (a, c) in self.amp.iter_mut().zip(data) {
+                *a = c.norm_sqr().sqrt();
+                max = max.max(*a);
+            }
+            let floor = max * 1e-9;
+            let (mut s, mut count) = (0.0, 0.0);
+            for (i, (c, &a)) in data.iter().zip(&self.amp).enumerate() {
+                let da = a - self.target_amp[i];
+                let dp = phase_of(*c, a, floor) - self.target_phase[i];
+                let w = weight_of(i % h, nx);
+                s += w * (da * da + dp * dp);
+                count += w;
+            }
+            Ok(libm::log(s / (2.0 * f64::max(count, 1.0)) + 1e-12))
+        }
+    }
 }

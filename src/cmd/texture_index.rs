@@ -43,7 +43,7 @@ fn config(per_model: usize, size: usize, augment: bool) -> BuildConfig {
         ..DatasetConfig::default()
     };
     c.dataset = if augment { d.augmented() } else { d };
-    c
+    c.synced()
 }
 
 fn read_ratings(path: Option<&Path>) -> Result<Vec<filigree::texture::scales::Rating>, String> {
@@ -231,6 +231,7 @@ pub fn bench(
     let mut cfg = config(per_model, size, augment);
     if let Some(json) = index {
         cfg.index = serde_json::from_str(json).map_err(|e| format!("--index-config: {e}"))?;
+        cfg = cfg.synced();
     }
     let mut stats = BuildStats::default();
     let t0 = Instant::now();

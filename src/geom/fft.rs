@@ -1,7 +1,8 @@
-//! The crate's one FFT, over `realfft`/`rustfft`: a reusable 3-D
-//! real-to-complex transform ([`RealFft3`], Micro's Fourier loss) and an
-//! in-place 2-D complex transform of `f32` planes ([`fft2`], the texture
-//! models' spectral synthesis and the texture scale analysis).
+//! The crate's one FFT: a reusable 3-D real-to-complex transform
+//! ([`RealFft3`], Micro's Fourier loss: radix-2 passes over many signals at
+//! once, written here, see [`RealFft3`]) and an in-place 2-D complex
+//! transform of `f32` planes over `rustfft` ([`fft2`], the texture models'
+//! spectral synthesis and the texture scale analysis).
 //!
 //! Sides are powers of two (1 allowed for a flat axis of a 3-D volume).
 //! Arithmetic is `f64` throughout; [`fft2`] converts its `f32` planes in and
@@ -23,9 +24,12 @@
 //! checked equal to the `libm` crate's (`kernel_twiddles_agree_with_the_libm_crate`);
 //! longer transforms are split into those (Cooley–Tukey, four-step) with
 //! twiddles from the `libm` crate, computed the same way on every target.
+//! [`RealFft3`] does not use rustfft: its own passes (plain `f64` adds and
+//! multiplies, `libm` twiddles) give the same bytes everywhere by
+//! construction (`bench micro --only loss` times it against the former
+//! rustfft path, kept in the bench).
 use crate::core::error::{Error, Result};
 use realfft::num_complex::Complex;
-use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 use std::sync::Arc;
 
@@ -140,24 +144,199 @@ fn check_side(n: usize, flat_ok: bool) -> bool {
     n.is_power_of_two() && n <= MAX_FFT_SIDE && (flat_ok || n >= 2)
 }
 
+/// Lanes a [`LaneFft`] transforms together: `2 · n · LANES` values of one
+/// block stay in the L1 cache through all its stages.
+const LANES: usize = 64;
+
+/// A forward complex FFT of one power-of-two length `n` applied to many
+/// signals at once ("lanes"): the signals are the columns of `n` rows, real
+/// and imaginary parts in separate arrays, so each butterfly is one loop
+/// over contiguous lanes of elementwise arithmetic, which the compiler
+/// vectorises and which rounds the same way on every target (Rust neither
+/// fuses multiply-adds nor reorders float operations). Radix-2 decimation in
+/// frequency with twiddles from the `libm` crate (`W = 1` and `W = −i` exact),
+/// then the rows put back in order (bit reversal).
+#[derive(Debug, Clone)]
+struct LaneFft {
+    n: usize,
+    /// `W_n^k = exp(−2πik/n)` for k < n/2.
+    wr: Vec<f64>,
+    wi: Vec<f64>,
+    /// The row swaps of the bit reversal: (r, reversed r) with r below.
+    swaps: Vec<(usize, usize)>,
+}
+
+/// `(a, b) ← (a + b, (a − b)·w)` over lanes.
+#[inline(always)]
+fn butterfly(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64], wr: f64, wi: f64) {
+    let lanes = ar
+        .iter_mut()
+        .zip(ai.iter_mut())
+        .zip(br.iter_mut().zip(bi.iter_mut()));
+    for ((ar, ai), (br, bi)) in lanes {
+        let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
+        *ar = xr + yr;
+        *ai = xi + yi;
+        let (dr, di) = (xr - yr, xi - yi);
+        *br = dr * wr - di * wi;
+        *bi = dr * wi + di * wr;
+    }
+}
+
+/// [`butterfly`] with `w = 1`.
+#[inline(always)]
+fn butterfly_one(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64]) {
+    let lanes = ar
+        .iter_mut()
+        .zip(ai.iter_mut())
+        .zip(br.iter_mut().zip(bi.iter_mut()));
+    for ((ar, ai), (br, bi)) in lanes {
+        let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
+        *ar = xr + yr;
+        *ai = xi + yi;
+        *br = xr - yr;
+        *bi = xi - yi;
+    }
+}
+
+/// [`butterfly`] with `w = −i`.
+#[inline(always)]
+fn butterfly_minus_i(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64]) {
+    let lanes = ar
+        .iter_mut()
+        .zip(ai.iter_mut())
+        .zip(br.iter_mut().zip(bi.iter_mut()));
+    for ((ar, ai), (br, bi)) in lanes {
+        let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
+        *ar = xr + yr;
+        *ai = xi + yi;
+        *br = xi - yi;
+        *bi = yr - xr;
+    }
+}
+
+/// Rows `r0 < r1` (at `stride`), lanes `c0..c0 + w`, of one array.
+#[inline(always)]
+fn two_rows(
+    v: &mut [f64],
+    stride: usize,
+    r0: usize,
+    r1: usize,
+    c0: usize,
+    w: usize,
+) -> (&mut [f64], &mut [f64]) {
+    let (lo, hi) = v.split_at_mut(r1 * stride);
+    (&mut lo[r0 * stride + c0..][..w], &mut hi[c0..][..w])
+}
+
+impl LaneFft {
+    fn new(n: usize) -> LaneFft {
+        let (mut wr, mut wi) = (vec![], vec![]);
+        for k in 0..n / 2 {
+            let a = -std::f64::consts::TAU * k as f64 / n as f64;
+            wr.push(libm::cos(a));
+            wi.push(libm::sin(a));
+        }
+        let bits = n.trailing_zeros();
+        let swaps = (0..n)
+            .filter_map(|r| {
+                let s = if bits == 0 {
+                    r
+                } else {
+                    r.reverse_bits() >> (usize::BITS - bits)
+                };
+                (r < s).then_some((r, s))
+            })
+            .collect();
+        LaneFft { n, wr, wi, swaps }
+    }
+
+    /// Transform lanes `from..to` of the `n` rows of `re`/`im` that start
+    /// every `stride` values (row r's lane l at `r · stride + l`), in place.
+    fn run(&self, re: &mut [f64], im: &mut [f64], stride: usize, from: usize, to: usize) {
+        let mut c0 = from;
+        while c0 < to {
+            let c1 = (c0 + LANES).min(to);
+            self.block(re, im, stride, c0, c1 - c0);
+            c0 = c1;
+        }
+    }
+
+    fn block(&self, re: &mut [f64], im: &mut [f64], stride: usize, c0: usize, w: usize) {
+        let n = self.n;
+        let mut h = n / 2;
+        while h >= 1 {
+            let step = n / (2 * h);
+            for b in (0..n).step_by(2 * h) {
+                for j in 0..h {
+                    let (r0, r1) = (b + j, b + j + h);
+                    let (ar, br) = two_rows(re, stride, r0, r1, c0, w);
+                    let (ai, bi) = two_rows(im, stride, r0, r1, c0, w);
+                    if j == 0 {
+                        butterfly_one(ar, ai, br, bi);
+                    } else if 2 * j == h {
+                        butterfly_minus_i(ar, ai, br, bi);
+                    } else {
+                        butterfly(ar, ai, br, bi, self.wr[j * step], self.wi[j * step]);
+                    }
+                }
+            }
+            h /= 2;
+        }
+        for &(r, s) in &self.swaps {
+            let (a, b) = two_rows(re, stride, r, s, c0, w);
+            a.swap_with_slice(b);
+            let (a, b) = two_rows(im, stride, r, s, c0, w);
+            a.swap_with_slice(b);
+        }
+    }
+}
+
+/// The weight of the `kz` plane of a half spectrum of a volume `nz` deep:
+/// how many coefficients of the whole spectrum each of its entries stands
+/// for (1 on the planes kz = 0 and kz = nz/2, whose conjugates lie in
+/// themselves; 2 on the others, whose conjugates are not kept).
+pub fn plane_weight(kz: usize, nz: usize) -> f64 {
+    if kz == 0 || 2 * kz == nz {
+        1.0
+    } else {
+        2.0
+    }
+}
+
 /// A forward 3-D FFT of real `nx × ny × nz` volumes (x fastest) giving the
-/// coefficients with `kx ≤ nx/2` (the others are their complex conjugates:
-/// `X[kx, ky, kz] = conj X[nx − kx, −ky, −kz]`). Plans, scratch and the
-/// output are kept between calls: a fit's thousands of transforms
-/// allocate nothing.
+/// coefficients with `kz ≤ nz/2` (the others are their complex conjugates:
+/// `X[kx, ky, kz] = conj X[−kx, −ky, nz − kz]`, indices mod the sides), as
+/// separate real and imaginary parts laid out `ky + ny·(kx + nx·kz)`.
+/// Plans, scratch and the output are kept between calls: a fit's thousands
+/// of transforms allocate nothing.
+///
+/// The steps, each a [`LaneFft`] over contiguous lanes: along z a real
+/// transform (even and odd planes packed as one complex signal of length
+/// nz/2, then split), along y per kz plane, then each plane transposed and
+/// along x. Pure `f64` arithmetic with `libm` twiddles: the same bytes
+/// natively and in wasm.
+#[derive(Clone)]
 pub struct RealFft3 {
     dims: [usize; 3],
-    half: usize,
-    r2c: Option<Arc<dyn RealToComplex<f64>>>,
-    /// x when longer than [`LEAF`]: a complex transform of the real row.
-    fx: Option<Plan>,
-    fy: Option<Plan>,
-    fz: Option<Plan>,
-    row: Vec<f64>,
-    crow: Vec<C64>,
-    scratch: Vec<C64>,
-    lines: Vec<C64>,
-    out: Vec<C64>,
+    /// kz planes kept: nz/2 + 1 (1 for a flat z).
+    planes: usize,
+    /// Length nz/2 along z (the packed real transform), y, x.
+    fz: LaneFft,
+    fy: LaneFft,
+    fx: LaneFft,
+    /// `W_nz^k` for k ≤ nz/2 (the real transform's split).
+    zr: Vec<f64>,
+    zi: Vec<f64>,
+    /// Packed z signals of one block of lanes: nz/2 rows of [`LANES`].
+    pr: Vec<f64>,
+    pi: Vec<f64>,
+    /// After z and y: planes of `ky · nx + x`.
+    ar: Vec<f64>,
+    ai: Vec<f64>,
+    /// The result: planes of `kx · ny + ky`.
+    br: Vec<f64>,
+    bi: Vec<f64>,
 }
 
 impl std::fmt::Debug for RealFft3 {
@@ -165,12 +344,6 @@ impl std::fmt::Debug for RealFft3 {
         f.debug_struct("RealFft3")
             .field("dims", &self.dims)
             .finish()
-    }
-}
-
-impl Clone for RealFft3 {
-    fn clone(&self) -> Self {
-        RealFft3::new(self.dims).expect("dims were checked")
     }
 }
 
@@ -186,25 +359,29 @@ impl RealFft3 {
             )));
         }
         let [nx, ny, nz] = dims;
-        let half = if nx > 1 { nx / 2 + 1 } else { 1 };
-        let r2c = (nx > 1 && nx <= LEAF).then(|| RealFftPlanner::<f64>::new().plan_fft_forward(nx));
-        let mut planner = FftPlanner::<f64>::new();
-        let fx = (nx > LEAF).then(|| Plan::new(nx, false, &mut planner));
-        let fy = (ny > 1).then(|| Plan::new(ny, false, &mut planner));
-        let fz = (nz > 1).then(|| Plan::new(nz, false, &mut planner));
-        let scratch_len = r2c.as_ref().map_or(0, |p| p.get_scratch_len());
+        let planes = if nz > 1 { nz / 2 + 1 } else { 1 };
+        let m = (nz / 2).max(1);
+        let (mut zr, mut zi) = (vec![], vec![]);
+        for k in 0..=nz / 2 {
+            let a = -std::f64::consts::TAU * k as f64 / nz as f64;
+            zr.push(libm::cos(a));
+            zi.push(libm::sin(a));
+        }
+        let len = planes * nx * ny;
         Ok(RealFft3 {
             dims,
-            half,
-            r2c,
-            fx,
-            fy,
-            fz,
-            row: vec![0.0; nx],
-            crow: vec![C64::default(); nx],
-            scratch: vec![C64::default(); scratch_len],
-            lines: vec![C64::default(); half * ny.max(nz)],
-            out: vec![C64::default(); half * ny * nz],
+            planes,
+            fz: LaneFft::new(m),
+            fy: LaneFft::new(ny),
+            fx: LaneFft::new(nx),
+            zr,
+            zi,
+            pr: vec![0.0; m * LANES],
+            pi: vec![0.0; m * LANES],
+            ar: vec![0.0; len],
+            ai: vec![0.0; len],
+            br: vec![0.0; len],
+            bi: vec![0.0; len],
         })
     }
 
@@ -213,14 +390,14 @@ impl RealFft3 {
         self.dims
     }
 
-    /// Coefficients kept along x: `nx/2 + 1` (1 for a flat x).
-    pub fn half(&self) -> usize {
-        self.half
+    /// The kz planes kept: `nz/2 + 1` (1 for a flat z).
+    pub fn planes(&self) -> usize {
+        self.planes
     }
 
-    /// The half spectrum of `values` (`nx·ny·nz` of them, x fastest), laid
-    /// out as `kx + half·(ky + ny·kz)`.
-    pub fn forward(&mut self, values: &[f64]) -> Result<&[C64]> {
+    /// The half spectrum of `values` (`nx·ny·nz` of them, x fastest): real
+    /// and imaginary parts laid out `ky + ny·(kx + nx·kz)`, `kz ≤ nz/2`.
+    pub fn forward(&mut self, values: &[f64]) -> Result<(&[f64], &[f64])> {
         let [nx, ny, nz] = self.dims;
         if values.len() != nx * ny * nz {
             return Err(Error::input(format!(
@@ -229,91 +406,96 @@ impl RealFft3 {
                 values.len()
             )));
         }
-        let h = self.half;
-        // x: one real-to-complex transform per row.
-        match &self.r2c {
-            Some(r2c) => {
-                for (src, dst) in values.chunks_exact(nx).zip(self.out.chunks_exact_mut(h)) {
-                    self.row.copy_from_slice(src);
-                    let need = r2c.get_scratch_len();
-                    if self.scratch.len() < need {
-                        self.scratch.resize(need, C64::default());
-                    }
-                    r2c.process_with_scratch(&mut self.row, dst, &mut self.scratch[..need])
-                        .map_err(|e| Error::input(format!("FFT: {e}")))?;
+        let plane = nx * ny;
+        // z: real to complex, by blocks of lanes.
+        if nz == 1 {
+            self.ar.copy_from_slice(values);
+            self.ai.fill(0.0);
+        } else {
+            let m = nz / 2;
+            let mut c0 = 0;
+            while c0 < plane {
+                let w = LANES.min(plane - c0);
+                for j in 0..m {
+                    self.pr[j * LANES..][..w].copy_from_slice(&values[2 * j * plane + c0..][..w]);
+                    self.pi[j * LANES..][..w]
+                        .copy_from_slice(&values[(2 * j + 1) * plane + c0..][..w]);
                 }
+                self.fz.run(&mut self.pr, &mut self.pi, LANES, 0, w);
+                self.split_z(c0, w);
+                c0 += w;
             }
-            None => match &self.fx {
-                Some(fx) => {
-                    for (src, dst) in values.chunks_exact(nx).zip(self.out.chunks_exact_mut(h)) {
-                        for (c, &v) in self.crow.iter_mut().zip(src) {
-                            *c = C64::new(v, 0.0);
-                        }
-                        fx.process(&mut self.crow, &mut self.scratch);
-                        dst.copy_from_slice(&self.crow[..h]);
-                    }
-                }
-                None => {
-                    for (d, &v) in self.out.iter_mut().zip(values) {
-                        *d = C64::new(v, 0.0);
-                    }
-                }
-            },
         }
-        // y: per z plane, gather the h lines (kx fixed) contiguously.
-        if let Some(fy) = &self.fy {
-            let lines = &mut self.lines[..h * ny];
-            for plane in self.out.chunks_exact_mut(h * ny) {
-                for y in 0..ny {
-                    for kx in 0..h {
-                        lines[kx * ny + y] = plane[kx + h * y];
-                    }
-                }
-                fy.process(lines, &mut self.scratch);
-                for y in 0..ny {
-                    for kx in 0..h {
-                        plane[kx + h * y] = lines[kx * ny + y];
+        // y: per kz plane, lanes along x.
+        for kz in 0..self.planes {
+            let r = kz * plane..(kz + 1) * plane;
+            self.fy
+                .run(&mut self.ar[r.clone()], &mut self.ai[r], nx, 0, nx);
+        }
+        // x: per plane, transposed so that the lanes run along ky.
+        for kz in 0..self.planes {
+            let r = kz * plane..(kz + 1) * plane;
+            for (src, dst) in [(&self.ar, &mut self.br), (&self.ai, &mut self.bi)] {
+                let (s, d) = (&src[r.clone()], &mut dst[r.clone()]);
+                for ky in 0..ny {
+                    for (x, &v) in s[ky * nx..(ky + 1) * nx].iter().enumerate() {
+                        d[x * ny + ky] = v;
                     }
                 }
             }
+            self.fx
+                .run(&mut self.br[r.clone()], &mut self.bi[r], ny, 0, ny);
         }
-        // z: per y row, gather the h lines along z.
-        if let Some(fz) = &self.fz {
-            let lines = &mut self.lines[..h * nz];
-            let plane = h * ny;
-            for y in 0..ny {
-                for z in 0..nz {
-                    let base = z * plane + y * h;
-                    for kx in 0..h {
-                        lines[kx * nz + z] = self.out[base + kx];
-                    }
+        Ok((&self.br, &self.bi))
+    }
+
+    /// The real transform's last step for lanes `c0..c0 + w`: from the
+    /// packed spectrum `Z` (length m = nz/2, in `pr`/`pi`) the coefficients
+    /// `X[k] = E[k] + W^k O[k]`, `E = (Z[k] + conj Z[m−k])/2`,
+    /// `O = (Z[k] − conj Z[m−k])/2i`, for k = 0..=m, into `ar`/`ai`.
+    fn split_z(&mut self, c0: usize, w: usize) {
+        let m = self.dims[2] / 2;
+        let plane = self.dims[0] * self.dims[1];
+        for k in 0..=m {
+            let (a, b) = (k % m, (m - k) % m);
+            let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
+            let (br, bi) = (&self.pr[b * LANES..][..w], &self.pi[b * LANES..][..w]);
+            let xr = &mut self.ar[k * plane + c0..][..w];
+            let xi = &mut self.ai[k * plane + c0..][..w];
+            if k == 0 || k == m {
+                let sign = if k == 0 { 1.0 } else { -1.0 };
+                for l in 0..w {
+                    xr[l] = ar[l] + sign * ai[l];
+                    xi[l] = 0.0;
                 }
-                fz.process(lines, &mut self.scratch);
-                for z in 0..nz {
-                    let base = z * plane + y * h;
-                    for kx in 0..h {
-                        self.out[base + kx] = lines[kx * nz + z];
-                    }
-                }
+                continue;
+            }
+            let (wr, wi) = (self.zr[k], self.zi[k]);
+            for l in 0..w {
+                let (er, ei) = ((ar[l] + br[l]) * 0.5, (ai[l] - bi[l]) * 0.5);
+                let (or, oi) = ((ai[l] + bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
+                xr[l] = er + (wr * or - wi * oi);
+                xi[l] = ei + (wr * oi + wi * or);
             }
         }
-        Ok(&self.out)
     }
 
     /// The whole spectrum (`kx + nx·(ky + ny·kz)`) from a half one given by
     /// [`RealFft3::forward`]: the missing coefficients are conjugates.
-    pub fn whole(&self, half: &[C64]) -> Vec<C64> {
+    pub fn whole(&self, re: &[f64], im: &[f64]) -> Vec<C64> {
         let [nx, ny, nz] = self.dims;
-        let h = self.half;
+        let at = |kx: usize, ky: usize, kz: usize| {
+            let i = ky + ny * (kx + nx * kz);
+            C64::new(re[i], im[i])
+        };
         let mut out = Vec::with_capacity(nx * ny * nz);
         for kz in 0..nz {
             for ky in 0..ny {
                 for kx in 0..nx {
-                    out.push(if kx < h {
-                        half[kx + h * (ky + ny * kz)]
+                    out.push(if kz < self.planes {
+                        at(kx, ky, kz)
                     } else {
-                        let (mx, my, mz) = (nx - kx, (ny - ky) % ny, (nz - kz) % nz);
-                        half[mx + h * (my + ny * mz)].conj()
+                        at((nx - kx) % nx, (ny - ky) % ny, nz - kz).conj()
                     });
                 }
             }
@@ -411,13 +593,16 @@ mod tests {
             [2, 1, 1],
             [8, 4, 1],
             [16, 1, 2],
+            [2, 64, 8],
+            [4, 2, 128],
         ] {
             let len: usize = dims.iter().product();
             let v: Vec<f64> = (0..len).map(|_| r.f64() - 0.5).collect();
             let mut f = RealFft3::new(dims).unwrap();
-            let half = f.forward(&v).unwrap().to_vec();
-            assert_eq!(half.len(), f.half() * dims[1] * dims[2]);
-            let whole = f.whole(&half);
+            let (re, im) = f.forward(&v).unwrap();
+            let (re, im) = (re.to_vec(), im.to_vec());
+            assert_eq!(re.len(), f.planes() * dims[0] * dims[1]);
+            let whole = f.whole(&re, &im);
             let c: Vec<C64> = v.iter().map(|&x| C64::new(x, 0.0)).collect();
             let want = naive(&c, dims, -1.0);
             for (i, (a, b)) in whole.iter().zip(&want).enumerate() {
@@ -501,8 +686,9 @@ mod tests {
         let dims = [64, 2, 64];
         let v: Vec<f64> = (0..64 * 2 * 64).map(|_| r.f64() - 0.5).collect();
         let mut f = RealFft3::new(dims).unwrap();
-        let half = f.forward(&v).unwrap().to_vec();
-        let whole = f.whole(&half);
+        let (re, im) = f.forward(&v).unwrap();
+        let (re, im) = (re.to_vec(), im.to_vec());
+        let whole = f.whole(&re, &im);
         let c: Vec<C64> = v.iter().map(|&x| C64::new(x, 0.0)).collect();
         let want = naive(&c, dims, -1.0);
         for (i, (a, b)) in whole.iter().zip(&want).enumerate() {

@@ -286,38 +286,45 @@ fn sample_grid(
                 .collect()
         })
         .collect();
+    // Per row (y, z), per term: the factors before the first one along x
+    // are one number for the row, the rest multiply a row of x values,
+    // each in the term's order (so the products round as in `raw`).
     out.clear();
-    out.reserve(nx * ny * nz);
-    let (mut sum, mut prod) = (vec![0.0; nx], vec![0.0; nx]);
-    for z in 0..nz {
-        for y in 0..ny {
-            sum.fill(t.constant);
-            for term in &tables {
-                prod.fill(1.0);
-                for (a, vals) in term {
-                    match a {
-                        0 => prod.iter_mut().zip(vals).for_each(|(p, v)| *p *= v),
-                        1 => {
-                            let v = vals[y];
-                            prod.iter_mut().for_each(|p| *p *= v);
-                        }
-                        _ => {
-                            let v = vals[z];
-                            prod.iter_mut().for_each(|p| *p *= v);
-                        }
-                    }
-                }
-                sum.iter_mut().zip(&prod).for_each(|(s, p)| *s += p);
+    out.resize(nx * ny * nz, 0.0);
+    let mut prod = vec![0.0; nx];
+    for (r, row) in out.chunks_exact_mut(nx).enumerate() {
+        let (y, z) = (r % ny, r / ny);
+        row.fill(t.constant);
+        for term in &tables {
+            let at = |a: usize, vals: &[f64]| if a == 1 { vals[y] } else { vals[z] };
+            let first_x = term.iter().position(|(a, _)| *a == 0);
+            let lead = first_x.unwrap_or(term.len());
+            let mut c = 1.0;
+            for (a, vals) in &term[..lead] {
+                c *= at(*a, vals);
             }
-            out.extend(sum.iter().map(|&v| {
-                let v = if t.thickness > 0.0 {
-                    v.abs() - t.thickness
+            if lead == term.len() {
+                row.iter_mut().for_each(|s| *s += c);
+                continue;
+            }
+            prod.iter_mut()
+                .zip(&term[lead].1)
+                .for_each(|(p, v)| *p = c * v);
+            for (a, vals) in &term[lead + 1..] {
+                if *a == 0 {
+                    prod.iter_mut().zip(vals).for_each(|(p, v)| *p *= v);
                 } else {
-                    v
-                };
-                let v = v * t.inv_bound;
-                stored(if v.is_nan() { f64::INFINITY } else { v }, clamp)
-            }));
+                    let v = at(*a, vals);
+                    prod.iter_mut().for_each(|p| *p *= v);
+                }
+            }
+            row.iter_mut().zip(&prod).for_each(|(s, p)| *s += p);
+        }
+        let (thick, inv) = (t.thickness, t.inv_bound);
+        for v in row.iter_mut() {
+            let s = if thick > 0.0 { v.abs() - thick } else { *v };
+            let s = s * inv;
+            *v = stored(if s.is_nan() { f64::INFINITY } else { s }, clamp);
         }
     }
     true
@@ -941,6 +948,24 @@ impl MicroFitJob {
             out.extend(points.iter().map(|p| stored(scene.eval(*p), *clamp)));
         }
         Ok(out)
+    }
+
+    /// One loss evaluation at the normalised point `u` the way the job's
+    /// steps do it (the scene, its samples into the reused buffer, FFT and
+    /// loss); infinite where the values are invalid. For `bench micro`.
+    pub fn evaluate(&mut self, u: &[f64]) -> Result<f64> {
+        let Some((s, v)) = self.scene_at(u) else {
+            return Ok(f64::INFINITY);
+        };
+        let spare = std::mem::take(&mut self.spare);
+        let mut work = Work::new(&self.sampler, s, || v.to_string(), spare)?;
+        loop {
+            if let (_, Some(values)) = work.advance(&self.sampler, WORK_PER_STEP)? {
+                let l = self.loss_of(&values)?;
+                self.spare = values;
+                return Ok(l);
+            }
+        }
     }
 
     /// The loss of fitting samples against the target (once it is sampled:

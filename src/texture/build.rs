@@ -43,6 +43,23 @@ impl Default for BuildConfig {
             .augmented(),
             index: IndexConfig::default(),
         }
+        .synced()
+    }
+}
+
+impl BuildConfig {
+    /// The settings with the network's pixel scale taken from the dataset:
+    /// crops are windows of textures rendered at twice their size, so the
+    /// index reads any image as a texture `2 · side` pixels across (see
+    /// [`crate::texture::pcn::PcnConfig::texture_side`]); without crops, it
+    /// reads images whole.
+    pub fn synced(mut self) -> Self {
+        self.index.pcn.texture_side = if self.dataset.crops {
+            2 * self.index.pcn.side
+        } else {
+            0
+        };
+        self
     }
 }
 

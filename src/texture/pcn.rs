@@ -56,6 +56,13 @@ pub struct PcnConfig {
     /// The indexing matrix, as rows: stage-2 subset `i` is the sum of the
     /// stage-1 maps listed in `combination[i]`. Empty means identity.
     pub combination: Vec<Vec<usize>>,
+    /// The pixel scale of the training images (see [`PcnConfig::window`]):
+    /// a whole texture is read as if its short side were `texture_side`
+    /// pixels, and the network sees a centred `side × side` window of it.
+    /// The dataset's crops are such windows of textures rendered at twice
+    /// their size, so an index trained on crops sets `2 · side`. 0 reads
+    /// every image whole (its centre square resampled to `side`).
+    pub texture_side: usize,
 }
 
 impl Default for PcnConfig {
@@ -72,6 +79,7 @@ impl Default for PcnConfig {
             side: 128,
             intensity_bins: 16,
             combination: Vec::new(),
+            texture_side: 0,
         }
     }
 }
@@ -130,6 +138,17 @@ impl PcnConfig {
                 format!("1 to {last} blocks a side fit the final maps"),
             ));
         }
+        if self.texture_side != 0 && !(self.side..=16 * self.side).contains(&self.texture_side) {
+            return Err(bad(
+                "texture_side",
+                format!(
+                    "the texture side must be 0 or {} to {} pixels, not {}",
+                    self.side,
+                    16 * self.side,
+                    self.texture_side
+                ),
+            ));
+        }
         if self.intensity_bins > 256 {
             return Err(bad("intensity_bins", "at most 256 grey-level bins".into()));
         }
@@ -142,6 +161,28 @@ impl PcnConfig {
             }
         }
         Ok(())
+    }
+
+    /// The side, in the image's pixels, of the centred square the network
+    /// reads from an image whose short side is `short`: the image at its
+    /// own pixel scale up to `texture_side` (a window of `side` pixels),
+    /// a proportionally larger window of a larger image (so any image is
+    /// read as a texture `texture_side` pixels across), and the whole of an
+    /// image smaller than `side`. A `side × side` image is always read
+    /// whole, so training on the dataset's images is unchanged.
+    pub fn window(&self, short: usize) -> usize {
+        if self.texture_side == 0 {
+            return short;
+        }
+        (short * self.side / self.texture_side)
+            .max(self.side)
+            .min(short)
+    }
+
+    /// What the network reads of `img`: its [`PcnConfig::window`],
+    /// resampled to `side × side`.
+    pub fn view(&self, img: &Gray) -> Result<Gray> {
+        prepare_window(img, self.side, self.window(img.width.min(img.height)))
     }
 
     /// The indexing matrix's rows (identity when none is given).
@@ -176,10 +217,16 @@ pub struct Pcn {
 /// Resamples the centre square of `img` to `side × side` by area averaging
 /// (or bilinear upsampling when the square is smaller).
 pub fn prepare(img: &Gray, side: usize) -> Result<Gray> {
+    prepare_window(img, side, img.width.min(img.height))
+}
+
+/// Resamples the centred `window × window` square of `img` (at most its
+/// short side) to `side × side`, as [`prepare`] does the whole square.
+pub fn prepare_window(img: &Gray, side: usize, window: usize) -> Result<Gray> {
     if img.width == 0 || img.height == 0 {
         return Err(Error::input("the image is empty"));
     }
-    let s = img.width.min(img.height);
+    let s = window.clamp(1, img.width.min(img.height));
     let (x0, y0) = ((img.width - s) / 2, (img.height - s) / 2);
     let mut out = Gray::new(side, side);
     let scale = s as f64 / side as f64;
@@ -505,7 +552,7 @@ impl Pcn {
         let taps = c.k1 * c.k2;
         let inputs: Vec<Map> = images
             .iter()
-            .map(|g| prepare(g, c.side).map(|g| as_map(&g)))
+            .map(|g| c.view(g).map(|g| as_map(&g)))
             .collect::<Result<_>>()?;
         let mut cov = vec![0f64; taps * taps];
         let mut count = 0;
@@ -544,10 +591,11 @@ impl Pcn {
         })
     }
 
-    /// The feature vector of one image (any size; resampled first).
+    /// The feature vector of one image (any size; its
+    /// [`PcnConfig::view`] first).
     pub fn features(&self, img: &Gray) -> Result<Vec<f32>> {
         let c = &self.config;
-        let prepared = prepare(img, c.side)?;
+        let prepared = c.view(img)?;
         let input = as_map(&prepared);
         let pooled: Vec<Map> = convolve(&input, &self.stage1, c.k1, c.k2)
             .iter()
@@ -813,6 +861,46 @@ mod tests {
             data: vec![f32::NAN; 1024],
         };
         assert!(Pcn::train(&[nan], small()).is_err());
+    }
+
+    #[test]
+    fn the_view_reads_textures_at_the_training_crops_pixel_scale() {
+        let c = PcnConfig {
+            side: 32,
+            texture_side: 64,
+            ..PcnConfig::default()
+        };
+        // A training image (side²) whole; a texture up to twice that at its
+        // own pixels; larger ones scaled down to read as 64 across; smaller
+        // ones whole.
+        assert_eq!(
+            [20, 32, 48, 64, 128, 256].map(|s| c.window(s)),
+            [20, 32, 32, 32, 64, 128]
+        );
+        let whole = PcnConfig {
+            side: 32,
+            ..PcnConfig::default()
+        };
+        assert_eq!(whole.window(256), 256);
+        // The view of a 64² ramp is its centre 32² square, pixel for pixel.
+        let ramp = Gray {
+            width: 64,
+            height: 64,
+            data: (0..64 * 64).map(|i| i as f32).collect(),
+        };
+        let v = c.view(&ramp).unwrap();
+        assert_eq!((v.width, v.height), (32, 32));
+        for y in 0..32 {
+            for x in 0..32 {
+                assert_eq!(v.at(x, y), ramp.at(x + 16, y + 16));
+            }
+        }
+        assert!(PcnConfig {
+            texture_side: 16,
+            ..c.clone()
+        }
+        .validate()
+        .is_err());
     }
 
     #[test]

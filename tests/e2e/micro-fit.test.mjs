@@ -3,10 +3,13 @@
 // target value, run a short
 // reconstruction in the worker pool (`micro-fit`, sharded) and see the
 // loss fall on the plot; apply the fitted value to the scene as one
-// undoable change.
+// undoable change. And fit wasm = native: the shared fit requests give, in
+// the worker, the native core's results to the bit.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { launch } from './harness.mjs';
+import fs from 'node:fs';
+import path from 'node:path';
+import { launch, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -64,5 +67,37 @@ test('micro reconstruct: the loss falls, the fitted value is applied and undone'
   await page.click('[data-testid=micro-fit-run]');
   await page.waitForSelector('[data-testid=doc-error]:not([hidden])', { timeout: 30000 });
   assert.match(await page.textContent('[data-testid=doc-error]'), /range .* is empty/);
+  await page.context().close();
+});
+
+/** JSON text with object keys sorted and `undefined` as null: equal text, equal numbers (bit for bit). */
+const canon = (v) => JSON.stringify(v, (k, x) => {
+  if (x === undefined) return null;
+  if (ArrayBuffer.isView(x)) return Array.from(x);
+  if (x && typeof x === 'object' && !Array.isArray(x)) return Object.fromEntries(Object.entries(x).sort(([a], [b]) => (a < b ? -1 : 1)));
+  return x;
+});
+
+test('micro-fit: the wasm worker gives the native results bit for bit (fitted values, loss trace, validation)', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  await page.waitForFunction(() => window.filigree?.pool, null, { timeout: 30000 });
+  const dir = path.join(ROOT, 'tests/fixtures/micro-native');
+  const { fits } = JSON.parse(fs.readFileSync(path.join(dir, 'fits.json'), 'utf8'));
+  assert.deepEqual([...new Set(fits.map((f) => f.request.optimizer))].sort(), ['cmaes', 'nelder-mead', 'powell']);
+  for (const f of fits) {
+    // The same canonical text in the page (the worker's numbers as they came).
+    const got = await page.evaluate(async (req) => {
+      const r = await window.filigree.pool.run('micro-fit', req);
+      return JSON.stringify(r, (k, x) => {
+        if (x === undefined) return null;
+        if (ArrayBuffer.isView(x)) return Array.from(x);
+        if (x && typeof x === 'object' && !Array.isArray(x)) return Object.fromEntries(Object.entries(x).sort(([a], [b]) => (a < b ? -1 : 1)));
+        return x;
+      });
+    }, f.request);
+    const want = JSON.parse(fs.readFileSync(path.join(dir, `${f.name}.json`), 'utf8'));
+    assert.ok(want.history.length >= 2 && want.loss < want.initial_loss, `${f.name}: the fixture is a real fit`);
+    assert.equal(got, canon(want), `${f.name}: wasm result equals the native core's`);
+  }
   await page.context().close();
 });

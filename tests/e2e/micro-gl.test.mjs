@@ -23,8 +23,8 @@ before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 /** In the page: render every shipped scene both ways, return the comparison per scene. */
-async function compareAll(page, { side, steps, cameras, extra = {}, only = null }) {
-  return page.evaluate(async ({ side, steps, cameras, extra, only }) => {
+async function compareAll(page, { side, steps, cameras, extra = {}, only = null, bigSide = 0 }) {
+  return page.evaluate(async ({ side, steps, cameras, extra, only, bigSide }) => {
     const { MicroGl } = await import('/www/micro-gl.js');
     const pool = window.filigree.pool;
     const examples = await pool.run('micro-examples', {});
@@ -53,6 +53,16 @@ async function compareAll(page, { side, steps, cameras, extra = {}, only = null 
           last = gl.draw(camera, side, side, { stats: true });
           times.push(performance.now() - t);
         }
+        // The first view once more at bigSide (one frame, no warm-up: the
+        // shader is compiled), for the frame-time summary; only where the
+        // small frame was quick (a 256² frame costs ~16× a 64² one: tens of
+        // seconds in SwiftShader for the heavy scenes, too long for CI).
+        let bigMs = null;
+        if (bigSide && camera === cameras[0] && Math.min(...times) < 20) {
+          const t = performance.now();
+          gl.draw(camera, bigSide, bigSide);
+          bigMs = performance.now() - t;
+        }
         const a = await decode(cpu.png);
         const b = last.rgba;
         const bg = extra.background || [24, 26, 30];
@@ -68,12 +78,12 @@ async function compareAll(page, { side, steps, cameras, extra = {}, only = null 
           name: ex.name, camera, functions: shader.functions, fragmentBytes: shader.fragment.length,
           hitMiss: hitMiss / n, mean: sum / (3 * n), cpuHitFraction: cpuHits / n,
           cpuStats: cpu.stats, glStats: last.stats,
-          compileMs, frameMs: Math.min(...times),
+          compileMs, frameMs: Math.min(...times), bigMs,
         });
       }
     }
     return out;
-  }, { side, steps, cameras, extra, only });
+  }, { side, steps, cameras, extra, only, bigSide });
 }
 
 const VIEWS = [
@@ -83,8 +93,17 @@ const VIEWS = [
 
 test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fixed steps, two views)', async () => {
   const page = await env.newPage({ path: '#tool=micro' });
-  const rows = await compareAll(page, { side: SIDE, steps: 'fixed', cameras: VIEWS });
+  const rows = await compareAll(page, { side: SIDE, steps: 'fixed', cameras: VIEWS, bigSide: 256 });
   assert.ok(rows.length >= 2 * 6, `${rows.length} renders`);
+  // One JSON line for the bench notes (issue 12): SwiftShader frame ms per
+  // scene, first view, at 64² (best of the timed frames) and 256² (one frame).
+  const first = rows.filter((r) => r.camera.distance === VIEWS[0].distance);
+  console.log(JSON.stringify({
+    bench: 'micro-gl', renderer: 'SwiftShader (software WebGL2)', steps: 'fixed', view: VIEWS[0],
+    note: '256: one frame, timed only where the 64² frame took under 20 ms (null: skipped)',
+    frame_ms: Object.fromEntries(first.map((r) => [r.name, { [SIDE]: +r.frameMs.toFixed(1), 256: r.bigMs === null ? null : +r.bigMs.toFixed(1),
+      steps_per_ray: +(r.glStats.steps / r.glStats.rays).toFixed(1) }])),
+  }));
   for (const r of rows) {
     const steps = { cpu: r.cpuStats.steps / r.cpuStats.rays, gl: r.glStats.steps / r.glStats.rays };
     console.log(`[micro-gl] ${r.name} d=${r.camera.distance}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `

@@ -17,6 +17,17 @@
 //   at once, no debounce), and the worker's part (`run`: the kept expansion
 //   regrows the subtree, then the whole answer is sent).
 // The floor line is an empty animation frame measured in the same run.
+// Every figure has a `before` twin measured in the same run with the panel's
+// old path switched on (`filigreeTangle.options.incremental = false`: every
+// repaint redraws the whole canvas and an answer keeps nothing of the last
+// one); the worker's side is the same in both. Round trips are timed in the
+// page (the input event to the end of the frame that paints the answer), not
+// through the test driver. `pan_work_ms` is our JS per pan frame (the
+// handler's bitmap copy), `pan_frame_ms` the frame interval around it.
+// "to frame" figures end with a one-pixel read of the canvas in the frame
+// callback after the panel's paint, so the browser's rasterisation of what
+// the panel drew is inside them (the new path leaves it to the browser; the
+// old one forced it in `paint` by copying the canvas): compare those.
 import { launch } from './harness.mjs';
 
 const root = process.argv[2];
@@ -54,13 +65,21 @@ const t0 = Date.now();
 await page.click('[data-example=village]');
 await waitForResult(n);
 const growMs = Date.now() - t0;
-const village = await page.evaluate(async () => {
+async function sliderAndPan(incremental) {
+  return page.evaluate(async (incremental) => {
   const t = window.filigreeTangle;
+  t.options.incremental = incremental;
+  t.clearLayers(); // each pass starts with no bitmap kept
   const r = t.result();
   const slider = document.querySelector('[data-testid=tangle-step]');
   const steps = r.steps.length;
   const moves = [], paints = [], batches = [], drags = [], dragPaints = [];
-  const frame = () => new Promise((res) => requestAnimationFrame(() => res()));
+  const c = document.querySelector('[data-testid=tangle-canvas]');
+  // A frame callback after the panel's paint, then one pixel read back: the browser
+  // rasterises the canvas's drawing there and then, so the time includes it.
+  const flush = () => c.getContext('2d').getImageData(0, 0, 1, 1);
+  const frame = () => new Promise((res) => requestAnimationFrame(() => { flush(); res(); }));
+  t.paintNow();
   await frame();
   for (const from of [0.95, 0.6, 0.3]) {
     for (let i = 0; i < 12; i++) {
@@ -82,26 +101,84 @@ const village = await page.evaluate(async () => {
     paints.push(t.timing().paint);
     batches.push(t.timing().batches);
   }
+  // The same kind of jumps as a person makes them: the panel has had idle time since the
+  // last paint (up to 3 s, until its idle work is done) before each one. On a new view
+  // (zoomed in a step), so no bitmap of the jumps above is of use.
+  document.querySelector('[data-act=zoom-in]').click();
+  t.clearLayers();
+  await new Promise((r) => setTimeout(r, 400));
+  const settledMoves = [];
+  const settle = async () => {
+    const until = performance.now() + 3000;
+    await new Promise((r) => setTimeout(r, 100));
+    while (!t.prebuilt() && performance.now() < until) await new Promise((r) => setTimeout(r, 50));
+  };
+  for (let i = 0; i < 12; i++) {
+    const k = Math.round(steps * (i % 2 ? 0.5 + i / 30 : 1 - i / 30));
+    await settle();
+    const start = performance.now();
+    slider.value = String(k);
+    slider.dispatchEvent(new Event('input', { bubbles: true }));
+    await frame();
+    settledMoves.push(performance.now() - start);
+  }
   // Back to the end: the final tangle, then pan frames (the bitmap of the last paint, moved).
   slider.value = String(steps);
   slider.dispatchEvent(new Event('input', { bubbles: true }));
   await frame();
-  const c = document.querySelector('[data-testid=tangle-canvas]');
   const b = c.getBoundingClientRect();
-  const pans = [];
+  const pans = [], panWork = [];
+  await frame();
   c.dispatchEvent(new PointerEvent('pointerdown', { pointerId: 7, clientX: b.left + 100, clientY: b.top + 100, bubbles: true }));
+  await frame();
   for (let i = 1; i <= 20; i++) {
     const start = performance.now();
     c.dispatchEvent(new PointerEvent('pointermove', { pointerId: 7, clientX: b.left + 100 + 5 * i, clientY: b.top + 100 + 3 * i, bubbles: true }));
+    // The handler's own time plus the bitmap copy in its frame callback (ours), then the frame.
+    const handler = performance.now() - start;
     await frame();
     pans.push(performance.now() - start);
+    panWork.push(handler + t.timing().pan);
   }
   c.dispatchEvent(new PointerEvent('pointerup', { pointerId: 7, clientX: b.left + 200, clientY: b.top + 160, bubbles: true }));
   await new Promise((r) => setTimeout(r, 300));
+  await frame();
+  // Back to the fitted view for the next pass.
+  document.querySelector('[data-act=zoom-fit]').click();
+  await frame();
   return {
     steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.count,
-    worker_ms: Math.round(t.timing().run), moves, paints, batches, drags, dragPaints, pans, sharp_paint: t.timing().paint,
+    worker_ms: Math.round(t.timing().run), moves, settledMoves, paints, batches, drags, dragPaints, pans, panWork, sharp_paint: t.timing().paint,
   };
+  }, incremental);
+}
+const villageBefore = await sliderAndPan(false);
+const village = await sliderAndPan(true);
+// The same drags and jumps with the two paths taking turns move by move (the load of
+// the machine then weighs on both alike; the bitmaps kept are shared).
+const interleaved = await page.evaluate(async () => {
+  const t = window.filigreeTangle;
+  const slider = document.querySelector('[data-testid=tangle-step]');
+  const steps = t.result().steps.length;
+  const c = document.querySelector('[data-testid=tangle-canvas]');
+  const frame = () => new Promise((res) => requestAnimationFrame(() => { c.getContext('2d').getImageData(0, 0, 1, 1); res(); }));
+  const out = { drag: [[], []], jump: [[], []] };
+  const move = async (k, n, kind) => {
+    t.options.incremental = n % 2 === 1;
+    const start = performance.now();
+    slider.value = String(k);
+    slider.dispatchEvent(new Event('input', { bubbles: true }));
+    await frame();
+    out[kind][n % 2].push(performance.now() - start);
+  };
+  t.clearLayers();
+  t.paintNow();
+  await frame();
+  let n = 0;
+  for (const from of [0.95, 0.6, 0.3]) for (let i = 1; i < 13; i++) await move(Math.round(steps * from) - i * 2, n++, 'drag');
+  for (let i = 0; i < 24; i++) await move(Math.round(steps * (i % 2 ? 0.52 + i / 70 : 0.98 - i / 70)), n++, 'jump');
+  t.options.incremental = true;
+  return out;
 });
 
 
@@ -109,9 +186,10 @@ const village = await page.evaluate(async () => {
 n = await runs();
 await page.click('[data-example=leaf]');
 await waitForResult(n);
-const edits = [];
+const edits = { before: [], after: [] };
 const subtreeSizes = [];
-for (let i = 0; i < 6; i++) {
+for (let i = 0; i < 12; i++) {
+  const incremental = i % 2 === 1;
   // Select the outline step with the largest subtree of at most 2,000 shapes
   // (the issue's case; `bench tangle` picks the same way natively) and move its distance.
   const target = await page.evaluate(() => {
@@ -135,38 +213,69 @@ for (let i = 0; i < 6; i++) {
   }, target));
   await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigreeTangle.state(), selected: sel }), target);
   await page.waitForSelector('[data-testid=tangle-param-distance]');
-  n = await runs();
-  const sent = await page.evaluate((v) => {
+  // Settle: the selection painted, nothing running.
+  await page.waitForFunction(() => !window.filigreeTangle.pending());
+  const r = await page.evaluate(async ({ v, incremental }) => {
+    const t = window.filigreeTangle;
+    t.options.incremental = incremental;
+    await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));
+    const status = document.querySelector('[data-testid=tangle-status]');
+    const n = Number(status.dataset.runs || 0);
     const i = document.querySelector('[data-testid=tangle-param-distance]');
-    const t = performance.now();
+    // The answer is shown (runs counted) in the task that schedules its paint;
+    // a frame callback asked for then runs right after that paint.
+    const done = new Promise((res) => {
+      const mo = new MutationObserver(() => {
+        if (Number(status.dataset.runs || 0) > n) {
+          mo.disconnect();
+          requestAnimationFrame(() => {
+            const before = performance.now();
+            document.querySelector('[data-testid=tangle-canvas]').getContext('2d').getImageData(0, 0, 1, 1); // rasterised
+            res([performance.now(), before]);
+          });
+        }
+      });
+      mo.observe(status, { attributes: true, attributeFilter: ['data-runs'] });
+    });
+    const start = performance.now();
     i.value = String(v);
     i.dispatchEvent(new Event('input', { bubbles: true }));
     i.dispatchEvent(new Event('change', { bubbles: true }));
-    return t;
-  }, 3 + i);
-  await waitForResult(n);
-  const r = await page.evaluate(async (s) => {
-    await new Promise((res) => requestAnimationFrame(() => res()));
-    const t = window.filigreeTangle;
-    return { total: performance.now() - s, run: t.timing().run, paint: t.timing().paint };
-  }, sent);
-  edits.push(r);
+    const [end, beforeFlush] = await done;
+    const tm = t.timing();
+    return {
+      total: end - start, run: tm.run, prepare: tm.prepare, paint: tm.paint, region: tm.region, reused: t.reused(),
+      toPaint: tm.paintAt - tm.answeredAt, raster: end - beforeFlush,
+    };
+  }, { v: 3 + (i >> 1), incremental });
+  await page.waitForFunction(() => !window.filigreeTangle.pending());
+  edits[incremental ? 'after' : 'before'].push(r);
 }
 const leafShapes = await page.evaluate(() => window.filigreeTangle.result().stats.shapes);
 
+const both = (after, before) => ({ ...summary(after), before: summary(before) });
+const editFigure = (key) => both(edits.after.map((e) => e[key]), edits.before.map((e) => e[key]));
 console.log(JSON.stringify({
+  load: (await import('node:os')).loadavg().map((x) => round(x)),
   frame_floor_ms: summary(frameFloor),
   village: {
     grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
     shapes_in_history: village.all_shapes,
-    slider_drag_to_frame_ms: summary(village.drags), slider_drag_paint_ms: summary(village.dragPaints),
-    slider_jump_to_frame_ms: summary(village.moves), slider_jump_paint_ms: summary(village.paints), slider_jump_batches_ms: summary(village.batches),
-    pan_frame_ms: summary(village.pans), sharp_repaint_ms: round(village.sharp_paint),
+    slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
+    slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
+    slider_jump_batches_ms: both(village.batches, villageBefore.batches),
+    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
+    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
+    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
+    pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
+    sharp_repaint_ms: round(village.sharp_paint),
   },
   leaf: {
     final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes,
-    param_edit_round_trip_ms: summary(edits.map((e) => e.total)),
-    param_edit_worker_ms: summary(edits.map((e) => e.run)), repaint_ms: summary(edits.map((e) => e.paint)),
+    param_edit_round_trip_ms: editFigure('total'),
+    param_edit_worker_ms: editFigure('run'), prepare_ms: editFigure('prepare'), repaint_ms: editFigure('paint'),
+    answer_to_paint_ms: editFigure('toPaint'), raster_ms: editFigure('raster'),
+    repainted_fraction: editFigure('region'), shapes_kept_from_last_answer: editFigure('reused'),
   },
 }, null, 1));
 await env.close();
