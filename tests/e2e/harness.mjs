@@ -60,6 +60,22 @@ export async function pickGenerator(page, name) {
     && document.querySelector(`[data-testid=fit-sliders] .row[data-param="${window.filigreeFit.info().params[0].name}"]`), name);
 }
 
+/** The Tangle panel's count of shown answers. */
+export const tangleRuns = (page) => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
+
+/**
+ * Wait until the Tangle panel has shown one more answer than `previous` and
+ * nothing is due, then two frames (so the answer is painted); returns the count.
+ */
+export async function waitForTangle(page, previous, timeout = 60000) {
+  await page.waitForFunction((prev) => {
+    const el = document.querySelector('[data-testid=tangle-status]');
+    return Number(el.dataset.runs || 0) > prev && !window.filigreeTangle.pending();
+  }, previous, { timeout });
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  return tangleRuns(page);
+}
+
 /** Drop a file (path or {name, bytes, type}) onto `selector` with real drag events. */
 export async function dropFile(page, selector, file) {
   const { name, bytes, type } = typeof file === 'string'

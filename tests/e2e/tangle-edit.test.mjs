@@ -18,22 +18,11 @@
 // more than 100 levels must be none, and those off by more than 2 a few.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { launch } from './harness.mjs';
+import { launch, tangleRuns as runs, waitForTangle as waitForResult } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch({ args: ['--disable-accelerated-2d-canvas'] }); });
 after(async () => { await env?.close(); });
-
-const runs = (page) => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
-
-async function waitForResult(page, previous, timeout = 60000) {
-  await page.waitForFunction((prev) => {
-    const el = document.querySelector('[data-testid=tangle-status]');
-    return Number(el.dataset.runs || 0) > prev && !window.filigreeTangle.pending();
-  }, previous, { timeout });
-  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-  return runs(page);
-}
 
 /** Select a step with a `distance` (outline, place) whose subtree has `lo`–`hi` shapes; set its distance to `v`. */
 async function editDistance(page, lo, hi, v) {

@@ -8,23 +8,11 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import { launch } from './harness.mjs';
+import { launch, tangleRuns as runs, waitForTangle as waitForResult } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
-
-const runs = (page) => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
-
-/** Wait until the panel has shown one more answer than `previous` and nothing is due. */
-async function waitForResult(page, previous, timeout = 60000) {
-  await page.waitForFunction((prev) => {
-    const el = document.querySelector('[data-testid=tangle-status]');
-    return Number(el.dataset.runs || 0) > prev && !window.filigreeTangle.pending();
-  }, previous, { timeout });
-  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-  return runs(page);
-}
 
 const count = (page) => page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.count));
 
