@@ -14,7 +14,7 @@ wasm=target/wasm32-unknown-unknown/release/filigree.wasm
 # Rust output uses named explicitly. FILIGREE_WASM_OPT=0 skips it.
 if [ "${FILIGREE_WASM_OPT:-1}" != 0 ]; then
   mkdir -p target/wasm-opt
-  wasm-opt -O3 --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+  wasm-opt -O3 --enable-simd --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
     --enable-mutable-globals --enable-reference-types "$wasm" -o target/wasm-opt/filigree.wasm
   echo "build: wasm-opt -O3 $(stat -c %s "$wasm") → $(stat -c %s target/wasm-opt/filigree.wasm) bytes"
   wasm=target/wasm-opt/filigree.wasm
