@@ -12,8 +12,14 @@ console.error = (...args) => {
   consoleError(...args);
 };
 
+// The core is built with WebAssembly SIMD; this smallest SIMD function
+// (i8x16.splat, i8x16.popcnt) validates only where SIMD is supported.
+const SIMD_PROBE = new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0, 1, 5, 1, 96, 0, 1, 123, 3, 2, 1, 0, 10, 10, 1, 8, 0, 65, 0, 253, 15, 253, 98, 11]);
 const ready = init({ module_or_path: new URL('../pkg/filigree_bg.wasm', import.meta.url) }).then(() => {
   self.postMessage({ type: MSG.READY, version: version() });
+}, (err) => {
+  throw WebAssembly.validate(SIMD_PROBE) ? err
+    : new Error('this browser cannot run the core: it needs WebAssembly SIMD (Chrome 91+, Firefox 89+, Safari 16.4+)');
 });
 
 const cancelled = new Set();
@@ -40,7 +46,12 @@ function isCoreError(err) {
 }
 
 async function run({ id, kind, payload }) {
-  await ready;
+  try {
+    await ready;
+  } catch (err) {
+    self.postMessage({ type: MSG.PANIC, id, message: `the core could not load: ${err?.message ?? err}` });
+    return;
+  }
   if (broken) {
     self.postMessage({ type: MSG.PANIC, id, message: 'the core crashed earlier in this worker' });
     return;

@@ -181,3 +181,25 @@ test('jobs with an affinity run on the worker that ran the last one (waiting for
   assert.deepEqual(r.third, r.first);
   assert.ok(r.same, 'a kept expansion answers as a fresh one does');
 });
+
+// A core that cannot be compiled (a browser without WebAssembly SIMD, or a
+// damaged download) must be said plainly when a job runs, not leave the job
+// waiting for ever.
+test('a core that fails to load fails each job with a plain message instead of hanging', { timeout: 60000 }, async () => {
+  const page = await env.newPage({ path: null });
+  await page.route('**/pkg/filigree_bg.wasm', (route) => route.fulfill({ status: 200, contentType: 'application/wasm', body: Buffer.from('not a wasm module') }));
+  await page.goto(`${env.url}#tool=inspect`);
+  const outcome = await page.evaluate(async () => {
+    try {
+      await window.filigree.pool.run('texture-models', {});
+      return { ok: true };
+    } catch (e) {
+      return { ok: false, kind: e.kind, message: e.message };
+    }
+  });
+  assert.equal(outcome.ok, false);
+  assert.equal(outcome.kind, 'crash');
+  assert.match(outcome.message, /the core could not load/);
+  await page.waitForSelector('.toast-error');
+  assert.match(await page.textContent('.toast-error'), /the core could not load/);
+});
