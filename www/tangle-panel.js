@@ -282,6 +282,7 @@ function mount(el, ctx) {
     q('[data-act=cancel]').disabled = false;
     status('growing…');
     const t0 = performance.now();
+    timing.runAt = t0;
     try {
       const r = await ctx.run('tangle', { ...requestOf(doc), keep: true }, {
         signal: ctrl.signal,
@@ -322,6 +323,7 @@ function mount(el, ctx) {
         frame = 0;
         paintChanged();
       } else paint();
+      timing.paintEndAt = performance.now();
       loadThumbnails();
     } catch (err) {
       if (running !== ctrl) return;

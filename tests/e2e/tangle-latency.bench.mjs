@@ -59,8 +59,13 @@ const frameFloor = await page.evaluate(async () => {
   return out;
 });
 
+// TANGLE_BENCH_ONLY=leaf or =village runs one half.
+const only = process.env.TANGLE_BENCH_ONLY || '';
+let n = 0;
+let villageOut = null;
+async function villageBench() {
 // ---- village: grow, then slider moves and pans
-let n = await runs();
+n = await runs();
 const t0 = Date.now();
 await page.click('[data-example=village]');
 await waitForResult(n);
@@ -182,6 +187,23 @@ const interleaved = await page.evaluate(async () => {
 });
 
 
+return {
+    grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
+    shapes_in_history: village.all_shapes,
+    slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
+    slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
+    slider_jump_batches_ms: both(village.batches, villageBefore.batches),
+    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
+    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
+    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
+    pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
+    sharp_repaint_ms: round(village.sharp_paint),
+  };
+}
+const both = (after, before) => ({ ...summary(after), before: summary(before) });
+if (only !== 'leaf') villageOut = await villageBench();
+let leafOut = null;
+async function leafBench() {
 // ---- leaf: a parameter edit round trip
 n = await runs();
 await page.click('[data-example=leaf]');
@@ -246,6 +268,7 @@ for (let i = 0; i < 12; i++) {
     return {
       total: end - start, run: tm.run, prepare: tm.prepare, paint: tm.paint, region: tm.region, reused: t.reused(),
       toPaint: tm.paintAt - tm.answeredAt, raster: end - beforeFlush,
+      toRun: tm.runAt - start, toFrame: beforeFlush - tm.paintEndAt,
     };
   }, { v: 3 + (i >> 1), incremental });
   await page.waitForFunction(() => !window.filigreeTangle.pending());
@@ -253,29 +276,21 @@ for (let i = 0; i < 12; i++) {
 }
 const leafShapes = await page.evaluate(() => window.filigreeTangle.result().stats.shapes);
 
-const both = (after, before) => ({ ...summary(after), before: summary(before) });
 const editFigure = (key) => both(edits.after.map((e) => e[key]), edits.before.map((e) => e[key]));
-console.log(JSON.stringify({
-  load: (await import('node:os')).loadavg().map((x) => round(x)),
-  frame_floor_ms: summary(frameFloor),
-  village: {
-    grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
-    shapes_in_history: village.all_shapes,
-    slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
-    slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
-    slider_jump_batches_ms: both(village.batches, villageBefore.batches),
-    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
-    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
-    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
-    pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
-    sharp_repaint_ms: round(village.sharp_paint),
-  },
-  leaf: {
+return {
     final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes,
     param_edit_round_trip_ms: editFigure('total'),
     param_edit_worker_ms: editFigure('run'), prepare_ms: editFigure('prepare'), repaint_ms: editFigure('paint'),
     answer_to_paint_ms: editFigure('toPaint'), raster_ms: editFigure('raster'),
+    input_to_request_ms: editFigure('toRun'), painted_to_frame_ms: editFigure('toFrame'),
     repainted_fraction: editFigure('region'), shapes_kept_from_last_answer: editFigure('reused'),
-  },
+  };
+}
+if (only !== 'village') leafOut = await leafBench();
+console.log(JSON.stringify({
+  load: (await import('node:os')).loadavg().map((x) => round(x)),
+  frame_floor_ms: summary(frameFloor),
+  village: villageOut,
+  leaf: leafOut,
 }, null, 1));
 await env.close();
