@@ -502,6 +502,17 @@ pub fn forget_kept() {
     KEPT.with_borrow_mut(|k| *k = None);
 }
 
+/// Forget the kept snapshots after edits, keeping the unedited expansion:
+/// the next drag or undo replays all its edits, as before snapshots were
+/// kept (`bench tangle` measures both in one run).
+pub fn forget_kept_edits() {
+    KEPT.with_borrow_mut(|k| {
+        if let Some(k) = k.as_mut() {
+            k.snapshots.retain(|(e, _)| e.is_empty());
+        }
+    });
+}
+
 /// A `tangle` request as a job: the expansion a bounded part a step, then
 /// each edit, then the answer.
 pub struct TangleJob {
