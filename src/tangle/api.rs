@@ -210,7 +210,11 @@ fn shape_columns<S: serde::Serializer>(
     where
         T: LeBytes<N>,
     {
-        serde_bytes::ByteBuf::from(v.iter().flat_map(|x| f(x).le()).collect::<Vec<u8>>())
+        let mut out = Vec::with_capacity(N * v.len());
+        for x in v {
+            out.extend_from_slice(&f(x).le());
+        }
+        serde_bytes::ByteBuf::from(out)
     }
     let mut ring_first = Vec::with_capacity(4 * (v.len() + 1));
     let mut rings = vec![];
@@ -218,7 +222,9 @@ fn shape_columns<S: serde::Serializer>(
     for x in v {
         ring_first.extend(at.to_le_bytes());
         at += x.rings.len() as u32;
-        rings.extend(x.rings.iter().flat_map(|r| r.to_le_bytes()));
+        for r in &x.rings {
+            rings.extend_from_slice(&r.to_le_bytes());
+        }
     }
     ring_first.extend(at.to_le_bytes());
     let mut m = s.serialize_map(Some(11))?;
@@ -255,7 +261,10 @@ macro_rules! le_bytes {
 le_bytes!(u8 => 1, u32 => 4, i32 => 4, f32 => 4);
 
 fn f32_bytes<S: serde::Serializer>(v: &[f32], s: S) -> std::result::Result<S::Ok, S::Error> {
-    let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mut bytes = Vec::with_capacity(4 * v.len());
+    for x in v {
+        bytes.extend_from_slice(&x.to_le_bytes());
+    }
     serde_bytes::serialize(&bytes, s)
 }
 
@@ -686,8 +695,9 @@ pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
     let pos: HashMap<u32, usize> = x.steps.iter().enumerate().map(|(k, s)| (s.id, k)).collect();
     let step_pos = |id: Option<u32>| id.and_then(|i| pos.get(&i)).map_or(-1, |&k| k as i64);
     let mut index = vec![u32::MAX; x.records.len()];
-    let mut shapes = vec![];
-    let mut points = vec![];
+    let mut shapes = Vec::with_capacity(x.records.len());
+    let total: usize = x.records.iter().map(|r| r.shape.poly.vertices()).sum();
+    let mut points = Vec::with_capacity(2 * total);
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     for (i, r) in x.records.iter().enumerate() {
         if x.is_removed(i) {
