@@ -64,17 +64,6 @@ fn subtree(r: &TangleResponse, s: usize) -> usize {
     made.len()
 }
 
-/// This thread's time on a core so far, in ns (Linux: schedstat, which a
-/// loaded machine does not inflate; None elsewhere).
-fn thread_cpu_ns() -> Option<u64> {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()?
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()
-}
-
 /// Seconds of wall clock and of this thread's CPU time.
 #[derive(Clone, Copy)]
 struct Secs {
@@ -83,15 +72,15 @@ struct Secs {
 }
 
 fn timed(req: TangleRequest) -> Result<(TangleResponse, Secs, bool), String> {
-    let c = thread_cpu_ns();
+    let c = super::slices_bench::thread_cpu_ms();
     let t = Instant::now();
     let job = start_tangle(req).map_err(|e| e.to_string())?;
     let reused = job.reused();
     let r = run_to_end(job, &Cancel::new(), |_| {}).map_err(|e| e.to_string())?;
     let wall = t.elapsed().as_secs_f64();
     let cpu = c
-        .zip(thread_cpu_ns())
-        .map(|(a, b)| b.saturating_sub(a) as f64 * 1e-9);
+        .zip(super::slices_bench::thread_cpu_ms())
+        .map(|(a, b)| (b - a) * 1e-3);
     Ok((r, Secs { wall, cpu }, reused))
 }
 
@@ -243,7 +232,7 @@ pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
         "{}",
         json!({
             "bench": "tangle",
-            "about": "each shipped grammar expanded natively (seed 1, default settings); seconds min/median over repeats; the paper's Table 1 (3.1 GHz machine, its own grammars) beside; the shapely baseline is the same grid+outline work in Python/GEOS in this run; edits: one step's parameter changed, answered from the kept expansion (as the browser's worker does) vs replayed from scratch, and the answer alone; a drag move of a second edit of that step (the last edit replaced) from the snapshot before it, and before (all edits replayed); cpu_median: this thread's CPU seconds (schedstat), which the load does not inflate",
+            "about": "each shipped grammar expanded natively (seed 1, default settings); seconds min/median over repeats; the paper's Table 1 (3.1 GHz machine, its own grammars) beside; the shapely baseline is the same grid+outline work in Python/GEOS in this run; edits: one step's parameter changed, answered from the kept expansion (as the browser's worker does) vs replayed from scratch, and the answer alone; a drag move of a second edit of that step (the last edit replaced) from the snapshot before it, and before (all edits replayed); cpu_median: this thread's CPU seconds (CLOCK_THREAD_CPUTIME_ID), which the load does not inflate",
             "rows": rows,
             "edits": edits,
             "baseline": baseline,
