@@ -188,6 +188,7 @@ async function jumpCpu(incremental) {
     const steps = t.result().steps.length;
     const c = document.querySelector('[data-testid=tangle-canvas]');
     const frame = () => new Promise((res) => requestAnimationFrame(() => { c.getContext('2d').getImageData(0, 0, 1, 1); res(); }));
+    t.clearLayers(); // no bitmap kept from the passes above
     for (let i = 0; i < n; i++) {
       slider.value = String(Math.round(steps * (i % 2 ? 0.51 + i / 65 : 0.99 - i / 65)));
       slider.dispatchEvent(new Event('input', { bubbles: true }));
