@@ -706,11 +706,17 @@ pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
         index[i] = shapes.len() as u32;
         let s = &r.shape;
         let first = (points.len() / 2) as u32;
-        for p in s.poly.rings.iter().flatten() {
-            points.push(p.x as f32);
-            points.push(p.y as f32);
-            lo = lo.min(*p);
-            hi = hi.max(*p);
+        for ring in &s.poly.rings {
+            let at = points.len();
+            points.resize(at + 2 * ring.len(), 0.0);
+            for (o, p) in points[at..].chunks_exact_mut(2).zip(ring) {
+                o[0] = p.x as f32;
+                o[1] = p.y as f32;
+            }
+            for p in ring {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
         }
         shapes.push(ShapeOut {
             tag: s.tag,
