@@ -273,6 +273,100 @@ fn a_kept_expansion_answers_edits_exactly_as_a_replay_from_scratch() {
     forget_kept();
 }
 
+/// Random edit sessions on the leaf (new edits on any step with
+/// parameters, a slider drag replacing the last edit, re-expansions,
+/// undos): every `keep` answer regrown from what the instance kept is byte
+/// for byte the answer of a replay from scratch, and a drag or an undo
+/// starts from the snapshot before the last edit instead of replaying all
+/// of them.
+#[test]
+fn kept_regrows_equal_fresh_expansions_for_random_edits() {
+    use filigree::tangle::api::forget_kept;
+    let g = example("leaf").unwrap().grammar;
+    // A small fixed generator: the sessions are the same on every run.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move |n: usize| {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((state >> 33) % n as u64) as usize
+    };
+    for session in 0..2u64 {
+        forget_kept();
+        let seed = 1 + session;
+        let doc = TangleRequest { seed, ..req(g) };
+        let mut edits: Vec<Edit> = vec![];
+        let mut last = run(TangleRequest {
+            keep: true,
+            ..doc.clone()
+        });
+        for round in 0..9 {
+            let action = if edits.is_empty() { 0 } else { next(4) };
+            // The least of the request's edits the kept state must have done.
+            let expect_done;
+            match action {
+                // A new edit: a parameter of a random step, or a re-draw.
+                0 | 1 => {
+                    expect_done = edits.len();
+                    let with: Vec<usize> = (0..last.steps.len())
+                        .filter(|&k| !last.steps[k].params.is_empty())
+                        .collect();
+                    let step = with[next(with.len())];
+                    let params = if action == 1 {
+                        BTreeMap::new()
+                    } else {
+                        let p = &last.steps[step].params[next(last.steps[step].params.len())];
+                        let f = 0.85 + 0.05 * next(9) as f64;
+                        let v = (p.value * f).clamp(p.min, p.max);
+                        let v = if p.integer { v.round() } else { v };
+                        BTreeMap::from([(p.name.to_string(), v)])
+                    };
+                    edits.push(Edit { step, params });
+                }
+                // A drag: the last edit's value moves.
+                2 => {
+                    expect_done = edits.len() - 1;
+                    let e = edits.last_mut().unwrap();
+                    for v in e.params.values_mut() {
+                        *v *= 1.0 + 0.02 * (1 + next(5)) as f64;
+                    }
+                    if e.params.is_empty() {
+                        // A re-draw again: the same request, answered as kept.
+                        continue;
+                    }
+                }
+                // An undo.
+                _ => {
+                    edits.pop();
+                    expect_done = edits.len();
+                }
+            }
+            let r = TangleRequest {
+                edits: edits.clone(),
+                export: if round % 3 == 0 {
+                    ExportFormat::Svg
+                } else {
+                    ExportFormat::None
+                },
+                ..doc.clone()
+            };
+            let scratch = run(r.clone());
+            let job = start_tangle(TangleRequest { keep: true, ..r }).unwrap();
+            assert!(job.reused(), "session {session} round {round}");
+            let done = job.reused_edits();
+            assert!(
+                done >= expect_done,
+                "session {session} round {round}: continued after {done} of {} edits, expected at least {expect_done}",
+                edits.len()
+            );
+            let kept = run_quietly(job).unwrap();
+            assert_eq!(kept, scratch, "session {session} round {round}: {edits:?}");
+            last = kept;
+        }
+    }
+    forget_kept();
+}
+
 #[test]
 fn start_shapes_from_text_svg_and_rings() {
     let g = "outline(6) : a -> [b, c]\n";

@@ -282,6 +282,7 @@ function mount(el, ctx) {
     q('[data-act=cancel]').disabled = false;
     status('growing…');
     const t0 = performance.now();
+    timing.runAt = t0;
     try {
       const r = await ctx.run('tangle', { ...requestOf(doc), keep: true }, {
         signal: ctrl.signal,
@@ -320,8 +321,12 @@ function mount(el, ctx) {
       if (options.incremental) {
         cancelAnimationFrame(frame);
         frame = 0;
-        paintChanged();
+        // An answer's full repaint draws heavy parts directly instead of first making
+        // their bitmaps (a second pass: the layers were just cleared, and which parts a
+        // later slider move needs is unknown); idle time makes them afterwards.
+        paintChanged({ newBitmaps: false });
       } else paint();
+      timing.paintEndAt = performance.now();
       loadThumbnails();
     } catch (err) {
       if (running !== ctrl) return;
@@ -481,10 +486,10 @@ function mount(el, ctx) {
     return { tiles, cols, rows, count, sum };
   }
 
-  function paintChanged() {
+  function paintChanged({ newBitmaps = true } = {}) {
     timing.paintAt = performance.now();
     const region = changedRegion();
-    if (region === false) paintNow();
+    if (region === false) paintNow({ newBitmaps });
     else if (region) paintRegion(region);
     else { timing.paint = 0; timing.region = 0; recordShown(); }
   }
@@ -548,7 +553,7 @@ function mount(el, ctx) {
     timing.paint = performance.now() - t0;
   }
 
-  function paintNow() {
+  function paintNow({ newBitmaps = true } = {}) {
     const t0 = performance.now();
     g.setTransform(1, 0, 0, 1, 0, 0);
     g.fillStyle = '#fff';
@@ -558,7 +563,8 @@ function mount(el, ctx) {
       const tb = performance.now();
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
-      paintBatches(g, b, lineWidth(), layers, viewKey());
+      const key = viewKey(), w = canvas.width, h = canvas.height;
+      paintBatches(g, b, lineWidth(), layers, key, newBitmaps ? null : (part) => layers.has(part, key, w, h));
       paintHighlight();
     }
     paintDrawing();

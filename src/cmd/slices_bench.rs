@@ -20,7 +20,7 @@ use std::time::Instant;
 /// does not count the time other processes held the core, so step times
 /// stay meaningful on a busy machine. `None` where not available.
 #[cfg(target_os = "linux")]
-fn thread_cpu_ms() -> Option<f64> {
+pub(super) fn thread_cpu_ms() -> Option<f64> {
     #[repr(C)]
     struct Timespec {
         sec: i64,
@@ -37,7 +37,7 @@ fn thread_cpu_ms() -> Option<f64> {
 }
 
 #[cfg(not(target_os = "linux"))]
-fn thread_cpu_ms() -> Option<f64> {
+pub(super) fn thread_cpu_ms() -> Option<f64> {
     None
 }
 

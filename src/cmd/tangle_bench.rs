@@ -4,7 +4,7 @@
 //! splits and outlines done with shapely/GEOS in the same run as a
 //! baseline (`scripts/tangle_shapely_baseline.py`).
 use filigree::core::job::{run_to_end, Cancel};
-use filigree::tangle::api::{start_tangle, Edit, TangleRequest, TangleResponse};
+use filigree::tangle::api::{forget_kept_edits, start_tangle, Edit, TangleRequest, TangleResponse};
 use filigree::tangle::examples::EXAMPLES;
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -64,19 +64,37 @@ fn subtree(r: &TangleResponse, s: usize) -> usize {
     made.len()
 }
 
-fn timed(req: TangleRequest) -> Result<(TangleResponse, f64, bool), String> {
+/// Seconds of wall clock and of this thread's CPU time.
+#[derive(Clone, Copy)]
+struct Secs {
+    wall: f64,
+    cpu: Option<f64>,
+}
+
+fn timed(req: TangleRequest) -> Result<(TangleResponse, Secs, bool), String> {
+    let c = super::slices_bench::thread_cpu_ms();
     let t = Instant::now();
     let job = start_tangle(req).map_err(|e| e.to_string())?;
     let reused = job.reused();
     let r = run_to_end(job, &Cancel::new(), |_| {}).map_err(|e| e.to_string())?;
-    Ok((r, t.elapsed().as_secs_f64(), reused))
+    let wall = t.elapsed().as_secs_f64();
+    let cpu = c
+        .zip(super::slices_bench::thread_cpu_ms())
+        .map(|(a, b)| (b - a) * 1e-3);
+    Ok((r, Secs { wall, cpu }, reused))
 }
 
 /// Issue 10's edit figure: a parameter edit on the step with the largest
 /// subtree of at most 2,000 shapes, answered from the kept expansion
 /// (what the browser's worker does) against a replay from scratch, and the
-/// answer alone (the same request again: nothing to regrow).
-fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> {
+/// answer alone (the same request again: nothing to regrow). With
+/// `operator`, only its steps are candidates.
+fn edit_row(
+    name: &str,
+    grammar: &str,
+    operator: Option<&str>,
+    repeats: usize,
+) -> Result<Value, String> {
     let doc = TangleRequest {
         grammar: grammar.to_string(),
         keep: true,
@@ -84,7 +102,9 @@ fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> 
     };
     let (base, _, _) = timed(doc.clone())?;
     let Some((step, size)) = (0..base.steps.len())
-        .filter(|&k| !base.steps[k].params.is_empty())
+        .filter(|&k| {
+            !base.steps[k].params.is_empty() && operator.is_none_or(|o| base.steps[k].operator == o)
+        })
         .map(|k| (k, subtree(&base, k)))
         .filter(|&(_, n)| n <= 2000)
         .max_by_key(|&(k, n)| (n, std::cmp::Reverse(k)))
@@ -93,6 +113,7 @@ fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> 
     };
     let p = &base.steps[step].params[0];
     let mut secs = (vec![], vec![], vec![]);
+    let mut drags = (vec![], vec![]);
     for rep in 0..repeats.max(1) {
         let value = (p.value * (0.8 + 0.05 * rep as f64)).clamp(p.min, p.max);
         let edit = Edit {
@@ -100,11 +121,31 @@ fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> 
             params: [(p.name.to_string(), value)].into(),
         };
         let edited = TangleRequest {
-            edits: vec![edit],
+            edits: vec![edit.clone()],
             ..doc.clone()
         };
         timed(doc.clone())?; // the document as kept, unedited
-        let (_, kept, reused) = timed(edited.clone())?;
+        let (r1, kept, reused) = timed(edited.clone())?;
+        // A second edit of the same step (where it was regrown), dragged:
+        // each move replaces the last edit. Kept snapshots start it after
+        // the first edit; without them (before) both edits are replayed.
+        let group = base.steps[step].group;
+        if let Some(pos) = r1.steps.iter().position(|s| s.group == group) {
+            let second = |f: f64| TangleRequest {
+                edits: vec![
+                    edit.clone(),
+                    Edit {
+                        step: pos,
+                        params: [(p.name.to_string(), (value * f).clamp(p.min, p.max))].into(),
+                    },
+                ],
+                ..doc.clone()
+            };
+            timed(second(1.1))?; // the drag's first move
+            drags.0.push(timed(second(1.12))?.1);
+            forget_kept_edits();
+            drags.1.push(timed(second(1.14))?.1);
+        }
         let (_, again, _) = timed(edited.clone())?;
         let (_, scratch, _) = timed(TangleRequest {
             keep: false,
@@ -117,12 +158,14 @@ fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> 
         secs.1.push(again);
         secs.2.push(scratch);
     }
-    let mm = |v: Vec<f64>| {
-        let (min, median) = super::min_median(v);
-        json!({"min": min, "median": median})
+    let mm = |v: Vec<Secs>| {
+        let cpu: Option<Vec<f64>> = v.iter().map(|s| s.cpu).collect();
+        let (min, median) = super::min_median(v.iter().map(|s| s.wall).collect());
+        let cpu_median = cpu.map(|c| super::min_median(c).1);
+        json!({"min": min, "median": median, "cpu_median": cpu_median})
     };
-    let kept_min = secs.0.iter().copied().fold(f64::INFINITY, f64::min);
-    let scratch_min = secs.2.iter().copied().fold(f64::INFINITY, f64::min);
+    let kept_min = secs.0.iter().map(|s| s.wall).fold(f64::INFINITY, f64::min);
+    let scratch_min = secs.2.iter().map(|s| s.wall).fold(f64::INFINITY, f64::min);
     Ok(json!({
         "grammar": name,
         "step": step,
@@ -134,6 +177,8 @@ fn edit_row(name: &str, grammar: &str, repeats: usize) -> Result<Value, String> 
         "answer_only_seconds": mm(secs.1),
         "scratch_edit_seconds": mm(secs.2),
         "speedup_kept_vs_scratch": scratch_min / kept_min,
+        "drag_move_seconds": mm(drags.0),
+        "drag_move_seconds_before": mm(drags.1),
     }))
 }
 
@@ -150,7 +195,11 @@ pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
         .iter()
         .filter(|e| want(e.name) && ["leaf", "village"].contains(&e.name))
     {
-        edits.push(edit_row(ex.name, ex.grammar, repeats)?);
+        edits.push(edit_row(ex.name, ex.grammar, None, repeats)?);
+        if ex.name == "leaf" {
+            // The step the browser's latency bench edits.
+            edits.push(edit_row(ex.name, ex.grammar, Some("outline"), repeats)?);
+        }
     }
     let mut baseline = Value::Null;
     if want("baseline") {
@@ -183,7 +232,7 @@ pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
         "{}",
         json!({
             "bench": "tangle",
-            "about": "each shipped grammar expanded natively (seed 1, default settings); seconds min/median over repeats; the paper's Table 1 (3.1 GHz machine, its own grammars) beside; the shapely baseline is the same grid+outline work in Python/GEOS in this run; edits: one step's parameter changed, answered from the kept expansion (as the browser's worker does) vs replayed from scratch, and the answer alone",
+            "about": "each shipped grammar expanded natively (seed 1, default settings); seconds min/median over repeats; the paper's Table 1 (3.1 GHz machine, its own grammars) beside; the shapely baseline is the same grid+outline work in Python/GEOS in this run; edits: one step's parameter changed, answered from the kept expansion (as the browser's worker does) vs replayed from scratch, and the answer alone; a drag move of a second edit of that step (the last edit replaced) from the snapshot before it, and before (all edits replayed); cpu_median: this thread's CPU seconds (CLOCK_THREAD_CPUTIME_ID), which the load does not inflate",
             "rows": rows,
             "edits": edits,
             "baseline": baseline,

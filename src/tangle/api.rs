@@ -210,7 +210,11 @@ fn shape_columns<S: serde::Serializer>(
     where
         T: LeBytes<N>,
     {
-        serde_bytes::ByteBuf::from(v.iter().flat_map(|x| f(x).le()).collect::<Vec<u8>>())
+        let mut out = Vec::with_capacity(N * v.len());
+        for x in v {
+            out.extend_from_slice(&f(x).le());
+        }
+        serde_bytes::ByteBuf::from(out)
     }
     let mut ring_first = Vec::with_capacity(4 * (v.len() + 1));
     let mut rings = vec![];
@@ -218,7 +222,9 @@ fn shape_columns<S: serde::Serializer>(
     for x in v {
         ring_first.extend(at.to_le_bytes());
         at += x.rings.len() as u32;
-        rings.extend(x.rings.iter().flat_map(|r| r.to_le_bytes()));
+        for r in &x.rings {
+            rings.extend_from_slice(&r.to_le_bytes());
+        }
     }
     ring_first.extend(at.to_le_bytes());
     let mut m = s.serialize_map(Some(11))?;
@@ -255,7 +261,10 @@ macro_rules! le_bytes {
 le_bytes!(u8 => 1, u32 => 4, i32 => 4, f32 => 4);
 
 fn f32_bytes<S: serde::Serializer>(v: &[f32], s: S) -> std::result::Result<S::Ok, S::Error> {
-    let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let mut bytes = Vec::with_capacity(4 * v.len());
+    for x in v {
+        bytes.extend_from_slice(&x.to_le_bytes());
+    }
     serde_bytes::serialize(&bytes, s)
 }
 
@@ -444,19 +453,24 @@ fn motifs(g: &Grammar) -> HashMap<String, Polygon> {
     m
 }
 
-/// The expansion a `keep` request left in this instance (one per wasm
-/// worker; natively, per thread). `fresh` is the expansion before any
-/// edit, `edited` the one after `edits`. A request for the same document
-/// whose edits extend `edits` continues from `edited`; one with other
-/// edits (an undo, a changed value) replays them on a copy of `fresh`.
-/// Either way the same operations run on the same state as a replay from
-/// scratch, so the answer's bytes are the same.
+/// The expansions a `keep` request left in this instance (one per wasm
+/// worker; natively, per thread), for one document: snapshots after some
+/// of its edits (the first with none). A request for the same document
+/// continues from the snapshot with the longest run of its leading edits:
+/// more edits replay only the new ones, a slider drag (the last edit
+/// replaced) and an undo (the last edit dropped) start from the snapshot
+/// before that edit. Either way the same operations run on the same state
+/// as a replay from scratch, so the answer's bytes are the same.
 struct Kept {
     /// The request, with what does not change the expansion cleared.
     document: TangleRequest,
-    fresh: Expansion,
-    edited: Option<(Vec<Edit>, Expansion)>,
+    /// `(edits, expansion after them)`, least recently used first; the one
+    /// without edits is never dropped.
+    snapshots: Vec<(Vec<Edit>, Expansion)>,
 }
+
+/// Snapshots kept besides the unedited expansion.
+const EDITED_SNAPSHOTS: usize = 4;
 
 thread_local! {
     static KEPT: std::cell::RefCell<Option<Kept>> = const { std::cell::RefCell::new(None) };
@@ -474,21 +488,38 @@ fn document_of(req: &TangleRequest) -> TangleRequest {
     }
 }
 
-/// A kept expansion for `req` and the edits still to apply, if this
-/// instance has one for its document.
+/// A kept expansion for `req` and how many of its edits it has done, if
+/// this instance has one for its document. A snapshot with all of the
+/// request's edits is handed over (the job keeps it again); one with fewer
+/// is copied, so it stays for the next drag or undo.
 fn take_kept(req: &TangleRequest) -> Option<(Expansion, usize)> {
     KEPT.with_borrow_mut(|kept| {
         let k = kept.as_mut().filter(|k| k.document == document_of(req))?;
-        match k.edited.take() {
-            Some((done, x)) if req.edits.starts_with(&done) => Some((x, done.len())),
-            _ => Some((k.fresh.clone(), 0)),
+        let best = (0..k.snapshots.len())
+            .filter(|&i| req.edits.starts_with(&k.snapshots[i].0))
+            .max_by_key(|&i| k.snapshots[i].0.len())?;
+        let done = k.snapshots[best].0.len();
+        if done == req.edits.len() {
+            return Some((k.snapshots.remove(best).1, done));
         }
+        Some((k.snapshots[best].1.clone(), done))
     })
 }
 
 /// Forget any kept expansion (tests; a worker never needs to).
 pub fn forget_kept() {
     KEPT.with_borrow_mut(|k| *k = None);
+}
+
+/// Forget the kept snapshots after edits, keeping the unedited expansion:
+/// the next drag or undo replays all its edits, as before snapshots were
+/// kept (`bench tangle` measures both in one run).
+pub fn forget_kept_edits() {
+    KEPT.with_borrow_mut(|k| {
+        if let Some(k) = k.as_mut() {
+            k.snapshots.retain(|(e, _)| e.is_empty());
+        }
+    });
 }
 
 /// A `tangle` request as a job: the expansion a bounded part a step, then
@@ -498,9 +529,11 @@ pub struct TangleJob {
     x: Option<Expansion>,
     edits: std::vec::IntoIter<Edit>,
     edit_no: usize,
-    /// With `keep`: the expansion before any edit, once it has ended
-    /// (`None` while it runs, or when the instance keeps it already).
-    fresh: Option<Expansion>,
+    /// Edits the starting expansion had done already (a kept snapshot).
+    done: usize,
+    /// With `keep`: snapshots to keep besides the final expansion (the
+    /// unedited one when it was grown here, the one before the last edit).
+    saved: Vec<(Vec<Edit>, Expansion)>,
     reused: bool,
     req: TangleRequest,
 }
@@ -522,7 +555,8 @@ pub fn start_tangle(req: TangleRequest) -> Result<TangleJob> {
         x: Some(x),
         edits: req.edits.clone().split_off(done).into_iter(),
         edit_no: done,
-        fresh: None,
+        done,
+        saved: vec![],
         reused,
         req,
     })
@@ -535,14 +569,27 @@ impl TangleJob {
         self.reused
     }
 
+    /// How many of the request's edits the kept expansion it continues
+    /// from had done (0 without one): the rest are replayed.
+    pub fn reused_edits(&self) -> usize {
+        self.done
+    }
+
     /// Apply the next edit to `x`; `false` when none is left.
     fn next_edit(&mut self, x: &mut Expansion) -> Result<bool> {
-        if self.req.keep && !self.reused && self.fresh.is_none() {
-            self.fresh = Some(x.clone());
-        }
         let Some(e) = self.edits.next() else {
             return Ok(false);
         };
+        // Before the first edit of a tangle grown here and before the last
+        // edit: the states a later request most likely starts from.
+        let n = self.req.edits.len();
+        if self.req.keep
+            && ((self.edit_no == 0 && !self.reused)
+                || (self.edit_no + 1 == n && self.edit_no > self.done))
+        {
+            self.saved
+                .push((self.req.edits[..self.edit_no].to_vec(), x.clone()));
+        }
         let field = format!("edits.{}", self.edit_no);
         self.edit_no += 1;
         let Some(step) = x.steps.get(e.step) else {
@@ -578,21 +625,36 @@ impl TangleJob {
         Ok(true)
     }
 
-    /// Leave the expansion `x` in the instance for the next `keep` request.
+    /// Leave the expansion `x` (and the snapshots saved on the way) in the
+    /// instance for the next `keep` request.
     fn keep(&mut self, x: Expansion) {
         let document = document_of(&self.req);
-        let edited = Some((std::mem::take(&mut self.req.edits), x));
-        let fresh = self.fresh.take();
-        KEPT.with_borrow_mut(|kept| match (kept.as_mut(), fresh) {
-            (_, Some(fresh)) => {
+        let mut add = std::mem::take(&mut self.saved);
+        add.push((std::mem::take(&mut self.req.edits), x));
+        let reused = self.reused;
+        KEPT.with_borrow_mut(|kept| {
+            if !kept.as_ref().is_some_and(|k| k.document == document) {
+                // Another document's: replaced by this one, when it was
+                // grown here (so its unedited expansion is among `add`).
+                if reused {
+                    return;
+                }
                 *kept = Some(Kept {
                     document,
-                    fresh,
-                    edited,
-                })
+                    snapshots: vec![],
+                });
             }
-            (Some(k), None) if k.document == document => k.edited = edited,
-            _ => {}
+            let Some(k) = kept.as_mut() else { return };
+            for (edits, x) in add {
+                k.snapshots.retain(|(e, _)| *e != edits);
+                k.snapshots.push((edits, x));
+            }
+            while k.snapshots.len() > EDITED_SNAPSHOTS + 1 {
+                let Some(i) = k.snapshots.iter().position(|(e, _)| !e.is_empty()) else {
+                    break;
+                };
+                k.snapshots.remove(i);
+            }
         });
     }
 }
@@ -633,8 +695,9 @@ pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
     let pos: HashMap<u32, usize> = x.steps.iter().enumerate().map(|(k, s)| (s.id, k)).collect();
     let step_pos = |id: Option<u32>| id.and_then(|i| pos.get(&i)).map_or(-1, |&k| k as i64);
     let mut index = vec![u32::MAX; x.records.len()];
-    let mut shapes = vec![];
-    let mut points = vec![];
+    let mut shapes = Vec::with_capacity(x.records.len());
+    let total: usize = x.records.iter().map(|r| r.shape.poly.vertices()).sum();
+    let mut points = Vec::with_capacity(2 * total);
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
     for (i, r) in x.records.iter().enumerate() {
         if x.is_removed(i) {
@@ -643,11 +706,17 @@ pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
         index[i] = shapes.len() as u32;
         let s = &r.shape;
         let first = (points.len() / 2) as u32;
-        for p in s.poly.rings.iter().flatten() {
-            points.push(p.x as f32);
-            points.push(p.y as f32);
-            lo = lo.min(*p);
-            hi = hi.max(*p);
+        for ring in &s.poly.rings {
+            let at = points.len();
+            points.resize(at + 2 * ring.len(), 0.0);
+            for (o, p) in points[at..].chunks_exact_mut(2).zip(ring) {
+                o[0] = p.x as f32;
+                o[1] = p.y as f32;
+            }
+            for p in ring {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
         }
         shapes.push(ShapeOut {
             tag: s.tag,

@@ -42,6 +42,22 @@ const round = (x) => Math.round(x * 10) / 10;
 const summary = (xs) => ({ median: round(median(xs)), p90: round(p90(xs)), n: xs.length });
 
 const page = await env.newPage({ path: '#tool=tangle' });
+// CPU time, which the machine's load does not inflate: the renderer process's (its main
+// thread, the worker's thread and the raster threads: `ProcessTime`) and its main
+// thread's (`ThreadTime`), read over the DevTools protocol around an interaction, in ms.
+const cdp = await page.context().newCDPSession(page);
+await cdp.send('Performance.enable', { timeDomain: 'threadTicks' });
+async function cpuNow() {
+  const { metrics } = await cdp.send('Performance.getMetrics');
+  const get = (name) => 1000 * (metrics.find((m) => m.name === name)?.value ?? NaN);
+  return { process: get('ProcessTime'), main: get('ThreadTime') };
+}
+async function cpuOf(fn) {
+  const a = await cpuNow();
+  const out = await fn();
+  const b = await cpuNow();
+  return { out, cpu: { process: b.process - a.process, main: b.main - a.main } };
+}
 const runs = () => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
 async function waitForResult(prev) {
   await page.waitForFunction((p) => Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > p
@@ -59,8 +75,13 @@ const frameFloor = await page.evaluate(async () => {
   return out;
 });
 
+// TANGLE_BENCH_ONLY=leaf or =village runs one half.
+const only = process.env.TANGLE_BENCH_ONLY || '';
+let n = 0;
+let villageOut = null;
+async function villageBench() {
 // ---- village: grow, then slider moves and pans
-let n = await runs();
+n = await runs();
 const t0 = Date.now();
 await page.click('[data-example=village]');
 await waitForResult(n);
@@ -73,11 +94,12 @@ async function sliderAndPan(incremental) {
   const r = t.result();
   const slider = document.querySelector('[data-testid=tangle-step]');
   const steps = r.steps.length;
-  const moves = [], paints = [], batches = [], drags = [], dragPaints = [];
+  const moves = [], paints = [], batches = [], drags = [], dragPaints = [], flushes = [], waits = [];
   const c = document.querySelector('[data-testid=tangle-canvas]');
   // A frame callback after the panel's paint, then one pixel read back: the browser
   // rasterises the canvas's drawing there and then, so the time includes it.
-  const flush = () => c.getContext('2d').getImageData(0, 0, 1, 1);
+  let flushMs = 0;
+  const flush = () => { const f0 = performance.now(); c.getContext('2d').getImageData(0, 0, 1, 1); flushMs = performance.now() - f0; };
   const frame = () => new Promise((res) => requestAnimationFrame(() => { flush(); res(); }));
   t.paintNow();
   await frame();
@@ -100,6 +122,8 @@ async function sliderAndPan(incremental) {
     moves.push(performance.now() - start);
     paints.push(t.timing().paint);
     batches.push(t.timing().batches);
+    flushes.push(flushMs);
+    waits.push(t.timing().paintAt - start);
   }
   // The same kind of jumps as a person makes them: the panel has had idle time since the
   // last paint (up to 3 s, until its idle work is done) before each one. On a new view
@@ -148,12 +172,34 @@ async function sliderAndPan(incremental) {
   await frame();
   return {
     steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.count,
-    worker_ms: Math.round(t.timing().run), moves, settledMoves, paints, batches, drags, dragPaints, pans, panWork, sharp_paint: t.timing().paint,
+    worker_ms: Math.round(t.timing().run), moves, settledMoves, flushes, waits, paints, batches, drags, dragPaints, pans, panWork, sharp_paint: t.timing().paint,
   };
   }, incremental);
 }
 const villageBefore = await sliderAndPan(false);
 const village = await sliderAndPan(true);
+// Back-to-back jumps again, each path alone between two CPU readings: CPU ms per jump.
+async function jumpCpu(incremental) {
+  const n = 24;
+  const { cpu } = await cpuOf(() => page.evaluate(async ({ incremental, n }) => {
+    const t = window.filigreeTangle;
+    t.options.incremental = incremental;
+    const slider = document.querySelector('[data-testid=tangle-step]');
+    const steps = t.result().steps.length;
+    const c = document.querySelector('[data-testid=tangle-canvas]');
+    const frame = () => new Promise((res) => requestAnimationFrame(() => { c.getContext('2d').getImageData(0, 0, 1, 1); res(); }));
+    t.clearLayers(); // no bitmap kept from the passes above
+    for (let i = 0; i < n; i++) {
+      slider.value = String(Math.round(steps * (i % 2 ? 0.51 + i / 65 : 0.99 - i / 65)));
+      slider.dispatchEvent(new Event('input', { bubbles: true }));
+      await frame();
+    }
+    t.options.incremental = true;
+  }, { incremental, n }));
+  return { process: round(cpu.process / n), main: round(cpu.main / n) };
+}
+const jumpCpuBefore = await jumpCpu(false);
+const jumpCpuAfter = await jumpCpu(true);
 // The same drags and jumps with the two paths taking turns move by move (the load of
 // the machine then weighs on both alike; the bitmaps kept are shared).
 const interleaved = await page.evaluate(async () => {
@@ -182,6 +228,28 @@ const interleaved = await page.evaluate(async () => {
 });
 
 
+return {
+    grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
+    shapes_in_history: village.all_shapes,
+    slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
+    slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
+    slider_jump_batches_ms: both(village.batches, villageBefore.batches),
+    // From the input event to the panel's paint (the frame's start), and the raster of what
+    // it drew (the pixel read in the frame callback after it).
+    slider_jump_input_to_paint_ms: both(village.waits, villageBefore.waits),
+    slider_jump_raster_ms: both(village.flushes, villageBefore.flushes),
+    slider_jump_cpu_ms_per_jump: { ...jumpCpuAfter, before: jumpCpuBefore },
+    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
+    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
+    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
+    pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
+    sharp_repaint_ms: round(village.sharp_paint),
+  };
+}
+const both = (after, before) => ({ ...summary(after), before: summary(before) });
+if (only !== 'leaf') villageOut = await villageBench();
+let leafOut = null;
+async function leafBench() {
 // ---- leaf: a parameter edit round trip
 n = await runs();
 await page.click('[data-example=leaf]');
@@ -215,7 +283,7 @@ for (let i = 0; i < 12; i++) {
   await page.waitForSelector('[data-testid=tangle-param-distance]');
   // Settle: the selection painted, nothing running.
   await page.waitForFunction(() => !window.filigreeTangle.pending());
-  const r = await page.evaluate(async ({ v, incremental }) => {
+  const { out: r, cpu } = await cpuOf(() => page.evaluate(async ({ v, incremental }) => {
     const t = window.filigreeTangle;
     t.options.incremental = incremental;
     await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));
@@ -246,36 +314,32 @@ for (let i = 0; i < 12; i++) {
     return {
       total: end - start, run: tm.run, prepare: tm.prepare, paint: tm.paint, region: tm.region, reused: t.reused(),
       toPaint: tm.paintAt - tm.answeredAt, raster: end - beforeFlush,
+      toRun: tm.runAt - start, toFrame: beforeFlush - tm.paintEndAt,
     };
-  }, { v: 3 + (i >> 1), incremental });
+  }, { v: 3 + (i >> 1), incremental }));
+  r.cpuProcess = cpu.process;
+  r.cpuMain = cpu.main;
   await page.waitForFunction(() => !window.filigreeTangle.pending());
   edits[incremental ? 'after' : 'before'].push(r);
 }
 const leafShapes = await page.evaluate(() => window.filigreeTangle.result().stats.shapes);
 
-const both = (after, before) => ({ ...summary(after), before: summary(before) });
 const editFigure = (key) => both(edits.after.map((e) => e[key]), edits.before.map((e) => e[key]));
-console.log(JSON.stringify({
-  load: (await import('node:os')).loadavg().map((x) => round(x)),
-  frame_floor_ms: summary(frameFloor),
-  village: {
-    grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
-    shapes_in_history: village.all_shapes,
-    slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
-    slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
-    slider_jump_batches_ms: both(village.batches, villageBefore.batches),
-    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
-    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
-    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
-    pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
-    sharp_repaint_ms: round(village.sharp_paint),
-  },
-  leaf: {
+return {
     final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes,
     param_edit_round_trip_ms: editFigure('total'),
     param_edit_worker_ms: editFigure('run'), prepare_ms: editFigure('prepare'), repaint_ms: editFigure('paint'),
     answer_to_paint_ms: editFigure('toPaint'), raster_ms: editFigure('raster'),
+    input_to_request_ms: editFigure('toRun'), painted_to_frame_ms: editFigure('toFrame'),
+    round_trip_cpu_ms: { renderer_process: editFigure('cpuProcess'), main_thread: editFigure('cpuMain') },
     repainted_fraction: editFigure('region'), shapes_kept_from_last_answer: editFigure('reused'),
-  },
+  };
+}
+if (only !== 'village') leafOut = await leafBench();
+console.log(JSON.stringify({
+  load: (await import('node:os')).loadavg().map((x) => round(x)),
+  frame_floor_ms: summary(frameFloor),
+  village: villageOut,
+  leaf: leafOut,
 }, null, 1));
 await env.close();
