@@ -7,13 +7,13 @@
 # (one core, exporting each case), then bench/jax_fit_reference.py on the
 # exported cases (one core, XLA single-threaded), and prints one JSON object
 # with both figures, our/JAX ratios and the load. Needs a Python with jax:
-# $JAX_PYTHON, or .venv/bin/python, made with
-#   python3 -m venv .venv && .venv/bin/pip install jax jaxlib
+# $JAX_PYTHON, or target/jax-venv/bin/python, made with
+#   python3 -m venv target/jax-venv && target/jax-venv/bin/pip install jax jaxlib
 # Nothing in the build or the tests needs JAX; only this script does.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${1:-target/release/filigree}
-PY=${JAX_PYTHON:-.venv/bin/python}
+PY=${JAX_PYTHON:-target/jax-venv/bin/python}
 CPU=${BENCH_CPU:-0}
 DIR=$(mktemp -d)
 trap 'rm -rf "$DIR"' EXIT
