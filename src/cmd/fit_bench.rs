@@ -214,9 +214,16 @@ pub fn run(
             }
             let lo = rate(&mut obj, &p, false);
             let lg = rate(&mut obj, &p, true);
+            // The reference (pre-session-9) path, in the same run.
+            obj.reference = true;
+            let blo = rate(&mut obj, &p, false);
+            let blg = rate(&mut obj, &p, true);
             speed.push(json!({"generator": name, "grid": grid, "params": p.len(), "shapes": c.scene.shape_count(),
                               "loss_evals_per_s": lo.0.round(), "loss_grad_evals_per_s": lg.0.round(),
-                              "median_loss_evals_per_s": lo.1.round(), "median_loss_grad_evals_per_s": lg.1.round()}));
+                              "median_loss_evals_per_s": lo.1.round(), "median_loss_grad_evals_per_s": lg.1.round(),
+                              "before_loss_evals_per_s": blo.0.round(), "before_loss_grad_evals_per_s": blg.0.round(),
+                              "after_over_before_loss": (lo.0 / blo.0 * 100.0).round() / 100.0,
+                              "after_over_before_loss_grad": (lg.0 / blg.0 * 100.0).round() / 100.0}));
         }
     }
     // Field units: pixels (default) against canvas units, quick fits of the stripe patterns.
@@ -244,7 +251,7 @@ pub fn run(
     }
     let out = json!({"bench": "fit", "budget": if quick {"quick"} else {"paper"}, "threads": threads,
                      "fits": fits, "throughput_one_core": speed,
-                     "throughput_method": "best and median of three 0.3 s windows, one thread", "units": units});
+                     "throughput_method": "best and median of three 0.3 s windows, one thread; before_*: the reference path (Objective::reference) in the same run", "units": units});
     println!(
         "{}",
         serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
