@@ -241,7 +241,8 @@ fn sdf_total(sum_s: f64, sum_n: f64, norm: f64, w: f64) -> f64 {
 fn normal_px(gx: f64, gy: f64, tn: [f64; 2]) -> (f64, f64, f64) {
     let l2 = gx * gx + gy * gy;
     let q = gx * tn[0] + gy * tn[1];
-    let ok = (tn[0] != 0.0 || tn[1] != 0.0) && l2 > 1e-24;
+    // (Bitwise, not short-circuit: no branch.)
+    let ok = ((tn[0] != 0.0) | (tn[1] != 0.0)) & (l2 > 1e-24);
     let il2 = 1.0 / if ok { l2 } else { 1.0 };
     let qi = q * il2;
     let term = if ok { 1.0 - q * qi } else { 0.0 };
@@ -319,15 +320,19 @@ fn sdf_row<const G: bool>(
         let (u, d) = (&up[1..n - 1], &dn[1..n - 1]);
         let tm = &tnr[1..n - 1];
         let chunks = m / 4;
-        for ch in 0..chunks {
+        let lanes = l
+            .chunks_exact(4)
+            .zip(rr.chunks_exact(4))
+            .zip(u.chunks_exact(4).zip(d.chunks_exact(4)))
+            .zip(tm.chunks_exact(4));
+        for (ch, (((lc, rc), (uc, dc)), tc)) in lanes.enumerate() {
             for k in 0..4 {
-                let i = 4 * ch + k;
-                let gx = (rr[i] - l[i]) * 0.5;
-                let gy = (d[i] - u[i]) * ihy;
-                let (term, a, b) = normal_px(gx, gy, tm[i]);
+                let gx = (rc[k] - lc[k]) * 0.5;
+                let gy = (dc[k] - uc[k]) * ihy;
+                let (term, a, b) = normal_px(gx, gy, tc[k]);
                 an[k] += term;
                 if G {
-                    gg[i + 1] = [a * gscale * 0.5, b * gscale * ihy];
+                    gg[4 * ch + k + 1] = [a * gscale * 0.5, b * gscale * ihy];
                 }
             }
         }

@@ -3,16 +3,16 @@
 //! roots overlap (and vectorise).
 use super::scene::{Part, Scene};
 use super::tiles::Evaluator;
-use super::{edge_cap, CombineOp, Hit, CAP, NONE, NO_WIN};
+use super::{CombineOp, Hit, CAP, NONE, NO_WIN};
 use crate::pattern::sdf::{self, PrimKind};
 
 impl Evaluator {
     /// [`Evaluator::pixel`] for a chain of single-primitive circle, point and
     /// segment items (fills, inset fills, strokes) over a block of at most 4
     /// pixels per row: four independent lanes, so the square roots overlap
-    /// (and vectorise).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn lanes(
+    /// (and vectorise). With `W`, the winners too; without, no winner
+    /// bookkeeping at all.
+    pub(super) fn lanes<const W: bool>(
         &mut self,
         scene: &Scene,
         init: f64,
@@ -20,7 +20,6 @@ impl Evaluator {
         c: usize,
         (x0, x1): (usize, usize),
         (y0, y1): (usize, usize),
-        winners: bool,
     ) {
         let n = self.n;
         let inv = 1.0 / n as f64;
@@ -65,21 +64,38 @@ impl Evaluator {
                         }
                     }
                     let hw = 0.5 * self.widths[item.shape as usize];
+                    let mut vs = d;
+                    match item.part {
+                        Part::Fill if item.inset => vs.iter_mut().for_each(|v| *v += hw),
+                        Part::Fill => {}
+                        Part::Stroke => vs.iter_mut().for_each(|v| *v = v.abs() - hw),
+                    }
                     for k in 0..4 {
-                        let v = match item.part {
-                            Part::Fill if item.inset => d[k] + hw,
-                            Part::Fill => d[k],
-                            Part::Stroke => d[k].abs() - hw,
-                        };
-                        if v < best[k] {
-                            best[k] = v;
-                            bi[k] = it;
-                            bd[k] = d[k];
+                        let v = vs[k];
+                        if W {
+                            if v < best[k] {
+                                best[k] = v;
+                                bi[k] = it;
+                                bd[k] = d[k];
+                            }
+                        } else {
+                            // Selects, exactly the branch above (no `min`:
+                            // its choice between ±0 is not specified).
+                            best[k] = if v < best[k] { v } else { best[k] };
                         }
                     }
                     i += 1;
                 }
                 for k in 0..4 {
+                    if !W {
+                        // The branches below as selects.
+                        b[k] = match op {
+                            CombineOp::Union if best[k] < b[k] => best[k],
+                            CombineOp::Diff if -best[k] > b[k] => -best[k],
+                            _ => b[k],
+                        };
+                        continue;
+                    }
                     match op {
                         CombineOp::Union => {
                             if best[k] < b[k] {
@@ -104,13 +120,13 @@ impl Evaluator {
                 let idx = c * n * n + y * n + x0 + k;
                 let mut v = b[k];
                 let mut w = wi[k];
-                let cap = CAP.min(edge_cap(x0 + k, y, n));
+                let cap = CAP.min(self.edge[x0 + k].min(self.edge[y]));
                 if v.abs() >= cap {
                     v = v.clamp(-cap, cap);
                     w = NONE;
                 }
                 self.s[idx] = v * self.scale;
-                if winners {
+                if W {
                     self.win[idx] = if w == NONE {
                         NO_WIN
                     } else {
