@@ -90,13 +90,7 @@ fn rate(obj: &mut Objective, p: &[f64], grad: bool) -> (f64, f64) {
 /// Write one throughput case for `bench/jax_fit_reference.py`: the
 /// parameters, the target fields, the loss settings and our loss and
 /// gradient at the parameters, as `DIR/<generator>-<grid>.json`.
-fn export_case(
-    dir: &str,
-    name: &str,
-    c: &Case,
-    obj: &Objective,
-    p: &[f64],
-) -> Result<(), String> {
+fn export_case(dir: &str, name: &str, c: &Case, obj: &Objective, p: &[f64]) -> Result<(), String> {
     let mut o = obj.clone();
     let mut g = vec![0.0; p.len()];
     let loss_grad = o.loss_grad(p, &mut g);

@@ -211,7 +211,8 @@ fn loss_with(
             scratch.clear();
             scratch.resize(n, [0.0; 2]);
             for r in 0..channels * n {
-                let (a, b) = sdf_row::<true>(s, &t.sdf, t_normals, n, r, normals, norm * w, scratch);
+                let (a, b) =
+                    sdf_row::<true>(s, &t.sdf, t_normals, n, r, normals, norm * w, scratch);
                 sum_s += a;
                 sum_n += b;
                 if normals {
@@ -618,7 +619,8 @@ impl LossPass {
                 let end = rows.min(self.pos.saturating_add(budget.div_ceil(n)));
                 let normals = opts.normal_weight != 0.0;
                 for r in self.pos..end {
-                    let (a, b) = sdf_row::<false>(s, &t.sdf, t_normals, n, r, normals, 0.0, &mut []);
+                    let (a, b) =
+                        sdf_row::<false>(s, &t.sdf, t_normals, n, r, normals, 0.0, &mut []);
                     self.acc[0] += a;
                     self.acc[1] += b;
                 }
