@@ -1017,7 +1017,7 @@ mod tests {
             for channels in 1..4 {
                 for nw in [0.05, 0.0, 1.0] {
                     let len = channels * n * n;
-                    let mut field = |rng: &mut crate::core::rng::Rng| -> Vec<f64> {
+                    let field = |rng: &mut crate::core::rng::Rng| -> Vec<f64> {
                         (0..len)
                             .map(|_| {
                                 let v = rng.range_f64(-20.0, 20.0);
