@@ -10,6 +10,8 @@
 # $JAX_PYTHON, or target/jax-venv/bin/python, made with
 #   python3 -m venv target/jax-venv && target/jax-venv/bin/pip install jax jaxlib
 # Nothing in the build or the tests needs JAX; only this script does.
+# With BEFORE_BIN=<an older filigree binary>, its `bench fit --speed-only`
+# runs in the same session too and the rows get after/before ratios.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${1:-target/release/filigree}
@@ -22,12 +24,17 @@ trap 'rm -rf "$DIR"' EXIT
 load_before=$(cut -d' ' -f1-3 /proc/loadavg)
 taskset -c "$CPU" "$BIN" bench fit --speed-only --only circles-grid,stripes-dots \
   --export-jax "$DIR/cases" >"$DIR/ours.json"
+echo '{"throughput_one_core": []}' >"$DIR/before.json"
+if [ -n "${BEFORE_BIN:-}" ]; then
+  taskset -c "$CPU" "$BEFORE_BIN" bench fit --speed-only --only circles-grid,stripes-dots >"$DIR/before.json"
+fi
 XLA_FLAGS="--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1" \
   taskset -c "$CPU" "$PY" bench/jax_fit_reference.py "$DIR"/cases/*.json >"$DIR/jax.json"
 load_after=$(cut -d' ' -f1-3 /proc/loadavg)
-"$PY" - "$DIR/ours.json" "$DIR/jax.json" "$load_before" "$load_after" <<'EOF'
+"$PY" - "$DIR/ours.json" "$DIR/jax.json" "$load_before" "$load_after" "$DIR/before.json" <<'EOF'
 import json, sys
 ours = json.load(open(sys.argv[1]))["throughput_one_core"]
+before = {(b["generator"], b["grid"]): b for b in json.load(open(sys.argv[5]))["throughput_one_core"]}
 jax = {(c["generator"], c["grid"]): c for c in json.load(open(sys.argv[2]))["cases"]}
 rows = []
 for o in ours:
@@ -46,7 +53,14 @@ for o in ours:
            "ratio_loss_grad": round(o["loss_grad_evals_per_s"] / j["jax_loss_grad_evals_per_s"], 2)}
     for k in ("before_loss_evals_per_s", "before_loss_grad_evals_per_s"):
         if k in o:
-            row["ours_" + k] = o[k]
+            row["reference_path_" + k[len("before_"):]] = o[k]
+    b = before.get((o["generator"], o["grid"]))
+    if b is not None:
+        row["before_binary_loss_evals_per_s"] = b["loss_evals_per_s"]
+        row["before_binary_loss_grad_evals_per_s"] = b["loss_grad_evals_per_s"]
+        row["after_over_before_loss"] = round(o["loss_evals_per_s"] / b["loss_evals_per_s"], 2)
+        row["after_over_before_loss_grad"] = round(
+            o["loss_grad_evals_per_s"] / b["loss_grad_evals_per_s"], 2)
     rows.append(row)
 print(json.dumps({"bench": "fit_vs_jax", "load_before": sys.argv[3], "load_after": sys.argv[4],
                   "method": "best of three 0.3 s windows each, one core (taskset), JAX jit-compiled "
