@@ -361,10 +361,10 @@ fn scatter_row(d: &mut [f64], n: usize, r: usize, gg: &[[f64; 2]]) {
     {
         let row = &mut d[o + y * n..o + y * n + n];
         if n < 3 {
-            for x in 0..n {
+            for (x, g) in gg.iter().enumerate().take(n) {
                 let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
-                row[xp] += gg[x][0];
-                row[xm] -= gg[x][0];
+                row[xp] += g[0];
+                row[xm] -= g[0];
             }
         } else {
             // Gather form of `row[x + 1] += g[x]; row[x − 1] −= g[x]`.
