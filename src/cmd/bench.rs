@@ -39,6 +39,10 @@ pub enum Which {
         /// Skip the fits; only measure evaluations per second.
         #[arg(long)]
         speed_only: bool,
+        /// Write each throughput case (parameters, target fields, our loss and
+        /// gradient) as JSON into this directory, for bench/jax_fit_reference.py.
+        #[arg(long)]
+        export_jax: Option<String>,
     },
     /// Step times of every request kind at its largest realistic size
     /// (render-pattern 2048², fit-eval at grid 1024, pixel 4096² full mask,
@@ -145,8 +149,16 @@ pub fn run(w: Which) -> Result<(), String> {
             only,
             threads,
             speed_only,
+            export_jax,
             ..
-        } => super::fit_bench::run(quick, seeds, only.as_deref(), threads, speed_only),
+        } => super::fit_bench::run(
+            quick,
+            seeds,
+            only.as_deref(),
+            threads,
+            speed_only,
+            export_jax.as_deref(),
+        ),
         Which::Inspect { repeats, .. } => {
             let png = TEST_PNG_1024;
             let opts = InspectOptions::default();

@@ -87,6 +87,32 @@ fn rate(obj: &mut Objective, p: &[f64], grad: bool) -> (f64, f64) {
     (rates[2], rates[1])
 }
 
+/// Write one throughput case for `bench/jax_fit_reference.py`: the
+/// parameters, the target fields, the loss settings and our loss and
+/// gradient at the parameters, as `DIR/<generator>-<grid>.json`.
+fn export_case(dir: &str, name: &str, c: &Case, obj: &Objective, p: &[f64]) -> Result<(), String> {
+    let mut o = obj.clone();
+    let mut g = vec![0.0; p.len()];
+    let loss_grad = o.loss_grad(p, &mut g);
+    let loss = o.loss(p);
+    let colours: Vec<String> = c
+        .scene
+        .channels
+        .iter()
+        .map(|ch| {
+            let [r, g, b] = c.scene.rec.colours[ch.colour as usize];
+            format!("#{r:02x}{g:02x}{b:02x}")
+        })
+        .collect();
+    let v = json!({"generator": name, "grid": o.opts.grid, "scale": o.opts.scale(),
+                   "normal_weight": o.opts.normal_weight, "params": p, "channels": colours,
+                   "target_sdf": o.target.sdf, "loss": loss, "loss_from_loss_grad": loss_grad,
+                   "grad": g});
+    std::fs::create_dir_all(dir).map_err(|e| format!("{dir}: {e}"))?;
+    let path = format!("{dir}/{name}-{}.json", o.opts.grid);
+    std::fs::write(&path, v.to_string()).map_err(|e| format!("{path}: {e}"))
+}
+
 /// One fit sharded over `threads` threads (the same result as one thread).
 fn fit_on_threads(
     scene: &Scene,
@@ -110,6 +136,7 @@ pub fn run(
     only: Option<&str>,
     threads: Option<usize>,
     speed_only: bool,
+    export: Option<&str>,
 ) -> Result<(), String> {
     let budget = if quick { Budget::Quick } else { Budget::Paper };
     let threads = super::threads(threads)?;
@@ -176,11 +203,21 @@ pub fn run(
                     .zip(&c.hi)
                     .map(|(l, h)| l + 0.45 * (h - l))
                     .collect();
+            if let Some(dir) = export {
+                export_case(dir, name, &c, &obj, &p)?;
+            }
             let lo = rate(&mut obj, &p, false);
             let lg = rate(&mut obj, &p, true);
+            // The reference (pre-session-9) path, in the same run.
+            obj.reference = true;
+            let blo = rate(&mut obj, &p, false);
+            let blg = rate(&mut obj, &p, true);
             speed.push(json!({"generator": name, "grid": grid, "params": p.len(), "shapes": c.scene.shape_count(),
                               "loss_evals_per_s": lo.0.round(), "loss_grad_evals_per_s": lg.0.round(),
-                              "median_loss_evals_per_s": lo.1.round(), "median_loss_grad_evals_per_s": lg.1.round()}));
+                              "median_loss_evals_per_s": lo.1.round(), "median_loss_grad_evals_per_s": lg.1.round(),
+                              "before_loss_evals_per_s": blo.0.round(), "before_loss_grad_evals_per_s": blg.0.round(),
+                              "after_over_before_loss": (lo.0 / blo.0 * 100.0).round() / 100.0,
+                              "after_over_before_loss_grad": (lg.0 / blg.0 * 100.0).round() / 100.0}));
         }
     }
     // Field units: pixels (default) against canvas units, quick fits of the stripe patterns.
@@ -208,7 +245,7 @@ pub fn run(
     }
     let out = json!({"bench": "fit", "budget": if quick {"quick"} else {"paper"}, "threads": threads,
                      "fits": fits, "throughput_one_core": speed,
-                     "throughput_method": "best and median of three 0.3 s windows, one thread", "units": units});
+                     "throughput_method": "best and median of three 0.3 s windows, one thread; before_*: the reference path (Objective::reference) in the same run", "units": units});
     println!(
         "{}",
         serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?

@@ -171,6 +171,231 @@ pub fn loss(
     t_normals: &[[f64; 2]],
     ds: Option<&mut [f64]>,
 ) -> f64 {
+    loss_with(opts, s, t, t_normals, ds, &mut vec![])
+}
+
+/// [`loss`] with a scratch row the caller keeps (no allocation per call).
+fn loss_with(
+    opts: &LossOptions,
+    s: &[f64],
+    t: &Target,
+    t_normals: &[[f64; 2]],
+    ds: Option<&mut [f64]>,
+    scratch: &mut Vec<[f64; 2]>,
+) -> f64 {
+    if opts.kind != LossKind::Sdf {
+        return loss_reference(opts, s, t, t_normals, ds);
+    }
+    let n = t.n;
+    let nn = n * n;
+    let channels = s.len() / nn;
+    if channels == 0 {
+        return 0.0;
+    }
+    let norm = 1.0 / (channels * nn) as f64;
+    let w = opts.normal_weight;
+    let normals = w != 0.0;
+    let (mut sum_s, mut sum_n) = (0.0, 0.0);
+    match ds {
+        None => {
+            for r in 0..channels * n {
+                let (a, b) = sdf_row::<false>(s, &t.sdf, t_normals, n, r, normals, 0.0, &mut []);
+                sum_s += a;
+                sum_n += b;
+            }
+        }
+        Some(d) => {
+            for ((d, a), b) in d.iter_mut().zip(s).zip(&t.sdf) {
+                *d = 2.0 * (a - b) * norm;
+            }
+            scratch.clear();
+            scratch.resize(n, [0.0; 2]);
+            for r in 0..channels * n {
+                let (a, b) =
+                    sdf_row::<true>(s, &t.sdf, t_normals, n, r, normals, norm * w, scratch);
+                sum_s += a;
+                sum_n += b;
+                if normals {
+                    scatter_row(d, n, r, scratch);
+                }
+            }
+        }
+    }
+    sdf_total(sum_s, sum_n, norm, w)
+}
+
+/// `L_S + α_N·L_N` from the row sums of [`sdf_row`].
+#[inline]
+fn sdf_total(sum_s: f64, sum_n: f64, norm: f64, w: f64) -> f64 {
+    let mut total = sum_s * norm;
+    if w != 0.0 {
+        total += w * (sum_n * norm);
+    }
+    total
+}
+
+/// One pixel's normal term `1 − ⟨g, t⟩²/|g|²` (0 where the target normal
+/// or the field gradient `g` vanishes) and its derivative with respect to
+/// `g`, `−2q/|g|²·(t − q·g/|g|²)` with `q = ⟨g, t⟩`: no square root, and
+/// selects instead of branches so that rows vectorise.
+#[inline(always)]
+fn normal_px(gx: f64, gy: f64, tn: [f64; 2]) -> (f64, f64, f64) {
+    let l2 = gx * gx + gy * gy;
+    let q = gx * tn[0] + gy * tn[1];
+    // (Bitwise, not short-circuit: no branch.)
+    let ok = ((tn[0] != 0.0) | (tn[1] != 0.0)) & (l2 > 1e-24);
+    let il2 = 1.0 / if ok { l2 } else { 1.0 };
+    let qi = q * il2;
+    let term = if ok { 1.0 - q * qi } else { 0.0 };
+    let k = if ok { -2.0 * qi } else { 0.0 };
+    (term, k * (tn[0] - qi * gx), k * (tn[1] - qi * gy))
+}
+
+/// Row `r` (channel `r / n`, row `r % n`) of the SDF loss: the sums of
+/// `(S − T)²` and of the normal terms (central differences, one-sided at
+/// the borders), each in four partial sums. With `G`, `gg[x]` receives the
+/// normal term's derivative with respect to the pixel's stencil difference
+/// (× `gscale` and the inverse spacing), for [`scatter_row`]. Both
+/// [`loss`] and [`LossPass`] take every sum through here, so they give
+/// the same bits.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn sdf_row<const G: bool>(
+    s: &[f64],
+    t: &[f64],
+    tn: &[[f64; 2]],
+    n: usize,
+    r: usize,
+    normals: bool,
+    gscale: f64,
+    gg: &mut [[f64; 2]],
+) -> (f64, f64) {
+    let nn = n * n;
+    let (c, y) = (r / n, r % n);
+    let o = c * nn;
+    let f = &s[o..o + nn];
+    let row = &f[y * n..y * n + n];
+    let tr = &t[o + y * n..o + y * n + n];
+    let mut acc = [0.0f64; 4];
+    let (sc, tc) = (row.chunks_exact(4), tr.chunks_exact(4));
+    let (sr, trr) = (sc.remainder(), tc.remainder());
+    for (a, b) in sc.zip(tc) {
+        for k in 0..4 {
+            let e = a[k] - b[k];
+            acc[k] += e * e;
+        }
+    }
+    for (a, b) in sr.iter().zip(trr) {
+        acc[0] += (a - b) * (a - b);
+    }
+    let ls = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    if !normals {
+        return (ls, 0.0);
+    }
+    let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
+    let ihy = 1.0 / (yp - ym).max(1) as f64;
+    let (up, dn) = (&f[ym * n..ym * n + n], &f[yp * n..yp * n + n]);
+    let tnr = &tn[o + y * n..o + y * n + n];
+    let mut an = [0.0f64; 4];
+    // One pixel with its own stencil (the borders, and rows under 3 wide).
+    let one = |x: usize, an: &mut [f64; 4], gg: &mut [[f64; 2]]| {
+        let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
+        let ihx = 1.0 / (xp - xm).max(1) as f64;
+        let gx = (row[xp] - row[xm]) * ihx;
+        let gy = (dn[x] - up[x]) * ihy;
+        let (term, a, b) = normal_px(gx, gy, tnr[x]);
+        an[0] += term;
+        if G {
+            gg[x] = [a * gscale * ihx, b * gscale * ihy];
+        }
+    };
+    if n < 3 {
+        for x in 0..n {
+            one(x, &mut an, gg);
+        }
+    } else {
+        one(0, &mut an, gg);
+        // The interior: central differences, four lanes.
+        let m = n - 2;
+        let (l, rr) = (&row[..m], &row[2..]);
+        let (u, d) = (&up[1..n - 1], &dn[1..n - 1]);
+        let tm = &tnr[1..n - 1];
+        let chunks = m / 4;
+        let lanes = l
+            .chunks_exact(4)
+            .zip(rr.chunks_exact(4))
+            .zip(u.chunks_exact(4).zip(d.chunks_exact(4)))
+            .zip(tm.chunks_exact(4));
+        for (ch, (((lc, rc), (uc, dc)), tc)) in lanes.enumerate() {
+            for k in 0..4 {
+                let gx = (rc[k] - lc[k]) * 0.5;
+                let gy = (dc[k] - uc[k]) * ihy;
+                let (term, a, b) = normal_px(gx, gy, tc[k]);
+                an[k] += term;
+                if G {
+                    gg[4 * ch + k + 1] = [a * gscale * 0.5, b * gscale * ihy];
+                }
+            }
+        }
+        for i in 4 * chunks..m {
+            let gx = (rr[i] - l[i]) * 0.5;
+            let gy = (d[i] - u[i]) * ihy;
+            let (term, a, b) = normal_px(gx, gy, tm[i]);
+            an[0] += term;
+            if G {
+                gg[i + 1] = [a * gscale * 0.5, b * gscale * ihy];
+            }
+        }
+        one(n - 1, &mut an, gg);
+    }
+    (ls, (an[0] + an[1]) + (an[2] + an[3]))
+}
+
+/// Add the normal term's gradient of row `r` (from [`sdf_row`]'s `gg`)
+/// into `d` through the central-difference stencil.
+fn scatter_row(d: &mut [f64], n: usize, r: usize, gg: &[[f64; 2]]) {
+    let nn = n * n;
+    let (c, y) = (r / n, r % n);
+    let o = c * nn;
+    let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
+    {
+        let row = &mut d[o + y * n..o + y * n + n];
+        if n < 3 {
+            for (x, g) in gg.iter().enumerate().take(n) {
+                let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
+                row[xp] += g[0];
+                row[xm] -= g[0];
+            }
+        } else {
+            // Gather form of `row[x + 1] += g[x]; row[x − 1] −= g[x]`.
+            for j in 1..n - 1 {
+                row[j] += gg[j - 1][0] - gg[j + 1][0];
+            }
+            // (Pixel 0 differences over [0, 1], pixel n − 1 over [n − 2, n − 1].)
+            row[0] -= gg[0][0] + gg[1][0];
+            row[n - 1] += gg[n - 2][0] + gg[n - 1][0];
+        }
+    }
+    let (dp, dm) = (o + yp * n, o + ym * n);
+    for (x, g) in gg.iter().enumerate() {
+        d[dp + x] += g[1];
+    }
+    for (x, g) in gg.iter().enumerate() {
+        d[dm + x] -= g[1];
+    }
+}
+
+/// The loss as first written (the normal term with a square root and a
+/// branch per pixel, scattered gradients): the reference the fast
+/// [`loss`] is tested against, and the "before" figure of `bench fit`.
+#[doc(hidden)]
+pub fn loss_reference(
+    opts: &LossOptions,
+    s: &[f64],
+    t: &Target,
+    t_normals: &[[f64; 2]],
+    ds: Option<&mut [f64]>,
+) -> f64 {
     let n = t.n;
     let nn = n * n;
     let channels = s.len() / nn;
@@ -353,14 +578,13 @@ fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mu
 /// result is the same bits.
 #[derive(Debug, Clone, Default)]
 pub struct LossPass {
-    /// 0: the main term; 1: the normal term (`Sdf`); 2: done.
+    /// 0: going; 2: done.
     phase: u8,
-    /// Where the phase is: a chunk of four values (`Sdf`), a value (`L1`,
-    /// `Image`), a channel (`Pyramid`) or a channel row (normal term).
+    /// Where the pass is: a channel row (`Sdf`), a value (`L1`, `Image`)
+    /// or a channel (`Pyramid`).
     pos: usize,
-    acc: [f64; 4],
+    acc: [f64; 2],
     total: f64,
-    sum: f64,
 }
 
 impl LossPass {
@@ -388,65 +612,21 @@ impl LossPass {
         let budget = budget.max(1);
         match (opts.kind, self.phase) {
             (_, 2) => {}
-            (LossKind::Sdf, 0) => {
-                let chunks = s.len() / 4;
-                let end = chunks.min(self.pos.saturating_add(budget.div_ceil(4)));
-                for k in self.pos..end {
-                    let (a, b) = (&s[4 * k..4 * k + 4], &t.sdf[4 * k..4 * k + 4]);
-                    for j in 0..4 {
-                        let e = a[j] - b[j];
-                        self.acc[j] += e * e;
-                    }
-                }
-                self.pos = end;
-                if end == chunks {
-                    for (a, b) in s[4 * chunks..].iter().zip(&t.sdf[4 * chunks..]) {
-                        self.acc[0] += (a - b) * (a - b);
-                    }
-                    let acc = self.acc;
-                    self.total += (acc[0] + acc[1] + acc[2] + acc[3]) * norm;
-                    self.phase = if opts.normal_weight != 0.0 { 1 } else { 2 };
-                    self.pos = 0;
-                }
-            }
             (LossKind::Sdf, _) => {
-                // Rows of every channel, in order; the same arithmetic as
-                // `normal_term` without a gradient.
+                // Rows of every channel, in order, through `sdf_row` as
+                // `loss` takes them: the main and normal sums in `acc[0..2]`.
                 let rows = channels * n;
-                let end = rows.min(self.pos + budget.div_ceil(n));
-                let at = |i: usize| {
-                    let (m, p) = (i.saturating_sub(1), (i + 1).min(n - 1));
-                    (m, p, 1.0 / (p - m).max(1) as f64)
-                };
+                let end = rows.min(self.pos.saturating_add(budget.div_ceil(n)));
+                let normals = opts.normal_weight != 0.0;
                 for r in self.pos..end {
-                    let (c, y) = (r / n, r % n);
-                    let o = c * nn;
-                    let f = &s[o..o + nn];
-                    let (ym, yp, ihy) = at(y);
-                    let (row, rm, rp) = (y * n, ym * n, yp * n);
-                    let mut row_sum = 0.0;
-                    for x in 0..n {
-                        let (xm, xp, ihx) = at(x);
-                        let t = t_normals[o + row + x];
-                        if t[0] == 0.0 && t[1] == 0.0 {
-                            continue;
-                        }
-                        let gx = (f[row + xp] - f[row + xm]) * ihx;
-                        let gy = (f[rp + x] - f[rm + x]) * ihy;
-                        let l2 = gx * gx + gy * gy;
-                        if l2 <= 1e-24 {
-                            continue;
-                        }
-                        let il = 1.0 / l2.sqrt();
-                        let (nx, ny) = (gx * il, gy * il);
-                        let dot = nx * t[0] + ny * t[1];
-                        row_sum += 1.0 - dot * dot;
-                    }
-                    self.sum += row_sum;
+                    let (a, b) =
+                        sdf_row::<false>(s, &t.sdf, t_normals, n, r, normals, 0.0, &mut []);
+                    self.acc[0] += a;
+                    self.acc[1] += b;
                 }
                 self.pos = end;
                 if end == rows {
-                    self.total += opts.normal_weight * (self.sum / (channels * nn) as f64);
+                    self.total = sdf_total(self.acc[0], self.acc[1], norm, opts.normal_weight);
                     self.phase = 2;
                 }
             }
@@ -519,6 +699,12 @@ pub struct Objective {
     next_tile: usize,
     /// The loss pass of a loss evaluated in parts, once its fields are done.
     pass: Option<LossPass>,
+    /// A row of normal-term derivatives ([`sdf_row`]).
+    scratch: Vec<[f64; 2]>,
+    /// Take [`Objective::loss`] and [`Objective::loss_grad`] through
+    /// [`loss_reference`] (the "before" figure of `bench fit`).
+    #[doc(hidden)]
+    pub reference: bool,
 }
 
 impl Objective {
@@ -540,6 +726,24 @@ impl Objective {
             last_work: 0,
             next_tile: 0,
             pass: None,
+            scratch: vec![],
+            reference: false,
+        }
+    }
+
+    /// [`loss`] (or [`loss_reference`]) of the current fields.
+    fn field_loss(&mut self, grad: bool) -> f64 {
+        let ds = if grad {
+            self.ds.resize(self.eval.s.len(), 0.0);
+            Some(&mut self.ds[..])
+        } else {
+            None
+        };
+        let (s, t, tn) = (&self.eval.s, &self.target, &self.target_normals);
+        if self.reference {
+            loss_reference(&self.opts, s, t, tn, ds)
+        } else {
+            loss_with(&self.opts, s, t, tn, ds, &mut self.scratch)
         }
     }
 
@@ -641,13 +845,7 @@ impl Objective {
         self.eval.finish(&self.scene);
         self.evaluations += 1;
         self.last_work = self.eval.work;
-        let l = loss(
-            &self.opts,
-            &self.eval.s,
-            &self.target,
-            &self.target_normals,
-            None,
-        );
+        let l = self.field_loss(false);
         if l.is_finite() {
             l
         } else {
@@ -667,14 +865,7 @@ impl Objective {
         self.eval.eval(&self.scene, &self.nodes, true);
         self.evaluations += 1;
         self.last_work = self.eval.work * 2;
-        self.ds.resize(self.eval.s.len(), 0.0);
-        let l = loss(
-            &self.opts,
-            &self.eval.s,
-            &self.target,
-            &self.target_normals,
-            Some(&mut self.ds),
-        );
+        let l = self.field_loss(true);
         self.adj.clear();
         self.adj.resize(self.nodes.len(), 0.0);
         self.eval.backward(&self.scene, &self.ds, &mut self.adj);
@@ -810,6 +1001,93 @@ mod tests {
                     };
                     assert_eq!(got.to_bits(), want.to_bits(), "{kind:?} n {n}");
                 }
+            }
+        }
+    }
+
+    /// The fast SDF loss (fused rows, no square root, gathered gradients)
+    /// equals the per-pixel reference, loss and dL/dS, to 1e-12 relative,
+    /// on random fields with flat patches (vanishing gradients), zero target
+    /// normals, every grid side from 1 to 9 and odd sizes, 1 to 3
+    /// channels, with and without the normal term.
+    #[test]
+    fn fast_sdf_loss_equals_the_reference_on_random_fields() {
+        let mut rng = crate::core::rng::Rng::new(9);
+        for n in (1..10).chain([17, 37, 64]) {
+            for channels in 1..4 {
+                for nw in [0.05, 0.0, 1.0] {
+                    let len = channels * n * n;
+                    let field = |rng: &mut crate::core::rng::Rng| -> Vec<f64> {
+                        (0..len)
+                            .map(|_| {
+                                let v = rng.range_f64(-20.0, 20.0);
+                                // A third of the values on a coarse lattice: flat patches.
+                                if rng.range_f64(0.0, 1.0) < 0.33 {
+                                    (v / 8.0).round() * 8.0
+                                } else {
+                                    v
+                                }
+                            })
+                            .collect()
+                    };
+                    let s = field(&mut rng);
+                    let t = Target {
+                        n,
+                        scale: n as f64,
+                        sdf: field(&mut rng),
+                        mask: vec![0.0; len],
+                        unmatched: 0.0,
+                    };
+                    let mut tn = vec![];
+                    normals(&t.sdf, n, &mut tn);
+                    let opts = LossOptions {
+                        grid: n,
+                        normal_weight: nw,
+                        ..Default::default()
+                    };
+                    let (mut d1, mut d2) = (vec![0.0; len], vec![7.0; len]);
+                    let want = loss_reference(&opts, &s, &t, &tn, Some(&mut d1));
+                    let got = loss(&opts, &s, &t, &tn, Some(&mut d2));
+                    let plain = loss(&opts, &s, &t, &tn, None);
+                    assert_eq!(got.to_bits(), plain.to_bits(), "n {n}");
+                    assert!(
+                        (got - want).abs() <= 1e-12 * want.abs().max(1e-300),
+                        "n {n} c {channels} nw {nw}: {got} vs {want}"
+                    );
+                    let scale = d1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    for (i, (a, b)) in d2.iter().zip(&d1).enumerate() {
+                        assert!(
+                            (a - b).abs() <= 1e-12 * scale,
+                            "n {n} c {channels} nw {nw} ds[{i}]: {a} vs {b}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Through the objective (fields, loss, backward, tape): the fast path
+    /// and the reference path give the same loss and parameter gradient to
+    /// 1e-12 relative at random parameters.
+    #[test]
+    fn objective_fast_path_equals_the_reference_path() {
+        let mut rng = crate::core::rng::Rng::new(3);
+        let mut o = objective(SRC, &[0.22, 0.06, 0.2, 0.015], LossKind::Sdf, 53);
+        let (lo, hi) = ([0.1, 0.02, -0.5, 0.005], [0.3, 0.08, 0.5, 0.03]);
+        for _ in 0..20 {
+            let p: Vec<f64> = (0..4).map(|k| rng.range_f64(lo[k], hi[k])).collect();
+            let (mut g1, mut g2) = (vec![0.0; 4], vec![0.0; 4]);
+            o.reference = true;
+            let want = o.loss_grad(&p, &mut g1);
+            let want_l = o.loss(&p);
+            o.reference = false;
+            let got = o.loss_grad(&p, &mut g2);
+            assert_eq!(got.to_bits(), o.loss(&p).to_bits());
+            assert!((got - want).abs() <= 1e-12 * want.abs(), "{got} vs {want}");
+            assert!((want_l - want).abs() <= 1e-12 * want.abs());
+            let scale = g1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for k in 0..4 {
+                assert!((g1[k] - g2[k]).abs() <= 1e-12 * scale, "{g1:?} vs {g2:?}");
             }
         }
     }

@@ -1,18 +1,19 @@
-//! The 4-lane kernel: a chain made only of single circles, points and
-//! segments is evaluated for four pixels of a row at once, so the square
-//! roots overlap (and vectorise).
+//! The lane kernel: a chain made only of single circles, points and
+//! segments is evaluated for a whole small tile (`T2 × T2` pixels) at once,
+//! item by item, so the square roots overlap (and vectorise) and each
+//! item's set-up is paid once per tile, not once per row.
 use super::scene::{Part, Scene};
 use super::tiles::Evaluator;
-use super::{edge_cap, CombineOp, Hit, CAP, NONE, NO_WIN};
+use super::{CombineOp, Hit, CAP, NONE, NO_WIN, T2};
 use crate::pattern::sdf::{self, PrimKind};
 
 impl Evaluator {
     /// [`Evaluator::pixel`] for a chain of single-primitive circle, point and
-    /// segment items (fills, inset fills, strokes) over a block of at most 4
-    /// pixels per row: four independent lanes, so the square roots overlap
-    /// (and vectorise).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn lanes(
+    /// segment items (fills, inset fills, strokes) over a block of at most
+    /// `T2 × T2` pixels: independent lanes, so the square roots overlap
+    /// (and vectorise). With `W`, the winners too; without, no winner
+    /// bookkeeping at all.
+    pub(super) fn lanes<const W: bool>(
         &mut self,
         scene: &Scene,
         init: f64,
@@ -20,31 +21,34 @@ impl Evaluator {
         c: usize,
         (x0, x1): (usize, usize),
         (y0, y1): (usize, usize),
-        winners: bool,
     ) {
+        const L: usize = T2 * T2;
+        debug_assert!(x1 - x0 <= T2 && y1 - y0 <= T2);
         let n = self.n;
         let inv = 1.0 / n as f64;
-        let mut px = [0.0; 4];
-        for (k, v) in px.iter_mut().enumerate() {
-            *v = ((x0 + k).min(x1 - 1) as f64 + 0.5) * inv;
+        // Lane k is pixel (k % T2, k / T2) of the block (edge pixels repeated).
+        let mut px = [0.0; L];
+        let mut py = [0.0; L];
+        for k in 0..L {
+            px[k] = ((x0 + k % T2).min(x1 - 1) as f64 + 0.5) * inv;
+            py[k] = ((y0 + k / T2).min(y1 - 1) as f64 + 0.5) * inv;
         }
-        for y in y0..y1 {
-            let py = (y as f64 + 0.5) * inv;
-            let mut b = [init * CAP; 4];
-            let mut wi = [NONE; 4];
-            let mut wd = [0.0f64; 4];
-            let mut flip = [false; 4];
+        {
+            let mut b = [init * CAP; L];
+            let mut wi = [NONE; L];
+            let mut wd = [0.0f64; L];
+            let mut flip = [false; L];
             let mut i = 0;
             while i < ops.len() {
                 let op = ops[i].0;
-                let mut best = [f64::INFINITY; 4];
-                let mut bi = [NONE; 4];
-                let mut bd = [0.0f64; 4];
+                let mut best = [f64::INFINITY; L];
+                let mut bi = [NONE; L];
+                let mut bd = [0.0f64; L];
                 while i < ops.len() && ops[i].0 == op {
                     let it = ops[i].1;
                     let item = &scene.items[it as usize];
                     let f = &self.prim_vals[item.prim as usize];
-                    let mut d = [0.0f64; 4];
+                    let mut d = [0.0f64; L];
                     match item.kind {
                         PrimKind::Circle | PrimKind::Point => {
                             let r = if item.kind == PrimKind::Circle {
@@ -52,34 +56,51 @@ impl Evaluator {
                             } else {
                                 0.0
                             };
-                            let dy = py - f[1];
-                            for k in 0..4 {
+                            for k in 0..L {
                                 let dx = px[k] - f[0];
+                                let dy = py[k] - f[1];
                                 d[k] = (dx * dx + dy * dy).sqrt() - r;
                             }
                         }
                         _ => {
-                            for k in 0..4 {
-                                d[k] = sdf::segment_distance(f, [px[k], py]);
+                            for k in 0..L {
+                                d[k] = sdf::segment_distance(f, [px[k], py[k]]);
                             }
                         }
                     }
                     let hw = 0.5 * self.widths[item.shape as usize];
-                    for k in 0..4 {
-                        let v = match item.part {
-                            Part::Fill if item.inset => d[k] + hw,
-                            Part::Fill => d[k],
-                            Part::Stroke => d[k].abs() - hw,
-                        };
-                        if v < best[k] {
-                            best[k] = v;
-                            bi[k] = it;
-                            bd[k] = d[k];
+                    let mut vs = d;
+                    match item.part {
+                        Part::Fill if item.inset => vs.iter_mut().for_each(|v| *v += hw),
+                        Part::Fill => {}
+                        Part::Stroke => vs.iter_mut().for_each(|v| *v = v.abs() - hw),
+                    }
+                    for k in 0..L {
+                        let v = vs[k];
+                        if W {
+                            if v < best[k] {
+                                best[k] = v;
+                                bi[k] = it;
+                                bd[k] = d[k];
+                            }
+                        } else {
+                            // Selects, exactly the branch above (no `min`:
+                            // its choice between ±0 is not specified).
+                            best[k] = if v < best[k] { v } else { best[k] };
                         }
                     }
                     i += 1;
                 }
-                for k in 0..4 {
+                for k in 0..L {
+                    if !W {
+                        // The branches below as selects.
+                        b[k] = match op {
+                            CombineOp::Union if best[k] < b[k] => best[k],
+                            CombineOp::Diff if -best[k] > b[k] => -best[k],
+                            _ => b[k],
+                        };
+                        continue;
+                    }
                     match op {
                         CombineOp::Union => {
                             if best[k] < b[k] {
@@ -100,17 +121,18 @@ impl Evaluator {
                     }
                 }
             }
-            for k in 0..x1 - x0 {
-                let idx = c * n * n + y * n + x0 + k;
+            for k in (0..L).filter(|k| k % T2 < x1 - x0 && k / T2 < y1 - y0) {
+                let (x, y) = (x0 + k % T2, y0 + k / T2);
+                let idx = c * n * n + y * n + x;
                 let mut v = b[k];
                 let mut w = wi[k];
-                let cap = CAP.min(edge_cap(x0 + k, y, n));
+                let cap = CAP.min(self.edge[x].min(self.edge[y]));
                 if v.abs() >= cap {
                     v = v.clamp(-cap, cap);
                     w = NONE;
                 }
                 self.s[idx] = v * self.scale;
-                if winners {
+                if W {
                     self.win[idx] = if w == NONE {
                         NO_WIN
                     } else {

@@ -32,6 +32,10 @@ pub struct Evaluator {
     pub(super) ranges2: Vec<(usize, usize)>,
     pub(super) gcache: GeomCache,
     pub(super) lane_channels: Vec<bool>,
+    /// `edge[i]`: [`super::edge_cap`] of a pixel whose nearer border is in
+    /// column (or row) `i`, so `edge_cap(x, y) = min(edge[x], edge[y])`
+    /// (the same bits: the map is monotone and exact per integer).
+    pub(super) edge: Vec<f64>,
     /// Culling stamp of the current big tile (counts on across `eval_tiles` calls).
     tile_id: u32,
     /// Unweighted item evaluations of the evaluation in progress.
@@ -59,6 +63,7 @@ impl Evaluator {
             ranges2: vec![],
             gcache: GeomCache::default(),
             lane_channels: vec![],
+            edge: vec![],
             tile_id: 0,
             raw_work: 0,
         }
@@ -106,6 +111,9 @@ impl Evaluator {
         self.gather(scene, nodes);
         self.gcache.start(scene.rec.shapes.len());
         let n = self.n;
+        if self.edge.len() != n {
+            self.edge = (0..n).map(|i| edge_cap(i, n / 2, n)).collect();
+        }
         let nc = scene.channels.len();
         if self.s.capacity() < nc * n * n {
             // Every value is written by the evaluation: a fresh zeroed
@@ -220,7 +228,11 @@ impl Evaluator {
                             self.lane_channels.push(fast);
                             if fast {
                                 work += (ops.len() * (xe - sx) * (ye - sy)) as u64;
-                                self.lanes(scene, ch.init, ops, c, (sx, xe), (sy, ye), winners);
+                                if winners {
+                                    self.lanes::<true>(scene, ch.init, ops, c, (sx, xe), (sy, ye));
+                                } else {
+                                    self.lanes::<false>(scene, ch.init, ops, c, (sx, xe), (sy, ye));
+                                }
                             }
                         }
                         let scalar = !self.lane_channels.iter().all(|&l| l);
@@ -236,7 +248,7 @@ impl Evaluator {
                                     let ops = &chain2[a..b];
                                     work += ops.len() as u64;
                                     let idx = c * n * n + y * n + x;
-                                    let cap = edge_cap(x, y, n);
+                                    let cap = self.edge[x].min(self.edge[y]);
                                     self.pixel(scene, ch.init, ops, p, cap, idx, winners);
                                 }
                             }
