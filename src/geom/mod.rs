@@ -19,6 +19,7 @@
 //! follow from the envelope theorem: for `d = |p − q(θ)|` with `q` the
 //! closest point, `∂d/∂θ = −n·∂q/∂θ` at the fixed closest parameter,
 //! `n = (p − q)/d`.
+pub mod aa_distance;
 pub mod bezier;
 pub mod distance_transform;
 pub mod fft;
