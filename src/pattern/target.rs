@@ -976,4 +976,53 @@ mod tests {
             }
         }
     }
+
+    /// An anti-aliased image's target (fractional coverage, the
+    /// anti-aliased transform) built a few rows at a time equals the one-go
+    /// target bit for bit.
+    #[test]
+    fn stepping_an_antialiased_target_gives_the_same_bits() {
+        let (scene, _, _) = disc(8, (0.45, 0.55), 0.3);
+        let x = scene.rec.float_values();
+        for (side, n) in [(64usize, 32usize), (32, 32), (20, 32)] {
+            let img = crate::pattern::render::render(&scene, &x, side, 4).unwrap();
+            let one_go = Target::from_image(&scene, &img, n, n as f64, 60.0).unwrap();
+            for budget in [1, 500, 1 << 40] {
+                let b = TargetBuild::image(&scene, img.clone(), n, n as f64, 60.0).unwrap();
+                let (t, _) = stepped(&scene, b, budget);
+                assert!(same_bits(&t, &one_go), "{side}→{n}, budget {budget}");
+            }
+        }
+    }
+
+    /// Any image gives a target or an error, never a panic: noise in any
+    /// colour, a single pixel, one flat colour, a thin sliver.
+    #[test]
+    fn any_image_gives_a_target_or_an_error() {
+        let (scene, _, _) = disc(8, (0.5, 0.5), 0.2);
+        let mut rng = crate::core::rng::Rng::new(17);
+        let mut images = vec![];
+        for (w, h) in [(1u32, 1u32), (1, 40), (37, 2), (50, 50)] {
+            let mut noise = Rgba8Image::new(w, h);
+            let mut grey = Rgba8Image::new(w, h);
+            for y in 0..h {
+                for x in 0..w {
+                    let px: [u8; 4] = std::array::from_fn(|_| rng.below(256) as u8);
+                    noise.put(x, y, px);
+                    let g = (x * 255 / w.max(1)) as u8;
+                    grey.put(x, y, [g, g, g, 255]);
+                }
+            }
+            images.push(noise);
+            images.push(grey);
+        }
+        for img in images {
+            for n in [1, 16, 33] {
+                match Target::from_image(&scene, &img, n, n as f64, 200.0) {
+                    Ok(t) => assert!(t.sdf.iter().all(|v| v.is_finite())),
+                    Err(e) => assert!(e.to_string().contains("not close to any colour"), "{e}"),
+                }
+            }
+        }
+    }
 }
