@@ -232,14 +232,16 @@ impl AaDistance {
             }
             if !hard || first.is_some() {
                 let s2 = std::f64::consts::SQRT_2;
-                let gx = -self.at(xi - 1, yi - 1) - s2 * self.at(xi - 1, yi) - self.at(xi - 1, yi + 1)
-                    + self.at(xi + 1, yi - 1)
-                    + s2 * self.at(xi + 1, yi)
-                    + self.at(xi + 1, yi + 1);
-                let gy = -self.at(xi - 1, yi - 1) - s2 * self.at(xi, yi - 1) - self.at(xi + 1, yi - 1)
-                    + self.at(xi - 1, yi + 1)
-                    + s2 * self.at(xi, yi + 1)
-                    + self.at(xi + 1, yi + 1);
+                let gx =
+                    -self.at(xi - 1, yi - 1) - s2 * self.at(xi - 1, yi) - self.at(xi - 1, yi + 1)
+                        + self.at(xi + 1, yi - 1)
+                        + s2 * self.at(xi + 1, yi)
+                        + self.at(xi + 1, yi + 1);
+                let gy =
+                    -self.at(xi - 1, yi - 1) - s2 * self.at(xi, yi - 1) - self.at(xi + 1, yi - 1)
+                        + self.at(xi - 1, yi + 1)
+                        + s2 * self.at(xi, yi + 1)
+                        + self.at(xi + 1, yi + 1);
                 // Outward normal: against the gradient of the coverage.
                 let (mut nx, mut ny) = (-gx, -gy);
                 let mut len = (nx * nx + ny * ny).sqrt();
@@ -410,7 +412,11 @@ mod tests {
         for y in 0..h {
             for x in 0..w {
                 let want = x as f64 - 3.5;
-                assert!((d[y * w + x] - want).abs() < 1e-12, "{x},{y}: {}", d[y * w + x]);
+                assert!(
+                    (d[y * w + x] - want).abs() < 1e-12,
+                    "{x},{y}: {}",
+                    d[y * w + x]
+                );
             }
         }
     }

@@ -443,16 +443,7 @@ impl TargetBuild {
                     let y = idx.len() / fw;
                     if y < fh {
                         let palette = &scene.rec.colours;
-                        snap_rows(
-                            img,
-                            palette,
-                            fw,
-                            fh,
-                            *tolerance,
-                            y..y + 1,
-                            (idx, mix),
-                            far,
-                        );
+                        snap_rows(img, palette, fw, fh, *tolerance, y..y + 1, (idx, mix), far);
                         spent = spent.saturating_add((fw * (palette.len() + 1)) as BuildWork);
                         continue;
                     }
@@ -949,9 +940,7 @@ mod tests {
                     "segment(0.5 - 2 * cos({a}), 0.5 - 2 * sin({a}), 0.5 + 2 * cos({a}), \
                      0.5 + 2 * sin({a}), stroke: \"#000000\", width: {w});"
                 ),
-                Box::new(move |x: f64, y: f64| {
-                    ((x - 0.5) * sa - (y - 0.5) * ca).abs() - w / 2.0
-                }),
+                Box::new(move |x: f64, y: f64| ((x - 0.5) * sa - (y - 0.5) * ca).abs() - w / 2.0),
             ),
         ];
         for (shape, exact) in &shapes {
@@ -967,9 +956,12 @@ mod tests {
                 // The same image as hard masks: the fields before.
                 let (fw, fh) = field_side(&img, n);
                 let (idx, _, _) = snap_to_palette_wh(&img, &scene.rec.colours, fw, fh, 60.0);
-                let hard = TargetBuild::fields(idx, vec![], fw, fh, n, n as f64, 0.0).finish(&scene);
+                let hard =
+                    TargetBuild::fields(idx, vec![], fw, fh, n, n as f64, 0.0).finish(&scene);
                 let (before, _) = worst_error(&scene, &hard, [0, 0, 0], exact);
-                eprintln!("{shape} {side}→{n}: largest error {worst:.3} px (hard masks {before:.3})");
+                eprintln!(
+                    "{shape} {side}→{n}: largest error {worst:.3} px (hard masks {before:.3})"
+                );
                 assert!(worst < 0.1, "{shape} {side}→{n}: largest error {worst} px");
                 // The hard masks fail the same bound.
                 assert!(before > 0.2, "{shape} {side}→{n}: hard masks {before} px");
