@@ -416,7 +416,7 @@ function mount(el, ctx) {
   async function makeTarget() {
     const d = doc();
     try {
-      const r = await ctx.run('render-pattern', { program: d.program, params: named(info, d.values), size: TARGET_SIZE });
+      const r = await ctx.run('render-pattern', { program: d.program, params: named(info, d.values), size: TARGET_SIZE, supersample: 4 });
       ctx.commit({ ...doc(), target: { width: r.width, height: r.height, rgba: r.rgba }, truth: [...d.values] });
     } catch (err) {
       ctx.error(err);
