@@ -7,11 +7,16 @@
 # loops are not vectorised and the build takes many minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# (check.sh has built it already and runs this beside the wasm build.)
-cargo build --quiet --bin filigree
+# FILIGREE_BIN names a binary to use instead (check.sh passes a copy of
+# the dev binary, so that it can build on while this runs).
+bin=${FILIGREE_BIN:-}
+if [ -z "$bin" ]; then
+  cargo build --quiet --bin filigree
+  bin=target/debug/filigree
+fi
 out=target/texture-index.rebuilt.bin
 start=$(date +%s)
-target/debug/filigree build-index --out "$out" > target/texture-index.rebuilt.json
+"$bin" build-index --out "$out" > target/texture-index.rebuilt.json
 echo "texture index rebuilt in $(( $(date +%s) - start )) s: $(grep -E '"(bytes|id)"' target/texture-index.rebuilt.json | tr -d ' \n')"
 if ! cmp -s "$out" assets/texture-index.bin; then
   echo "assets/texture-index.bin is not what the code builds ($(stat -c %s assets/texture-index.bin) vs $(stat -c %s "$out") bytes)." >&2

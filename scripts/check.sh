@@ -2,8 +2,10 @@
 # Runs every check CI runs, in the same order, from a fresh clone on a fresh
 # Debian machine with Rust: installs what is missing (Chromium via apt, npm dev
 # dependencies, the wasm target and the matching wasm-bindgen-cli), then
-# fmt, clippy (native and wasm32, -D warnings), cargo tests, the texture
-# index rebuilt and compared with the committed one, the release wasm build, and the browser end-to-end tests in headless Chromium.
+# fmt, clippy (native and wasm32, -D warnings), cargo tests, the release
+# wasm build, the browser end-to-end tests in headless Chromium, and the
+# texture index rebuilt (in the background throughout) and compared with
+# the committed one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each step says when it starts (seconds since the start), so a slow CI
@@ -32,16 +34,28 @@ cargo clippy --all-targets -- -D warnings
 step "clippy (wasm32, web feature)"
 cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --features web -- -D warnings
 
+step "the CLI (dev build), then the texture index rebuilt in the background"
+# The index rebuild is the longest single job (about 20 CPU-minutes, most
+# of it training the SVMs). It runs at the lowest priority from here to the
+# end, on whatever the steps below leave idle: the single-threaded parts of
+# the test build, the wasm builds' link-time optimisation, the browser
+# tests. It reads a copy of the binary, so the builds below may replace it.
+cargo build --quiet --bin filigree
+cp target/debug/filigree target/filigree-index-check
+FILIGREE_BIN=target/filigree-index-check nice -n 19 bash scripts/check-texture-index.sh \
+  > target/texture-index-check.log 2>&1 &
+index_check=$!
+# If a step below fails, the rebuild stops too.
+trap 'pkill -f filigree-index-check 2>/dev/null || true' EXIT
+
 step "cargo test"
 cargo test
 
-step "release wasm build (and the test-hooks core), the texture index rebuilt beside it"
-# The index rebuild (minutes of both cores) runs during the wasm builds,
-# whose link-time optimisation leaves a core idle for most of their time.
-cargo build --quiet --bin filigree
-bash scripts/check-texture-index.sh > target/texture-index-check.log 2>&1 &
-index_check=$!
+step "release wasm build (and the test-hooks core)"
 FILIGREE_TEST_HOOKS=1 bash scripts/build.sh   # pkg/ and the test-only pkg-test/
+
+step "browser end-to-end tests (headless Chromium)"
+node --test --test-concurrency=1 tests/e2e/
 
 step "the committed texture index rebuilds to the same bytes"
 if ! wait "$index_check"; then
@@ -49,8 +63,5 @@ if ! wait "$index_check"; then
   exit 1
 fi
 cat target/texture-index-check.log
-
-step "browser end-to-end tests (headless Chromium)"
-node --test --test-concurrency=1 tests/e2e/
 
 step "all checks passed"
