@@ -606,8 +606,8 @@ impl TargetBuild {
 /// The signed distance of one channel: between pixel centres for a
 /// hard-edged channel, anti-aliased when some pixel is partly its colour.
 enum Transform {
-    Hard(SignedDistance),
-    Aa(AaDistance),
+    Hard(Box<SignedDistance>),
+    Aa(Box<AaDistance>),
 }
 
 impl Transform {
@@ -633,15 +633,15 @@ impl Transform {
             a > HARD && a < 1.0 - HARD
         });
         if soft {
-            Transform::Aa(AaDistance::new(
+            Transform::Aa(Box::new(AaDistance::new(
                 (0..idx.len()).map(coverage).collect(),
                 w,
                 h,
                 big,
-            ))
+            )))
         } else {
             let m: Vec<bool> = idx.iter().map(|&i| i == colour).collect();
-            Transform::Hard(SignedDistance::new(m, w, h, big))
+            Transform::Hard(Box::new(SignedDistance::new(m, w, h, big)))
         }
     }
 
@@ -930,7 +930,8 @@ mod tests {
         // bilinearly rounds a ridge off by up to half a fine pixel.
         let (a, w) = (0.47f64, 0.075);
         let (sa, ca) = a.sin_cos();
-        let shapes: [(String, Box<dyn Fn(f64, f64) -> f64>); 2] = [
+        type Shape = (String, Box<dyn Fn(f64, f64) -> f64>);
+        let shapes: [Shape; 2] = [
             (
                 "circle(0.48, 0.53, 0.27, fill: \"#000000\");".into(),
                 Box::new(|x: f64, y: f64| (x - 0.48).hypot(y - 0.53) - 0.27),
