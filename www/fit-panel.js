@@ -11,6 +11,10 @@ import { createCodeEditor } from './code-editor.js';
 import { radioGroup } from './radio-group.js';
 
 const TARGET_SIZE = 256;
+// A target made from known values is drawn anti-aliased, as a user's image
+// of the design would be: the target's fields read the outline from the
+// edge pixels' coverage, to a fraction of a pixel.
+const TARGET_SUPERSAMPLE = 4;
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
 const PREVIEW_EVERY_MS = 250;
 const BUDGETS = ['quick', 'paper'];
@@ -178,7 +182,7 @@ const fitState = {
       if (typeof x.program !== 'string') throw invalid('program', 'is missing');
       const info = await programInfo(ctx.run, x.program);
       const full = await programInfo(ctx.run, x.program, named(info, truth, { integersOnly: true }));
-      const r = await ctx.run('render-pattern', { program: x.program, params: named(full, truth), size: TARGET_SIZE });
+      const r = await ctx.run('render-pattern', { program: x.program, params: named(full, truth), size: TARGET_SIZE, supersample: TARGET_SUPERSAMPLE });
       target = { width: r.width, height: r.height, rgba: r.rgba };
     } else if (target?.indexed) target = unindexTarget(target.indexed);
     return { ...x, target };
@@ -416,7 +420,7 @@ function mount(el, ctx) {
   async function makeTarget() {
     const d = doc();
     try {
-      const r = await ctx.run('render-pattern', { program: d.program, params: named(info, d.values), size: TARGET_SIZE });
+      const r = await ctx.run('render-pattern', { program: d.program, params: named(info, d.values), size: TARGET_SIZE, supersample: TARGET_SUPERSAMPLE });
       ctx.commit({ ...doc(), target: { width: r.width, height: r.height, rgba: r.rgba }, truth: [...d.values] });
     } catch (err) {
       ctx.error(err);

@@ -7,6 +7,7 @@ use filigree::pattern::fit::{colour_indices, Budget, FitJob, FitOptions, FitResu
 use filigree::pattern::generators::GENERATORS;
 use filigree::pattern::loss::{LossKind, LossOptions, Objective, SdfUnits};
 use filigree::pattern::record::{Program, RecordLimits};
+use filigree::pattern::render::render;
 use filigree::pattern::target::Target;
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -49,6 +50,16 @@ fn target(c: &Case, loss: &LossOptions) -> Result<Target, String> {
         loss.grid,
         loss.scale(),
     ))
+}
+
+/// The target of the fits: the truth rendered anti-aliased (4×4 samples a
+/// pixel) at twice the grid's side, as a user's image of the design would
+/// be, snapped to the palette with the default tolerance. Its fields come
+/// from the image's coverage, with the outline placed to a fraction of a
+/// pixel ([`filigree::geom::aa_distance`]).
+fn image_target(c: &Case, loss: &LossOptions) -> Result<Target, String> {
+    let img = render(&c.scene, &c.truth, 2 * loss.grid, 4).map_err(|e| e.to_string())?;
+    Target::from_image(&c.scene, &img, loss.grid, loss.scale(), 60.0).map_err(|e| e.to_string())
 }
 
 fn mse(c: &Case, p: &[f64]) -> f64 {
@@ -151,7 +162,7 @@ pub fn run(
                 let c = case(g.source, 1000 + seed)?;
                 let mut opts = FitOptions::budget(budget);
                 opts.seed = seed + 1;
-                let t = target(&c, &opts.loss)?;
+                let t = image_target(&c, &opts.loss)?;
                 let t0 = Instant::now();
                 let r = fit_on_threads(&c.scene, &t, opts, threads)?;
                 let sdf_secs = t0.elapsed().as_secs_f64();
@@ -164,7 +175,7 @@ pub fn run(
                 let img_secs = t1.elapsed().as_secs_f64();
                 // Image-space L2 end to end (its own GA too): the paper's Fig. 3 setting.
                 let t2 = Instant::now();
-                let tgt = target(&c, &io.loss)?;
+                let tgt = image_target(&c, &io.loss)?;
                 let rs = run_quietly(FitJob::from_parts(c.scene.clone(), tgt, io))
                     .map_err(|e| e.to_string())?;
                 let scratch_secs = t2.elapsed().as_secs_f64();

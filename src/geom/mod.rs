@@ -1,7 +1,8 @@
 //! 2-D geometry shared by the tools: exact distances to primitives with
 //! their derivatives ([`primitives`]), quadratic and cubic Bézier helpers
-//! ([`bezier`]), winding numbers ([`winding`]) and the exact Euclidean
-//! distance transform of a raster mask ([`distance_transform`]).
+//! ([`bezier`]), winding numbers ([`winding`]), the exact Euclidean
+//! distance transform of a raster mask ([`distance_transform`]) and the
+//! sub-pixel one of an anti-aliased coverage raster ([`aa_distance`]).
 //!
 //! Tangle's building blocks work on glam `DVec2`: polygons with holes and
 //! their booleans, slices and insets through `i_overlay` ([`polygon`]),
@@ -19,6 +20,7 @@
 //! follow from the envelope theorem: for `d = |p − q(θ)|` with `q` the
 //! closest point, `∂d/∂θ = −n·∂q/∂θ` at the fixed closest parameter,
 //! `n = (p − q)/d`.
+pub mod aa_distance;
 pub mod bezier;
 pub mod distance_transform;
 pub mod fft;
