@@ -8,7 +8,7 @@ use filigree::pattern::fit::{colour_indices, Budget, FitJob, FitOptions, TargetS
 use filigree::pattern::generators::{generator, GENERATORS};
 use filigree::pattern::loss::{LossKind, LossOptions, Objective};
 use filigree::pattern::optim::{GaOptions, InitMethod};
-use filigree::pattern::record::{Program, RecordLimits};
+use filigree::pattern::record::{ParamDecl, Program, RecordLimits};
 use filigree::pattern::render;
 use filigree::pattern::target::Target;
 use filigree::raster::{decode, encode_png, Limits};
@@ -1068,6 +1068,22 @@ for j in 0..12 {
 }
 ";
 
+/// A truth for [`TILED`] drawn from `seed` in the middle half of each
+/// range, and a start 3% of each range away from it (up or down by coin).
+fn tiled_truth_and_start(decls: &[&ParamDecl], seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let mut rng = Rng::new(seed);
+    let truth: Vec<f64> = decls
+        .iter()
+        .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.25, 0.75))
+        .collect();
+    let start = truth
+        .iter()
+        .zip(decls)
+        .map(|(v, d)| v + if rng.f64() < 0.5 { -0.03 } else { 0.03 } * (d.hi - d.lo))
+        .collect();
+    (truth, start)
+}
+
 /// A tiled program (stripes and dots running past every edge) fitted to its
 /// own render from a start 3% of each range away recovers the placement of
 /// its shapes (angle, periods, offset) with a normalised parameter MSE
@@ -1082,16 +1098,7 @@ fn a_tiled_program_fitted_to_its_own_render_recovers_its_placement() {
     let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
     let decls = scene.rec.float_decls();
     for seed in [5, 6] {
-        let mut rng = Rng::new(seed);
-        let truth: Vec<f64> = decls
-            .iter()
-            .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.25, 0.75))
-            .collect();
-        let start: Vec<f64> = truth
-            .iter()
-            .zip(&decls)
-            .map(|(v, d)| v + if rng.f64() < 0.5 { -0.03 } else { 0.03 } * (d.hi - d.lo))
-            .collect();
+        let (truth, start) = tiled_truth_and_start(&decls, seed);
         let mut o = FitOptions::budget(Budget::Quick);
         o.loss.grid = 96;
         o.iterations = 300;
@@ -1131,16 +1138,7 @@ fn tiled_antialiased_fit_mse() -> Vec<f64> {
     let decls = scene.rec.float_decls();
     let mut out = vec![];
     for seed in [5, 6] {
-        let mut rng = Rng::new(seed);
-        let truth: Vec<f64> = decls
-            .iter()
-            .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.25, 0.75))
-            .collect();
-        let start: Vec<f64> = truth
-            .iter()
-            .zip(&decls)
-            .map(|(v, d)| v + if rng.f64() < 0.5 { -0.03 } else { 0.03 } * (d.hi - d.lo))
-            .collect();
+        let (truth, start) = tiled_truth_and_start(&decls, seed);
         let img = render::render(&scene, &truth, 256, 4).unwrap();
         let mut o = FitOptions::default();
         o.loss.grid = AUTO_GRID.1; // what a 256² image target gets

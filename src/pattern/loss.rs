@@ -251,6 +251,24 @@ fn normal_px(gx: f64, gy: f64, tn: [f64; 2]) -> (f64, f64, f64) {
     (term, k * (tn[0] - qi * gx), k * (tn[1] - qi * gy))
 }
 
+/// Σ (a − b)² over `a` and `b` in four partial sums (lane `k` takes every
+/// fourth element, the remainder goes to lane 0): four sums break the serial
+/// add chain and vectorise. Callers combine the lanes in their own order.
+fn squared_differences4(a: &[f64], b: &[f64]) -> [f64; 4] {
+    let mut acc = [0.0f64; 4];
+    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ar, br) = (ac.remainder(), bc.remainder());
+    for (x, y) in ac.zip(bc) {
+        for k in 0..4 {
+            let e = x[k] - y[k];
+            acc[k] += e * e;
+        }
+    }
+    for (x, y) in ar.iter().zip(br) {
+        acc[0] += (x - y) * (x - y);
+    }
+    acc
+}
 /// Row `r` (channel `r / n`, row `r % n`) of the SDF loss: the sums of
 /// `(S − T)²` and of the normal terms (central differences, one-sided at
 /// the borders), each in four partial sums. With `G`, `gg[x]` receives the
@@ -276,18 +294,7 @@ fn sdf_row<const G: bool>(
     let f = &s[o..o + nn];
     let row = &f[y * n..y * n + n];
     let tr = &t[o + y * n..o + y * n + n];
-    let mut acc = [0.0f64; 4];
-    let (sc, tc) = (row.chunks_exact(4), tr.chunks_exact(4));
-    let (sr, trr) = (sc.remainder(), tc.remainder());
-    for (a, b) in sc.zip(tc) {
-        for k in 0..4 {
-            let e = a[k] - b[k];
-            acc[k] += e * e;
-        }
-    }
-    for (a, b) in sr.iter().zip(trr) {
-        acc[0] += (a - b) * (a - b);
-    }
+    let acc = squared_differences4(row, tr);
     let ls = (acc[0] + acc[1]) + (acc[2] + acc[3]);
     if !normals {
         return (ls, 0.0);
@@ -411,19 +418,7 @@ pub fn loss_reference(
     let mut total = 0.0;
     match opts.kind {
         LossKind::Sdf => {
-            // Four partial sums break the serial add chain (and vectorise).
-            let mut acc = [0.0f64; 4];
-            let (sc, tc) = (s.chunks_exact(4), t.sdf.chunks_exact(4));
-            let (sr, tr) = (sc.remainder(), tc.remainder());
-            for (a, b) in sc.zip(tc) {
-                for k in 0..4 {
-                    let e = a[k] - b[k];
-                    acc[k] += e * e;
-                }
-            }
-            for (a, b) in sr.iter().zip(tr) {
-                acc[0] += (a - b) * (a - b);
-            }
+            let acc = squared_differences4(s, &t.sdf);
             total += (acc[0] + acc[1] + acc[2] + acc[3]) * norm;
             if let Some(d) = ds.as_deref_mut() {
                 for ((d, a), b) in d.iter_mut().zip(s).zip(&t.sdf) {
