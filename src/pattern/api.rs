@@ -278,7 +278,10 @@ impl Default for PatternSnapRequest {
 /// A target image snapped to a program's palette.
 #[derive(Debug, Clone, Serialize)]
 pub struct SnapResponse {
-    /// `size × size`, every pixel exactly one of the program's colours.
+    /// `size × size`: every pixel one of the program's colours, or, where
+    /// the upload blends two of them (an anti-aliased edge), that blend of
+    /// the two, so the fit still reads its outlines to a fraction of a
+    /// pixel (see `geom::aa_distance`).
     #[serde(flatten)]
     pub image: RawImage,
     /// Fraction of pixels farther than the tolerance from every colour.
@@ -287,18 +290,22 @@ pub struct SnapResponse {
 
 /// Decode an uploaded target, resample it to `size × size` (nearest) and
 /// snap every pixel to the nearest colour the program draws with (or its
-/// background), so the user sees exactly what the fit will compare against.
+/// background), or to the blend of two of them that explains it better (an
+/// anti-aliased edge), so the user sees exactly what the fit will compare
+/// against and the fit keeps the edges' sub-pixel positions.
 pub fn snap_target(req: &PatternSnapRequest) -> Result<SnapResponse> {
     let size = lim::int_in("size", req.size, lim::SNAP_SIZE)?;
     let tolerance = lim::finite_in("tolerance", req.tolerance, lim::TOLERANCE)?;
     let img = decode(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
     let (_, scene, _) = scene_of(&req.program, &req.params)?;
     let colours = &scene.rec.colours;
-    let (idx, unmatched) = super::target::snap_to_palette(&img, colours, size, tolerance);
+    let (idx, mix, unmatched) =
+        super::target::snap_to_palette_wh(&img, colours, size, size, tolerance);
     let mut image = Rgba8Image::new(size as u32, size as u32);
-    for (i, &k) in idx.iter().enumerate() {
-        let [r, g, b] = colours[k as usize];
-        image.data[4 * i..4 * i + 4].copy_from_slice(&[r, g, b, 255]);
+    for (i, (&k, &(other, t))) in idx.iter().zip(&mix).enumerate() {
+        let (a, b) = (colours[k as usize], colours[other as usize]);
+        let c = |j: usize| (t * a[j] as f64 + (1.0 - t) * b[j] as f64).round() as u8;
+        image.data[4 * i..4 * i + 4].copy_from_slice(&[c(0), c(1), c(2), 255]);
     }
     Ok(SnapResponse {
         image: RawImage::from(image),

@@ -40,23 +40,12 @@ pub struct Target {
 /// first). Keeps the distance transforms of a target a few milliseconds.
 const MAX_FIELD_SIDE: usize = 512;
 
-/// Palette index of every pixel of an `n × n` grid laid over the image:
+/// Palette index of every pixel of an `nw × nh` grid laid over the image:
 /// nearest palette colour (RGB distance) of the image pixel under each grid
 /// pixel's centre. Transparent pixels (alpha < 128) count as background.
-/// Returns the indices and the fraction of pixels farther than `tolerance`
-/// from their colour.
-pub(crate) fn snap_to_palette(
-    img: &Rgba8Image,
-    palette: &[Rgb],
-    n: usize,
-    tolerance: f64,
-) -> (Vec<u16>, f64) {
-    let (idx, _, far) = snap_to_palette_wh(img, palette, n, n, tolerance);
-    (idx, far)
-}
-
-/// [`snap_to_palette`] on a `nw × nh` raster, with each pixel's [`Mix`].
-fn snap_to_palette_wh(
+/// Returns the indices, each pixel's [`Mix`], and the fraction of pixels
+/// farther than `tolerance` from their colour.
+pub(crate) fn snap_to_palette_wh(
     img: &Rgba8Image,
     palette: &[Rgb],
     nw: usize,
@@ -878,7 +867,7 @@ mod tests {
     fn an_image_the_size_of_the_grid_keeps_the_exact_grid_fields() {
         let (scene, img, _) = disc(64, (0.5, 0.5), 0.2);
         let t = Target::from_image(&scene, &img, 64, 64.0, 60.0).unwrap();
-        let (idx, _) = snap_to_palette(&img, &scene.rec.colours, 64, 60.0);
+        let (idx, _, _) = snap_to_palette_wh(&img, &scene.rec.colours, 64, 64, 60.0);
         let g = Target::from_indices(&scene, &idx, 64, 64.0);
         assert_eq!(t.sdf, g.sdf);
         assert_eq!(t.mask, g.mask);
@@ -914,6 +903,44 @@ mod tests {
             }
         }
         (worst, count)
+    }
+
+    /// An anti-aliased drawing uploaded in the browser goes through
+    /// `pattern-snap` (what the user sees) before it becomes the target:
+    /// the snap keeps its edge pixels as blends of two palette colours, so
+    /// the target built from the snapped picture still has its outline to a
+    /// tenth of a pixel. (Snapped to hard colours, as before, it was off by
+    /// about half a pixel.)
+    #[test]
+    fn an_uploaded_antialiased_target_keeps_its_subpixel_edges_through_the_snap() {
+        use crate::pattern::api::{snap_target, PatternSnapRequest};
+        use crate::pattern::render::render;
+        use crate::raster::encode_png;
+        let src = "background \"#ffffff\";\ncircle(0.48, 0.53, 0.27, fill: \"#203040\");";
+        let exact = |x: f64, y: f64| (x - 0.48).hypot(y - 0.53) - 0.27;
+        let p = Program::parse(src).unwrap();
+        let scene = Scene::new(p.record(&p.defaults(), &RecordLimits::default()).unwrap());
+        let img = render(&scene, &scene.rec.float_values(), 256, 8).unwrap();
+        let snapped = snap_target(&PatternSnapRequest {
+            program: src.into(),
+            bytes: encode_png(&img).unwrap(),
+            size: 256,
+            ..PatternSnapRequest::default()
+        })
+        .unwrap();
+        let palette = &scene.rec.colours;
+        let blends = snapped
+            .image
+            .rgba
+            .chunks_exact(4)
+            .filter(|px| !palette.iter().any(|c| c[..] == px[..3]))
+            .count();
+        assert!(blends > 100, "{blends} edge pixels kept as blends");
+        let shown = Rgba8Image::from_raw(256, 256, snapped.image.rgba).unwrap();
+        let t = Target::from_image(&scene, &shown, 128, 128.0, 60.0).unwrap();
+        let (worst, count) = worst_error(&scene, &t, [0x20, 0x30, 0x40], &exact);
+        assert!(count > 100, "{count} pixels near the outline");
+        assert!(worst < 0.1, "largest error {worst} px after the snap");
     }
 
     /// A disc and a slanted band drawn anti-aliased by the renderer: the
