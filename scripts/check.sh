@@ -3,9 +3,9 @@
 # Debian machine with Rust: installs what is missing (Chromium via apt, npm dev
 # dependencies, the wasm target and the matching wasm-bindgen-cli), then
 # fmt, clippy (native and wasm32, -D warnings), cargo tests, the release
-# wasm build, the browser end-to-end tests in headless Chromium, and the
-# texture index rebuilt (in the background throughout) and compared with
-# the committed one.
+# wasm build, the texture index rebuilt (in the background from the test
+# build on) and compared with the committed one, and the browser
+# end-to-end tests in headless Chromium.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each step says when it starts (seconds since the start), so a slow CI
@@ -36,10 +36,10 @@ cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --featu
 
 step "the CLI (dev build), then the texture index rebuilt in the background"
 # The index rebuild is the longest single job (about 20 CPU-minutes, most
-# of it training the SVMs). It runs at the lowest priority from here to the
-# end, on whatever the steps below leave idle: the single-threaded parts of
-# the test build, the wasm builds' link-time optimisation, the browser
-# tests. It reads a copy of the binary, so the builds below may replace it.
+# of it training the SVMs). It runs at the lowest priority under the test
+# and wasm builds, on what they leave idle (their single-threaded parts,
+# link-time optimisation). It reads a copy of the binary, so the builds
+# below may replace it.
 cargo build --quiet --bin filigree
 cp target/debug/filigree target/filigree-index-check
 FILIGREE_BIN=target/filigree-index-check nice -n 19 bash scripts/check-texture-index.sh \
@@ -54,14 +54,17 @@ cargo test
 step "release wasm build (and the test-hooks core)"
 FILIGREE_TEST_HOOKS=1 bash scripts/build.sh   # pkg/ and the test-only pkg-test/
 
-step "browser end-to-end tests (headless Chromium)"
-node --test --test-concurrency=1 tests/e2e/
-
+# The rebuild gets both cores for what is left of it before the browser
+# tests start: left running beside them, it doubled their time (nice 19 did
+# not keep it out of Chromium's way).
 step "the committed texture index rebuilds to the same bytes"
 if ! wait "$index_check"; then
   cat target/texture-index-check.log
   exit 1
 fi
 cat target/texture-index-check.log
+
+step "browser end-to-end tests (headless Chromium)"
+node --test --test-concurrency=1 tests/e2e/
 
 step "all checks passed"
