@@ -126,25 +126,43 @@ pub struct Retrieval {
 }
 
 /// Maps `f` over `items` on all cores natively (one thread in wasm),
-/// keeping the order.
+/// keeping the order. Each thread takes the next item when it is free, so
+/// items of very different cost (an SVM that converges in 50 epochs beside
+/// one that needs 1,000) keep every core busy; which thread computes an
+/// item never changes its result.
 pub fn par_map<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync) -> Vec<U> {
     #[cfg(not(target_arch = "wasm32"))]
     {
+        use std::sync::atomic::{AtomicUsize, Ordering};
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
             .min(items.len().max(1));
         if threads > 1 {
-            let chunk = items.len().div_ceil(threads);
-            return std::thread::scope(|s| {
-                let handles: Vec<_> = items
-                    .chunks(chunk)
-                    .map(|c| s.spawn(|| c.iter().map(&f).collect::<Vec<U>>()))
-                    .collect();
+            let next = AtomicUsize::new(0);
+            let work = || {
+                let mut mine = Vec::new();
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(i) else { break };
+                    mine.push((i, f(item)));
+                }
+                mine
+            };
+            let done: Vec<(usize, U)> = std::thread::scope(|s| {
+                let handles: Vec<_> = (0..threads).map(|_| s.spawn(work)).collect();
                 handles
                     .into_iter()
                     .flat_map(|h| h.join().expect("a worker thread panicked"))
                     .collect()
             });
+            let mut out: Vec<Option<U>> = (0..items.len()).map(|_| None).collect();
+            for (i, u) in done {
+                out[i] = Some(u);
+            }
+            return out
+                .into_iter()
+                .map(|u| u.expect("every item mapped"))
+                .collect();
         }
     }
     items.iter().map(f).collect()

@@ -315,6 +315,32 @@ impl Linear {
     pub fn decision(&self, x: &[f32]) -> f64 {
         dot(&self.w, x) - self.rho as f64
     }
+
+    /// The machine trained on rows minus `mean`, taking rows as they are:
+    /// w·(x − μ) − ρ = w·x − (ρ + w·μ).
+    fn uncentred(self, mean: &[f64]) -> Linear {
+        let shift: f64 = self.w.iter().zip(mean).map(|(w, m)| *w as f64 * m).sum();
+        Linear {
+            rho: (self.rho as f64 + shift) as f32,
+            w: self.w,
+        }
+    }
+}
+
+/// The mean of each column of `rows` (summed in row order, in f64).
+fn column_mean(rows: &[Vec<f32>]) -> Vec<f64> {
+    let dim = rows.first().map_or(0, |r| r.len());
+    let mut mean = vec![0f64; dim];
+    for r in rows {
+        for (m, v) in mean.iter_mut().zip(r) {
+            *m += *v as f64;
+        }
+    }
+    let n = rows.len().max(1) as f64;
+    for m in &mut mean {
+        *m /= n;
+    }
+    mean
 }
 
 /// Dot product of an f64 weight vector and an f32 row, in eight fixed
@@ -432,13 +458,33 @@ pub struct OneVsRest {
 impl OneVsRest {
     /// Trains one machine per class present in `labels` (see
     /// [`train_linear_svc`]), the classes on all cores natively.
+    ///
+    /// The machines train on the rows centred on their mean, and the mean
+    /// is folded back into each machine's ρ, so they take the rows as they
+    /// are. Why: our features (square-rooted histograms) are all positive
+    /// and lie in a narrow cone, which conditions the dual badly; on the
+    /// Texture dataset most machines ran into [`MAX_EPOCHS`] uncentred,
+    /// and centred the solver does a third of the updates with the same
+    /// held-out accuracy (measured in session 10: 41.1 M → 13.5 M updates
+    /// for 55 machines; model accuracy 66.7% → 67.4% on held-out bases,
+    /// 86.1% → 85.7% on the paper's split).
     pub fn train(rows: &[Vec<f32>], labels: &[u16], c: f64) -> OneVsRest {
         let mut classes: Vec<u16> = labels.to_vec();
         classes.sort_unstable();
         classes.dedup();
+        let mean = column_mean(rows);
+        let centred: Vec<Vec<f32>> = rows
+            .iter()
+            .map(|r| {
+                r.iter()
+                    .zip(&mean)
+                    .map(|(v, m)| (*v as f64 - m) as f32)
+                    .collect()
+            })
+            .collect();
         let machines = crate::texture::index::par_map(&classes, |&k| {
             let pos: Vec<bool> = labels.iter().map(|&l| l == k).collect();
-            train_linear_svc(rows, &pos, c, k as u64)
+            train_linear_svc(&centred, &pos, c, k as u64).uncentred(&mean)
         });
         OneVsRest { classes, machines }
     }
@@ -529,6 +575,45 @@ mod tests {
         let (rows, labels) = blobs(150, 2, 4);
         let (test, tlabels) = blobs(100, 3, 4);
         let ovr = OneVsRest::train(&rows, &labels, 1.0);
+        let right = test
+            .iter()
+            .zip(&tlabels)
+            .filter(|(x, l)| ovr.predict(x) == **l)
+            .count();
+        assert!(right >= 95, "{right}/100 right");
+    }
+
+    /// One-vs-rest machines train on centred rows but take rows as they
+    /// are: each one's decision on a row equals the centred machine's on
+    /// the row minus the mean (the mean is folded into ρ), and far from the
+    /// origin (every feature shifted by 5) the classes are still told apart.
+    #[test]
+    fn one_vs_rest_folds_the_mean_into_each_machine() {
+        let shift = |rows: Vec<Vec<f32>>| -> Vec<Vec<f32>> {
+            rows.into_iter()
+                .map(|r| r.into_iter().map(|v| v + 5.0).collect())
+                .collect()
+        };
+        let (rows, labels) = blobs(150, 2, 4);
+        let (test, tlabels) = blobs(100, 3, 4);
+        let (rows, test) = (shift(rows), shift(test));
+        let ovr = OneVsRest::train(&rows, &labels, 1.0);
+        let mean = column_mean(&rows);
+        let centre = |x: &[f32]| -> Vec<f32> {
+            x.iter()
+                .zip(&mean)
+                .map(|(v, m)| (*v as f64 - m) as f32)
+                .collect()
+        };
+        let centred: Vec<Vec<f32>> = rows.iter().map(|r| centre(r)).collect();
+        for (k, m) in ovr.classes.iter().zip(&ovr.machines) {
+            let pos: Vec<bool> = labels.iter().map(|l| l == k).collect();
+            let plain = train_linear_svc(&centred, &pos, 1.0, *k as u64);
+            for x in &test {
+                let (a, b) = (m.decision(x), plain.decision(&centre(x)));
+                assert!((a - b).abs() < 1e-4 * (1.0 + b.abs()), "{a} vs {b}");
+            }
+        }
         let right = test
             .iter()
             .zip(&tlabels)
