@@ -31,7 +31,8 @@ pub enum LossKind {
     /// L2 of the field difference summed over a Gaussian pyramid.
     Pyramid,
     /// L2 of the rendered colour coverage (1-pixel anti-aliased) against the
-    /// target's colour masks: differentiable rendering, for comparison.
+    /// target's coverage read from its field the same way: differentiable
+    /// rendering, for comparison.
     Image,
 }
 
@@ -122,6 +123,17 @@ pub(crate) fn normals_rows(
             });
         }
     }
+}
+
+/// The fraction of a pixel a colour covers, from the colour's signed
+/// distance at the pixel's centre in pixels of the grid: 1 − (d + ½)
+/// clamped to [0, 1], the box filter's coverage of a straight edge across
+/// the pixel along an axis. The image-space loss reads the pattern's and
+/// the target's coverage both through this, so at the truth they agree
+/// wherever the two fields do.
+#[inline]
+pub(crate) fn coverage(d_px: f64) -> f64 {
+    (0.5 - d_px).clamp(0.0, 1.0)
 }
 
 /// One 3×3 binomial blur + decimation by two, clamped borders.
@@ -440,11 +452,10 @@ pub fn loss_reference(
             }
         }
         LossKind::Image => {
-            // Coverage of a pixel from its signed distance in pixels.
             let to_px = n as f64 / t.scale;
             for i in 0..s.len() {
-                let a = (0.5 - s[i] * to_px).clamp(0.0, 1.0);
-                let e = a - t.mask[i] as f64;
+                let a = coverage(s[i] * to_px);
+                let e = a - t.cover[i];
                 total += e * e * norm;
                 if let Some(d) = ds.as_deref_mut() {
                     let inside = 0.5 - s[i] * to_px;
@@ -631,15 +642,14 @@ impl LossPass {
                 let (sv, tv, tm) = (
                     &s[self.pos..end],
                     &t.sdf[self.pos..end],
-                    &t.mask[self.pos..end],
+                    &t.cover[self.pos..end],
                 );
                 for ((&v, &d), &m) in sv.iter().zip(tv).zip(tm) {
                     if opts.kind == LossKind::L1 {
                         let e = v - d;
                         self.total += e.abs() * norm;
                     } else {
-                        let a = (0.5 - v * to_px).clamp(0.0, 1.0);
-                        let e = a - m as f64;
+                        let e = coverage(v * to_px) - m;
                         self.total += e * e * norm;
                     }
                 }
@@ -1030,7 +1040,7 @@ mod tests {
                         n,
                         scale: n as f64,
                         sdf: field(&mut rng),
-                        mask: vec![0.0; len],
+                        cover: vec![0.0; len],
                         unmatched: 0.0,
                     };
                     let mut tn = vec![];

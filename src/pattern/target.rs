@@ -14,6 +14,7 @@
 //! The distance transforms themselves are shared:
 //! [`crate::geom::distance_transform`], [`crate::geom::aa_distance`].
 use super::field::{edge_cap, Evaluator, Scene, CAP};
+use super::loss::coverage;
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
 use crate::geom::aa_distance::{AaDistance, HARD};
@@ -29,8 +30,12 @@ pub struct Target {
     pub scale: f64,
     /// Channel-major signed fields, same layout as `Evaluator::s`.
     pub sdf: Vec<f64>,
-    /// Channel-major masks (1 inside the colour).
-    pub mask: Vec<f32>,
+    /// Channel-major coverage: the fraction of each pixel the colour
+    /// covers, read from the field with the pattern's own convention
+    /// ([`coverage`]), so the image-space loss compares like with like: 0
+    /// or 1 for a hard-edged target on its own grid (the masks), fractions
+    /// along a sub-pixel outline.
+    pub cover: Vec<f64>,
     /// Fraction of pixels farther than the tolerance from every palette colour.
     pub unmatched: f64,
 }
@@ -74,35 +79,40 @@ pub(crate) fn snap_to_palette_wh(
 pub(crate) type Mix = (u16, f64);
 
 /// The mix of pixel colour `px` whose nearest palette colour is `a` (squared
-/// distance `d2`): the second colour `b` and fraction `t` for which
-/// `t·a + (1 − t)·b` is nearest `px`, when that explains `px` better than `a`
-/// alone. Returns the (index, mix) with the larger fraction first.
+/// distance `d2`): the two palette colours `i`, `j` and fraction `t` for
+/// which `t·i + (1 − t)·j` is nearest `px`, when that explains `px` better
+/// than `a` alone. Every pair is tried, not only pairs with `a`: a thin dark
+/// line anti-aliased on white is grey, and grey may be nearest a third
+/// colour (blue, say) that is not in the pixel at all. Returns the (index,
+/// mix) with the larger fraction first.
 fn mix_of(px: [u8; 4], palette: &[Rgb], a: u16, d2: f64) -> (u16, Mix) {
     let pure = (a, (a, 1.0));
     if d2 == 0.0 {
         return pure;
     }
-    let ca = palette[a as usize];
-    let mut best: Option<(f64, u16, f64)> = None;
-    for (j, cb) in palette.iter().enumerate() {
-        let ab: [f64; 3] = std::array::from_fn(|k| ca[k] as f64 - cb[k] as f64);
-        let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-        if j == a as usize || l2 == 0.0 {
-            continue;
-        }
-        let pb: [f64; 3] = std::array::from_fn(|k| px[k] as f64 - cb[k] as f64);
-        let t = ((pb[0] * ab[0] + pb[1] * ab[1] + pb[2] * ab[2]) / l2).clamp(0.0, 1.0);
-        let r: f64 = (0..3).map(|k| (pb[k] - t * ab[k]).powi(2)).sum();
-        if best.is_none_or(|b| r < b.0) {
-            best = Some((r, j as u16, t));
+    // (residual, i, j, fraction of i)
+    let mut best: Option<(f64, u16, u16, f64)> = None;
+    for (i, ci) in palette.iter().enumerate() {
+        for (j, cj) in palette.iter().enumerate().skip(i + 1) {
+            let ij: [f64; 3] = std::array::from_fn(|k| ci[k] as f64 - cj[k] as f64);
+            let l2 = ij[0] * ij[0] + ij[1] * ij[1] + ij[2] * ij[2];
+            if l2 == 0.0 {
+                continue;
+            }
+            let pj: [f64; 3] = std::array::from_fn(|k| px[k] as f64 - cj[k] as f64);
+            let t = ((pj[0] * ij[0] + pj[1] * ij[1] + pj[2] * ij[2]) / l2).clamp(0.0, 1.0);
+            let r: f64 = (0..3).map(|k| (pj[k] - t * ij[k]).powi(2)).sum();
+            if best.is_none_or(|b| r < b.0) {
+                best = Some((r, i as u16, j as u16, t));
+            }
         }
     }
     match best {
-        Some((r, b, t)) if r < d2 && t < 1.0 - HARD => {
+        Some((r, i, j, t)) if r < d2 && t > HARD && t < 1.0 - HARD => {
             if t >= 0.5 {
-                (a, (b, t))
+                (i, (j, t))
             } else {
-                (b, (a, 1.0 - t))
+                (j, (i, 1.0 - t))
             }
         }
         _ => pure,
@@ -209,7 +219,7 @@ impl Target {
             n,
             scale,
             sdf: vec![],
-            mask: vec![],
+            cover: vec![],
             unmatched: 0.0,
         }
     }
@@ -255,7 +265,7 @@ pub struct TargetBuild {
     scale: f64,
     stage: Stage,
     sdf: Vec<f64>,
-    mask: Vec<f32>,
+    cover: Vec<f64>,
     unmatched: f64,
 }
 
@@ -351,15 +361,15 @@ impl TargetBuild {
             scale,
             stage: Stage::Done,
             sdf: vec![],
-            mask: vec![],
+            cover: vec![],
             unmatched: 0.0,
         }
     }
 
     /// The fields of palette indices on a `fw × fh` raster covering the
     /// canvas: computed there, then taken as they are (`fw = fh = n`) or
-    /// sampled bilinearly at the centres of the `n × n` grid (masks are
-    /// where the sampled field is negative).
+    /// sampled bilinearly at the centres of the `n × n` grid; the coverage
+    /// is read from the field in grid pixels ([`coverage`]).
     fn fields(
         idx: Vec<u16>,
         mix: Vec<Mix>,
@@ -433,7 +443,9 @@ impl TargetBuild {
                     if y < fh {
                         let palette = &scene.rec.colours;
                         snap_rows(img, palette, fw, fh, *tolerance, y..y + 1, (idx, mix), far);
-                        spent = spent.saturating_add((fw * (palette.len() + 1)) as BuildWork);
+                        // (The nearest colour, then every pair for a mix.)
+                        let pairs = palette.len() * palette.len().saturating_sub(1) / 2;
+                        spent = spent.saturating_add((fw * (palette.len() + 1 + pairs)) as BuildWork);
                         continue;
                     }
                     let far = *far as f64 / (fw * fh) as f64;
@@ -487,7 +499,7 @@ impl TargetBuild {
                             n,
                             scale,
                             sdf: std::mem::take(&mut self.sdf),
-                            mask: std::mem::take(&mut self.mask),
+                            cover: std::mem::take(&mut self.cover),
                             unmatched: self.unmatched,
                         };
                         self.stage = Stage::Done;
@@ -496,7 +508,7 @@ impl TargetBuild {
                     if c == 0 && self.sdf.is_empty() {
                         let cap = scene.channels.len() * n * n;
                         self.sdf.reserve_exact(cap);
-                        self.mask.reserve_exact(cap);
+                        self.cover.reserve_exact(cap);
                     }
                     let sd = match sd {
                         Some(sd) => sd,
@@ -547,14 +559,12 @@ impl TargetBuild {
                     if (fw, fh) == (n, n) {
                         // The grid's own fields: all rows at once (a copy).
                         let px_to_units = scale / n as f64;
-                        let colour = scene.channels[c].colour;
                         self.sdf.extend(
                             d.iter()
                                 .enumerate()
                                 .map(|(i, v)| edge_clamp(v * px_to_units, i % n, i / n, n, scale)),
                         );
-                        self.mask
-                            .extend(idx.iter().map(|&i| if i == colour { 1.0f32 } else { 0.0 }));
+                        self.cover.extend(d.iter().map(|&v| coverage(v)));
                         spent = spent.saturating_add((n * n / 4) as BuildWork);
                         *row = n;
                     } else {
@@ -564,10 +574,9 @@ impl TargetBuild {
                         let v = (y as f64 + 0.5) * sy - 0.5;
                         for x in 0..n {
                             let u = (x as f64 + 0.5) * sx - 0.5;
-                            let value = bilinear(d, fw, fh, u, v) * px * scale;
-                            let value = edge_clamp(value, x, y, n, scale);
-                            self.sdf.push(value);
-                            self.mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
+                            let canvas = bilinear(d, fw, fh, u, v) * px;
+                            self.cover.push(coverage(canvas * n as f64));
+                            self.sdf.push(edge_clamp(canvas * scale, x, y, n, scale));
                         }
                         spent = spent.saturating_add(4 * n as BuildWork);
                         *row += 1;
@@ -754,7 +763,8 @@ mod tests {
                         .enumerate()
                         .map(|(i, v)| edge_clamp(v * (scale / n as f64), i % n, i / n, n, scale)),
                 );
-                mask.extend(m.iter().map(|&b| if b { 1.0f32 } else { 0.0 }));
+                // A hard channel's coverage is its mask.
+                mask.extend(m.iter().map(|&b| if b { 1.0 } else { 0.0 }));
             } else {
                 let px = 1.0 / ((fw * fh) as f64).sqrt();
                 let d = signed_distance(&m, fw, fh, CAP / px);
@@ -762,10 +772,9 @@ mod tests {
                 for y in 0..n {
                     for x in 0..n {
                         let (u, v) = ((x as f64 + 0.5) * sx - 0.5, (y as f64 + 0.5) * sy - 0.5);
-                        let value = bilinear(&d, fw, fh, u, v) * px * scale;
-                        let value = edge_clamp(value, x, y, n, scale);
-                        sdf.push(value);
-                        mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
+                        let value = bilinear(&d, fw, fh, u, v) * px;
+                        sdf.push(edge_clamp(value * scale, x, y, n, scale));
+                        mask.push((0.5 - value * n as f64).clamp(0.0, 1.0));
                     }
                 }
             }
@@ -774,7 +783,7 @@ mod tests {
             n,
             scale,
             sdf,
-            mask,
+            cover: mask,
             unmatched: 0.0,
         }
     }
@@ -786,7 +795,7 @@ mod tests {
                 .iter()
                 .zip(&b.sdf)
                 .all(|(x, y)| x.to_bits() == y.to_bits())
-            && a.mask == b.mask
+            && a.cover == b.cover
             && a.unmatched.to_bits() == b.unmatched.to_bits()
     }
 
@@ -870,7 +879,7 @@ mod tests {
         let (idx, _, _) = snap_to_palette_wh(&img, &scene.rec.colours, 64, 64, 60.0);
         let g = Target::from_indices(&scene, &idx, 64, 64.0);
         assert_eq!(t.sdf, g.sdf);
-        assert_eq!(t.mask, g.mask);
+        assert_eq!(t.cover, g.cover);
     }
 
     /// The largest error, in grid pixels, of channel `colour`'s target field
