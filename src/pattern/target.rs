@@ -308,6 +308,8 @@ enum Stage {
         fh: usize,
         channel: usize,
         d: Vec<f64>,
+        /// The anti-aliased transform that gave `d`, to sample between pixels.
+        aa: Option<Box<AaDistance>>,
         row: usize,
     },
     Done,
@@ -530,6 +532,11 @@ impl TargetBuild {
                             spent = spent.saturating_add(2 * (fw * fh) as BuildWork);
                             let idx = std::mem::take(idx);
                             let mix = std::mem::take(mix);
+                            // An anti-aliased field is sampled from its edge pieces.
+                            let aa = match std::mem::replace(sd, Transform::Done) {
+                                Transform::Aa(t) => Some(t),
+                                _ => None,
+                            };
                             self.stage = Stage::Sample {
                                 idx,
                                 mix,
@@ -537,6 +544,7 @@ impl TargetBuild {
                                 fh,
                                 channel: c,
                                 d,
+                                aa,
                                 row: 0,
                             };
                         }
@@ -553,6 +561,7 @@ impl TargetBuild {
                     fh,
                     channel,
                     d,
+                    aa,
                     row,
                 } => {
                     let (fw, fh, c) = (*fw, *fh, *channel);
@@ -574,7 +583,10 @@ impl TargetBuild {
                         let v = (y as f64 + 0.5) * sy - 0.5;
                         for x in 0..n {
                             let u = (x as f64 + 0.5) * sx - 0.5;
-                            let canvas = bilinear(d, fw, fh, u, v) * px;
+                            let canvas = match aa {
+                                Some(t) => t.sample(u, v),
+                                None => bilinear(d, fw, fh, u, v),
+                            } * px;
                             self.cover.push(coverage(canvas * n as f64));
                             self.sdf.push(edge_clamp(canvas * scale, x, y, n, scale));
                         }
@@ -606,6 +618,8 @@ impl TargetBuild {
 enum Transform {
     Hard(Box<SignedDistance>),
     Aa(Box<AaDistance>),
+    /// Handed on once complete.
+    Done,
 }
 
 impl Transform {
@@ -647,6 +661,7 @@ impl Transform {
         match self {
             Transform::Hard(s) => s.step(budget),
             Transform::Aa(s) => s.step(budget),
+            Transform::Done => unreachable!("a finished transform was stepped"),
         }
     }
 }
