@@ -95,7 +95,7 @@ fn mix_of(px: [u8; 4], palette: &[Rgb], a: u16, d2: f64) -> (u16, Mix) {
     for (i, ci) in palette.iter().enumerate() {
         for (j, cj) in palette.iter().enumerate().skip(i + 1) {
             let ij: [f64; 3] = std::array::from_fn(|k| ci[k] as f64 - cj[k] as f64);
-            let l2 = ij[0] * ij[0] + ij[1] * ij[1] + ij[2] * ij[2];
+            let l2 = seg2(palette, i as u16, j as u16);
             if l2 == 0.0 {
                 continue;
             }
@@ -108,7 +108,16 @@ fn mix_of(px: [u8; 4], palette: &[Rgb], a: u16, d2: f64) -> (u16, Mix) {
         }
     }
     match best {
-        Some((r, i, j, t)) if r < d2 && t > HARD && t < 1.0 - HARD => {
+        // The pixel must lie along the segment: off it by at most a quarter
+        // of its way along from the nearer end. A pixel of three colours
+        // (a thin line across an outline) is often nearest some segment,
+        // sometimes one to a colour not in it at all.
+        Some((r, i, j, t))
+            if r < d2
+                && t > HARD
+                && t < 1.0 - HARD
+                && r <= (ALONG * t.min(1.0 - t)).powi(2) * seg2(palette, i, j) =>
+        {
             if t >= 0.5 {
                 (i, (j, t))
             } else {
@@ -117,6 +126,16 @@ fn mix_of(px: [u8; 4], palette: &[Rgb], a: u16, d2: f64) -> (u16, Mix) {
         }
         _ => pure,
     }
+}
+
+/// How far (relative) off the segment between two palette colours a pixel
+/// may lie and still count as their mix: see [`mix_of`].
+const ALONG: f64 = 0.25;
+
+/// Squared RGB distance between palette colours `i` and `j`.
+fn seg2(palette: &[Rgb], i: u16, j: u16) -> f64 {
+    let (a, b) = (palette[i as usize], palette[j as usize]);
+    (0..3).map(|k| (a[k] as f64 - b[k] as f64).powi(2)).sum()
 }
 
 /// Rows `rows` of [`snap_to_palette_wh`]: appends their indices to `out`
@@ -866,6 +885,61 @@ mod tests {
             let (t, _) = stepped(&scene, b, budget);
             assert!(same_bits(&t, &one_go), "drawn, budget {budget}");
         }
+    }
+
+    /// A pixel's mix: every blend of two palette colours is read back as
+    /// those two colours (to a rounding), even when the blend is nearest a
+    /// third colour (grey, between the dark line and white, is nearest
+    /// blue); a pixel of three colours is not read as a blend with a colour
+    /// that is not in it.
+    #[test]
+    fn a_pixel_is_read_as_the_blend_of_the_two_colours_it_mixes() {
+        let palette: [Rgb; 4] = [[255, 255, 255], [46, 134, 193], [243, 156, 18], [28, 40, 51]];
+        let nearest = |px: [u8; 4]| -> (u16, f64) {
+            let mut best = (0u16, f64::INFINITY);
+            for (i, c) in palette.iter().enumerate() {
+                let d: f64 = (0..3).map(|k| (px[k] as f64 - c[k] as f64).powi(2)).sum();
+                if d < best.1 {
+                    best = (i as u16, d);
+                }
+            }
+            best
+        };
+        for i in 0..4u16 {
+            for j in 0..4u16 {
+                if i == j {
+                    continue;
+                }
+                for t in [0.1, 0.3, 0.45, 0.55, 0.7, 0.9] {
+                    let (a, b) = (palette[i as usize], palette[j as usize]);
+                    let px: [u8; 4] = std::array::from_fn(|k| {
+                        if k == 3 {
+                            255
+                        } else {
+                            (t * a[k] as f64 + (1.0 - t) * b[k] as f64).round() as u8
+                        }
+                    });
+                    let (near, d2) = nearest(px);
+                    let (major, (minor, f)) = mix_of(px, &palette, near, d2);
+                    let (want_major, want_minor, want_f) =
+                        if t >= 0.5 { (i, j, t) } else { (j, i, 1.0 - t) };
+                    assert_eq!((major, minor), (want_major, want_minor), "{i}/{j} at {t}: {px:?}");
+                    assert!((f - want_f).abs() < 0.01, "{i}/{j} at {t}: {f}");
+                }
+            }
+        }
+        // Grey between the dark line and white is nearest blue.
+        let grey = [141, 147, 153, 255];
+        assert_eq!(nearest(grey).0, 1);
+        let (near, d2) = nearest(grey);
+        let (major, (minor, _)) = mix_of(grey, &palette, near, d2);
+        assert_eq!((major.min(minor), major.max(minor)), (0, 3));
+        // Blue with a little white and dark (a thin dark line across the
+        // edge of a blue stripe) lies near the blue–orange segment: it is
+        // blue, not a blend with orange.
+        let three = [70, 137, 183, 255];
+        let (near, d2) = nearest(three);
+        assert_eq!(mix_of(three, &palette, near, d2), (1, (1, 1.0)));
     }
 
     #[test]
