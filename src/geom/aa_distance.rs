@@ -537,7 +537,10 @@ mod tests {
                  bilinear largest {worst_bilinear:.3} mean {mean_bilinear:+.4}"
             );
             assert!(worst < 0.11, "case {k}: sampled largest {worst}");
-            assert!(worst < worst_bilinear, "case {k}: bilinear {worst_bilinear}");
+            assert!(
+                worst < worst_bilinear,
+                "case {k}: bilinear {worst_bilinear}"
+            );
             if k == 0 {
                 // The disc: no bias, where interpolation overstates.
                 assert!(mean.abs() < 0.005, "disc: sampled mean {mean}");

@@ -9,7 +9,16 @@
 //! colours), and a channel whose coverage has fractions gets the
 //! anti-aliased transform ([`crate::geom::aa_distance`]), which puts the
 //! outline where the image says it is to a fraction of a pixel. A
-//! hard-edged channel keeps the transform between pixel centres.
+//! hard-edged channel keeps the transform between pixel centres. Only a
+//! pixel that lies along the segment between two palette colours counts
+//! as their blend (every pair is tried).
+//!
+//! An image bigger than the loss grid gets its fields on its own raster,
+//! then sampled at the grid's pixel centres: bilinearly near an outline,
+//! and, for an anti-aliased channel, as the distance to its edge pieces
+//! farther away ([`AaDistance::sample`]: interpolation rounds off ridges).
+//! Each channel's coverage (what the image-space loss compares) is read
+//! from the sampled field as the pattern's is ([`coverage`]).
 //!
 //! The distance transforms themselves are shared:
 //! [`crate::geom::distance_transform`], [`crate::geom::aa_distance`].
@@ -466,7 +475,8 @@ impl TargetBuild {
                         snap_rows(img, palette, fw, fh, *tolerance, y..y + 1, (idx, mix), far);
                         // (The nearest colour, then every pair for a mix.)
                         let pairs = palette.len() * palette.len().saturating_sub(1) / 2;
-                        spent = spent.saturating_add((fw * (palette.len() + 1 + pairs)) as BuildWork);
+                        spent =
+                            spent.saturating_add((fw * (palette.len() + 1 + pairs)) as BuildWork);
                         continue;
                     }
                     let far = *far as f64 / (fw * fh) as f64;
@@ -894,7 +904,12 @@ mod tests {
     /// that is not in it.
     #[test]
     fn a_pixel_is_read_as_the_blend_of_the_two_colours_it_mixes() {
-        let palette: [Rgb; 4] = [[255, 255, 255], [46, 134, 193], [243, 156, 18], [28, 40, 51]];
+        let palette: [Rgb; 4] = [
+            [255, 255, 255],
+            [46, 134, 193],
+            [243, 156, 18],
+            [28, 40, 51],
+        ];
         let nearest = |px: [u8; 4]| -> (u16, f64) {
             let mut best = (0u16, f64::INFINITY);
             for (i, c) in palette.iter().enumerate() {
@@ -923,7 +938,11 @@ mod tests {
                     let (major, (minor, f)) = mix_of(px, &palette, near, d2);
                     let (want_major, want_minor, want_f) =
                         if t >= 0.5 { (i, j, t) } else { (j, i, 1.0 - t) };
-                    assert_eq!((major, minor), (want_major, want_minor), "{i}/{j} at {t}: {px:?}");
+                    assert_eq!(
+                        (major, minor),
+                        (want_major, want_minor),
+                        "{i}/{j} at {t}: {px:?}"
+                    );
                     assert!((f - want_f).abs() < 0.01, "{i}/{j} at {t}: {f}");
                 }
             }
