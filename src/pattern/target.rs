@@ -619,7 +619,10 @@ impl TargetBuild {
                             self.cover.push(coverage(canvas * n as f64));
                             self.sdf.push(edge_clamp(canvas * scale, x, y, n, scale));
                         }
-                        spent = spent.saturating_add(4 * n as BuildWork);
+                        // (Away from the outline an anti-aliased field
+                        // looks at up to 16 edge pieces a pixel.)
+                        let per_pixel = if aa.is_some() { 20 } else { 4 };
+                        spent = spent.saturating_add(per_pixel * n as BuildWork);
                         *row += 1;
                     }
                     if *row == n {
