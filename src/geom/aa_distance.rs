@@ -500,14 +500,13 @@ mod tests {
                     break d;
                 }
             };
-            for i in 0..w * h {
+            for (i, &f) in d.iter().enumerate() {
                 let (x, y) = ((i % w) as f64, (i / w) as f64);
                 // (It looks at more pieces than the sweeps passed on.)
                 let e = t.sample(x, y);
                 assert!(
-                    e.signum() == d[i].signum() && e.abs() <= d[i].abs(),
-                    "case {k} at {x},{y}: {e} vs {}",
-                    d[i]
+                    e.signum() == f.signum() && e.abs() <= f.abs(),
+                    "case {k} at {x},{y}: {e} vs {f}"
                 );
             }
             // Largest and mean signed error, sampled and interpolated,
