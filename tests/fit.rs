@@ -1163,12 +1163,14 @@ fn tiled_antialiased_fit_mse() -> Vec<f64> {
 /// The target's fields come from the image's coverage
 /// ([`filigree::geom::aa_distance`]), and the image polish compares the
 /// pattern's coverage with the target's, read from that field the same way
-/// (`filigree::pattern::loss::coverage`). Measured: 3.9e-6 and 1.8e-6, the
-/// dot radius still the largest share (about 0.009 grid pixel too small).
-/// Before: with fields between the centres of hard masks (a crisp render)
-/// 5–7e-4; with sub-pixel fields but a polish against hard masks of the
-/// target, 5.3e-5 and 3.5e-5 (the polish pulled the radius down by 0.03
-/// pixel).
+/// (`filigree::pattern::loss::coverage`). Measured: 5.4e-7 and 1.4e-6, the
+/// dot radius the largest share (0.003–0.005 grid pixel too big). Before:
+/// with fields between the centres of hard masks (a crisp render) 5–7e-4;
+/// with sub-pixel fields but a polish against hard masks of the target,
+/// 5.3e-5 and 3.5e-5 (the polish pulled the radius down by 0.03 pixel);
+/// with coverage against coverage but the target's field interpolated
+/// bilinearly near the outline, 3.9e-6 and 1.3e-6 (radius 0.005–0.009
+/// pixel too small).
 #[test]
 fn a_tiled_program_fitted_to_its_own_antialiased_render_meets_1e_5() {
     for (k, mse) in tiled_antialiased_fit_mse().into_iter().enumerate() {
