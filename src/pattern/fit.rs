@@ -62,6 +62,9 @@ pub struct FitOptions {
     /// robustly but its composed fields are not exact distances inside
     /// overlaps, which biases the optimum slightly; `filigree bench fit`
     /// (`image_same_init`) shows this polish removing most of that bias.
+    /// The image loss reads the target's coverage from its field as it
+    /// reads the pattern's ([`super::loss::coverage`]), so its minimum is
+    /// the truth for an anti-aliased target as for a hard-edged one.
     #[serde(default)]
     pub polish: usize,
     /// Split one fit over `shards.1` identical jobs (the browser's worker

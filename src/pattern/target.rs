@@ -9,11 +9,21 @@
 //! colours), and a channel whose coverage has fractions gets the
 //! anti-aliased transform ([`crate::geom::aa_distance`]), which puts the
 //! outline where the image says it is to a fraction of a pixel. A
-//! hard-edged channel keeps the transform between pixel centres.
+//! hard-edged channel keeps the transform between pixel centres. Only a
+//! pixel that lies along the segment between two palette colours counts
+//! as their blend (every pair is tried).
+//!
+//! An image bigger than the loss grid gets its fields on its own raster,
+//! then sampled at the grid's pixel centres: bilinearly near an outline,
+//! and, for an anti-aliased channel, as the distance to its edge pieces
+//! farther away ([`AaDistance::sample`]: interpolation rounds off ridges).
+//! Each channel's coverage (what the image-space loss compares) is read
+//! from the sampled field as the pattern's is ([`coverage`]).
 //!
 //! The distance transforms themselves are shared:
 //! [`crate::geom::distance_transform`], [`crate::geom::aa_distance`].
 use super::field::{edge_cap, Evaluator, Scene, CAP};
+use super::loss::coverage;
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
 use crate::geom::aa_distance::{AaDistance, HARD};
@@ -29,8 +39,12 @@ pub struct Target {
     pub scale: f64,
     /// Channel-major signed fields, same layout as `Evaluator::s`.
     pub sdf: Vec<f64>,
-    /// Channel-major masks (1 inside the colour).
-    pub mask: Vec<f32>,
+    /// Channel-major coverage: the fraction of each pixel the colour
+    /// covers, read from the field with the pattern's own convention
+    /// ([`coverage`]), so the image-space loss compares like with like: 0
+    /// or 1 for a hard-edged target on its own grid (the masks), fractions
+    /// along a sub-pixel outline.
+    pub cover: Vec<f64>,
     /// Fraction of pixels farther than the tolerance from every palette colour.
     pub unmatched: f64,
 }
@@ -74,39 +88,63 @@ pub(crate) fn snap_to_palette_wh(
 pub(crate) type Mix = (u16, f64);
 
 /// The mix of pixel colour `px` whose nearest palette colour is `a` (squared
-/// distance `d2`): the second colour `b` and fraction `t` for which
-/// `t·a + (1 − t)·b` is nearest `px`, when that explains `px` better than `a`
-/// alone. Returns the (index, mix) with the larger fraction first.
+/// distance `d2`): the two palette colours `i`, `j` and fraction `t` for
+/// which `t·i + (1 − t)·j` is nearest `px`, when that explains `px` better
+/// than `a` alone. Every pair is tried, not only pairs with `a`: a thin dark
+/// line anti-aliased on white is grey, and grey may be nearest a third
+/// colour (blue, say) that is not in the pixel at all. Returns the (index,
+/// mix) with the larger fraction first.
 fn mix_of(px: [u8; 4], palette: &[Rgb], a: u16, d2: f64) -> (u16, Mix) {
     let pure = (a, (a, 1.0));
     if d2 == 0.0 {
         return pure;
     }
-    let ca = palette[a as usize];
-    let mut best: Option<(f64, u16, f64)> = None;
-    for (j, cb) in palette.iter().enumerate() {
-        let ab: [f64; 3] = std::array::from_fn(|k| ca[k] as f64 - cb[k] as f64);
-        let l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-        if j == a as usize || l2 == 0.0 {
-            continue;
-        }
-        let pb: [f64; 3] = std::array::from_fn(|k| px[k] as f64 - cb[k] as f64);
-        let t = ((pb[0] * ab[0] + pb[1] * ab[1] + pb[2] * ab[2]) / l2).clamp(0.0, 1.0);
-        let r: f64 = (0..3).map(|k| (pb[k] - t * ab[k]).powi(2)).sum();
-        if best.is_none_or(|b| r < b.0) {
-            best = Some((r, j as u16, t));
+    // (residual, i, j, fraction of i)
+    let mut best: Option<(f64, u16, u16, f64)> = None;
+    for (i, ci) in palette.iter().enumerate() {
+        for (j, cj) in palette.iter().enumerate().skip(i + 1) {
+            let ij: [f64; 3] = std::array::from_fn(|k| ci[k] as f64 - cj[k] as f64);
+            let l2 = seg2(palette, i as u16, j as u16);
+            if l2 == 0.0 {
+                continue;
+            }
+            let pj: [f64; 3] = std::array::from_fn(|k| px[k] as f64 - cj[k] as f64);
+            let t = ((pj[0] * ij[0] + pj[1] * ij[1] + pj[2] * ij[2]) / l2).clamp(0.0, 1.0);
+            let r: f64 = (0..3).map(|k| (pj[k] - t * ij[k]).powi(2)).sum();
+            if best.is_none_or(|b| r < b.0) {
+                best = Some((r, i as u16, j as u16, t));
+            }
         }
     }
     match best {
-        Some((r, b, t)) if r < d2 && t < 1.0 - HARD => {
+        // The pixel must lie along the segment: off it by at most a quarter
+        // of its way along from the nearer end. A pixel of three colours
+        // (a thin line across an outline) is often nearest some segment,
+        // sometimes one to a colour not in it at all.
+        Some((r, i, j, t))
+            if r < d2
+                && t > HARD
+                && t < 1.0 - HARD
+                && r <= (ALONG * t.min(1.0 - t)).powi(2) * seg2(palette, i, j) =>
+        {
             if t >= 0.5 {
-                (a, (b, t))
+                (i, (j, t))
             } else {
-                (b, (a, 1.0 - t))
+                (j, (i, 1.0 - t))
             }
         }
         _ => pure,
     }
+}
+
+/// How far (relative) off the segment between two palette colours a pixel
+/// may lie and still count as their mix: see [`mix_of`].
+const ALONG: f64 = 0.25;
+
+/// Squared RGB distance between palette colours `i` and `j`.
+fn seg2(palette: &[Rgb], i: u16, j: u16) -> f64 {
+    let (a, b) = (palette[i as usize], palette[j as usize]);
+    (0..3).map(|k| (a[k] as f64 - b[k] as f64).powi(2)).sum()
 }
 
 /// Rows `rows` of [`snap_to_palette_wh`]: appends their indices to `out`
@@ -209,7 +247,7 @@ impl Target {
             n,
             scale,
             sdf: vec![],
-            mask: vec![],
+            cover: vec![],
             unmatched: 0.0,
         }
     }
@@ -255,7 +293,7 @@ pub struct TargetBuild {
     scale: f64,
     stage: Stage,
     sdf: Vec<f64>,
-    mask: Vec<f32>,
+    cover: Vec<f64>,
     unmatched: f64,
 }
 
@@ -298,6 +336,8 @@ enum Stage {
         fh: usize,
         channel: usize,
         d: Vec<f64>,
+        /// The anti-aliased transform that gave `d`, to sample between pixels.
+        aa: Option<Box<AaDistance>>,
         row: usize,
     },
     Done,
@@ -351,15 +391,15 @@ impl TargetBuild {
             scale,
             stage: Stage::Done,
             sdf: vec![],
-            mask: vec![],
+            cover: vec![],
             unmatched: 0.0,
         }
     }
 
     /// The fields of palette indices on a `fw × fh` raster covering the
     /// canvas: computed there, then taken as they are (`fw = fh = n`) or
-    /// sampled bilinearly at the centres of the `n × n` grid (masks are
-    /// where the sampled field is negative).
+    /// sampled bilinearly at the centres of the `n × n` grid; the coverage
+    /// is read from the field in grid pixels ([`coverage`]).
     fn fields(
         idx: Vec<u16>,
         mix: Vec<Mix>,
@@ -433,7 +473,10 @@ impl TargetBuild {
                     if y < fh {
                         let palette = &scene.rec.colours;
                         snap_rows(img, palette, fw, fh, *tolerance, y..y + 1, (idx, mix), far);
-                        spent = spent.saturating_add((fw * (palette.len() + 1)) as BuildWork);
+                        // (The nearest colour, then every pair for a mix.)
+                        let pairs = palette.len() * palette.len().saturating_sub(1) / 2;
+                        spent =
+                            spent.saturating_add((fw * (palette.len() + 1 + pairs)) as BuildWork);
                         continue;
                     }
                     let far = *far as f64 / (fw * fh) as f64;
@@ -487,7 +530,7 @@ impl TargetBuild {
                             n,
                             scale,
                             sdf: std::mem::take(&mut self.sdf),
-                            mask: std::mem::take(&mut self.mask),
+                            cover: std::mem::take(&mut self.cover),
                             unmatched: self.unmatched,
                         };
                         self.stage = Stage::Done;
@@ -496,7 +539,7 @@ impl TargetBuild {
                     if c == 0 && self.sdf.is_empty() {
                         let cap = scene.channels.len() * n * n;
                         self.sdf.reserve_exact(cap);
-                        self.mask.reserve_exact(cap);
+                        self.cover.reserve_exact(cap);
                     }
                     let sd = match sd {
                         Some(sd) => sd,
@@ -518,6 +561,11 @@ impl TargetBuild {
                             spent = spent.saturating_add(2 * (fw * fh) as BuildWork);
                             let idx = std::mem::take(idx);
                             let mix = std::mem::take(mix);
+                            // An anti-aliased field is sampled from its edge pieces.
+                            let aa = match std::mem::replace(sd, Transform::Done) {
+                                Transform::Aa(t) => Some(t),
+                                _ => None,
+                            };
                             self.stage = Stage::Sample {
                                 idx,
                                 mix,
@@ -525,6 +573,7 @@ impl TargetBuild {
                                 fh,
                                 channel: c,
                                 d,
+                                aa,
                                 row: 0,
                             };
                         }
@@ -541,20 +590,19 @@ impl TargetBuild {
                     fh,
                     channel,
                     d,
+                    aa,
                     row,
                 } => {
                     let (fw, fh, c) = (*fw, *fh, *channel);
                     if (fw, fh) == (n, n) {
                         // The grid's own fields: all rows at once (a copy).
                         let px_to_units = scale / n as f64;
-                        let colour = scene.channels[c].colour;
                         self.sdf.extend(
                             d.iter()
                                 .enumerate()
                                 .map(|(i, v)| edge_clamp(v * px_to_units, i % n, i / n, n, scale)),
                         );
-                        self.mask
-                            .extend(idx.iter().map(|&i| if i == colour { 1.0f32 } else { 0.0 }));
+                        self.cover.extend(d.iter().map(|&v| coverage(v)));
                         spent = spent.saturating_add((n * n / 4) as BuildWork);
                         *row = n;
                     } else {
@@ -564,12 +612,17 @@ impl TargetBuild {
                         let v = (y as f64 + 0.5) * sy - 0.5;
                         for x in 0..n {
                             let u = (x as f64 + 0.5) * sx - 0.5;
-                            let value = bilinear(d, fw, fh, u, v) * px * scale;
-                            let value = edge_clamp(value, x, y, n, scale);
-                            self.sdf.push(value);
-                            self.mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
+                            let canvas = match aa {
+                                Some(t) => t.sample(u, v),
+                                None => bilinear(d, fw, fh, u, v),
+                            } * px;
+                            self.cover.push(coverage(canvas * n as f64));
+                            self.sdf.push(edge_clamp(canvas * scale, x, y, n, scale));
                         }
-                        spent = spent.saturating_add(4 * n as BuildWork);
+                        // (Away from the outline an anti-aliased field
+                        // looks at up to 16 edge pieces a pixel.)
+                        let per_pixel = if aa.is_some() { 20 } else { 4 };
+                        spent = spent.saturating_add(per_pixel * n as BuildWork);
                         *row += 1;
                     }
                     if *row == n {
@@ -597,6 +650,8 @@ impl TargetBuild {
 enum Transform {
     Hard(Box<SignedDistance>),
     Aa(Box<AaDistance>),
+    /// Handed on once complete.
+    Done,
 }
 
 impl Transform {
@@ -638,6 +693,7 @@ impl Transform {
         match self {
             Transform::Hard(s) => s.step(budget),
             Transform::Aa(s) => s.step(budget),
+            Transform::Done => unreachable!("a finished transform was stepped"),
         }
     }
 }
@@ -754,7 +810,8 @@ mod tests {
                         .enumerate()
                         .map(|(i, v)| edge_clamp(v * (scale / n as f64), i % n, i / n, n, scale)),
                 );
-                mask.extend(m.iter().map(|&b| if b { 1.0f32 } else { 0.0 }));
+                // A hard channel's coverage is its mask.
+                mask.extend(m.iter().map(|&b| if b { 1.0 } else { 0.0 }));
             } else {
                 let px = 1.0 / ((fw * fh) as f64).sqrt();
                 let d = signed_distance(&m, fw, fh, CAP / px);
@@ -762,10 +819,9 @@ mod tests {
                 for y in 0..n {
                     for x in 0..n {
                         let (u, v) = ((x as f64 + 0.5) * sx - 0.5, (y as f64 + 0.5) * sy - 0.5);
-                        let value = bilinear(&d, fw, fh, u, v) * px * scale;
-                        let value = edge_clamp(value, x, y, n, scale);
-                        sdf.push(value);
-                        mask.push(if value < 0.0 { 1.0f32 } else { 0.0 });
+                        let value = bilinear(&d, fw, fh, u, v) * px;
+                        sdf.push(edge_clamp(value * scale, x, y, n, scale));
+                        mask.push((0.5 - value * n as f64).clamp(0.0, 1.0));
                     }
                 }
             }
@@ -774,7 +830,7 @@ mod tests {
             n,
             scale,
             sdf,
-            mask,
+            cover: mask,
             unmatched: 0.0,
         }
     }
@@ -786,7 +842,7 @@ mod tests {
                 .iter()
                 .zip(&b.sdf)
                 .all(|(x, y)| x.to_bits() == y.to_bits())
-            && a.mask == b.mask
+            && a.cover == b.cover
             && a.unmatched.to_bits() == b.unmatched.to_bits()
     }
 
@@ -844,6 +900,70 @@ mod tests {
         }
     }
 
+    /// A pixel's mix: every blend of two palette colours is read back as
+    /// those two colours (to a rounding), even when the blend is nearest a
+    /// third colour (grey, between the dark line and white, is nearest
+    /// blue); a pixel of three colours is not read as a blend with a colour
+    /// that is not in it.
+    #[test]
+    fn a_pixel_is_read_as_the_blend_of_the_two_colours_it_mixes() {
+        let palette: [Rgb; 4] = [
+            [255, 255, 255],
+            [46, 134, 193],
+            [243, 156, 18],
+            [28, 40, 51],
+        ];
+        let nearest = |px: [u8; 4]| -> (u16, f64) {
+            let mut best = (0u16, f64::INFINITY);
+            for (i, c) in palette.iter().enumerate() {
+                let d: f64 = (0..3).map(|k| (px[k] as f64 - c[k] as f64).powi(2)).sum();
+                if d < best.1 {
+                    best = (i as u16, d);
+                }
+            }
+            best
+        };
+        for i in 0..4u16 {
+            for j in 0..4u16 {
+                if i == j {
+                    continue;
+                }
+                for t in [0.1, 0.3, 0.45, 0.55, 0.7, 0.9] {
+                    let (a, b) = (palette[i as usize], palette[j as usize]);
+                    let px: [u8; 4] = std::array::from_fn(|k| {
+                        if k == 3 {
+                            255
+                        } else {
+                            (t * a[k] as f64 + (1.0 - t) * b[k] as f64).round() as u8
+                        }
+                    });
+                    let (near, d2) = nearest(px);
+                    let (major, (minor, f)) = mix_of(px, &palette, near, d2);
+                    let (want_major, want_minor, want_f) =
+                        if t >= 0.5 { (i, j, t) } else { (j, i, 1.0 - t) };
+                    assert_eq!(
+                        (major, minor),
+                        (want_major, want_minor),
+                        "{i}/{j} at {t}: {px:?}"
+                    );
+                    assert!((f - want_f).abs() < 0.01, "{i}/{j} at {t}: {f}");
+                }
+            }
+        }
+        // Grey between the dark line and white is nearest blue.
+        let grey = [141, 147, 153, 255];
+        assert_eq!(nearest(grey).0, 1);
+        let (near, d2) = nearest(grey);
+        let (major, (minor, _)) = mix_of(grey, &palette, near, d2);
+        assert_eq!((major.min(minor), major.max(minor)), (0, 3));
+        // Blue with a little white and dark (a thin dark line across the
+        // edge of a blue stripe) lies near the blue–orange segment: it is
+        // blue, not a blend with orange.
+        let three = [70, 137, 183, 255];
+        let (near, d2) = nearest(three);
+        assert_eq!(mix_of(three, &palette, near, d2), (1, (1, 1.0)));
+    }
+
     #[test]
     fn a_target_matching_no_colour_fails_while_it_is_built() {
         let (scene, mut img, _) = disc(40, (0.5, 0.5), 0.2);
@@ -870,7 +990,7 @@ mod tests {
         let (idx, _, _) = snap_to_palette_wh(&img, &scene.rec.colours, 64, 64, 60.0);
         let g = Target::from_indices(&scene, &idx, 64, 64.0);
         assert_eq!(t.sdf, g.sdf);
-        assert_eq!(t.mask, g.mask);
+        assert_eq!(t.cover, g.cover);
     }
 
     /// The largest error, in grid pixels, of channel `colour`'s target field
