@@ -2,7 +2,8 @@
 // canvas, pen-and-ink: black strokes on paper white, grey fills for `fill`,
 // black with white lines for `white_lines`, filled marks for `mark`.
 //
-//   const t = prepareTangle(response, prev?)  per-shape bounding boxes, styles, lazily built Path2Ds;
+//   const t = prepareTangle(response, prev?)  per-shape bounding boxes, styles, lazily built Path2Ds
+//                                       (the byte columns of shapes and steps viewed as typed arrays);
 //                                       with `prev` (the last answer), its shapes that are unchanged
 //                                       (same group, id, ink and points) keep their Path2Ds
 //   t.visible(i, k)                     shape i shown after k steps (k = steps.length: final)
@@ -69,6 +70,15 @@ export function shapeColumns(c) {
   return S;
 }
 
+/** The answer's steps, each step's `inputs` and `outputs` (u32 little-endian bytes, src/tangle/api.rs `StepOut`) viewed as Uint32Arrays, in place. */
+export function stepsOf(steps) {
+  for (const st of steps) {
+    st.inputs = column(st.inputs, Uint32Array);
+    st.outputs = column(st.outputs, Uint32Array);
+  }
+  return steps;
+}
+
 /**
  * Which shapes of the answer (columns S, points pts) are shapes of the
  * previous prepared answer P: the same group and id, tag, ink, rings and
@@ -123,6 +133,7 @@ function sameRange(a, ao, b, bo, len) {
 
 export function prepareTangle(r, prev = null) {
   const S = r.shapes = shapeColumns(r.shapes);
+  stepsOf(r.steps);
   const n = S.count;
   const pts = pointsOf(r.points);
   const { born, died, first } = S;

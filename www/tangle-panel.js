@@ -330,6 +330,7 @@ function mount(el, ctx) {
       loadThumbnails();
     } catch (err) {
       if (running !== ctrl) return;
+      paint(); // the last answer, without the highlight of a document it does not answer
       status(err?.kind === 'cancelled' ? 'cancelled' : 'the tangle could not grow (see above)');
       if (err?.kind !== 'cancelled') ctx.error(err, { prefix: 'Tangle', source: 'run' });
     } finally {
@@ -339,6 +340,9 @@ function mount(el, ctx) {
       }
     }
   }
+
+  /** Whether a run for document `s`, which the canvas does not show yet, is due or under way. */
+  const awaitingAnswer = (s) => !!T && !!shownFor && !sameRequest(shownFor, s) && (runTimer !== null || running !== null);
 
   /** After an edit, the edited step was regrown at a new position: select it there. */
   function resolveSelection() {
@@ -1272,7 +1276,10 @@ function mount(el, ctx) {
       if (!prev || prev.selected !== s.selected || !sameRequest(s, prev)) {
         hl = null;
         if (shownFor && sameRequest(shownFor, s)) showSelected();
-        paint();
+        // An edit (or any new request) is answered soon: until then the canvas keeps the
+        // last picture and its highlight. Repainting now would only take the highlight off,
+        // and its raster would take the CPU from the worker growing the answer.
+        if (!(options.incremental && awaitingAnswer(s))) paint();
       }
     },
     markError(err) {
