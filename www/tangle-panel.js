@@ -18,9 +18,12 @@
 // `curve`/`shape` polyline definition for split and place rules.
 //
 // Drawing (tangle-draw.js): a step's picture is a few Path2D parts from a
-// segment tree over the steps, built lazily; heavy parts are kept as bitmaps
-// of the current view, so a slider drag redraws only the small parts that
-// changed, and idle time draws the heaviest parts' bitmaps ahead of a jump.
+// segment tree over the steps, built lazily; heavy parts shown by many steps
+// are kept as bitmaps of the current view, so a slider drag redraws only the
+// small parts that changed, and idle time draws the heaviest parts' bitmaps
+// ahead of a jump. A slider move is painted at once when nothing was painted
+// since the last frame. While an answer is due, the canvas keeps the last
+// picture (and its highlight) until the answer repaints it.
 // During a pan or zoom the last full picture is moved as a bitmap and
 // redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
 // An answer after an edit keeps the last answer's unchanged shapes (same
@@ -568,7 +571,13 @@ function mount(el, ctx) {
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
       const key = viewKey(), w = canvas.width, h = canvas.height;
-      paintBatches(g, b, lineWidth(), layers, key, newBitmaps ? null : (part) => layers.has(part, key, w, h));
+      // A heavy part is copied from its bitmap when there is one; else it gets one when
+      // other steps are likely to show it too (a part of the step tree shown by at least a
+      // sixteenth of the steps), and is drawn directly otherwise: a far jump shows a few
+      // deep parts no other step shows, and a bitmap of one (a canvas made, drawn and
+      // copied) costs more than drawing it (the old path: always a bitmap).
+      const again = (part) => !options.incremental || part.span * 16 >= T.steps;
+      paintBatches(g, b, lineWidth(), layers, key, (part) => (newBitmaps ? again(part) : layers.has(part, key, w, h)));
       paintHighlight();
     }
     paintDrawing();
@@ -715,7 +724,21 @@ function mount(el, ctx) {
     out.dataset.step = String(k);
     if (draw) paint();
   }
-  slider.addEventListener('input', () => { stopPlay(); setStep(Number(slider.value)); });
+  slider.addEventListener('input', () => { stopPlay(); setStep(Number(slider.value), false); paintSoon(); });
+
+  // A slider move is painted at once when nothing was painted since the last frame (a key,
+  // a click on the track, a drag's first move): the paint then overlaps the wait for the
+  // next frame instead of starting with it. Moves faster than frames wait for the next
+  // one (paint: one repaint a frame).
+  let paintedNow = false;
+  function paintSoon() {
+    if (!options.incremental || paintedNow) { paint(); return; }
+    cancelAnimationFrame(frame);
+    frame = 0;
+    paintedNow = true;
+    requestAnimationFrame(() => { paintedNow = false; });
+    paintChanged();
+  }
 
   const playBtn = q('[data-act=play]');
   function stopPlay() {
