@@ -37,6 +37,7 @@ import { download } from './project.js';
 import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer, LAYER_VERTICES } from './tangle-draw.js';
 
 const RUN_DELAY_MS = 120;
+const BUSY_DELAY_MS = 150; // a run shows it is busy after this long
 const TYPING_DELAY_MS = 600;
 const SHARP_DELAY_MS = 120;
 const THUMB = { width: 96, height: 72 };
@@ -282,8 +283,17 @@ function mount(el, ctx) {
     running?.abort();
     const ctrl = new AbortController();
     running = ctrl;
-    q('[data-act=cancel]').disabled = false;
-    status('growing…');
+    // A run says it is busy (status, Cancel) only when it takes a while: an edit's answer
+    // comes within a few frames, and every change on the page makes the browser draw a
+    // frame, which takes the CPU from the worker growing the answer.
+    let busy = false;
+    const showBusy = () => {
+      if (running !== ctrl || busy) return;
+      busy = true;
+      q('[data-act=cancel]').disabled = false;
+      status('growing…');
+    };
+    const busyTimer = options.incremental ? ctx.setTimeout(showBusy, BUSY_DELAY_MS) : (showBusy(), null);
     const t0 = performance.now();
     timing.runAt = t0;
     try {
@@ -291,7 +301,7 @@ function mount(el, ctx) {
         signal: ctrl.signal,
         affinity: KEEP_AFFINITY,
         onProgress: (p) => {
-          if (running !== ctrl) return;
+          if (running !== ctrl || !busy) return;
           status(`growing: ${p.figure != null ? `${Math.round(p.figure).toLocaleString('en')} shapes` : p.stage}`);
         },
       });
@@ -337,9 +347,11 @@ function mount(el, ctx) {
       status(err?.kind === 'cancelled' ? 'cancelled' : 'the tangle could not grow (see above)');
       if (err?.kind !== 'cancelled') ctx.error(err, { prefix: 'Tangle', source: 'run' });
     } finally {
+      ctx.clearTimeout(busyTimer);
       if (running === ctrl) {
         running = null;
-        q('[data-act=cancel]').disabled = true;
+        const cancel = q('[data-act=cancel]');
+        if (!cancel.disabled) cancel.disabled = true;
       }
     }
   }
@@ -1299,10 +1311,11 @@ function mount(el, ctx) {
       if (!prev || prev.selected !== s.selected || !sameRequest(s, prev)) {
         hl = null;
         if (shownFor && sameRequest(shownFor, s)) showSelected();
-        // An edit (or any new request) is answered soon: until then the canvas keeps the
+        // An edit of the selected step is answered soon: until then the canvas keeps the
         // last picture and its highlight. Repainting now would only take the highlight off,
-        // and its raster would take the CPU from the worker growing the answer.
-        if (!(options.incremental && awaitingAnswer(s))) paint();
+        // and its raster would take the CPU from the worker growing the answer. (A new
+        // document without a selection drops the highlight at once.)
+        if (!(options.incremental && s.selected != null && awaitingAnswer(s))) paint();
       }
     },
     markError(err) {
