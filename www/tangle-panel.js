@@ -226,8 +226,9 @@ function mount(el, ctx) {
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
-  // `incremental: false` is the old path (a full repaint each time, no shape
-  // kept from the last answer): the latency bench measures both in one run.
+  // `incremental: false` is the old path (a full repaint each time, a bitmap for every
+  // heavy part, a slider move painted at the next frame, an edit repainted and shown busy
+  // at once, no shape kept from the last answer): the latency bench measures both in one run.
   // `highlight: false` leaves the selected step's highlight out of a paint (tests compare
   // the picture with a fresh answer's).
   const options = { incremental: true, highlight: true };
