@@ -589,8 +589,8 @@ function mount(el, ctx) {
       // sixteenth of the steps), and is drawn directly otherwise: a far jump shows a few
       // deep parts no other step shows, and a bitmap of one (a canvas made, drawn and
       // copied) costs more than drawing it (the old path: always a bitmap).
-      const again = (part) => !options.incremental || part.span * 16 >= T.steps;
-      paintBatches(g, b, lineWidth(), layers, key, (part) => (newBitmaps ? again(part) : layers.has(part, key, w, h)));
+      const shared = (part) => !options.incremental || part.span * 16 >= T.steps;
+      paintBatches(g, b, lineWidth(), layers, key, (part) => (newBitmaps ? shared(part) : layers.has(part, key, w, h)));
       paintHighlight();
     }
     paintDrawing();
