@@ -21,8 +21,7 @@
 // segment tree over the steps, built lazily; heavy parts shown by many steps
 // are kept as bitmaps of the current view, so a slider drag redraws only the
 // small parts that changed, and idle time draws the heaviest parts' bitmaps
-// ahead of a jump. A slider move is painted at once when nothing was painted
-// since the last frame. While an answer is due, the canvas keeps the last
+// ahead of a jump. While an edit's answer is due, the canvas keeps the last
 // picture (and its highlight) until the answer repaints it.
 // During a pan or zoom the last full picture is moved as a bitmap and
 // redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
@@ -226,9 +225,10 @@ function mount(el, ctx) {
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
+  let lastParts = new Set(); // the parts of the step tree the last full repaint drew
   // `incremental: false` is the old path (a full repaint each time, a bitmap for every
-  // heavy part, a slider move painted at the next frame, an edit repainted and shown busy
-  // at once, no shape kept from the last answer): the latency bench measures both in one run.
+  // heavy part, an edit repainted and shown busy at once, no shape kept from the last
+  // answer): the latency bench measures both in one run.
   // `highlight: false` leaves the selected step's highlight out of a paint (tests compare
   // the picture with a fresh answer's).
   const options = { incremental: true, highlight: true };
@@ -586,11 +586,14 @@ function mount(el, ctx) {
       const key = viewKey(), w = canvas.width, h = canvas.height;
       // A heavy part is copied from its bitmap when there is one; else it gets one when
       // other steps are likely to show it too (a part of the step tree shown by at least a
-      // sixteenth of the steps), and is drawn directly otherwise: a far jump shows a few
-      // deep parts no other step shows, and a bitmap of one (a canvas made, drawn and
-      // copied) costs more than drawing it (the old path: always a bitmap).
-      const shared = (part) => !options.incremental || part.span * 16 >= T.steps;
+      // sixteenth of the steps) or the last paint showed it too (a drag), and is drawn
+      // directly otherwise: a far jump shows a few deep parts no other step shows, and a
+      // bitmap of one (a canvas made, drawn and copied) costs more than drawing it (the
+      // old path: always a bitmap).
+      const last = lastParts;
+      const shared = (part) => !options.incremental || part.span * 16 >= T.steps || last.has(part);
       paintBatches(g, b, lineWidth(), layers, key, (part) => (newBitmaps ? shared(part) : layers.has(part, key, w, h)));
+      lastParts = new Set(b.parts);
       paintHighlight();
     }
     paintDrawing();
@@ -737,21 +740,7 @@ function mount(el, ctx) {
     out.dataset.step = String(k);
     if (draw) paint();
   }
-  slider.addEventListener('input', () => { stopPlay(); setStep(Number(slider.value), false); paintSoon(); });
-
-  // A slider move is painted at once when nothing was painted since the last frame (a key,
-  // a click on the track, a drag's first move): the paint then overlaps the wait for the
-  // next frame instead of starting with it. Moves faster than frames wait for the next
-  // one (paint: one repaint a frame).
-  let paintedNow = false;
-  function paintSoon() {
-    if (!options.incremental || paintedNow) { paint(); return; }
-    cancelAnimationFrame(frame);
-    frame = 0;
-    paintedNow = true;
-    requestAnimationFrame(() => { paintedNow = false; });
-    paintChanged();
-  }
+  slider.addEventListener('input', () => { stopPlay(); setStep(Number(slider.value)); });
 
   const playBtn = q('[data-act=play]');
   function stopPlay() {

@@ -19,9 +19,9 @@
 // The floor line is an empty animation frame measured in the same run.
 // Every figure has a `before` twin measured in the same run with the panel's
 // old path switched on (`filigreeTangle.options.incremental = false`: every
-// repaint redraws the whole canvas, every heavy part gets a bitmap, a slider
-// move waits for the next frame, an edit repaints at once and shows "growing"
-// at once, and an answer keeps nothing of the last one); the worker's side
+// repaint redraws the whole canvas, every heavy part gets a bitmap, an edit
+// repaints at once and shows "growing" at once, and an answer keeps nothing
+// of the last one); the worker's side
 // (the core and its answer's format) is the same in both. Round trips are timed in the
 // page (the input event to the end of the frame that paints the answer), not
 // through the test driver. `pan_work_ms` is our JS per pan frame (the
