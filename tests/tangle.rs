@@ -441,9 +441,10 @@ fn the_cli_writes_the_svg_the_request_makes() {
     );
 }
 
-/// The answer's shapes and points cross to the browser as columns of
-/// little-endian bytes: decoding them gives back every field of every
-/// shape and every point (what `www/tangle-draw.js` reads).
+/// The answer's shapes, points and steps' shape indices cross to the
+/// browser as little-endian bytes: decoding them gives back every field of
+/// every shape, every point and every step's inputs and outputs (what
+/// `www/tangle-draw.js` reads).
 #[test]
 fn shapes_and_points_serialise_as_byte_columns_that_decode_exactly() {
     let r = run(req(example("checkerboard").unwrap().grammar));
@@ -490,5 +491,23 @@ fn shapes_and_points_serialise_as_byte_columns_that_decode_exactly() {
     }
     let pts: Vec<f32> = u32s("points").into_iter().map(f32::from_bits).collect();
     assert_eq!(pts, r.points);
+    // Each step's input and output shape indices: u32 bytes too.
+    let le = |c: &serde_json::Value| -> Vec<u32> {
+        let b: Vec<u8> = c
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b.as_u64().unwrap() as u8)
+            .collect();
+        b.chunks(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    assert_eq!(v["steps"].as_array().unwrap().len(), r.steps.len());
+    for (k, st) in r.steps.iter().enumerate() {
+        assert_eq!(le(&v["steps"][k]["inputs"]), st.inputs, "step {k}");
+        assert_eq!(le(&v["steps"][k]["outputs"]), st.outputs, "step {k}");
+    }
+    assert!(r.steps.iter().any(|s| s.outputs.len() > 1));
     assert!(r.shapes.iter().any(|s| s.died >= 0) && r.shapes.iter().any(|s| s.born == -1));
 }

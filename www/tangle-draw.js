@@ -2,12 +2,14 @@
 // canvas, pen-and-ink: black strokes on paper white, grey fills for `fill`,
 // black with white lines for `white_lines`, filled marks for `mark`.
 //
-//   const t = prepareTangle(response, prev?)  per-shape bounding boxes, styles, lazily built Path2Ds;
+//   const t = prepareTangle(response, prev?)  per-shape bounding boxes, styles, lazily built Path2Ds
+//                                       (the byte columns of shapes and steps viewed as typed arrays);
 //                                       with `prev` (the last answer), its shapes that are unchanged
 //                                       (same group, id, ink and points) keep their Path2Ds
 //   t.visible(i, k)                     shape i shown after k steps (k = steps.length: final)
 //   t.batches(k) → {k, parts, count}    what step k shows: a few Path2D batches per ink style
-//                                       (a segment tree over steps, nodes built lazily, kept)
+//                                       (a segment tree over steps, nodes built lazily, kept;
+//                                       a part's `span`: how many steps show it)
 //   paintBatches(g, batches, lineWidth, layers?, key?)  draws them (g already transformed);
 //                                       with createLayers(), heavy parts come from bitmaps
 //   t.changes(k, from, kFrom)           shapes shown at step k of t and not at step kFrom of `from`
@@ -69,6 +71,15 @@ export function shapeColumns(c) {
   return S;
 }
 
+/** The answer's steps, each step's `inputs` and `outputs` (u32 little-endian bytes, src/tangle/api.rs `StepOut`) viewed as Uint32Arrays, in place. */
+export function stepsOf(steps) {
+  for (const st of steps) {
+    st.inputs = column(st.inputs, Uint32Array);
+    st.outputs = column(st.outputs, Uint32Array);
+  }
+  return steps;
+}
+
 /**
  * Which shapes of the answer (columns S, points pts) are shapes of the
  * previous prepared answer P: the same group and id, tag, ink, rings and
@@ -123,6 +134,7 @@ function sameRange(a, ao, b, bo, len) {
 
 export function prepareTangle(r, prev = null) {
   const S = r.shapes = shapeColumns(r.shapes);
+  stepsOf(r.steps);
   const n = S.count;
   const pts = pointsOf(r.points);
   const { born, died, first } = S;
@@ -206,10 +218,22 @@ export function prepareTangle(r, prev = null) {
     }
     return b;
   }
-  /** The batches of a node, built once. */
+  /** How many steps show the shapes of a node (the length of its interval). */
+  function spanOf(node) {
+    let lo = 0, hi = nSteps;
+    for (let bit = 30 - Math.clz32(node); bit >= 0; bit--) {
+      const mid = (lo + hi) >> 1;
+      if ((node >> bit) & 1) lo = mid + 1; else hi = mid;
+    }
+    return hi - lo + 1;
+  }
+  /** The batches of a node, built once; `span`: how many steps show them. */
   function batchOf(node) {
     let b = built.get(node);
-    if (!b) built.set(node, b = batchOfList(members.get(node) || []));
+    if (!b) {
+      built.set(node, b = batchOfList(members.get(node) || []));
+      b.span = spanOf(node);
+    }
     return b;
   }
   /** Nodes on the root-to-k path of the step tree that hold shapes. */
@@ -387,6 +411,9 @@ function paintPart(g, b, lineWidth) {
 /** Parts with at least this many vertices are drawn from a bitmap when `layers` are given. */
 export const LAYER_VERTICES = 20000;
 
+/** Canvases of dropped bitmaps kept for new ones (a canvas's memory is not made anew). */
+const SPARE_CANVASES = 4;
+
 /**
  * Bitmaps of heavy parts for one view, least recently used dropped beyond a
  * memory budget. Rasterising lines is most of a repaint (900k vertices: ~200 ms
@@ -396,25 +423,25 @@ export const LAYER_VERTICES = 20000;
  */
 export function createLayers(budgetBytes = 96e6) {
   const cache = new Map(); // part → {key, canvas}
+  const spare = []; // canvases of dropped bitmaps, for the next ones
   return {
     /** `part`'s bitmap for view `key` on a w×h canvas; `render(g)` draws it when missing. */
     get(part, key, w, h, render) {
       let e = cache.get(part);
       cache.delete(part);
       if (!e || e.key !== key || e.canvas.width !== w || e.canvas.height !== h) {
-        const canvas = e?.canvas || document.createElement('canvas');
-        canvas.width = w;
+        const canvas = e?.canvas || spare.pop() || document.createElement('canvas');
+        canvas.width = w; // clears it
         canvas.height = h;
-        const g = canvas.getContext('2d');
-        g.clearRect(0, 0, w, h);
-        render(g);
+        render(canvas.getContext('2d'));
         e = { key, canvas };
       }
       cache.set(part, e);
       const keep = Math.max(2, Math.floor(budgetBytes / (4 * w * h)));
-      for (const old of cache.keys()) {
+      for (const [old, o] of cache) {
         if (cache.size <= keep) break;
         cache.delete(old);
+        if (spare.length < SPARE_CANVASES) spare.push(o.canvas);
       }
       return e.canvas;
     },

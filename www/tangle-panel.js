@@ -18,9 +18,11 @@
 // `curve`/`shape` polyline definition for split and place rules.
 //
 // Drawing (tangle-draw.js): a step's picture is a few Path2D parts from a
-// segment tree over the steps, built lazily; heavy parts are kept as bitmaps
-// of the current view, so a slider drag redraws only the small parts that
-// changed, and idle time draws the heaviest parts' bitmaps ahead of a jump.
+// segment tree over the steps, built lazily; heavy parts shown by many steps
+// are kept as bitmaps of the current view, so a slider drag redraws only the
+// small parts that changed, and idle time draws the heaviest parts' bitmaps
+// ahead of a jump. While an edit's answer is due, the canvas keeps the last
+// picture (and its highlight) until the answer repaints it.
 // During a pan or zoom the last full picture is moved as a bitmap and
 // redrawn sharp once the gesture pauses, so 18k shapes stay smooth.
 // An answer after an edit keeps the last answer's unchanged shapes (same
@@ -34,6 +36,7 @@ import { download } from './project.js';
 import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer, LAYER_VERTICES } from './tangle-draw.js';
 
 const RUN_DELAY_MS = 120;
+const BUSY_DELAY_MS = 150; // a run shows it is busy after this long
 const TYPING_DELAY_MS = 600;
 const SHARP_DELAY_MS = 120;
 const THUMB = { width: 96, height: 72 };
@@ -222,8 +225,10 @@ function mount(el, ctx) {
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
-  // `incremental: false` is the old path (a full repaint each time, no shape
-  // kept from the last answer): the latency bench measures both in one run.
+  let lastParts = new Set(); // the parts of the step tree the last full repaint drew
+  // `incremental: false` is the old path (a full repaint each time, a bitmap for every
+  // heavy part, an edit repainted and shown busy at once, no shape kept from the last
+  // answer): the latency bench measures both in one run.
   // `highlight: false` leaves the selected step's highlight out of a paint (tests compare
   // the picture with a fresh answer's).
   const options = { incremental: true, highlight: true };
@@ -279,8 +284,17 @@ function mount(el, ctx) {
     running?.abort();
     const ctrl = new AbortController();
     running = ctrl;
-    q('[data-act=cancel]').disabled = false;
-    status('growing…');
+    // A run says it is busy (status, Cancel) only when it takes a while: an edit's answer
+    // comes within a few frames, and every change on the page makes the browser draw a
+    // frame, which takes the CPU from the worker growing the answer.
+    let busy = false;
+    const showBusy = () => {
+      if (running !== ctrl || busy) return;
+      busy = true;
+      q('[data-act=cancel]').disabled = false;
+      status('growing…');
+    };
+    const busyTimer = options.incremental ? ctx.setTimeout(showBusy, BUSY_DELAY_MS) : (showBusy(), null);
     const t0 = performance.now();
     timing.runAt = t0;
     try {
@@ -288,7 +302,7 @@ function mount(el, ctx) {
         signal: ctrl.signal,
         affinity: KEEP_AFFINITY,
         onProgress: (p) => {
-          if (running !== ctrl) return;
+          if (running !== ctrl || !busy) return;
           status(`growing: ${p.figure != null ? `${Math.round(p.figure).toLocaleString('en')} shapes` : p.stage}`);
         },
       });
@@ -330,15 +344,21 @@ function mount(el, ctx) {
       loadThumbnails();
     } catch (err) {
       if (running !== ctrl) return;
+      paint(); // the last answer, without the highlight of a document it does not answer
       status(err?.kind === 'cancelled' ? 'cancelled' : 'the tangle could not grow (see above)');
       if (err?.kind !== 'cancelled') ctx.error(err, { prefix: 'Tangle', source: 'run' });
     } finally {
+      ctx.clearTimeout(busyTimer);
       if (running === ctrl) {
         running = null;
-        q('[data-act=cancel]').disabled = true;
+        const cancel = q('[data-act=cancel]');
+        if (!cancel.disabled) cancel.disabled = true;
       }
     }
   }
+
+  /** Whether a run for document `s`, which the canvas does not show yet, is due or under way. */
+  const awaitingAnswer = (s) => !!T && !!shownFor && !sameRequest(shownFor, s) && (runTimer !== null || running !== null);
 
   /** After an edit, the edited step was regrown at a new position: select it there. */
   function resolveSelection() {
@@ -564,7 +584,16 @@ function mount(el, ctx) {
       const b = T.batches(k);
       timing.batches = performance.now() - tb;
       const key = viewKey(), w = canvas.width, h = canvas.height;
-      paintBatches(g, b, lineWidth(), layers, key, newBitmaps ? null : (part) => layers.has(part, key, w, h));
+      // A heavy part is copied from its bitmap when there is one; else it gets one when
+      // other steps are likely to show it too (a part of the step tree shown by at least a
+      // sixteenth of the steps) or the last paint showed it too (a drag), and is drawn
+      // directly otherwise: a far jump shows a few deep parts no other step shows, and a
+      // bitmap of one (a canvas made, drawn and copied) costs more than drawing it (the
+      // old path: always a bitmap).
+      const last = lastParts;
+      const shared = (part) => !options.incremental || part.span * 16 >= T.steps || last.has(part);
+      paintBatches(g, b, lineWidth(), layers, key, (part) => (newBitmaps ? shared(part) : layers.has(part, key, w, h)));
+      lastParts = new Set(b.parts);
       paintHighlight();
     }
     paintDrawing();
@@ -1272,7 +1301,11 @@ function mount(el, ctx) {
       if (!prev || prev.selected !== s.selected || !sameRequest(s, prev)) {
         hl = null;
         if (shownFor && sameRequest(shownFor, s)) showSelected();
-        paint();
+        // An edit of the selected step is answered soon: until then the canvas keeps the
+        // last picture and its highlight. Repainting now would only take the highlight off,
+        // and its raster would take the CPU from the worker growing the answer. (A new
+        // document without a selection drops the highlight at once.)
+        if (!(options.incremental && s.selected != null && awaitingAnswer(s))) paint();
       }
     },
     markError(err) {

@@ -1,6 +1,7 @@
-// Tangle edits on the fast path (issue 10 item 9): an answer keeps the last
-// answer's unchanged shapes (their Path2Ds, tangle-draw.js `prepareTangle(r,
-// prev)`) and the panel repaints only the tiles where the picture changed.
+// Tangle edits on the fast path (issue 10 item 9): while an edit's answer is
+// due the canvas is left as it is; an answer keeps the last answer's
+// unchanged shapes (their Path2Ds, tangle-draw.js `prepareTangle(r, prev)`)
+// and the panel repaints only the tiles where the picture changed.
 // Both must give exactly what a fresh answer painted in full gives:
 // - the shapes the panel holds equal a fresh, full expansion's (not kept
 //   by the worker, nothing reused), column by column and point by point;
@@ -120,10 +121,18 @@ test('tangle: an edit keeps the unchanged shapes and repaints only where it chan
   await editDistance(page, 4, 120, null);
   let n = await runs(page);
   const before = await page.evaluate(() => window.filigreeTangle.state().edits.length);
-  await page.$eval('[data-testid=tangle-param-distance]', (i) => {
+  // Until its answer arrives, an edit leaves the canvas as it is (the last picture and its
+  // highlight): no repaint competes with the worker for the CPU.
+  const held = await page.$eval('[data-testid=tangle-param-distance]', async (i) => {
+    const t = window.filigreeTangle;
+    const paintAt = t.timing().paintAt;
     i.value = String(Number(i.value) * 0.5);
     i.dispatchEvent(new Event('input', { bubbles: true }));
+    for (let f = 0; f < 3; f++) await new Promise((r) => requestAnimationFrame(r));
+    return { repainted: t.timing().paintAt !== paintAt, pending: t.pending(), runs: Number(document.querySelector('[data-testid=tangle-status]').dataset.runs) };
   });
+  assert.ok(held.pending && held.runs === n, 'the answer is still due three frames after the input');
+  assert.equal(held.repainted, false, 'nothing was repainted while the answer was due');
   n = await waitForResult(page, n);
   const first = await page.evaluate(() => window.filigreeTangle.state().edits.at(-1).params.distance);
   await page.$eval('[data-testid=tangle-param-distance]', (i) => {

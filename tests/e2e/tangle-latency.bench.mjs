@@ -19,8 +19,10 @@
 // The floor line is an empty animation frame measured in the same run.
 // Every figure has a `before` twin measured in the same run with the panel's
 // old path switched on (`filigreeTangle.options.incremental = false`: every
-// repaint redraws the whole canvas and an answer keeps nothing of the last
-// one); the worker's side is the same in both. Round trips are timed in the
+// repaint redraws the whole canvas, every heavy part gets a bitmap, an edit
+// repaints at once and shows "growing" at once, and an answer keeps nothing
+// of the last one); the worker's side
+// (the core and its answer's format) is the same in both. Round trips are timed in the
 // page (the input event to the end of the frame that paints the answer), not
 // through the test driver. `pan_work_ms` is our JS per pan frame (the
 // handler's bitmap copy), `pan_frame_ms` the frame interval around it.
@@ -34,7 +36,13 @@ const root = process.argv[2];
 // Software 2-D canvas: in headless Chromium the GPU canvas runs on
 // SwiftShader, which rasterises big paths at ~30 s a frame (an artefact of
 // the emulated GPU, not what a user's GPU or Chromium's software raster does).
-const args = ['--disable-accelerated-2d-canvas'];
+// The page is still composited on SwiftShader (~30 ms of CPU a frame in the
+// GPU process, beside the page's threads on a 2-core machine);
+// TANGLE_BENCH_COMPOSITING=software composites in software instead, to see
+// how much of a figure that is (not the default: the figures of earlier
+// sessions were measured with it).
+const args = ['--disable-accelerated-2d-canvas',
+  ...(process.env.TANGLE_BENCH_COMPOSITING === 'software' ? ['--disable-gpu-compositing'] : [])];
 const env = await launch(root ? { root, args } : { args });
 const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
 const p90 = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length * 0.9)]; };
@@ -338,6 +346,7 @@ return {
 if (only !== 'village') leafOut = await leafBench();
 console.log(JSON.stringify({
   load: (await import('node:os')).loadavg().map((x) => round(x)),
+  compositing: process.env.TANGLE_BENCH_COMPOSITING === 'software' ? 'software' : 'gpu (SwiftShader)',
   frame_floor_ms: summary(frameFloor),
   village: villageOut,
   leaf: leafOut,
