@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Baseline for `filigree bench tangle`: the work of its BASELINE_GRAMMAR
-(a 1200x1200 sheet split into a grid of 20-unit cells, each cell outlined
-four times by 2 units: 18,000 final shapes) done with shapely/GEOS.
+(`bench/tangle-baseline.tangle`: a 1200x1200 sheet split into a grid of
+20-unit cells, each cell outlined four times by 2 units: 18,000 final
+shapes) done with shapely/GEOS.
 Prints JSON {"shapes", "vertices", "seconds": {"min", "median"}}.
 Exits 1 if shapely is not installed (the bench then reports it missing)."""
 import json

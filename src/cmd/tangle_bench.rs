@@ -19,14 +19,9 @@ const TABLE1: [(&str, u32, u32, u32, f64); 5] = [
 ];
 
 /// The grammar the shapely baseline reproduces: a grid of 20-unit cells,
-/// each outlined four times (18,000 final shapes), no wobble.
-pub const BASELINE_GRAMMAR: &str = "start rect(1200, 1200) : sheet
-regularSplit(line, 20, 1) : sheet -> [cell]
-outline(2) : cell -> [a, ra]
-outline(2) : a -> [b, rb]
-outline(2) : b -> [c, rc]
-outline(2) : c -> [d, rd]
-";
+/// each outlined four times (18,000 final shapes), no wobble. The browser's
+/// latency bench (`tests/e2e/tangle-latency.bench.mjs`) grows the same file.
+pub const BASELINE_GRAMMAR: &str = include_str!("../../bench/tangle-baseline.tangle");
 
 fn expand(grammar: &str, wobble: f64, repeats: usize) -> Result<(Value, f64), String> {
     let mut secs = vec![];
