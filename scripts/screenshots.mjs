@@ -12,13 +12,16 @@ const SIZES = {
   desktop: { viewport: { width: 1280, height: 800 } },
   phone: { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true, deviceScaleFactor: 2 },
 };
-const VIEWS = ['', '#tool=pixel', '#tool=fit', '#tool=inspect'];
+const VIEWS = ['', '#tool=pixel', '#tool=fit', '#tool=inspect', '#tool=tangle', '#tool=micro', '#tool=texture'];
 // What "ready" means per view: the example's result is on screen.
 const READY = {
   '': () => document.querySelectorAll('.home-preview[data-ready]').length === 3,
   '#tool=pixel': () => document.querySelector('[data-testid=pixel-status]')?.dataset.runs,
   '#tool=fit': () => document.querySelector('[data-testid=fit-sliders] input'),
   '#tool=inspect': () => document.querySelector('[data-testid=drop-zone]'),
+  '#tool=tangle': () => Number(document.querySelector('[data-testid=tangle-status]')?.dataset.runs) > 0,
+  '#tool=micro': () => Number(document.querySelector('[data-testid=micro-status]')?.dataset.runs) > 0,
+  '#tool=texture': () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending(),
 };
 
 const env = await launch();
@@ -26,7 +29,7 @@ try {
   for (const [size, opts] of Object.entries(SIZES)) {
     for (const view of VIEWS) {
       const page = await env.newPage({ path: view, ...opts });
-      await page.waitForFunction(READY[view], null, { timeout: 30000 }).catch(() => console.warn(`${size} ${view}: not ready`));
+      await page.waitForFunction(READY[view], null, { timeout: 90000 }).catch(() => console.warn(`${size} ${view}: not ready`));
       await page.waitForTimeout(600);
       const name = `${size}-${view.replace('#tool=', '') || 'home'}.png`;
       await page.screenshot({ path: path.join(out, name) });
