@@ -1103,6 +1103,7 @@ function mount(el, ctx) {
       li.append(b);
       const cached = thumbnails.get(ex.name);
       if (cached) c.getContext('2d').drawImage(cached, 0, 0);
+      else b.dataset.thumb = 'pending'; // its preview is still growing (styles.css shows that)
       return li;
     }));
     markExample(state());
@@ -1136,7 +1137,7 @@ function mount(el, ctx) {
           if (err?.kind === 'cancelled') throw err;
           // This grammar cannot grow here (its card says so); the others still get theirs.
           const b = list.querySelector(`[data-example="${CSS.escape(ex.name)}"]`);
-          if (b) b.title = `${ex.about} (no preview: ${err?.message || err})`;
+          if (b) { b.title = `${ex.about} (no preview: ${err?.message || err})`; b.dataset.thumb = 'none'; }
           continue;
         }
         const c = document.createElement('canvas');
@@ -1144,8 +1145,9 @@ function mount(el, ctx) {
         c.height = THUMB.height;
         drawThumbnail(c, r);
         thumbnails.set(ex.name, c);
-        const target = list.querySelector(`[data-example="${CSS.escape(ex.name)}"] canvas`);
-        target?.getContext('2d').drawImage(c, 0, 0);
+        const card = list.querySelector(`[data-example="${CSS.escape(ex.name)}"]`);
+        card?.querySelector('canvas').getContext('2d').drawImage(c, 0, 0);
+        if (card) delete card.dataset.thumb;
       }
       list.dataset.thumbnails = 'ready';
     } catch (err) {

@@ -93,6 +93,15 @@ async function clickCanvas(page, [x, y]) {
   await page.mouse.click(box.x + x, box.y + y);
 }
 
+/** Each grammar card: its name, its `data-thumb` mark, and the dark pixels of its preview. */
+const cardThumbs = (page) => page.$$eval('[data-testid=tangle-examples] [data-example]', (bs) => bs.map((b) => {
+  const c = b.querySelector('canvas');
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let ink = 0;
+  for (let i = 0; i < d.length; i += 4) if (d[i + 3] > 0 && d[i] < 128) ink++;
+  return { name: b.dataset.example, thumb: b.dataset.thumb ?? null, ink };
+}));
+
 test('tangle: grow the leaf, walk its history, select, re-expand and edit a step, export the same SVG as the CLI', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
   await page.addScriptTag({ content: PAINTED });
@@ -101,6 +110,8 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   const names = await page.$$eval('[data-testid=tangle-examples] [data-example]', (bs) => bs.map((b) => b.dataset.example));
   assert.equal(names[0], 'leaf');
   assert.ok(names.includes('village'), names.join());
+  // A card whose preview is still growing is marked pending (and pulses), not left blank.
+  for (const c of await cardThumbs(page)) assert.ok(c.ink > 100 || c.thumb === 'pending', `${c.name}: blank and not pending`);
 
   let n = await runs(page);
   await page.click('[data-example=leaf]');
@@ -227,6 +238,13 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   const [hash, length] = fs.readFileSync(new URL('../golden/tangle-leaf-seed1.svg.sha256', import.meta.url), 'utf8').trim().split(/\s+/);
   assert.equal(fresh.length, Number(length), 'SVG length equals the native golden');
   assert.equal(fresh.hash, hash, 'the browser\'s SVG is byte for byte the native CLI\'s');
+
+  // Every grammar card got its preview (a blank card pulses until then, marked pending).
+  await page.waitForSelector('[data-testid=tangle-examples][data-thumbnails=ready]', { timeout: 120000 });
+  for (const c of await cardThumbs(page)) {
+    assert.equal(c.thumb, null, `${c.name}: no longer pending`);
+    assert.ok(c.ink > 100, `${c.name}: its preview has ink (${c.ink} dark pixels)`);
+  }
 });
 
 test('tangle: a grammar error is marked in the editor at its line; a typed word is a start', async () => {
