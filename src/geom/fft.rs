@@ -1,5 +1,5 @@
 //! The crate's one FFT: a reusable 3-D real-to-complex transform
-//! ([`RealFft3`], Micro's Fourier loss: radix-2 passes over many signals at
+//! ([`RealFft3`], Micro's Fourier loss: radix-4 passes over many signals at
 //! once, written here, see [`RealFft3`]) and an in-place 2-D complex
 //! transform of `f32` planes over `rustfft` ([`fft2`], the texture models'
 //! spectral synthesis and the texture scale analysis).
