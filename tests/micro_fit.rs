@@ -525,8 +525,9 @@ fn the_cli_fits_a_scene_file_to_a_target_file() {
 
 /// The lattice path (a periodic root: each factor's values computed once
 /// per axis) gives exactly the values of evaluating every point, for sines,
-/// cosines, phases, powers, a constant and a sheet thickness, for a scene
-/// and a volume target; a scene it cannot take is sampled point by point.
+/// cosines, phases, powers, a constant and a sheet thickness, terms with
+/// no, one and two factors along x and factors before and after them, for
+/// a scene and a volume target; a scene it cannot take is sampled point by point.
 #[test]
 fn lattice_sampling_equals_pointwise_sampling_bit_for_bit() {
     use filigree::core::job::Job;
@@ -536,7 +537,9 @@ fn lattice_sampling_equals_pointwise_sampling_bit_for_bit() {
         json!({"type": "periodic", "thickness": 0.3, "constant": 0.2, "terms": [
             [f("sin", "x", 37.0, 1.5, 0.1, 1), f("cos", "y", 41.0, 0.7, 0.0, 2), f("sin", "z", 13.0, -1.0, 2.0, 3)],
             [f("cos", "z", 90.0, 1.0, 0.0, 1)],
-            [f("sin", "y", 7.0, 2.0, 0.3, 1), f("sin", "y", 11.0, 1.0, 0.0, 1)]]})
+            [f("sin", "y", 7.0, 2.0, 0.3, 1), f("sin", "y", 11.0, 1.0, 0.0, 1)],
+            [f("cos", "z", 5.0, 0.9, 0.0, 1), f("cos", "x", 23.0, 1.1, 0.4, 1), f("sin", "x", 3.0, 1.0, 0.0, 2)],
+            [f("sin", "x", 17.0, 0.8, 0.0, 1), f("cos", "z", 29.0, 1.0, 0.2, 1)]]})
         .to_string(),
         json!({"type": "sphere", "radius": 0.1}).to_string(),
     ];

@@ -1,5 +1,5 @@
 //! The crate's one FFT: a reusable 3-D real-to-complex transform
-//! ([`RealFft3`], Micro's Fourier loss: radix-2 passes over many signals at
+//! ([`RealFft3`], Micro's Fourier loss: radix-4 passes over many signals at
 //! once, written here, see [`RealFft3`]) and an in-place 2-D complex
 //! transform of `f32` planes over `rustfft` ([`fft2`], the texture models'
 //! spectral synthesis and the texture scale analysis).
@@ -153,37 +153,25 @@ const LANES: usize = 64;
 /// and imaginary parts in separate arrays, so each butterfly is one loop
 /// over contiguous lanes of elementwise arithmetic, which the compiler
 /// vectorises and which rounds the same way on every target (Rust neither
-/// fuses multiply-adds nor reorders float operations). Radix-2 decimation in
-/// frequency with twiddles from the `libm` crate (`W = 1` and `W = −i` exact),
-/// then the rows put back in order (bit reversal).
+/// fuses multiply-adds nor reorders float operations). Decimation in
+/// frequency, radix 4 (each stage reads and writes the rows once where two
+/// radix-2 stages would twice) and one radix-2 stage when log₂ n is odd,
+/// twiddles from the `libm` crate (`W = 1` and `W = −i` exact). The output
+/// rows come in bit-reversed order, as radix 2 leaves them: [`LaneFft::run`]
+/// puts them back, or the caller reads row `rev[k]` for coefficient k.
 #[derive(Debug, Clone)]
 struct LaneFft {
     n: usize,
-    /// `W_n^k = exp(−2πik/n)` for k < n/2.
+    /// `W_n^k = exp(−2πik/n)` for k < n.
     wr: Vec<f64>,
     wi: Vec<f64>,
+    /// Where coefficient k is before reordering (bit reversal of k).
+    rev: Vec<usize>,
     /// The row swaps of the bit reversal: (r, reversed r) with r below.
     swaps: Vec<(usize, usize)>,
 }
 
-/// `(a, b) ← (a + b, (a − b)·w)` over lanes.
-#[inline(always)]
-fn butterfly(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64], wr: f64, wi: f64) {
-    let lanes = ar
-        .iter_mut()
-        .zip(ai.iter_mut())
-        .zip(br.iter_mut().zip(bi.iter_mut()));
-    for ((ar, ai), (br, bi)) in lanes {
-        let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
-        *ar = xr + yr;
-        *ai = xi + yi;
-        let (dr, di) = (xr - yr, xi - yi);
-        *br = dr * wr - di * wi;
-        *bi = dr * wi + di * wr;
-    }
-}
-
-/// [`butterfly`] with `w = 1`.
+/// `(a, b) ← (a + b, a − b)` over lanes: the radix-2 butterfly with `w = 1`.
 #[inline(always)]
 fn butterfly_one(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64]) {
     let lanes = ar
@@ -199,19 +187,58 @@ fn butterfly_one(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64])
     }
 }
 
-/// [`butterfly`] with `w = −i`.
+/// Four rows of a sub-transform (at offsets 0, q, 2q, 3q), real or
+/// imaginary parts.
+type Rows4<'a> = [&'a mut [f64]; 4];
+
+/// The radix-4 butterfly over lanes, rows `x0..x3` of a sub-transform of
+/// length 4q at offsets 0, q, 2q, 3q: with `t0 = x0 + x2`, `t1 = x0 − x2`,
+/// `t2 = x1 + x3`, `t3 = −i (x1 − x3)`, row 0 gets `t0 + t2`, row 1
+/// `(t0 − t2)·w2`, row 2 `(t1 + t3)·w1`, row 3 `(t1 − t3)·w3` (the order two
+/// radix-2 stages leave them in). `w = None`: all twiddles 1.
 #[inline(always)]
-fn butterfly_minus_i(ar: &mut [f64], ai: &mut [f64], br: &mut [f64], bi: &mut [f64]) {
-    let lanes = ar
-        .iter_mut()
-        .zip(ai.iter_mut())
-        .zip(br.iter_mut().zip(bi.iter_mut()));
-    for ((ar, ai), (br, bi)) in lanes {
-        let (xr, xi, yr, yi) = (*ar, *ai, *br, *bi);
-        *ar = xr + yr;
-        *ai = xi + yi;
-        *br = xi - yi;
-        *bi = yr - xr;
+fn radix4(re: Rows4, im: Rows4, w: Option<[(f64, f64); 3]>) {
+    let [r0, r1, r2, r3] = re;
+    let [i0, i1, i2, i3] = im;
+    let n = r0.len();
+    let (r1, r2, r3) = (&mut r1[..n], &mut r2[..n], &mut r3[..n]);
+    let (i0, i1, i2, i3) = (&mut i0[..n], &mut i1[..n], &mut i2[..n], &mut i3[..n]);
+    match w {
+        None => {
+            for l in 0..n {
+                let (t0r, t0i) = (r0[l] + r2[l], i0[l] + i2[l]);
+                let (t1r, t1i) = (r0[l] - r2[l], i0[l] - i2[l]);
+                let (t2r, t2i) = (r1[l] + r3[l], i1[l] + i3[l]);
+                let (t3r, t3i) = (i1[l] - i3[l], r3[l] - r1[l]);
+                r0[l] = t0r + t2r;
+                i0[l] = t0i + t2i;
+                r1[l] = t0r - t2r;
+                i1[l] = t0i - t2i;
+                r2[l] = t1r + t3r;
+                i2[l] = t1i + t3i;
+                r3[l] = t1r - t3r;
+                i3[l] = t1i - t3i;
+            }
+        }
+        Some([(w1r, w1i), (w2r, w2i), (w3r, w3i)]) => {
+            for l in 0..n {
+                let (t0r, t0i) = (r0[l] + r2[l], i0[l] + i2[l]);
+                let (t1r, t1i) = (r0[l] - r2[l], i0[l] - i2[l]);
+                let (t2r, t2i) = (r1[l] + r3[l], i1[l] + i3[l]);
+                let (t3r, t3i) = (i1[l] - i3[l], r3[l] - r1[l]);
+                r0[l] = t0r + t2r;
+                i0[l] = t0i + t2i;
+                let (ar, ai) = (t0r - t2r, t0i - t2i);
+                r1[l] = ar * w2r - ai * w2i;
+                i1[l] = ar * w2i + ai * w2r;
+                let (br, bi) = (t1r + t3r, t1i + t3i);
+                r2[l] = br * w1r - bi * w1i;
+                i2[l] = br * w1i + bi * w1r;
+                let (cr, ci) = (t1r - t3r, t1i - t3i);
+                r3[l] = cr * w3r - ci * w3i;
+                i3[l] = cr * w3i + ci * w3r;
+            }
+        }
     }
 }
 
@@ -229,65 +256,102 @@ fn two_rows(
     (&mut lo[r0 * stride + c0..][..w], &mut hi[c0..][..w])
 }
 
+/// Rows `r, r + q, r + 2q, r + 3q` (q ≥ 1, at `stride`), lanes
+/// `c0..c0 + w`, of one array.
+#[inline(always)]
+fn four_rows(v: &mut [f64], stride: usize, r: usize, q: usize, c0: usize, w: usize) -> Rows4<'_> {
+    let d = q * stride;
+    let v = &mut v[r * stride + c0..];
+    let (a, v) = v.split_at_mut(d);
+    let (b, v) = v.split_at_mut(d);
+    let (c, e) = v.split_at_mut(d);
+    [&mut a[..w], &mut b[..w], &mut c[..w], &mut e[..w]]
+}
+
 impl LaneFft {
     fn new(n: usize) -> LaneFft {
         let (mut wr, mut wi) = (vec![], vec![]);
-        for k in 0..n / 2 {
+        for k in 0..n {
             let a = -std::f64::consts::TAU * k as f64 / n as f64;
             wr.push(libm::cos(a));
             wi.push(libm::sin(a));
         }
         let bits = n.trailing_zeros();
-        let swaps = (0..n)
-            .filter_map(|r| {
-                let s = if bits == 0 {
+        let rev: Vec<usize> = (0..n)
+            .map(|r| {
+                if bits == 0 {
                     r
                 } else {
                     r.reverse_bits() >> (usize::BITS - bits)
-                };
-                (r < s).then_some((r, s))
+                }
             })
             .collect();
-        LaneFft { n, wr, wi, swaps }
+        let swaps = (0..n)
+            .filter_map(|r| (r < rev[r]).then_some((r, rev[r])))
+            .collect();
+        LaneFft {
+            n,
+            wr,
+            wi,
+            rev,
+            swaps,
+        }
     }
 
     /// Transform lanes `from..to` of the `n` rows of `re`/`im` that start
-    /// every `stride` values (row r's lane l at `r · stride + l`), in place.
-    fn run(&self, re: &mut [f64], im: &mut [f64], stride: usize, from: usize, to: usize) {
+    /// every `stride` values (row r's lane l at `r · stride + l`), in place;
+    /// `ordered`: rows put in order, else coefficient k left in row `rev[k]`.
+    fn run(
+        &self,
+        re: &mut [f64],
+        im: &mut [f64],
+        stride: usize,
+        from: usize,
+        to: usize,
+        ordered: bool,
+    ) {
         let mut c0 = from;
         while c0 < to {
             let c1 = (c0 + LANES).min(to);
             self.block(re, im, stride, c0, c1 - c0);
+            if ordered {
+                for &(r, s) in &self.swaps {
+                    let (a, b) = two_rows(re, stride, r, s, c0, c1 - c0);
+                    a.swap_with_slice(b);
+                    let (a, b) = two_rows(im, stride, r, s, c0, c1 - c0);
+                    a.swap_with_slice(b);
+                }
+            }
             c0 = c1;
         }
     }
 
     fn block(&self, re: &mut [f64], im: &mut [f64], stride: usize, c0: usize, w: usize) {
         let n = self.n;
-        let mut h = n / 2;
-        while h >= 1 {
-            let step = n / (2 * h);
-            for b in (0..n).step_by(2 * h) {
-                for j in 0..h {
-                    let (r0, r1) = (b + j, b + j + h);
-                    let (ar, br) = two_rows(re, stride, r0, r1, c0, w);
-                    let (ai, bi) = two_rows(im, stride, r0, r1, c0, w);
-                    if j == 0 {
-                        butterfly_one(ar, ai, br, bi);
-                    } else if 2 * j == h {
-                        butterfly_minus_i(ar, ai, br, bi);
-                    } else {
-                        butterfly(ar, ai, br, bi, self.wr[j * step], self.wi[j * step]);
-                    }
+        // Sub-transforms of length `len`, four rows `q` apart each.
+        let mut len = n;
+        while len >= 4 {
+            let q = len / 4;
+            let step = n / len;
+            for b in (0..n).step_by(len) {
+                for j in 0..q {
+                    let tw = (j > 0)
+                        .then(|| [1, 2, 3].map(|m| (self.wr[m * j * step], self.wi[m * j * step])));
+                    radix4(
+                        four_rows(re, stride, b + j, q, c0, w),
+                        four_rows(im, stride, b + j, q, c0, w),
+                        tw,
+                    );
                 }
             }
-            h /= 2;
+            len = q;
         }
-        for &(r, s) in &self.swaps {
-            let (a, b) = two_rows(re, stride, r, s, c0, w);
-            a.swap_with_slice(b);
-            let (a, b) = two_rows(im, stride, r, s, c0, w);
-            a.swap_with_slice(b);
+        if len == 2 {
+            for b in (0..n).step_by(2) {
+                let (ar, br) = two_rows(re, stride, b, b + 1, c0, w);
+                let (ai, bi) = two_rows(im, stride, b, b + 1, c0, w);
+                butterfly_one(ar, ai, br, bi);
+            }
         }
     }
 }
@@ -421,30 +485,31 @@ impl RealFft3 {
                     self.pi[j * LANES..][..w]
                         .copy_from_slice(&values[(2 * j + 1) * plane + c0..][..w]);
                 }
-                self.fz.run(&mut self.pr, &mut self.pi, LANES, 0, w);
+                self.fz.run(&mut self.pr, &mut self.pi, LANES, 0, w, false);
                 self.split_z(c0, w);
                 c0 += w;
             }
         }
-        // y: per kz plane, lanes along x.
+        // y: per kz plane, lanes along x (coefficient ky left in row
+        // `fy.rev[ky]`, read so by the transpose).
         for kz in 0..self.planes {
             let r = kz * plane..(kz + 1) * plane;
             self.fy
-                .run(&mut self.ar[r.clone()], &mut self.ai[r], nx, 0, nx);
+                .run(&mut self.ar[r.clone()], &mut self.ai[r], nx, 0, nx, false);
         }
         // x: per plane, transposed so that the lanes run along ky.
         for kz in 0..self.planes {
             let r = kz * plane..(kz + 1) * plane;
             for (src, dst) in [(&self.ar, &mut self.br), (&self.ai, &mut self.bi)] {
                 let (s, d) = (&src[r.clone()], &mut dst[r.clone()]);
-                for ky in 0..ny {
-                    for (x, &v) in s[ky * nx..(ky + 1) * nx].iter().enumerate() {
+                for (ky, &row) in self.fy.rev.iter().enumerate() {
+                    for (x, &v) in s[row * nx..(row + 1) * nx].iter().enumerate() {
                         d[x * ny + ky] = v;
                     }
                 }
             }
             self.fx
-                .run(&mut self.br[r.clone()], &mut self.bi[r], ny, 0, ny);
+                .run(&mut self.br[r.clone()], &mut self.bi[r], ny, 0, ny, true);
         }
         Ok((&self.br, &self.bi))
     }
@@ -457,7 +522,8 @@ impl RealFft3 {
         let m = self.dims[2] / 2;
         let plane = self.dims[0] * self.dims[1];
         for k in 0..=m {
-            let (a, b) = (k % m, (m - k) % m);
+            // Z[k] is in row `fz.rev[k]` (the z pass leaves them so).
+            let (a, b) = (self.fz.rev[k % m], self.fz.rev[(m - k) % m]);
             let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
             let (br, bi) = (&self.pr[b * LANES..][..w], &self.pi[b * LANES..][..w]);
             let xr = &mut self.ar[k * plane + c0..][..w];
@@ -595,6 +661,15 @@ mod tests {
             [16, 1, 2],
             [2, 64, 8],
             [4, 2, 128],
+            // Every length from 1 to 256 on each axis (radix-4 stages and
+            // the odd radix-2 one; z halves its length).
+            [32, 2, 2],
+            [2, 32, 4],
+            [256, 1, 2],
+            [1, 256, 2],
+            [2, 2, 256],
+            [1, 1, 512],
+            [128, 4, 2],
         ] {
             let len: usize = dims.iter().product();
             let v: Vec<f64> = (0..len).map(|_| r.f64() - 0.5).collect();

@@ -245,16 +245,23 @@ impl Fourier {
         for kz in 0..m / plane {
             let w = plane_weight(kz, nz);
             let r = kz * plane..(kz + 1) * plane;
-            let terms = self.terms[r.clone()].iter_mut();
-            let got = self.amp[r.clone()]
-                .iter()
-                .zip(&re[r.clone()])
-                .zip(&im[r.clone()]);
-            let want = target.amp[r.clone()].iter().zip(&target.phase[r]);
-            for ((t, ((&a, &cr), &ci)), (&ta, &tp)) in terms.zip(got).zip(want) {
-                let da = a - ta;
-                let p = atan2(ci, cr);
-                let dp = (if a > floor { p } else { 0.0 }) - tp;
+            // Six slices of one length and an index: the loop the
+            // compiler vectorises (zipped iterators it left scalar).
+            let terms = &mut self.terms[r.clone()];
+            let (amp, cr, ci) = (&self.amp[r.clone()], &re[r.clone()], &im[r.clone()]);
+            let (ta, tp) = (&target.amp[r.clone()], &target.phase[r]);
+            let (amp, cr, ci, ta, tp) = (
+                &amp[..plane],
+                &cr[..plane],
+                &ci[..plane],
+                &ta[..plane],
+                &tp[..plane],
+            );
+            for (l, t) in terms.iter_mut().enumerate() {
+                let a = amp[l];
+                let da = a - ta[l];
+                let p = atan2(ci[l], cr[l]);
+                let dp = (if a > floor { p } else { 0.0 }) - tp[l];
                 *t = w * (da * da + dp * dp);
             }
         }

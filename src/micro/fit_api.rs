@@ -287,44 +287,82 @@ fn sample_grid(
         })
         .collect();
     // Per row (y, z), per term: the factors before the first one along x
-    // are one number for the row, the rest multiply a row of x values,
-    // each in the term's order (so the products round as in `raw`).
+    // are one number for the row (`c`), the rest multiply a row of x
+    // values, each in the term's order (so the products round as in
+    // `raw`). The common shapes (nothing after the first x factor, or one
+    // more factor) are one fused pass over the row; others use `prod`.
+    let plans: Vec<(usize, usize)> = tables
+        .iter()
+        .map(|term| {
+            let lead = term.iter().position(|(a, _)| *a == 0);
+            (lead.unwrap_or(term.len()), term.len())
+        })
+        .collect();
     out.clear();
-    out.resize(nx * ny * nz, 0.0);
-    let mut prod = vec![0.0; nx];
-    for (r, row) in out.chunks_exact_mut(nx).enumerate() {
+    out.reserve(nx * ny * nz);
+    let (mut row, mut prod) = (vec![0.0; nx], vec![0.0; nx]);
+    let (thick, inv) = (t.thickness, t.inv_bound);
+    // `stored` with the clamp hoisted: ±∞ clamps nothing.
+    let lim = clamp.unwrap_or(f64::INFINITY);
+    let finish = |s: f64| {
+        let s = s * inv;
+        let s = if s.is_nan() { f64::INFINITY } else { s };
+        let s = if s < -lim {
+            -lim
+        } else if s > lim {
+            lim
+        } else {
+            s
+        };
+        if s.is_finite() {
+            s
+        } else {
+            MAX_VALUE
+        }
+    };
+    for r in 0..ny * nz {
         let (y, z) = (r % ny, r / ny);
+        let at = |a: usize, vals: &[f64]| if a == 1 { vals[y] } else { vals[z] };
         row.fill(t.constant);
-        for term in &tables {
-            let at = |a: usize, vals: &[f64]| if a == 1 { vals[y] } else { vals[z] };
-            let first_x = term.iter().position(|(a, _)| *a == 0);
-            let lead = first_x.unwrap_or(term.len());
+        for (term, &(lead, len)) in tables.iter().zip(&plans) {
             let mut c = 1.0;
             for (a, vals) in &term[..lead] {
                 c *= at(*a, vals);
             }
-            if lead == term.len() {
+            if lead == len {
                 row.iter_mut().for_each(|s| *s += c);
                 continue;
             }
-            prod.iter_mut()
-                .zip(&term[lead].1)
-                .for_each(|(p, v)| *p = c * v);
-            for (a, vals) in &term[lead + 1..] {
-                if *a == 0 {
-                    prod.iter_mut().zip(vals).for_each(|(p, v)| *p *= v);
-                } else {
-                    let v = at(*a, vals);
-                    prod.iter_mut().for_each(|p| *p *= v);
+            let vx = &term[lead].1[..nx];
+            match &term[lead + 1..] {
+                [] => row.iter_mut().zip(vx).for_each(|(s, v)| *s += c * v),
+                [(0, v2)] => row
+                    .iter_mut()
+                    .zip(vx)
+                    .zip(&v2[..nx])
+                    .for_each(|((s, v), w)| *s += c * v * w),
+                [(a, v2)] => {
+                    let w = at(*a, v2);
+                    row.iter_mut().zip(vx).for_each(|(s, v)| *s += c * v * w);
+                }
+                rest => {
+                    prod.iter_mut().zip(vx).for_each(|(p, v)| *p = c * v);
+                    for (a, vals) in rest {
+                        if *a == 0 {
+                            prod.iter_mut().zip(vals).for_each(|(p, v)| *p *= v);
+                        } else {
+                            let v = at(*a, vals);
+                            prod.iter_mut().for_each(|p| *p *= v);
+                        }
+                    }
+                    row.iter_mut().zip(&prod).for_each(|(s, p)| *s += p);
                 }
             }
-            row.iter_mut().zip(&prod).for_each(|(s, p)| *s += p);
         }
-        let (thick, inv) = (t.thickness, t.inv_bound);
-        for v in row.iter_mut() {
-            let s = if thick > 0.0 { v.abs() - thick } else { *v };
-            let s = s * inv;
-            *v = stored(if s.is_nan() { f64::INFINITY } else { s }, clamp);
+        if thick > 0.0 {
+            out.extend(row.iter().map(|v| finish(v.abs() - thick)));
+        } else {
+            out.extend(row.iter().map(|&v| finish(v)));
         }
     }
     true
