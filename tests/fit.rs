@@ -1288,3 +1288,49 @@ fn a_fit_is_bounded_by_time_as_well_as_evaluations() {
     let e = start_fit(&req(0.0)).err().expect("0 s is refused");
     assert_eq!(e.field(), Some("max_seconds"));
 }
+
+/// The `bench fit --speed-only` cases at 128² (circles-grid, stripes-dots:
+/// truth from seed 7, parameters at 45% of each range), evaluated a fixed
+/// number of times: a workload for `valgrind --tool=callgrind` (instructions
+/// per loss and per loss+gradient call), not a test of anything. Run with
+/// `FIT_PROFILE_EVALS=N FIT_PROFILE_CASE=circles-grid[,loss|grad] cargo test
+/// --test fit -- --ignored fit_throughput_workload`.
+#[test]
+#[ignore]
+fn fit_throughput_workload() {
+    let evals: usize = std::env::var("FIT_PROFILE_EVALS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let spec = std::env::var("FIT_PROFILE_CASE").unwrap_or("circles-grid".into());
+    let mut parts = spec.split(',');
+    let name = parts.next().unwrap().to_string();
+    let which = parts.next().unwrap_or("both").to_string();
+    let prog = program(&name);
+    let rec = prog
+        .record(&prog.defaults(), &RecordLimits::default())
+        .unwrap();
+    let scene = Scene::new(rec);
+    let decls = scene.rec.float_decls();
+    let mut rng = Rng::new(7);
+    let truth: Vec<f64> = decls
+        .iter()
+        .map(|d| d.lo + (d.hi - d.lo) * rng.range_f64(0.1, 0.9))
+        .collect();
+    let p: Vec<f64> = decls.iter().map(|d| d.lo + 0.45 * (d.hi - d.lo)).collect();
+    let opts = LossOptions::default();
+    let idx = colour_indices(&scene, &truth, opts.grid).unwrap();
+    let t = Target::from_indices(&scene, &idx, opts.grid, opts.scale());
+    let mut obj = Objective::new(scene, t, opts);
+    let mut g = vec![0.0; p.len()];
+    let (mut l, mut lg) = (0.0, 0.0);
+    for _ in 0..evals {
+        if which != "grad" {
+            l = std::hint::black_box(obj.loss(&p));
+        }
+        if which != "loss" {
+            lg = std::hint::black_box(obj.loss_grad(&p, &mut g));
+        }
+    }
+    eprintln!("{name}: loss {l} loss_grad {lg} grad {g:?}");
+}

@@ -13,6 +13,7 @@ impl Evaluator {
     /// `T2 × T2` pixels: independent lanes, so the square roots overlap
     /// (and vectorise). With `W`, the winners too; without, no winner
     /// bookkeeping at all.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn lanes<const W: bool>(
         &mut self,
         scene: &Scene,
@@ -21,18 +22,11 @@ impl Evaluator {
         c: usize,
         (x0, x1): (usize, usize),
         (y0, y1): (usize, usize),
+        (px, py): (&[f64; T2 * T2], &[f64; T2 * T2]),
     ) {
         const L: usize = T2 * T2;
         debug_assert!(x1 - x0 <= T2 && y1 - y0 <= T2);
         let n = self.n;
-        let inv = 1.0 / n as f64;
-        // Lane k is pixel (k % T2, k / T2) of the block (edge pixels repeated).
-        let mut px = [0.0; L];
-        let mut py = [0.0; L];
-        for k in 0..L {
-            px[k] = ((x0 + k % T2).min(x1 - 1) as f64 + 0.5) * inv;
-            py[k] = ((y0 + k / T2).min(y1 - 1) as f64 + 0.5) * inv;
-        }
         {
             let mut b = [init * CAP; L];
             let mut wi = [NONE; L];
@@ -121,36 +115,65 @@ impl Evaluator {
                     }
                 }
             }
-            for k in (0..L).filter(|k| k % T2 < x1 - x0 && k / T2 < y1 - y0) {
-                let (x, y) = (x0 + k % T2, y0 + k / T2);
-                let idx = c * n * n + y * n + x;
-                let mut v = b[k];
-                let mut w = wi[k];
-                let cap = CAP.min(self.edge[x].min(self.edge[y]));
-                if v.abs() >= cap {
-                    v = v.clamp(-cap, cap);
-                    w = NONE;
-                }
-                self.s[idx] = v * self.scale;
-                if W {
-                    self.win[idx] = if w == NONE {
-                        NO_WIN
-                    } else {
-                        let item = &scene.items[w as usize];
-                        let h = Hit {
-                            d: wd[k],
-                            prim: item.prim,
-                            sign: 1.0,
+            let (bw, bh) = (x1 - x0, y1 - y0);
+            for j in 0..bh {
+                let row = c * n * n + (y0 + j) * n + x0;
+                let ey = self.edge[y0 + j];
+                for i in 0..bw {
+                    let k = j * T2 + i;
+                    let idx = row + i;
+                    let mut v = b[k];
+                    let mut w = wi[k];
+                    let cap = CAP.min(self.edge[x0 + i].min(ey));
+                    if v.abs() >= cap {
+                        v = v.clamp(-cap, cap);
+                        w = NONE;
+                    }
+                    self.s[idx] = v * self.scale;
+                    if W {
+                        self.win[idx] = if w == NONE {
+                            NO_WIN
+                        } else {
+                            let item = &scene.items[w as usize];
+                            let h = Hit {
+                                d: wd[k],
+                                prim: item.prim,
+                                sign: 1.0,
+                            };
+                            let mut rec = scene.win_of(item, &h);
+                            if flip[k] {
+                                rec.psign = -rec.psign;
+                                rec.wcoef = -rec.wcoef;
+                            }
+                            rec
                         };
-                        let mut rec = scene.win_of(item, &h);
-                        if flip[k] {
-                            rec.psign = -rec.psign;
-                            rec.wcoef = -rec.wcoef;
-                        }
-                        rec
-                    };
+                    }
                 }
             }
         }
+    }
+
+    /// The pixel centres of a block for [`Evaluator::lanes`]: lane `k` is
+    /// pixel `(x0 + k % T2, y0 + k / T2)`, the block's last column (row)
+    /// repeated past its end.
+    #[inline(always)]
+    pub(super) fn lane_centres(
+        &self,
+        (x0, x1): (usize, usize),
+        (y0, y1): (usize, usize),
+    ) -> ([f64; T2 * T2], [f64; T2 * T2]) {
+        let mut cx = [0.0; T2];
+        let mut cy = [0.0; T2];
+        for i in 0..T2 {
+            cx[i] = self.centres[(x0 + i).min(x1 - 1)];
+            cy[i] = self.centres[(y0 + i).min(y1 - 1)];
+        }
+        let mut px = [0.0; T2 * T2];
+        let mut py = [0.0; T2 * T2];
+        for k in 0..T2 * T2 {
+            px[k] = cx[k % T2];
+            py[k] = cy[k / T2];
+        }
+        (px, py)
     }
 }

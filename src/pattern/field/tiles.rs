@@ -36,6 +36,9 @@ pub struct Evaluator {
     /// column (or row) `i`, so `edge_cap(x, y) = min(edge[x], edge[y])`
     /// (the same bits: the map is monotone and exact per integer).
     pub(super) edge: Vec<f64>,
+    /// `centres[i]`: the centre of pixel column (row) `i` in canvas units,
+    /// `(i + ½) / n` computed as everywhere else (the same bits).
+    pub(super) centres: Vec<f64>,
     /// Culling stamp of the current big tile (counts on across `eval_tiles` calls).
     tile_id: u32,
     /// Unweighted item evaluations of the evaluation in progress.
@@ -64,6 +67,7 @@ impl Evaluator {
             gcache: GeomCache::default(),
             lane_channels: vec![],
             edge: vec![],
+            centres: vec![],
             tile_id: 0,
             raw_work: 0,
         }
@@ -113,6 +117,8 @@ impl Evaluator {
         let n = self.n;
         if self.edge.len() != n {
             self.edge = (0..n).map(|i| edge_cap(i, n / 2, n)).collect();
+            let inv = 1.0 / n as f64;
+            self.centres = (0..n).map(|i| (i as f64 + 0.5) * inv).collect();
         }
         let nc = scene.channels.len();
         if self.s.capacity() < nc * n * n {
@@ -221,6 +227,7 @@ impl Evaluator {
                         let (xe, ye) = ((sx + T2).min(n), (sy + T2).min(n));
                         // Chains of single circles, points and segments: a 4-lane kernel.
                         self.lane_channels.clear();
+                        let (lx, ly) = self.lane_centres((sx, xe), (sy, ye));
                         for (c, ch) in scene.channels.iter().enumerate() {
                             let (a, b) = self.ranges2[c];
                             let ops = &chain2[a..b];
@@ -229,9 +236,25 @@ impl Evaluator {
                             if fast {
                                 work += (ops.len() * (xe - sx) * (ye - sy)) as u64;
                                 if winners {
-                                    self.lanes::<true>(scene, ch.init, ops, c, (sx, xe), (sy, ye));
+                                    self.lanes::<true>(
+                                        scene,
+                                        ch.init,
+                                        ops,
+                                        c,
+                                        (sx, xe),
+                                        (sy, ye),
+                                        (&lx, &ly),
+                                    );
                                 } else {
-                                    self.lanes::<false>(scene, ch.init, ops, c, (sx, xe), (sy, ye));
+                                    self.lanes::<false>(
+                                        scene,
+                                        ch.init,
+                                        ops,
+                                        c,
+                                        (sx, xe),
+                                        (sy, ye),
+                                        (&lx, &ly),
+                                    );
                                 }
                             }
                         }
