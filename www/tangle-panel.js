@@ -1103,7 +1103,7 @@ function mount(el, ctx) {
       li.append(b);
       const cached = thumbnails.get(ex.name);
       if (cached) c.getContext('2d').drawImage(cached, 0, 0);
-      else b.dataset.thumb = 'pending'; // its preview is still growing (styles.css shows that)
+      else b.dataset.thumb = 'pending'; // its preview is still growing (styles.css dims the card)
       return li;
     }));
     markExample(state());

@@ -110,7 +110,7 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   const names = await page.$$eval('[data-testid=tangle-examples] [data-example]', (bs) => bs.map((b) => b.dataset.example));
   assert.equal(names[0], 'leaf');
   assert.ok(names.includes('village'), names.join());
-  // A card whose preview is still growing is marked pending (and pulses), not left blank.
+  // A card whose preview is still growing is marked pending (and dimmed), not left blank.
   for (const c of await cardThumbs(page)) assert.ok(c.ink > 100 || c.thumb === 'pending', `${c.name}: blank and not pending`);
 
   let n = await runs(page);
@@ -239,7 +239,7 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   assert.equal(fresh.length, Number(length), 'SVG length equals the native golden');
   assert.equal(fresh.hash, hash, 'the browser\'s SVG is byte for byte the native CLI\'s');
 
-  // Every grammar card got its preview (a blank card pulses until then, marked pending).
+  // Every grammar card got its preview (a blank card is dimmed until then, marked pending).
   await page.waitForSelector('[data-testid=tangle-examples][data-thumbnails=ready]', { timeout: 120000 });
   for (const c of await cardThumbs(page)) {
     assert.equal(c.thumb, null, `${c.name}: no longer pending`);
