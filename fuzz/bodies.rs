@@ -458,16 +458,24 @@ pub fn tangle_grammar(data: &[u8]) {
 }
 
 /// Vector start shapes as the page and the CLI hand them to the core: the
-/// bytes as text read as an SVG document, as SVG path data and as a typed
-/// word; what parses must be finite rings within the point limit, and a
+/// bytes as text read as an SVG document (fitted into a frame: it stays
+/// inside), as SVG path data and as a typed word; what parses must be
+/// finite rings within the point limit, and a
 /// tangle grown from it (small budgets) must keep its area.
 pub fn tangle_start(data: &[u8]) {
     use filigree::geom::polygon::Polygon;
-    use filigree::geom::svg::{document_rings, path_rings, MAX_POINTS};
+    use filigree::geom::svg::{document_polygons, path_rings, MAX_POINTS};
     let text = String::from_utf8_lossy(data);
     let mut sources = vec![];
-    if let Ok(r) = document_rings(&text, 0.05) {
-        sources.push(r);
+    // A document's shapes, fitted into a frame: inside it, finite.
+    let frame = (glam::DVec2::ZERO, glam::DVec2::new(800.0, 600.0));
+    if let Ok(polys) = document_polygons(&text, 0.05, Some(frame)) {
+        let (lo, hi) = Polygon::bbox_all(&polys);
+        assert!(
+            lo.cmpge(frame.0 - 1e-6).all() && hi.cmple(frame.1 + 1e-6).all(),
+            "{lo} {hi}"
+        );
+        sources.push(polys.into_iter().flat_map(|p| p.rings).collect());
     }
     if let Ok(r) = path_rings(&text, 0.05) {
         sources.push(r);

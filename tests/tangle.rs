@@ -394,6 +394,63 @@ fn start_shapes_from_text_svg_and_rings() {
     assert_eq!(bad.field(), Some("start.svg"));
 }
 
+/// A drawing tool's SVG: a 24-unit icon on a white background, a disc with
+/// a white bar cut out of it, and a dot overlapping the disc's rim.
+const ICON: &str = r##"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 24 24">
+  <rect width="24" height="24" fill="#fff"/>
+  <circle cx="12" cy="12" r="10" fill="#222"/>
+  <rect x="11" y="6" width="2" height="12" fill="white"/>
+  <circle cx="21" cy="12" r="2"/>
+</svg>"##;
+
+#[test]
+fn an_uploaded_svg_is_fitted_into_the_frame_the_grammar_was_written_for() {
+    let frame_of = |grammar: &str| {
+        let r = run(TangleRequest {
+            start: Some(StartRequest::Svg { svg: ICON.into() }),
+            max_steps: 1,
+            ..req(grammar)
+        });
+        let starts: Vec<Polygon> = (0..r.shapes.len())
+            .filter(|&i| r.shapes[i].born == -1)
+            .map(|i| poly(&r, i))
+            .collect();
+        (starts.clone(), Polygon::bbox_all(&starts))
+    };
+    // The grammar's own start: a 720-unit square, so the 21-unit-wide ink
+    // (disc x 2..22, dot to 23) is scaled ×720/21 and sits in it.
+    let (starts, (lo, hi)) = frame_of("start rect(720, 720) : a\noutline(6) : a -> [b, c]\n");
+    assert_eq!(
+        starts.len(),
+        1,
+        "the dot overlapping the rim is part of the disc"
+    );
+    assert_eq!(
+        starts[0].rings.len(),
+        2,
+        "the white bar is a hole, the background paper"
+    );
+    assert!(
+        (hi.x - lo.x - 720.0).abs() < 0.01 && lo.x.abs() < 0.01,
+        "{lo} {hi}"
+    );
+    assert!(lo.y > 0.0 && hi.y < 720.0, "centred: {lo} {hi}");
+    let s2 = (720.0f64 / 21.0).powi(2);
+    let (disc, dot) = (std::f64::consts::PI * 100.0, std::f64::consts::PI * 4.0);
+    let a = starts[0].area() / s2;
+    assert!(
+        a > disc - 24.0 && a < disc - 24.0 + dot,
+        "{a}: the disc less the bar, plus part of the dot"
+    );
+    // No start line: the 800×600 rectangle the grammar would start from.
+    let (_, (lo, hi)) = frame_of("outline(6) : a -> [b, c]\n");
+    assert!(
+        lo.y.abs() < 0.01 && (hi.y - 600.0).abs() < 0.01,
+        "{lo} {hi}"
+    );
+    assert!(lo.x > 0.0 && hi.x < 800.0, "{lo} {hi}");
+}
+
 #[test]
 fn the_cli_writes_the_svg_the_request_makes() {
     let dir = std::env::temp_dir().join(format!("filigree-tangle-{}", std::process::id()));

@@ -120,7 +120,8 @@ const html = `
           <label class="inline">height <input type="number" name="start-text-height" min="1" max="1000000" value="300"></label>
         </span>
         <span class="tangle-start-svg" hidden>
-          <input type="file" accept=".svg,image/svg+xml" name="start-svg" aria-label="SVG file" data-field="start.svg">
+          <input type="file" accept=".svg,image/svg+xml" name="start-svg" aria-label="SVG file" data-field="start.svg"
+            title="What the file draws: shapes inside shapes become holes, overlapping shapes one shape, white fills holes; scaled to the grammar's start size">
         </span>
         <span class="tangle-start-polygon" hidden>
           <button type="button" data-act="draw-start">Draw a polygon</button>

@@ -10,7 +10,9 @@ pub struct Args {
     /// Grammar file (rules `op(params) : tag -> [tags]`, see assets/tangle/).
     #[arg(long)]
     grammar: PathBuf,
-    /// Start from every closed shape of an SVG file (nested shapes become holes).
+    /// Start from the shapes an SVG file draws: nested shapes become holes,
+    /// overlapping ones one shape, white fills cut holes; scaled to fit the
+    /// grammar's start shapes (800×600 when it has none), whatever the file's units.
     #[arg(long, value_name = "SVG", conflicts_with_all = ["text", "rect"])]
     start: Option<PathBuf>,
     /// Start from the letter outlines of a typed word.

@@ -93,6 +93,16 @@ impl Polygon {
     /// several (e.g. a figure eight). `None` when a coordinate is not
     /// finite or beyond [`MAX_COORD`].
     pub fn new(rings: Vec<Ring>) -> Option<Vec<Polygon>> {
+        Self::filled(rings, FillRule::EvenOdd)
+    }
+
+    /// As [`Polygon::new`], filled by the nonzero winding rule: a ring
+    /// inside another is a hole only when it winds the other way.
+    pub fn new_nonzero(rings: Vec<Ring>) -> Option<Vec<Polygon>> {
+        Self::filled(rings, FillRule::NonZero)
+    }
+
+    fn filled(rings: Vec<Ring>, rule: FillRule) -> Option<Vec<Polygon>> {
         if !rings
             .iter()
             .flatten()
@@ -100,7 +110,7 @@ impl Polygon {
         {
             return None;
         }
-        Some(from_shapes(rings.simplify_shape(FillRule::EvenOdd)))
+        Some(from_shapes(rings.simplify_shape(rule)))
     }
 
     /// An axis-aligned rectangle.
@@ -145,6 +155,14 @@ impl Polygon {
             return (DVec2::ZERO, DVec2::ZERO);
         };
         it.fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)))
+    }
+
+    /// The box (min, max) around polygons (infinite and inverted for none).
+    pub fn bbox_all<'a>(polys: impl IntoIterator<Item = &'a Polygon>) -> (DVec2, DVec2) {
+        polys.into_iter().map(Polygon::bbox).fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(a, b), (c, d)| (a.min(c), b.max(d)),
+        )
     }
 
     /// Area centroid (the bounding box centre for a degenerate polygon).

@@ -8,6 +8,7 @@
 //! allows (it refuses deep nesting itself) and transforms are accumulated
 //! on an explicit stack, never by recursion.
 use crate::core::error::{Error, Result};
+use crate::geom::polygon::Polygon;
 use glam::DVec2;
 
 /// Most points over all rings of one source.
@@ -158,15 +159,88 @@ fn add_path(b: &mut RingBuilder, d: &str) -> Result<()> {
     Ok(())
 }
 
-/// Rings of every closed shape in an SVG document: `<path>`, `<rect>`,
-/// `<circle>`, `<ellipse>`, `<polygon>` (and `<polyline>`, closed), with
-/// `transform`s applied. Nested rings are holes under the even-odd rule.
-pub fn document_rings(text: &str, tolerance: f64) -> Result<Vec<Vec<DVec2>>> {
+/// One drawn element of an SVG document (`<path>`, `<rect>`, `<circle>`,
+/// `<ellipse>`, `<polygon>`, `<polyline>`, closed): its rings with the
+/// transforms applied, and how it is painted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Element {
+    pub rings: Vec<Vec<DVec2>>,
+    /// Filled by the nonzero rule: only when the file says
+    /// `fill-rule="nonzero"`. Unsaid, nested subpaths are holes (even-odd),
+    /// which is what drawing tools mean by a compound path.
+    pub nonzero: bool,
+    /// Filled white (paper): it can only cut a hole in the ink around it.
+    pub paper: bool,
+}
+
+/// Most drawn elements of a document combined into start shapes.
+pub const MAX_DRAWN: usize = 5_000;
+/// Most pairs of elements whose nesting is measured exactly (pairs whose
+/// boxes nest), so a file of thousands of concentric rings cannot take
+/// minutes.
+pub const MAX_NESTED_PAIRS: usize = 20_000;
+/// How deep `<use>` references may chain (a reference cycle stops here).
+const MAX_USE_DEPTH: u8 = 8;
+
+/// What inherits down the tree: transform, fill rule, paper fill.
+#[derive(Clone, Copy)]
+struct Inherited {
+    transform: [f64; 6],
+    nonzero: bool,
+    paper: bool,
+    uses: u8,
+    /// Reached through `<use>`: a `<symbol>` is drawn then.
+    used: bool,
+}
+
+/// A presentation property of `node`: its `style` attribute's declaration
+/// if any (it wins), else the attribute of that name.
+fn property<'a>(node: &roxmltree::Node<'a, '_>, name: &str) -> Option<&'a str> {
+    let from_style = node.attribute("style").and_then(|style| {
+        style.split(';').find_map(|decl| {
+            let (k, v) = decl.split_once(':')?;
+            (k.trim() == name).then(|| v.trim())
+        })
+    });
+    from_style.or_else(|| node.attribute(name)).map(str::trim)
+}
+
+/// Whether a `fill` value is paper white (`white`, `#fff`, `rgb(255,…)`,
+/// near-white); `None` when it does not say (inherit).
+fn paper_fill(v: &str) -> Option<bool> {
+    if v == "inherit" {
+        return None;
+    }
+    Some(match svgtypes::Paint::from_str(v) {
+        Ok(svgtypes::Paint::Color(c)) => c.alpha > 0 && c.red.min(c.green).min(c.blue) >= 245,
+        _ => false,
+    })
+}
+
+/// Every drawn element of an SVG document, in document order, with
+/// `transform`s (under `root`), `fill-rule` and `fill` inherited as SVG
+/// does; `<use>` references drawn where they are used (also `<symbol>`s);
+/// definitions, masks, text and `display: none` parts skipped. Curves are
+/// flattened to within `tolerance` after the transforms.
+pub fn document_elements(text: &str, tolerance: f64, root: [f64; 6]) -> Result<Vec<Element>> {
     let doc = roxmltree::Document::parse(text)
         .map_err(|e| Error::input(format!("the SVG file is not valid XML: {e}")))?;
+    let ids: std::collections::HashMap<&str, roxmltree::Node> = doc
+        .descendants()
+        .filter_map(|n| Some((n.attribute("id")?, n)))
+        .collect();
     let mut b = RingBuilder::new(tolerance);
-    // Depth-first with an explicit stack of (node, transform).
-    let mut stack = vec![(doc.root_element(), [1.0, 0.0, 0.0, 1.0, 0.0, 0.0])];
+    // (first ring, nonzero, paper) of each element; its rings end where the next begin.
+    let mut spans: Vec<(usize, bool, bool)> = vec![];
+    // Depth-first with an explicit stack, never by recursion.
+    let top = Inherited {
+        transform: root,
+        nonzero: false,
+        paper: false,
+        uses: 0,
+        used: false,
+    };
+    let mut stack = vec![(doc.root_element(), top)];
     let mut seen = 0usize;
     while let Some((node, parent)) = stack.pop() {
         seen += 1;
@@ -175,21 +249,32 @@ pub fn document_rings(text: &str, tolerance: f64) -> Result<Vec<Vec<DVec2>>> {
                 "the SVG file has more than {MAX_ELEMENTS} elements (the SVG element limit)"
             )));
         }
-        let t = match node.attribute("transform") {
-            Some(s) => {
-                let m: svgtypes::Transform = s
-                    .parse()
-                    .map_err(|e| Error::input(format!("an SVG transform is not valid: {e}")))?;
-                compose(parent, [m.a, m.b, m.c, m.d, m.e, m.f])
-            }
-            None => parent,
-        };
-        b.transform = t;
+        if property(&node, "display") == Some("none") {
+            continue;
+        }
+        let mut here = parent;
+        if let Some(s) = node.attribute("transform") {
+            let m: svgtypes::Transform = s
+                .parse()
+                .map_err(|e| Error::input(format!("an SVG transform is not valid: {e}")))?;
+            here.transform = compose(parent.transform, [m.a, m.b, m.c, m.d, m.e, m.f]);
+        }
+        match property(&node, "fill-rule") {
+            Some("nonzero") => here.nonzero = true,
+            Some("evenodd") => here.nonzero = false,
+            _ => {}
+        }
+        if let Some(p) = property(&node, "fill").and_then(paper_fill) {
+            here.paper = p;
+        }
+        b.transform = here.transform;
         let num = |name: &str| -> f64 {
             node.attribute(name)
                 .and_then(|v| v.parse::<svgtypes::Number>().ok())
                 .map_or(0.0, |n| n.0)
         };
+        let first = b.rings.len();
+        let mut drawn = true;
         match node.tag_name().name() {
             "path" => add_path(&mut b, node.attribute("d").unwrap_or(""))?,
             "rect" => {
@@ -233,23 +318,207 @@ pub fn document_rings(text: &str, tolerance: f64) -> Result<Vec<Vec<DVec2>>> {
                 }
                 b.close();
             }
+            "use" => {
+                let href = node
+                    .attribute("href")
+                    .or_else(|| node.attribute(("http://www.w3.org/1999/xlink", "href")));
+                let target = href
+                    .and_then(|h| h.strip_prefix('#'))
+                    .and_then(|id| ids.get(id));
+                if let Some(&target) = target {
+                    if here.uses >= MAX_USE_DEPTH {
+                        return Err(Error::limit(format!(
+                            "the SVG file's <use> references chain more than {MAX_USE_DEPTH} deep \
+                             (or in a cycle; the SVG reference limit)"
+                        )));
+                    }
+                    let mut inner = here;
+                    inner.transform =
+                        compose(here.transform, [1.0, 0.0, 0.0, 1.0, num("x"), num("y")]);
+                    inner.uses += 1;
+                    inner.used = true;
+                    stack.push((target, inner));
+                }
+                continue;
+            }
+            "symbol" if here.used => drawn = false,
             // Not drawn: definitions, masks, text.
             "defs" | "clipPath" | "mask" | "symbol" | "pattern" | "marker" | "text" | "style" => {
                 continue
             }
-            _ => {}
+            _ => drawn = false,
+        }
+        if drawn {
+            b.close();
+            if b.rings.len() > first {
+                spans.push((first, here.nonzero, here.paper));
+            }
         }
         // Children in reverse so they are visited in document order.
         let kids: Vec<_> = node.children().filter(|n| n.is_element()).collect();
-        stack.extend(kids.into_iter().rev().map(|k| (k, t)));
+        stack.extend(kids.into_iter().rev().map(|k| (k, here)));
     }
-    let rings = b.finish()?;
-    if rings.is_empty() {
+    let mut rings = b.finish()?;
+    let mut out = Vec::with_capacity(spans.len());
+    for &(first, nonzero, paper) in spans.iter().rev() {
+        out.push(Element {
+            rings: rings.split_off(first),
+            nonzero,
+            paper,
+        });
+    }
+    out.reverse();
+    Ok(out)
+}
+
+/// The start shapes an SVG document draws, as polygons with holes: each
+/// element's region (its fill rule), then the ink the drawing shows.
+/// Elements inside another element are holes in it, inside a hole ink
+/// again (the nesting of the issue's "nested paths become holes", across
+/// elements as within one); elements that only overlap are one shape
+/// (their union); white-filled elements only cut holes (a white
+/// background or a white letter on a black disc). `frame` (min, max):
+/// the drawing is scaled, keeping its proportions, and centred to fit it,
+/// and curves are flattened to `tolerance` at that scale (a 24-unit icon
+/// and a 2,000-unit poster give the same tangle).
+pub fn document_polygons(
+    text: &str,
+    tolerance: f64,
+    frame: Option<(DVec2, DVec2)>,
+) -> Result<Vec<Polygon>> {
+    let identity = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0];
+    let mut elements = document_elements(text, tolerance, identity)?;
+    if let Some(frame) = frame {
+        // Flattened again at the fitted scale, then fitted once more: the
+        // finer polyline reaches further out along the curves than the
+        // first one, whose box set the scale.
+        if let Some(fit) = fit_into(&elements, frame) {
+            elements = document_elements(text, tolerance, fit)?;
+            if let Some([s, _, _, _, e, f]) = fit_into(&elements, frame) {
+                for p in elements.iter_mut().flat_map(|e| e.rings.iter_mut().flatten()) {
+                    *p = *p * s + DVec2::new(e, f);
+                }
+            }
+        }
+    }
+    let polys = ink_of(&elements)?;
+    if polys.is_empty() {
         return Err(Error::input(
-            "the SVG file has no closed shape (path, rect, circle, ellipse or polygon)",
+            "the SVG file has no closed shape with area (path, rect, circle, ellipse or polygon)",
         ));
     }
-    Ok(rings)
+    Ok(polys)
+}
+
+/// The map (uniform scale, then offset) that fits the box of the ink
+/// elements' points into `frame`, centred; `None` when they have no extent.
+fn fit_into(elements: &[Element], (lo, hi): (DVec2, DVec2)) -> Option<[f64; 6]> {
+    let ink = elements.iter().filter(|e| !e.paper);
+    let (mut blo, mut bhi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for p in ink.flat_map(|e| e.rings.iter().flatten()) {
+        blo = blo.min(*p);
+        bhi = bhi.max(*p);
+    }
+    let (size, span) = (hi - lo, bhi - blo);
+    let scale = [size.x / span.x, size.y / span.y]
+        .into_iter()
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    scale.is_finite().then(|| {
+        let offset = lo + (size - span * scale) * 0.5 - blo * scale;
+        [scale, 0.0, 0.0, scale, offset.x, offset.y]
+    })
+}
+
+/// The ink of drawn elements (see [`document_polygons`]).
+fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
+    if elements.len() > MAX_DRAWN {
+        return Err(Error::limit(format!(
+            "the SVG file draws {} shapes; at most {MAX_DRAWN} (the SVG shape limit)",
+            elements.len()
+        )));
+    }
+    let mut regions = vec![];
+    for e in elements {
+        let made = if e.nonzero {
+            Polygon::new_nonzero(e.rings.clone())
+        } else {
+            Polygon::new(e.rings.clone())
+        };
+        let made = made.ok_or_else(|| {
+            Error::input(format!(
+                "SVG coordinates must be finite numbers within ±{}",
+                super::polygon::MAX_COORD
+            ))
+        })?;
+        if !made.is_empty() {
+            let area: f64 = made.iter().map(Polygon::area).sum();
+            let (lo, hi) = Polygon::bbox_all(&made);
+            regions.push((made, e.paper, area, lo, hi));
+        }
+    }
+    // Which ink element contains which (measured exactly where the boxes
+    // nest). Of two equal regions the earlier contains the later, and the
+    // later is a duplicate, dropped (a path drawn twice is one shape).
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.max(b);
+    let mut pairs = 0usize;
+    let mut contains = vec![];
+    for (j, (rj, _, aj, loj, hij)) in regions.iter().enumerate() {
+        for (i, (ri, paper_i, ai, loi, hii)) in regions.iter().enumerate() {
+            let boxed = loi.cmple(*loj).all() && hii.cmpge(*hij).all();
+            let larger = if same(*ai, *aj) { i < j } else { ai > aj };
+            if i == j || *paper_i || !boxed || !larger {
+                continue;
+            }
+            pairs += 1;
+            if pairs > MAX_NESTED_PAIRS {
+                return Err(Error::limit(format!(
+                    "the SVG file has more than {MAX_NESTED_PAIRS} pairs of shapes boxed one \
+                     in the other (the SVG nesting limit)"
+                )));
+            }
+            let outside: f64 = rj
+                .iter()
+                .flat_map(|p| p.difference_all(ri))
+                .map(|p| p.area())
+                .sum();
+            if outside <= 1e-6 * aj {
+                contains.push((i, j));
+            }
+        }
+    }
+    let mut duplicate = vec![false; regions.len()];
+    for &(i, j) in &contains {
+        duplicate[j] |= same(regions[i].2, regions[j].2);
+    }
+    // Depth: how many ink elements contain each one.
+    let mut depth = vec![0usize; regions.len()];
+    for &(i, j) in &contains {
+        if !duplicate[i] {
+            depth[j] += 1;
+        }
+    }
+    let deepest = depth.iter().copied().max().unwrap_or(0);
+    let mut ink: Vec<Polygon> = vec![];
+    for d in 0..=deepest {
+        let layer: Vec<Polygon> = regions
+            .iter()
+            .zip(&depth)
+            .zip(&duplicate)
+            .filter(|(((_, paper, ..), &k), &dup)| !dup && k == d && (d % 2 == 1 || !paper))
+            .flat_map(|(((r, ..), _), _)| r.iter().cloned())
+            .collect();
+        if layer.is_empty() {
+            continue;
+        }
+        ink = if d % 2 == 0 {
+            ink.extend(layer);
+            Polygon::union_all(&ink)
+        } else {
+            ink.iter().flat_map(|p| p.difference_all(&layer)).collect()
+        };
+    }
+    Ok(ink)
 }
 
 /// `outer ∘ inner` for affine maps `[a, b, c, d, e, f]`.
@@ -284,27 +553,157 @@ mod tests {
         assert!(path_rings("M 0 0 L x", 0.1).is_err());
     }
 
+    const ID: [f64; 6] = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0];
+
+    fn svg(body: &str) -> String {
+        format!(
+            r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink">{body}</svg>"#
+        )
+    }
+
+    /// Total area and number of rings of a document's start shapes.
+    fn ink(body: &str) -> (f64, usize) {
+        let p = document_polygons(&svg(body), 0.01, None).unwrap();
+        (
+            p.iter().map(Polygon::area).sum(),
+            p.iter().map(|q| q.rings.len()).sum(),
+        )
+    }
+
     #[test]
     fn documents_apply_transforms_and_skip_defs() {
-        let svg = r#"<svg xmlns="http://www.w3.org/2000/svg">
+        let doc = svg(r#"
           <defs><rect width="99" height="99"/></defs>
           <g transform="translate(100 0) scale(2)">
             <rect x="0" y="0" width="10" height="5"/>
             <circle cx="30" cy="30" r="5"/>
           </g>
           <polygon points="0,0 4,0 4,4"/>
-        </svg>"#;
-        let rings = document_rings(svg, 0.01).unwrap();
-        assert_eq!(rings.len(), 3);
+          <g style="display: none"><rect width="50" height="50"/></g>"#);
+        let e = document_elements(&doc, 0.01, ID).unwrap();
+        assert_eq!(e.len(), 3);
         let (lo, hi) = Polygon {
-            rings: vec![rings[0].clone()],
+            rings: e[0].rings.clone(),
         }
         .bbox();
         assert_eq!((lo, hi), (DVec2::new(100.0, 0.0), DVec2::new(120.0, 10.0)));
-        let a = area(vec![rings[1].clone()]);
+        let a = area(e[1].rings.clone());
         assert!((a - std::f64::consts::PI * 100.0).abs() < 1.0, "{a}");
-        assert!(document_rings("<svg", 0.1).is_err());
-        assert!(document_rings(r#"<svg xmlns="http://www.w3.org/2000/svg"/>"#, 0.1).is_err());
+        assert!(document_polygons("<svg", 0.1, None).is_err());
+        assert!(document_polygons(&svg(""), 0.1, None).is_err());
+    }
+
+    #[test]
+    fn overlapping_elements_are_one_shape_and_nested_ones_holes() {
+        // Two squares overlapping by 5×10: their union, not a lens-shaped hole.
+        let (a, rings) =
+            ink(r#"<rect width="10" height="10"/><rect x="5" width="10" height="10"/>"#);
+        assert!((a - 150.0).abs() < 1e-6 && rings == 1, "{a} {rings}");
+        // Nested elements alternate: ink, hole, ink again.
+        let (a, rings) = ink(
+            r#"<rect width="100" height="100"/><rect x="20" y="20" width="60" height="60"/>
+               <rect x="40" y="40" width="20" height="20"/>"#,
+        );
+        assert!((a - (10000.0 - 3600.0 + 400.0)).abs() < 1e-6, "{a}");
+        assert_eq!(rings, 3);
+        // A dot in the counter of a ring is not inside the ring's region: ink.
+        let (a, _) = ink(
+            r#"<path d="M0 0H30V30H0Z M10 10H20V20H10Z"/><rect x="12" y="12" width="6" height="6"/>"#,
+        );
+        assert!((a - (900.0 - 100.0 + 36.0)).abs() < 1e-6, "{a}");
+        // A path drawn twice is one shape, not a shape with itself as a hole.
+        let (a, _) = ink(r#"<rect width="10" height="10"/><rect width="10" height="10"/>"#);
+        assert!((a - 100.0).abs() < 1e-6, "{a}");
+    }
+
+    #[test]
+    fn white_fills_cut_holes_and_a_white_background_is_paper() {
+        let (a, rings) = ink(r##"<rect width="200" height="200" fill="#ffffff"/>
+               <circle cx="100" cy="100" r="50" style="fill: #222"/>
+               <rect x="90" y="70" width="20" height="60" fill="white"/>"##);
+        let disc = std::f64::consts::PI * 2500.0;
+        assert!((a - (disc - 1200.0)).abs() < 1.0, "{a}");
+        assert_eq!(rings, 2, "the disc and the white bar as its hole");
+        // Inherited from a group, overridden by a child.
+        let e = document_elements(
+            &svg(r#"<g fill="white"><rect width="1" height="1"/><rect width="1" height="1" fill="red"/></g>"#),
+            0.01,
+            ID,
+        )
+        .unwrap();
+        assert_eq!((e[0].paper, e[1].paper), (true, false));
+    }
+
+    #[test]
+    fn fill_rule_nonzero_is_honoured_and_unsaid_means_nested_subpaths_are_holes() {
+        // Both subpaths wind the same way.
+        let d = "M0 0H10V10H0Z M2 2H8V8H2Z";
+        let (a, _) = ink(&format!(r#"<path d="{d}"/>"#));
+        assert!((a - 64.0).abs() < 1e-9, "{a}");
+        let (a, _) = ink(&format!(r#"<path d="{d}" fill-rule="evenodd"/>"#));
+        assert!((a - 64.0).abs() < 1e-9, "{a}");
+        let (a, _) = ink(&format!(
+            r#"<g style="fill-rule:nonzero"><path d="{d}"/></g>"#
+        ));
+        assert!((a - 100.0).abs() < 1e-9, "{a}");
+        // Nonzero with the inner subpath the other way round: a hole.
+        let (a, _) = ink(r#"<path fill-rule="nonzero" d="M0 0H10V10H0Z M2 2V8H8V2Z"/>"#);
+        assert!((a - 64.0).abs() < 1e-9, "{a}");
+    }
+
+    #[test]
+    fn use_draws_what_it_references_and_a_cycle_is_an_error() {
+        let e = document_elements(
+            &svg(r##"<defs><symbol id="s"><rect width="2" height="2"/></symbol></defs>
+                  <use xlink:href="#s" x="10" y="5"/><use href="#s" x="20"/><use href="#nothing"/>"##),
+            0.01,
+            ID,
+        )
+        .unwrap();
+        assert_eq!(e.len(), 2);
+        let lo = |k: usize| {
+            e[k].rings[0]
+                .iter()
+                .fold(DVec2::splat(1e9), |a, &p| a.min(p))
+        };
+        assert_eq!(
+            (lo(0), lo(1)),
+            (DVec2::new(10.0, 5.0), DVec2::new(20.0, 0.0))
+        );
+        let cycle = svg(r##"<g id="a"><rect width="1" height="1"/><use href="#a" x="1"/></g>"##);
+        let err = document_polygons(&cycle, 0.01, None).unwrap_err();
+        assert!(err.to_string().contains("reference limit"), "{err}");
+    }
+
+    #[test]
+    fn a_frame_fits_the_drawing_at_any_units_with_smooth_curves() {
+        let icon = r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 24 24"><circle cx="12" cy="12" r="10"/></svg>"#;
+        let frame = (DVec2::ZERO, DVec2::new(800.0, 600.0));
+        let p = document_polygons(icon, 0.05, Some(frame)).unwrap();
+        let (lo, hi) = Polygon::bbox_all(&p);
+        assert!(
+            (lo - DVec2::new(100.0, 0.0)).abs().max_element() < 1e-9,
+            "{lo}"
+        );
+        assert!(
+            (hi - DVec2::new(700.0, 600.0)).abs().max_element() < 1e-9,
+            "{hi}"
+        );
+        // Flattened at the fitted scale: within 0.05 of the true circle.
+        let c = DVec2::new(400.0, 300.0);
+        let a = p[0].area();
+        assert!(
+            (a - std::f64::consts::PI * 90_000.0).abs() < 0.05 * 2.0 * std::f64::consts::PI * 300.0,
+            "{a}"
+        );
+        for w in p[0].rings[0].windows(2) {
+            let mid = ((w[0] + w[1]) * 0.5 - c).length();
+            assert!(
+                300.0 - mid < 0.06,
+                "a chord {} inside the circle",
+                300.0 - mid
+            );
+        }
     }
 
     #[test]

@@ -323,6 +323,44 @@ fn check(req: &TangleRequest) -> Result<(Grammar, Settings)> {
     ))
 }
 
+/// Refuses start shapes of more than [`MAX_START_POINTS`] points.
+fn start_point_limit(n: usize, field: &str) -> Result<()> {
+    if n > MAX_START_POINTS {
+        return Err(Error::limit(format!(
+            "the start shapes have {n} points; at most {MAX_START_POINTS} (the start point limit)"
+        ))
+        .at(field.to_string()));
+    }
+    Ok(())
+}
+
+/// Polygons of start rings, within the start point limit and with area.
+fn start_polys(rings: Vec<Vec<DVec2>>, field: &str) -> Result<Vec<Polygon>> {
+    start_point_limit(rings.iter().map(Vec::len).sum(), field)?;
+    let v = Polygon::new(rings).ok_or_else(|| {
+        Error::input(format!(
+            "start shape points must be finite numbers within ±{}",
+            crate::geom::polygon::MAX_COORD
+        ))
+        .at(field.to_string())
+    })?;
+    if v.is_empty() {
+        return Err(Error::input("the start shape has no area").at(field.to_string()));
+    }
+    Ok(v)
+}
+
+/// A start rectangle at the origin, of a sane size.
+fn start_rect(w: f64, h: f64, field: &str) -> Result<Polygon> {
+    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= 1e6) {
+        return Err(Error::input(format!(
+            "a start rectangle is between 0 and 1000000 units a side (got {w}×{h})"
+        ))
+        .at(field.to_string()));
+    }
+    Ok(Polygon::rect(DVec2::ZERO, DVec2::new(w, h)))
+}
+
 /// The start shapes (polygon, tag).
 fn start_shapes(req: &TangleRequest, g: &Grammar) -> Result<Vec<(Polygon, String)>> {
     let tag = g
@@ -332,85 +370,69 @@ fn start_shapes(req: &TangleRequest, g: &Grammar) -> Result<Vec<(Polygon, String
         .or_else(|| g.rules.first().map(|r| r.tag.clone()))
         .unwrap_or_default();
     let pt = |p: &[f64; 2]| DVec2::new(p[0], p[1]);
-    let polys = |rings: Vec<Vec<DVec2>>, field: &str| -> Result<Vec<Polygon>> {
-        let n: usize = rings.iter().map(Vec::len).sum();
-        if n > MAX_START_POINTS {
-            return Err(Error::limit(format!(
-                "the start shapes have {n} points; at most {MAX_START_POINTS} (the start point limit)"
-            ))
-            .at(field.to_string()));
-        }
-        let v = Polygon::new(rings).ok_or_else(|| {
-            Error::input(format!(
-                "start shape points must be finite numbers within ±{}",
-                crate::geom::polygon::MAX_COORD
-            ))
-            .at(field.to_string())
-        })?;
-        if v.is_empty() {
-            return Err(Error::input("the start shape has no area").at(field.to_string()));
-        }
-        Ok(v)
-    };
-    let rect = |w: f64, h: f64, field: &str| -> Result<Polygon> {
-        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= 1e6) {
-            return Err(Error::input(format!(
-                "a start rectangle is between 0 and 1000000 units a side (got {w}×{h})"
-            ))
-            .at(field.to_string()));
-        }
-        Ok(Polygon::rect(DVec2::ZERO, DVec2::new(w, h)))
-    };
     let one = |p: Vec<Polygon>| p.into_iter().map(|q| (q, tag.clone())).collect::<Vec<_>>();
     match &req.start {
         Some(StartRequest::Rect { width, height }) => {
-            Ok(vec![(rect(*width, *height, "start")?, tag.clone())])
+            Ok(vec![(start_rect(*width, *height, "start")?, tag.clone())])
         }
-        Some(StartRequest::Polygon { points }) => Ok(one(polys(
+        Some(StartRequest::Polygon { points }) => Ok(one(start_polys(
             vec![points.iter().map(pt).collect()],
             "start.points",
         )?)),
-        Some(StartRequest::Rings { rings }) => Ok(one(polys(
+        Some(StartRequest::Rings { rings }) => Ok(one(start_polys(
             rings.iter().map(|r| r.iter().map(pt).collect()).collect(),
             "start.rings",
         )?)),
-        Some(StartRequest::Svg { svg }) => Ok(one(polys(
-            crate::geom::svg::document_rings(svg, CURVE_TOLERANCE)
-                .map_err(|e| e.at("start.svg"))?,
-            "start.svg",
-        )?)),
-        Some(StartRequest::Text { text, height }) => Ok(one(polys(
+        Some(StartRequest::Svg { svg }) => {
+            // Fitted into the frame the grammar was written for: its own
+            // start shapes' box (an 800×600 rectangle when it has none), so
+            // its distances mean the same on any file's units.
+            let frame = match g.start.is_empty() {
+                true => (DVec2::ZERO, DVec2::new(800.0, 600.0)),
+                false => {
+                    let starts = grammar_starts(g)?;
+                    Polygon::bbox_all(starts.iter().map(|(p, _)| p))
+                }
+            };
+            let n = crate::geom::svg::document_polygons(svg, CURVE_TOLERANCE, Some(frame))
+                .map_err(|e| e.at("start.svg"))?;
+            start_point_limit(n.iter().map(Polygon::vertices).sum(), "start.svg")?;
+            Ok(one(n))
+        }
+        Some(StartRequest::Text { text, height }) => Ok(one(start_polys(
             super::letters::text_rings(text, *height).map_err(|e| e.at("start.text"))?,
             "start.text",
         )?)),
-        None if g.start.is_empty() => Ok(vec![(rect(800.0, 600.0, "start")?, tag.clone())]),
-        None => {
-            let mut out = vec![];
-            for s in &g.start {
-                let field = "grammar";
-                let made = match &s.shape {
-                    StartShape::Rect { width, height } => vec![rect(*width, *height, field)?],
-                    StartShape::Circle { radius } => {
-                        let n = (std::f64::consts::TAU * radius / 2.0).clamp(16.0, 4096.0);
-                        vec![Polygon::circle(DVec2::splat(*radius), *radius, n as usize)]
-                    }
-                    StartShape::Polygon(pts) => polys(vec![pts.clone()], field)?,
-                    StartShape::Svg(d) => polys(
-                        crate::geom::svg::path_rings(d, CURVE_TOLERANCE)
-                            .map_err(|e| at_line(e, s.line))?,
-                        field,
-                    )?,
-                    StartShape::Text(t) => polys(
-                        super::letters::text_rings(t, LETTER_HEIGHT)
-                            .map_err(|e| at_line(e, s.line))?,
-                        field,
-                    )?,
-                };
-                out.extend(made.into_iter().map(|p| (p, s.tag.clone())));
-            }
-            Ok(out)
-        }
+        None if g.start.is_empty() => Ok(vec![(start_rect(800.0, 600.0, "start")?, tag.clone())]),
+        None => grammar_starts(g),
     }
+}
+
+/// The grammar's `start` lines' shapes (polygon, tag), built with the
+/// checks of [`start_shapes`].
+fn grammar_starts(g: &Grammar) -> Result<Vec<(Polygon, String)>> {
+    let mut out = vec![];
+    for s in &g.start {
+        let field = "grammar";
+        let made = match &s.shape {
+            StartShape::Rect { width, height } => vec![start_rect(*width, *height, field)?],
+            StartShape::Circle { radius } => {
+                let n = (std::f64::consts::TAU * radius / 2.0).clamp(16.0, 4096.0);
+                vec![Polygon::circle(DVec2::splat(*radius), *radius, n as usize)]
+            }
+            StartShape::Polygon(pts) => start_polys(vec![pts.clone()], field)?,
+            StartShape::Svg(d) => start_polys(
+                crate::geom::svg::path_rings(d, CURVE_TOLERANCE).map_err(|e| at_line(e, s.line))?,
+                field,
+            )?,
+            StartShape::Text(t) => start_polys(
+                super::letters::text_rings(t, LETTER_HEIGHT).map_err(|e| at_line(e, s.line))?,
+                field,
+            )?,
+        };
+        out.extend(made.into_iter().map(|p| (p, s.tag.clone())));
+    }
+    Ok(out)
 }
 
 /// `curve c = svg("...")` and `shape s = svg("...")` as polylines.
