@@ -222,7 +222,7 @@ function mount(el, ctx) {
   let playing = 0;
   // Figures of the last paint/answer for tests and the latency bench: ms, `region` (the
   // repainted fraction of the canvas), `why` (why the last repaint could not be partial).
-  const timing = { paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '' };
+  const timing = { paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '', paints: [] };
   // What the canvas shows (set by every sharp paint; null after a pan frame):
   // a repaint then redraws only the rectangle where the picture differs.
   let shown = null; // {T, k, key, w, h, hl, drawing}
@@ -522,6 +522,7 @@ function mount(el, ctx) {
    */
   function paintRegion({ tiles, cols, rows, count, sum }) {
     const t0 = performance.now();
+    noteDrawn(t0);
     const clip = new Path2D();
     let x0 = cols, y0 = rows, x1 = 0, y1 = 0;
     for (let y = 0; y < rows; y++) {
@@ -574,8 +575,14 @@ function mount(el, ctx) {
     timing.paint = performance.now() - t0;
   }
 
+  /** When the canvas was last drawn (a few times kept, for the tests). */
+  function noteDrawn(at) {
+    timing.paints = [...timing.paints.slice(-15), at];
+  }
+
   function paintNow({ newBitmaps = true } = {}) {
     const t0 = performance.now();
+    noteDrawn(t0);
     g.setTransform(1, 0, 0, 1, 0, 0);
     g.fillStyle = '#fff';
     g.fillRect(0, 0, canvas.width, canvas.height);

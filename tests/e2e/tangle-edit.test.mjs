@@ -122,17 +122,27 @@ test('tangle: an edit keeps the unchanged shapes and repaints only where it chan
   let n = await runs(page);
   const before = await page.evaluate(() => window.filigreeTangle.state().edits.length);
   // Until its answer arrives, an edit leaves the canvas as it is (the last picture and its
-  // highlight): no repaint competes with the worker for the CPU.
+  // highlight): no repaint competes with the worker for the CPU. Every frame until the
+  // answer is looked at, and the panel's paints are timed: none may fall between the input
+  // and the answer (however fast the worker answers on this machine).
   const held = await page.$eval('[data-testid=tangle-param-distance]', async (i) => {
     const t = window.filigreeTangle;
-    const paintAt = t.timing().paintAt;
+    const status = document.querySelector('[data-testid=tangle-status]');
+    const runs = () => Number(status.dataset.runs);
+    const n0 = runs();
+    const t0 = performance.now();
     i.value = String(Number(i.value) * 0.5);
     i.dispatchEvent(new Event('input', { bubbles: true }));
-    for (let f = 0; f < 3; f++) await new Promise((r) => requestAnimationFrame(r));
-    return { repainted: t.timing().paintAt !== paintAt, pending: t.pending(), runs: Number(document.querySelector('[data-testid=tangle-status]').dataset.runs) };
+    let frames = 0;
+    while (runs() === n0 && performance.now() - t0 < 60000) {
+      await new Promise((r) => requestAnimationFrame(r));
+      frames++;
+    }
+    const tm = t.timing();
+    return { answered: runs() > n0, frames, whileDue: tm.paints.filter((p) => p > t0 && p < tm.answeredAt).length };
   });
-  assert.ok(held.pending && held.runs === n, 'the answer is still due three frames after the input');
-  assert.equal(held.repainted, false, 'nothing was repainted while the answer was due');
+  assert.ok(held.answered, 'the edit was answered');
+  assert.equal(held.whileDue, 0, `nothing was repainted while the answer was due (${held.frames} frames)`);
   n = await waitForResult(page, n);
   const first = await page.evaluate(() => window.filigreeTangle.state().edits.at(-1).params.distance);
   await page.$eval('[data-testid=tangle-param-distance]', (i) => {

@@ -269,6 +269,46 @@ test('tangle: a grammar error is marked in the editor at its line; a typed word 
   assert.ok(await count(page) > 50);
 });
 
+test('tangle: an uploaded SVG icon starts the tangle as it looks, fitted to the grammar\'s frame', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  let n = await runs(page);
+  await page.click('[data-example=leaf]'); // start rect(800, 600)
+  n = await waitForResult(page, n);
+  // Choosing "an SVG file" opens the file picker; the person picks the icon.
+  const [chooser] = await Promise.all([page.waitForEvent('filechooser'), page.selectOption('[name=start-kind]', 'svg')]);
+  await chooser.setFiles(new URL('../fixtures/badge.svg', import.meta.url).pathname);
+  n = await waitForResult(page, n);
+  const start = await page.evaluate(() => {
+    const t = window.filigreeTangle;
+    const r = t.result(), pts = t.points();
+    const out = [];
+    for (let i = 0; i < r.shapes.count; i++) {
+      const s = r.shapes.at(i);
+      if (s.born !== -1) continue;
+      const m = s.rings.reduce((a, b) => a + b, 0);
+      let lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
+      for (let k = s.first; k < s.first + m; k++) {
+        const [x, y] = [pts[2 * k], pts[2 * k + 1]];
+        lo = [Math.min(lo[0], x), Math.min(lo[1], y)];
+        hi = [Math.max(hi[0], x), Math.max(hi[1], y)];
+      }
+      out.push({ rings: s.rings.length, lo, hi });
+    }
+    return { kind: t.state().start.kind, shapes: out, grown: r.stats.shapes };
+  });
+  assert.equal(start.kind, 'svg');
+  // The disc (with the dot over its rim, and the white bar as a hole) and the <use>d dot;
+  // the white background is paper.
+  assert.equal(start.shapes.length, 2, JSON.stringify(start.shapes));
+  const disc = start.shapes.find((s) => s.rings === 2);
+  assert.ok(disc, JSON.stringify(start.shapes));
+  // The 24-unit drawing (ink y 2..23) scaled into the leaf's 800×600 frame: full height.
+  const lo = Math.min(...start.shapes.map((s) => s.lo[1])), hi = Math.max(...start.shapes.map((s) => s.hi[1]));
+  assert.ok(Math.abs(lo) < 0.5 && Math.abs(hi - 600) < 0.5, `${lo}..${hi}`);
+  assert.ok(start.grown > 100, `the leaf grammar grew on it: ${start.grown} shapes`);
+});
+
 test('tangle: a curve drawn on the canvas joins the grammar and a split cuts along it; a drawn shape joins too', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
   await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
