@@ -395,7 +395,10 @@ pub fn document_polygons(
         if let Some(fit) = fit_into(&elements, frame) {
             elements = document_elements(text, tolerance, fit)?;
             if let Some([s, _, _, _, e, f]) = fit_into(&elements, frame) {
-                for p in elements.iter_mut().flat_map(|e| e.rings.iter_mut().flatten()) {
+                for p in elements
+                    .iter_mut()
+                    .flat_map(|e| e.rings.iter_mut().flatten())
+                {
                     *p = *p * s + DVec2::new(e, f);
                 }
             }

@@ -272,7 +272,11 @@ pub fn stipple(
                     (j as f64 + 0.2 + 0.6 * rng.f64()) * s,
                 );
             let angle = rng.f64() * std::f64::consts::TAU;
-            if out.len() >= MAX_MARKS || !poly.contains(c) || poly.boundary_distance(c) < 2.0 * r {
+            if out.len() >= MAX_MARKS || !poly.contains(c) {
+                continue;
+            }
+            let room = poly.boundary_distance(c);
+            if room < 2.0 * r {
                 continue;
             }
             let mark = match kind {
@@ -301,7 +305,19 @@ pub fn stipple(
                     Polygon { rings: vec![ring] }
                 }
             };
-            out.extend(mark.intersect(poly));
+            // A mark that reaches less far from its centre than the shape's
+            // boundary is wholly inside: clipping it would give it back (at
+            // the cost of a boolean with the whole shape, most of a
+            // stippled tangle's time). Only a dash can reach past 2r.
+            let reach = mark.rings[0]
+                .iter()
+                .map(|p| p.distance(c))
+                .fold(0.0, f64::max);
+            if reach < room {
+                out.push(mark);
+            } else {
+                out.extend(mark.intersect(poly));
+            }
         }
     }
     out
@@ -444,10 +460,17 @@ mod tests {
     #[test]
     fn stipple_marks_lie_inside_and_are_bounded() {
         let mut rng = Rng::new(3);
-        let parent = Polygon::circle(DVec2::splat(50.0), 50.0, 64);
+        // A disc with a hole: no mark may reach into the hole either.
+        let disc = Polygon::circle(DVec2::splat(50.0), 50.0, 64);
+        let parent = disc.difference(&Polygon::circle(DVec2::splat(50.0), 20.0, 32))[0].clone();
+        assert_eq!(parent.rings.len(), 2);
         for kind in [StippleKind::Dots, StippleKind::Dashes, StippleKind::Curves] {
             let m = stipple(&parent, kind, 8.0, 2.0, &mut rng);
             assert!(m.len() > 20, "{kind:?}");
+            // Kept as they were made (not clipped) or clipped: normalised alike,
+            // outer rings counter-clockwise.
+            let ccw = |q: &Polygon| crate::geom::polygon::ring_area2(&q.rings[0]) > 0.0;
+            assert!(m.iter().all(ccw), "{kind:?}");
             let outside: f64 = m
                 .iter()
                 .flat_map(|q| q.difference(&parent))
