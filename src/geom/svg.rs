@@ -175,10 +175,11 @@ pub struct Element {
 
 /// Most drawn elements of a document combined into start shapes.
 pub const MAX_DRAWN: usize = 5_000;
-/// Most pairs of elements whose nesting is measured exactly (pairs whose
-/// boxes nest), so a file of thousands of concentric rings cannot take
-/// minutes.
-pub const MAX_NESTED_PAIRS: usize = 20_000;
+/// Most work spent measuring which elements lie inside which (the
+/// vertices of every pair whose boxes nest, summed; about a second), so a
+/// file of thousands of concentric rings, or of many shapes inside one
+/// huge outline, cannot take minutes.
+pub const MAX_NESTING_WORK: usize = 4_000_000;
 /// How deep `<use>` references may chain (a reference cycle stops here).
 const MAX_USE_DEPTH: u8 = 8;
 
@@ -464,7 +465,7 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
     // nest). Of two equal regions the earlier contains the later, and the
     // later is a duplicate, dropped (a path drawn twice is one shape).
     let same = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.max(b);
-    let mut pairs = 0usize;
+    let mut work = 0usize;
     let mut contains = vec![];
     for (j, (rj, _, aj, loj, hij)) in regions.iter().enumerate() {
         for (i, (ri, paper_i, ai, loi, hii)) in regions.iter().enumerate() {
@@ -473,11 +474,11 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
             if i == j || *paper_i || !boxed || !larger {
                 continue;
             }
-            pairs += 1;
-            if pairs > MAX_NESTED_PAIRS {
+            work += rj.iter().chain(ri).map(Polygon::vertices).sum::<usize>();
+            if work > MAX_NESTING_WORK {
                 return Err(Error::limit(format!(
-                    "the SVG file has more than {MAX_NESTED_PAIRS} pairs of shapes boxed one \
-                     in the other (the SVG nesting limit)"
+                    "the SVG file's shapes lie one inside the other too often to sort out (more \
+                     than {MAX_NESTING_WORK} vertices compared; the SVG nesting limit)"
                 )));
             }
             let outside: f64 = rj
@@ -707,6 +708,36 @@ mod tests {
                 300.0 - mid
             );
         }
+    }
+
+    #[test]
+    fn many_shapes_inside_one_huge_outline_are_refused_quickly() {
+        // A 100,000-point outline around 400 dots: every dot's nesting would be a
+        // boolean with the whole outline (minutes); the work cap stops it first.
+        let n = 100_000;
+        let ring: String = (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                format!(
+                    "{}{:.4} {:.4} ",
+                    if k == 0 { "M" } else { "L" },
+                    500.0 + 500.0 * t.cos(),
+                    500.0 + 500.0 * t.sin()
+                )
+            })
+            .collect();
+        let dots: String = (0..400)
+            .map(|k| {
+                format!(
+                    r#"<circle cx="{}" cy="{}" r="3"/>"#,
+                    300 + (k % 20) * 20,
+                    300 + (k / 20) * 20
+                )
+            })
+            .collect();
+        let err = document_polygons(&svg(&format!(r#"<path d="{ring}Z"/>{dots}"#)), 0.05, None)
+            .unwrap_err();
+        assert!(err.to_string().contains("nesting limit"), "{err}");
     }
 
     #[test]
