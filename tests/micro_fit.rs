@@ -637,6 +637,7 @@ fn fits_give_the_stored_native_results() {
 /// `EVALS`) and a quick timing.
 #[test]
 #[ignore]
+#[allow(clippy::disallowed_methods)] // a native, hand-run measurement
 fn a_fixed_number_of_loss_evaluations() {
     use filigree::core::job::Job;
     let evals: usize = std::env::var("EVALS").map_or(100, |v| v.parse().unwrap());

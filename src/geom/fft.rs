@@ -361,7 +361,7 @@ impl LaneFft {
 /// (two loads of adjacent values, two stores of adjacent values: vector
 /// moves and shuffles) rather than one strided store per value.
 fn transpose(s: &[f64], d: &mut [f64], rev: &[usize], nx: usize, ny: usize) {
-    if nx % 2 != 0 || ny % 2 != 0 {
+    if !nx.is_multiple_of(2) || !ny.is_multiple_of(2) {
         for (ky, &row) in rev.iter().enumerate() {
             for (x, &v) in s[row * nx..(row + 1) * nx].iter().enumerate() {
                 d[x * ny + ky] = v;
