@@ -628,3 +628,32 @@ fn fits_give_the_stored_native_results() {
         assert!(got == want, "{name}: the native result differs from {path}");
     }
 }
+
+/// `EVALS` (default 100) loss evaluations of the bench's problem (gyroid
+/// 1D on a 32³ grid, a candidate near the truth): the scene, its lattice
+/// samples, FFT and loss, the way the job does them. Ignored: a fixed
+/// amount of work for `valgrind --tool=callgrind` (instructions per
+/// evaluation: the difference of two counts over the difference of their
+/// `EVALS`) and a quick timing.
+#[test]
+#[ignore]
+#[allow(clippy::disallowed_methods)] // a native, hand-run measurement
+fn a_fixed_number_of_loss_evaluations() {
+    use filigree::core::job::Job;
+    let evals: usize = std::env::var("EVALS").map_or(100, |v| v.parse().unwrap());
+    let mut job = start_fit(MicroFitRequest {
+        grid: 32,
+        ..gyroid_request(Optimizer::Cmaes, 10)
+    })
+    .unwrap();
+    job.step().unwrap();
+    let u = [(101.0 - 10.0) / 390.0];
+    let t = std::time::Instant::now();
+    let mut last = 0.0;
+    for _ in 0..evals {
+        last = job.evaluate(&u).unwrap();
+    }
+    let ms = t.elapsed().as_secs_f64() * 1e3 / evals.max(1) as f64;
+    eprintln!("{evals} evaluations: {ms:.4} ms each, loss {last:?}");
+    assert!(last.is_finite());
+}

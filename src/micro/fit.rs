@@ -122,13 +122,16 @@ pub fn sum8(v: &[f64]) -> f64 {
     ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]))
 }
 
-/// The largest of `v` (0 for none).
+/// The largest of `v` (0 for none; NaNs skipped). A compare and select
+/// rather than `f64::max` (whose NaN rule SSE2 has no instruction for):
+/// the same result here, where no running maximum is NaN, in vector
+/// registers.
 fn max_of(v: &[f64]) -> f64 {
     let mut m = [0.0f64; 8];
     let mut chunks = v.chunks_exact(8);
     for c in &mut chunks {
         for k in 0..8 {
-            m[k] = m[k].max(c[k]);
+            m[k] = if c[k] > m[k] { c[k] } else { m[k] };
         }
     }
     for (k, x) in chunks.remainder().iter().enumerate() {
@@ -237,8 +240,10 @@ impl Fourier {
                 target.amp.len()
             )));
         }
-        for ((a, r), i) in self.amp.iter_mut().zip(re).zip(im) {
-            *a = (r * r + i * i).sqrt();
+        // Indexed over slices of one length, so that it vectorises.
+        let (amp, cr, ci) = (&mut self.amp[..m], &re[..m], &im[..m]);
+        for l in 0..m {
+            amp[l] = (cr[l] * cr[l] + ci[l] * ci[l]).sqrt();
         }
         let floor = max_of(&self.amp) * PHASE_FLOOR;
         let plane = nx * ny;

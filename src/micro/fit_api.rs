@@ -298,27 +298,32 @@ fn sample_grid(
             (lead.unwrap_or(term.len()), term.len())
         })
         .collect();
+    // Each row is built and finished in `row` by passes of elementwise
+    // arithmetic and selects (no branches: the compiler vectorises them),
+    // then appended.
     out.clear();
     out.reserve(nx * ny * nz);
     let (mut row, mut prod) = (vec![0.0; nx], vec![0.0; nx]);
     let (thick, inv) = (t.thickness, t.inv_bound);
-    // `stored` with the clamp hoisted: ±∞ clamps nothing.
-    let lim = clamp.unwrap_or(f64::INFINITY);
-    let finish = |s: f64| {
-        let s = s * inv;
-        let s = if s.is_nan() { f64::INFINITY } else { s };
-        let s = if s < -lim {
-            -lim
-        } else if s > lim {
-            lim
-        } else {
-            s
-        };
-        if s.is_finite() {
-            s
-        } else {
-            MAX_VALUE
-        }
+    // `stored` with the clamp hoisted. Without one, NaN and ±∞ all become
+    // `MAX_VALUE`, as the clamped path's NaN → +∞ → unclamped does.
+    let finish = |row: &mut [f64]| match clamp {
+        None => row.iter_mut().for_each(|v| {
+            let s = *v * inv;
+            *v = if s.is_finite() { s } else { MAX_VALUE };
+        }),
+        Some(lim) => row.iter_mut().for_each(|v| {
+            let s = *v * inv;
+            let s = if s.is_nan() { f64::INFINITY } else { s };
+            let s = if s < -lim {
+                -lim
+            } else if s > lim {
+                lim
+            } else {
+                s
+            };
+            *v = if s.is_finite() { s } else { MAX_VALUE };
+        }),
     };
     for r in 0..ny * nz {
         let (y, z) = (r % ny, r / ny);
@@ -360,10 +365,10 @@ fn sample_grid(
             }
         }
         if thick > 0.0 {
-            out.extend(row.iter().map(|v| finish(v.abs() - thick)));
-        } else {
-            out.extend(row.iter().map(|&v| finish(v)));
+            row.iter_mut().for_each(|v| *v = v.abs() - thick);
         }
+        finish(&mut row);
+        out.extend_from_slice(&row);
     }
     true
 }
