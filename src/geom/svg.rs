@@ -377,8 +377,9 @@ pub fn document_elements(text: &str, tolerance: f64, root: [f64; 6]) -> Result<V
 /// Elements inside another element are holes in it, inside a hole ink
 /// again (the nesting of the issue's "nested paths become holes", across
 /// elements as within one); elements that only overlap are one shape
-/// (their union); white-filled elements only cut holes (a white
-/// background or a white letter on a black disc). `frame` (min, max):
+/// (their union); white-filled elements cut what was drawn before them (a
+/// white letter on a black disc) and are paper under what comes after (a
+/// white background). `frame` (min, max):
 /// the drawing is scaled, keeping its proportions, and centred to fit it,
 /// and curves are flattened to `tolerance` at that scale (a 24-unit icon
 /// and a 2,000-unit poster give the same tangle).
@@ -442,6 +443,7 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
             elements.len()
         )));
     }
+    // (polygons, area, box, paper) of each element with area, in document order.
     let mut regions = vec![];
     for e in elements {
         let made = if e.nonzero {
@@ -458,20 +460,28 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
         if !made.is_empty() {
             let area: f64 = made.iter().map(Polygon::area).sum();
             let (lo, hi) = Polygon::bbox_all(&made);
-            regions.push((made, e.paper, area, lo, hi));
+            regions.push((made, area, lo, hi, e.paper));
         }
     }
+    let boxed = |(lo, hi): (DVec2, DVec2), (ilo, ihi): (DVec2, DVec2)| {
+        lo.cmple(ilo).all() && hi.cmpge(ihi).all()
+    };
+    let overlap = |(lo, hi): (DVec2, DVec2), (olo, ohi): (DVec2, DVec2)| {
+        lo.cmple(ohi).all() && olo.cmple(hi).all()
+    };
+    let ink_at: Vec<usize> = (0..regions.len()).filter(|&k| !regions[k].4).collect();
     // Which ink element contains which (measured exactly where the boxes
     // nest). Of two equal regions the earlier contains the later, and the
     // later is a duplicate, dropped (a path drawn twice is one shape).
     let same = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.max(b);
     let mut work = 0usize;
     let mut contains = vec![];
-    for (j, (rj, _, aj, loj, hij)) in regions.iter().enumerate() {
-        for (i, (ri, paper_i, ai, loi, hii)) in regions.iter().enumerate() {
-            let boxed = loi.cmple(*loj).all() && hii.cmpge(*hij).all();
+    for &j in &ink_at {
+        let (rj, aj, loj, hij, _) = &regions[j];
+        for &i in &ink_at {
+            let (ri, ai, loi, hii, _) = &regions[i];
             let larger = if same(*ai, *aj) { i < j } else { ai > aj };
-            if i == j || *paper_i || !boxed || !larger {
+            if i == j || !larger || !boxed((*loi, *hii), (*loj, *hij)) {
                 continue;
             }
             work += rj.iter().chain(ri).map(Polygon::vertices).sum::<usize>();
@@ -493,9 +503,10 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
     }
     let mut duplicate = vec![false; regions.len()];
     for &(i, j) in &contains {
-        duplicate[j] |= same(regions[i].2, regions[j].2);
+        duplicate[j] |= same(regions[i].1, regions[j].1);
     }
-    // Depth: how many ink elements contain each one.
+    // Depth: how many ink elements contain each one; even depths are ink,
+    // odd ones holes, layer by layer from the outside in.
     let mut depth = vec![0usize; regions.len()];
     for &(i, j) in &contains {
         if !duplicate[i] {
@@ -505,12 +516,10 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
     let deepest = depth.iter().copied().max().unwrap_or(0);
     let mut ink: Vec<Polygon> = vec![];
     for d in 0..=deepest {
-        let layer: Vec<Polygon> = regions
+        let layer: Vec<Polygon> = ink_at
             .iter()
-            .zip(&depth)
-            .zip(&duplicate)
-            .filter(|(((_, paper, ..), &k), &dup)| !dup && k == d && (d % 2 == 1 || !paper))
-            .flat_map(|(((r, ..), _), _)| r.iter().cloned())
+            .filter(|&&k| !duplicate[k] && depth[k] == d)
+            .flat_map(|&k| regions[k].0.iter().cloned())
             .collect();
         if layer.is_empty() {
             continue;
@@ -521,6 +530,22 @@ fn ink_of(elements: &[Element]) -> Result<Vec<Polygon>> {
         } else {
             ink.iter().flat_map(|p| p.difference_all(&layer)).collect()
         };
+    }
+    // White paints over what was drawn before it (painter's order): a white
+    // element after some ink it overlaps cuts it; one before all the ink it
+    // overlaps (a white background) is paper under the drawing.
+    let cuts: Vec<Polygon> = (0..regions.len())
+        .filter(|&p| {
+            let (_, _, lo, hi, paper) = &regions[p];
+            *paper
+                && ink_at
+                    .iter()
+                    .any(|&k| k < p && overlap((*lo, *hi), (regions[k].2, regions[k].3)))
+        })
+        .flat_map(|p| regions[p].0.iter().cloned())
+        .collect();
+    if !cuts.is_empty() {
+        ink = ink.iter().flat_map(|p| p.difference_all(&cuts)).collect();
     }
     Ok(ink)
 }
@@ -628,6 +653,12 @@ mod tests {
         let disc = std::f64::consts::PI * 2500.0;
         assert!((a - (disc - 1200.0)).abs() < 1.0, "{a}");
         assert_eq!(rings, 2, "the disc and the white bar as its hole");
+        // A white stripe drawn over part of a disc cuts it (painter's order),
+        // though it is not inside it.
+        let (a, _) = ink(
+            r#"<rect width="100" height="100"/><rect x="40" y="-10" width="20" height="120" fill="white"/>"#,
+        );
+        assert!((a - 8000.0).abs() < 1e-6, "{a}");
         // Inherited from a group, overridden by a child.
         let e = document_elements(
             &svg(r#"<g fill="white"><rect width="1" height="1"/><rect width="1" height="1" fill="red"/></g>"#),
