@@ -239,6 +239,38 @@ impl Polygon {
         )
     }
 
+    /// `self − ⋃ inner` for pieces the caller knows lie strictly inside
+    /// `self` (apart from its boundary, as an inset does): when neither
+    /// `self` nor any piece has holes and the pieces' boxes are apart, the
+    /// result is `self`'s outline with each piece's outline as a hole, made
+    /// directly (no boolean: an outline step's most common case, and the
+    /// same region [`Polygon::difference_all`] gives). Anything else goes
+    /// through [`Polygon::difference_all`].
+    pub fn minus_inside(&self, inner: &[Polygon]) -> Vec<Polygon> {
+        let simple = self.rings.len() == 1 && inner.iter().all(|p| p.rings.len() == 1);
+        let boxes: Vec<(DVec2, DVec2)> = inner.iter().map(Polygon::bbox).collect();
+        let (lo, hi) = self.bbox();
+        let apart = |(a0, a1): (DVec2, DVec2), (b0, b1): (DVec2, DVec2)| {
+            a1.x < b0.x || b1.x < a0.x || a1.y < b0.y || b1.y < a0.y
+        };
+        let direct = simple
+            && boxes
+                .iter()
+                .all(|&(b0, b1)| b0.x > lo.x && b0.y > lo.y && b1.x < hi.x && b1.y < hi.y)
+            && (0..boxes.len()).all(|i| (0..i).all(|j| apart(boxes[i], boxes[j])));
+        if !direct {
+            return self.difference_all(inner);
+        }
+        let mut rings = Vec::with_capacity(1 + inner.len());
+        rings.push(self.rings[0].clone());
+        rings.extend(
+            inner
+                .iter()
+                .map(|p| p.rings[0].iter().rev().copied().collect()),
+        );
+        vec![Polygon { rings }]
+    }
+
     /// The union of polygons.
     pub fn union_all(polys: &[Polygon]) -> Vec<Polygon> {
         let all: Vec<Vec<Ring>> = polys.iter().map(|p| p.rings.clone()).collect();
@@ -422,6 +454,32 @@ mod tests {
             let a_ring: f64 = ring.iter().map(Polygon::area).sum();
             prop_assert!(a_in <= p.area() + 1e-6);
             prop_assert!((a_in + a_ring - p.area()).abs() <= 1e-3 * p.area().max(1.0));
+        }
+
+        /// The ring made directly from an inset's outlines is the region the
+        /// boolean difference gives: the same area, the same points inside,
+        /// and its holes wind clockwise.
+        #[test]
+        fn the_direct_ring_is_the_boolean_difference(p in arb_poly(), d in 0.1f64..5.0,
+            probes in proptest::collection::vec((-50.0f64..50.0, -50.0f64..50.0), 64)) {
+            let inner = p.inset(d);
+            let direct = p.minus_inside(&inner);
+            let boolean = p.difference_all(&inner);
+            let area = |ps: &[Polygon]| ps.iter().map(Polygon::area).sum::<f64>();
+            prop_assert!((area(&direct) - area(&boolean)).abs() <= 1e-6 * p.area().max(1.0));
+            for (x, y) in probes {
+                let q = DVec2::new(x, y);
+                // Points within rounding of an edge may fall either way.
+                if direct.iter().chain(&boolean).any(|r| r.boundary_distance(q) < 1e-6) {
+                    continue;
+                }
+                let inside = |ps: &[Polygon]| ps.iter().any(|r| r.contains(q));
+                prop_assert_eq!(inside(&direct), inside(&boolean), "at {:?}", q);
+            }
+            for r in &direct {
+                prop_assert!(ring_area2(&r.rings[0]) > 0.0);
+                prop_assert!(r.rings[1..].iter().all(|h| ring_area2(h) < 0.0));
+            }
         }
     }
 }

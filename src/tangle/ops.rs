@@ -237,7 +237,9 @@ pub fn outline(poly: &Polygon, distance: f64, step: f64, wobble: &Wobble) -> [Ve
             .flat_map(|p| p.resampled(step).map_points(|q| w.at(q)))
             .collect();
     }
-    let ring = poly.difference_all(&inner);
+    // The inner shapes lie inside the shape, at least 0.4 × distance from
+    // its boundary.
+    let ring = poly.minus_inside(&inner);
     [inner, ring]
 }
 
