@@ -193,3 +193,33 @@ fn write_fuzz_seeds() {
     std::fs::write(dir.join("other-version.bin"), v).unwrap();
     std::fs::write(dir.join("empty.bin"), b"").unwrap();
 }
+
+/// A picture too small to read as a texture (a 10×10 icon) is refused with
+/// a clear error that says its size and the minimum, not analysed from the
+/// blur its enlargement would be; the smallest accepted size is half the
+/// network's window (16 pixels for this index's 32).
+#[test]
+fn a_tiny_example_is_refused_with_its_size_and_the_minimum() {
+    let bytes = small_index();
+    let loaded = filigree::api::run_json(
+        "texture-index",
+        &serde_json::json!({ "bytes": bytes }).to_string(),
+    )
+    .unwrap();
+    let id = loaded["id"].as_str().unwrap().to_string();
+    let analyse = |side: usize| {
+        filigree::api::run_json(
+            "texture-analyse",
+            &serde_json::json!({ "index": id, "bytes": png_of("islamic", side) }).to_string(),
+        )
+    };
+    let e = analyse(10).unwrap_err();
+    assert_eq!(e.field(), Some("bytes"));
+    let msg = e.to_string();
+    assert!(
+        msg.contains("10×10 pixels") && msg.contains("at least 16"),
+        "{msg}"
+    );
+    assert!(analyse(15).is_err(), "one pixel under the minimum");
+    assert!(analyse(16).is_ok(), "the minimum itself is analysed");
+}

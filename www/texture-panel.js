@@ -369,7 +369,8 @@ function mount(el, ctx) {
 
   // ---- the example ------------------------------------------------------------------------
 
-  /** Analyse example `png` (bytes) as `source`, retrieve its nearest texture: one undoable step. */
+  /** Analyse example `png` (bytes) as `source`, retrieve its nearest texture: one undoable step.
+   * Resolves true when the document took it (false: it said why, and the document is unchanged). */
   async function useExample(source, png) {
     const doc = state();
     if (!doc) return;
@@ -394,11 +395,13 @@ function mount(el, ctx) {
       ctx.seal();
       status(`predicted ${a.model_name}; retrieved sample ${r.sample}`);
       ctx.clearError();
+      return true;
     } catch (err) {
-      if (working !== ctrl || err?.kind === 'cancelled') return;
+      if (working !== ctrl || err?.kind === 'cancelled') return false;
       if (err instanceof IndexError) indexFailed(err);
       else ctx.error(err, { prefix: 'Example', source: 'run' });
       status('the example could not be analysed (see above)');
+      return false;
     } finally {
       if (working === ctrl) working = null;
     }
@@ -412,7 +415,8 @@ function mount(el, ctx) {
       if (!ctx.alive()) return;
       const source = { kind: 'image', name: String(file.name || 'pasted image').slice(0, 200), png };
       await drawExample(source);
-      await useExample(source, png);
+      // Refused (too small to read, say): the canvas shows the document's example again.
+      if (!(await useExample(source, png)) && ctx.alive()) await drawExample(state()?.source);
     } catch (err) {
       ctx.error(err, { prefix: 'Example' });
     }

@@ -344,8 +344,33 @@ impl Index {
         Ok((axes, coords))
     }
 
-    /// The predicted model and scales of an image.
+    /// The smallest short side, in pixels, of an image [`Index::analyse`]
+    /// accepts: half the network's window (`side`, 128 for the shipped
+    /// index). A smaller picture would be enlarged more than twice to fill
+    /// the window, and what the network reads of it is the enlargement's
+    /// blur, not the texture: its model and scales would be made up.
+    pub fn min_side(&self) -> usize {
+        self.pcn.config.side.div_ceil(2).max(1)
+    }
+
+    /// The predicted model and scales of an image (at least
+    /// [`Index::min_side`] pixels on its short side).
     pub fn analyse(&self, img: &Gray) -> Result<Analysis> {
+        let min = self.min_side();
+        if img.width.min(img.height) < min {
+            return Err(Error::input(format!(
+                "the example is {}×{} pixels; the texture analysis needs at least {min} on \
+                 its short side (it reads a {}-pixel window, and a smaller picture would be \
+                 enlarged into a blur). Use a larger picture of the texture, or repeat a small \
+                 seamless tile to fill {}×{}",
+                img.width,
+                img.height,
+                self.pcn.config.side,
+                self.pcn.config.side,
+                self.pcn.config.side
+            ))
+            .at("bytes"));
+        }
         let f = self.pcn.features(img)?;
         let mut scales = [5u8; 12];
         for (s, c) in scales.iter_mut().zip(&self.scale_classifiers) {

@@ -158,3 +158,32 @@ test('a corrupt, wrong-version or missing index is said in the panel; models sti
     await page.context().close();
   }
 });
+
+test('a picture too small to read as a texture is refused with its size; the document and its example stay', async () => {
+  const page = await env.newPage({ path: '#tool=texture' });
+  await page.waitForFunction(settled, null, { timeout: 45000 });
+  const before = await state(page);
+  // A 10×10 icon: enlarged to the network's 128-pixel window it would be a blur.
+  const b64 = await page.evaluate(async () => {
+    const c = new OffscreenCanvas(10, 10);
+    const g = c.getContext('2d');
+    g.fillStyle = '#888';
+    g.fillRect(0, 0, 10, 10);
+    g.fillStyle = '#000';
+    g.fillRect(2, 2, 3, 3);
+    const a = new Uint8Array(await (await c.convertToBlob({ type: 'image/png' })).arrayBuffer());
+    let s = '';
+    for (const x of a) s += String.fromCharCode(x);
+    return btoa(s);
+  });
+  await dropFile(page, '[data-testid=texture-drop]', { name: 'icon.png', bytes: Buffer.from(b64, 'base64'), type: 'image/png' });
+  await page.waitForSelector('[data-testid=doc-error]:not([hidden])', { timeout: 30000 });
+  assert.match(await page.textContent('[data-testid=doc-error]'), /10×10 pixels.*at least 64/);
+  // The example shown is the document's again (the model's 256² render), and nothing changed.
+  await page.waitForFunction(() => document.querySelector('[data-testid=texture-example]').width === 256, null, { timeout: 30000 });
+  await page.waitForFunction(settled, null, { timeout: 30000 });
+  const after = await state(page);
+  assert.deepEqual(after.source, before.source, 'the example in the document is the one before');
+  assert.deepEqual(after.retrieved, before.retrieved, 'and so is the retrieved texture');
+  assert.equal(await page.isDisabled('button[data-act=undo]'), true, 'nothing to undo: the refused picture made no step');
+});
