@@ -8,7 +8,7 @@
 //! lies on top of an earlier one (painter's order, e.g. fish scales).
 //!
 //! **Which copies.** The recorder emits every copy that can touch the
-//! canvas `[0, 1]²` for *some* values of the float parameters within their
+//! canvas `[0, WIDTH] × [0, HEIGHT]` (`[0, 1]²` when square) for *some* values of the float parameters within their
 //! declared ranges, and only those; the set depends on the ranges (and the
 //! integer parameters), never on the float values, so one tape serves a
 //! whole fit. It is found from interval bounds over the ranges
@@ -208,21 +208,23 @@ impl Rec<'_> {
                 c.pos.line, c.pos.column, pxb.0, pyb.0
             ))
         };
-        // Candidate index range for offsets k·[lo, hi] + s with the box [e0, e1]:
-        // k·p + s + e1 ≥ 0 and k·p + s + e0 ≤ 1 for some p in [lo, hi].
-        let candidates = |(lo, hi): Iv, s: Iv, e: Iv| -> (f64, f64) {
+        // Candidate index range for offsets k·[lo, hi] + s with the box [e0, e1]
+        // on an axis of the canvas `[0, side]`: k·p + s + e1 ≥ 0 and
+        // k·p + s + e0 ≤ side for some p in [lo, hi].
+        let (cw, ch) = (self.canvas.w, self.canvas.h);
+        let candidates = |(lo, hi): Iv, s: Iv, e: Iv, side: f64| -> (f64, f64) {
             let a = -e.1 - s.1;
-            let b = 1.0 - e.0 - s.0;
+            let b = side - e.0 - s.0;
             (
                 (a / lo).min(a / hi).floor() - 1.0,
                 (b / lo).max(b / hi).ceil() + 1.0,
             )
         };
-        let touches = |k: f64, p: Iv, s: Iv, e: Iv| {
+        let touches = |k: f64, p: Iv, s: Iv, e: Iv, side: f64| {
             let o = scale_iv(k, p);
-            o.1 + s.1 + e.1 >= 0.0 && o.0 + s.0 + e.0 <= 1.0
+            o.1 + s.1 + e.1 >= 0.0 && o.0 + s.0 + e.0 <= side
         };
-        let (j0, j1) = candidates(pyb, (0.0, 0.0), ye);
+        let (j0, j1) = candidates(pyb, (0.0, 0.0), ye, ch);
         // Non-finite ends (pitches near 0 or huge extents) are refused too,
         // so the loops below always end.
         if !(j0.is_finite() && j1.is_finite() && j1 - j0 <= limit as f64) {
@@ -231,9 +233,9 @@ impl Rec<'_> {
         let mut copies: Vec<(f64, f64)> = vec![];
         let mut j = j0;
         while j <= j1 {
-            if touches(j, pyb, (0.0, 0.0), ye) {
+            if touches(j, pyb, (0.0, 0.0), ye, ch) {
                 let s = scale_iv(j, shb);
-                let (i0, i1) = candidates(pxb, s, xe);
+                let (i0, i1) = candidates(pxb, s, xe, cw);
                 if !(i0.is_finite() && i1.is_finite())
                     || i1 - i0 + copies.len() as f64 > 2.0 * limit as f64
                 {
@@ -241,7 +243,7 @@ impl Rec<'_> {
                 }
                 let mut i = i0;
                 while i <= i1 {
-                    if touches(i, pxb, s, xe) {
+                    if touches(i, pxb, s, xe, cw) {
                         copies.push((j, i));
                     }
                     i += 1.0;
