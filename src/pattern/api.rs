@@ -405,6 +405,10 @@ pub struct FitRequestOf<X> {
     pub program: String,
     /// Values by name for integer (structural) parameters; others default.
     pub params: BTreeMap<String, f64>,
+    /// The target image (or `target_rgba`, its pixels). The fit's canvas
+    /// takes its aspect, shorter side 1 (`Canvas::of_pixels`; a square image
+    /// gives `[0, 1]²`), so the CLI and the browser, sending the same image,
+    /// fit on the same canvas; `target_params` draws on the square canvas.
     #[serde(with = "serde_bytes", skip_serializing_if = "Option::is_none")]
     pub target_png: Option<Vec<u8>>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -947,6 +951,54 @@ mod tests {
 
     fn named(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
         pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    }
+
+    /// A picture that is not square: `render-pattern` with `height` draws
+    /// on the canvas of that aspect (round dots, an SVG of that size),
+    /// `pattern-snap` keeps an upload's aspect, and a request written before
+    /// `height` existed (no such field) is still the square it was.
+    #[test]
+    fn pictures_that_are_not_square_keep_their_aspect() {
+        let src = "background \"#ffffff\";\ncircle(WIDTH / 2, HEIGHT / 2, 0.3, fill: \"#000000\");";
+        let req = RenderPatternRequest {
+            program: src.into(),
+            size: 150,
+            height: Some(100),
+            ..Default::default()
+        };
+        let r = run_quietly(start_render(req).unwrap()).unwrap();
+        assert_eq!((r.image.width, r.image.height), (150, 100));
+        let dark = |x: u32, y: u32| r.image.rgba[4 * (y * 150 + x) as usize] < 128;
+        // Radius 0.3 of the shorter side: 30 px both ways from (75, 50).
+        assert!(dark(75, 50) && dark(75 + 29, 50) && dark(75, 50 + 29));
+        assert!(!dark(75 + 31, 50) && !dark(75, 50 + 31));
+        assert!(
+            r.svg.starts_with(
+                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"150\" height=\"100\" viewBox=\"0 0 150 100\">"
+            ),
+            "{}",
+            r.svg
+        );
+        assert!(
+            r.svg.contains("<circle cx=\"75\" cy=\"50\" r=\"30\""),
+            "{}",
+            r.svg
+        );
+        let old: RenderPatternRequest =
+            serde_json::from_str(&format!("{{\"program\": {src:?}, \"size\": 40}}")).unwrap();
+        assert_eq!(old.height, None);
+        let r = run_quietly(start_render(old).unwrap()).unwrap();
+        assert_eq!((r.image.width, r.image.height), (40, 40));
+        // An upload of 300 × 240 snapped to 128 along its longer side.
+        let img = crate::raster::Rgba8Image::new(300, 240);
+        let snapped = snap_target(&PatternSnapRequest {
+            program: src.into(),
+            bytes: crate::raster::encode_png(&img).unwrap(),
+            size: 128,
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!((snapped.image.width, snapped.image.height), (128, 102));
     }
 
     #[test]

@@ -316,6 +316,36 @@ mod tests {
         assert!(counts[0].0 <= 13 * 11, "{counts:?}");
     }
 
+    /// On a canvas that is not square the copies cover all of it, and only
+    /// the copies that touch it are emitted: `[0, 1.5] × [0, 1]` holds
+    /// columns 0..=6 and rows 0..=4 of a 0.25 lattice; `[0, 1] × [0, 1.25]`
+    /// columns 0..=4 and rows 0..=5. `WIDTH` and `HEIGHT` read the canvas.
+    #[test]
+    fn a_tile_covers_a_canvas_that_is_not_square() {
+        use super::super::Canvas;
+        let p = Program::parse("tile(0.25, 0.25) { circle(0, 0, 0.05); }").unwrap();
+        for ((w, h), copies) in [((300, 200), 7 * 5), ((200, 250), 5 * 6), ((64, 64), 25)] {
+            let canvas = Canvas::of_pixels(w, h);
+            let r = p.record_on(&[], &RecordLimits::default(), canvas).unwrap();
+            assert_eq!(r.shapes.len(), copies, "{w} × {h}");
+            assert_eq!(r.canvas, canvas);
+        }
+        let centre = |src: &str, canvas: Canvas| -> (f64, f64) {
+            let p = Program::parse(src).unwrap();
+            let r = p.record_on(&[], &RecordLimits::default(), canvas).unwrap();
+            let mut v = vec![];
+            r.tape.forward(&[], &mut v);
+            let f = r.prims[0].fields;
+            (v[f[0] as usize], v[f[1] as usize])
+        };
+        let src = "circle(WIDTH / 2, HEIGHT / 2, 0.1);";
+        assert_eq!(centre(src, Canvas::of_pixels(300, 240)), (0.625, 0.5));
+        assert_eq!(centre(src, Canvas::SQUARE), (0.5, 0.5));
+        // A name the program defines itself wins over the canvas's.
+        let src = "let WIDTH = 3; circle(WIDTH, 0, 0.1);";
+        assert_eq!(centre(src, Canvas::SQUARE), (3.0, 0.0));
+    }
+
     /// At the ends of every range (smallest and largest pitch, offset and
     /// size), the tile draws the same picture as a loop placing copies far
     /// past every edge (41 × 41 copies): no band along any edge is left
