@@ -208,4 +208,13 @@ test('a non-square upload keeps its aspect: the target, the fitted overlay and t
   const svg = fs.readFileSync(await download.path(), 'utf8');
   assert.match(svg, /^<svg xmlns="http:\/\/www.w3.org\/2000\/svg" width="512" height="410" viewBox="0 0 512 410">/);
   assert.doesNotMatch(svg, /preserveAspectRatio/);
+
+  // A share link carries the target with its aspect, pixel for pixel.
+  const want = await page.evaluate(() => Array.from(window.filigreeFit.state().target.rgba));
+  const { fragment } = await page.evaluate(() => window.filigree.currentShare());
+  const b = await env.newPage({ path: `#${fragment}` });
+  await b.waitForFunction(() => window.filigreeFit?.state()?.target?.height === 205);
+  const got = await b.evaluate(() => ({ width: window.filigreeFit.state().target.width, rgba: Array.from(window.filigreeFit.state().target.rgba) }));
+  assert.equal(got.width, 256);
+  assert.ok(got.rgba.length === want.length && got.rgba.every((v, i) => v === want[i]), 'the same target pixels');
 });
