@@ -1182,12 +1182,66 @@ mod tests {
             images.push(grey);
         }
         for img in images {
-            for n in [1, 16, 33] {
-                match Target::from_image(&scene, &img, n, n as f64, 200.0) {
-                    Ok(t) => assert!(t.sdf.iter().all(|v| v.is_finite())),
-                    Err(e) => assert!(e.to_string().contains("not close to any colour"), "{e}"),
+            // On the square canvas (stretched) and on the image's own.
+            let canvas = crate::pattern::fit::image_canvas(&img);
+            let rec = scene.rec.clone();
+            let own = Scene::new(crate::pattern::record::Recording { canvas, ..rec });
+            for sc in [&scene, &own] {
+                for n in [1, 16, 33] {
+                    match Target::from_image(sc, &img, n, n as f64, 200.0) {
+                        Ok(t) => {
+                            assert_eq!((t.grid.w, t.grid.h), canvas_grid(sc, n));
+                            assert_eq!(t.sdf.len(), sc.channels.len() * t.grid.len());
+                            assert!(t.sdf.iter().all(|v| v.is_finite()));
+                        }
+                        Err(e) => {
+                            assert!(e.to_string().contains("not close to any colour"), "{e}")
+                        }
+                    }
                 }
             }
         }
+    }
+
+    fn canvas_grid(scene: &Scene, n: usize) -> (usize, usize) {
+        scene.rec.canvas.grid(n)
+    }
+
+    /// A 300 × 240 disc image on its own canvas ([0, 1.25] × [0, 1]) on a
+    /// grid of its size: the target's field is the disc's exact distance
+    /// (a round disc, not an ellipse), to half a pixel, the grid 300 × 240.
+    #[test]
+    fn a_non_square_image_gives_round_fields_on_its_canvas() {
+        use crate::pattern::record::Canvas;
+        let canvas = Canvas::of_pixels(300, 240);
+        let src = "background \"#ffffff\";\ncircle(0.7, 0.45, 0.3, fill: \"#000000\");";
+        let p = Program::parse(src).unwrap();
+        let rec = p
+            .record_on(&p.defaults(), &RecordLimits::default(), canvas)
+            .unwrap();
+        let scene = Scene::new(rec);
+        let img = crate::pattern::render::render(&scene, &[], 300, 1).unwrap();
+        assert_eq!((img.width, img.height), (300, 240));
+        let t = Target::from_image(&scene, &img, 300, 240.0, 60.0).unwrap();
+        assert_eq!((t.grid.w, t.grid.h), (300, 240));
+        let k = scene
+            .channels
+            .iter()
+            .position(|ch| scene.rec.colours[ch.colour as usize] == [0, 0, 0])
+            .unwrap();
+        let f = &t.sdf[k * t.grid.len()..(k + 1) * t.grid.len()];
+        let mut near = 0;
+        for y in 0..240 {
+            for x in 0..300 {
+                let (u, v) = ((x as f64 + 0.5) / 240.0, (y as f64 + 0.5) / 240.0);
+                let truth = ((u - 0.7).hypot(v - 0.45) - 0.3) * 240.0;
+                if truth.abs() < 3.0 {
+                    near += 1;
+                    let e = (f[y * 300 + x] - truth).abs();
+                    assert!(e <= 0.75, "pixel ({x}, {y}): {} vs {truth}", f[y * 300 + x]);
+                }
+            }
+        }
+        assert!(near > 1000, "{near} pixels near the outline");
     }
 }
