@@ -72,6 +72,18 @@ pub fn lang(data: &[u8]) {
         assert_eq!(r.image.rgba.len(), 12 * 12 * 4);
         finite_svg(&r.svg, "render-pattern");
     }
+    // The same program on a canvas that is not square ([0, 1.33] × [0, 1]).
+    let wide = RenderPatternRequest {
+        program: src.into(),
+        size: 12,
+        height: Some(9),
+        ..Default::default()
+    };
+    if let Ok(r) = pattern_api::start_render(wide).and_then(run_quietly) {
+        assert_eq!((r.image.width, r.image.height), (12, 9));
+        assert_eq!(r.image.rgba.len(), 12 * 9 * 4);
+        finite_svg(&r.svg, "render-pattern (12 × 9)");
+    }
     let floats: Vec<_> = info.params.iter().filter(|p| !p.integer).collect();
     if floats.is_empty() || info.shapes == 0 {
         return;

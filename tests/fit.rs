@@ -1334,3 +1334,185 @@ fn fit_throughput_workload() {
     }
     eprintln!("{name}: loss {l} loss_grad {lg} grad {g:?}");
 }
+
+// ------------------------------------------------------- non-square targets
+
+/// Round dots on a lattice that covers whatever canvas it is recorded on.
+const DOTS: &str = "background \"#ffffff\";\n\
+    param dx in [0.18, 0.3] = 0.24;\nparam dy in [0.16, 0.28] = 0.2;\n\
+    param ox in [0.0, 0.1] = 0.05;\nparam oy in [0.0, 0.1] = 0.05;\n\
+    param r in [0.03, 0.07] = 0.05;\n\
+    tile(dx, dy) { circle(ox, oy, r, fill: \"#1f4e79\"); }";
+
+/// dx, dy, ox, oy, r of the [`DOTS`] target.
+const DOTS_TRUTH: [f64; 5] = [0.23, 0.19, 0.06, 0.04, 0.055];
+
+/// Width and height in pixels of the blob of ink (any pixel not white)
+/// holding the pixel nearest `(cx, cy)` that has ink, 4-connected.
+fn ink_extent(img: &filigree::raster::Rgba8Image, cx: u32, cy: u32) -> (u32, u32) {
+    let ink = |x: u32, y: u32| img.get(x, y)[..3].iter().any(|&c| c < 200);
+    let seed = (0..img.height)
+        .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| ink(x, y))
+        .min_by_key(|&(x, y)| (x as i64 - cx as i64).pow(2) + (y as i64 - cy as i64).pow(2))
+        .expect("some ink");
+    let mut seen = vec![false; (img.width * img.height) as usize];
+    let mut stack = vec![seed];
+    let (mut x0, mut x1, mut y0, mut y1) = (seed.0, seed.0, seed.1, seed.1);
+    while let Some((x, y)) = stack.pop() {
+        let i = (y * img.width + x) as usize;
+        if seen[i] || !ink(x, y) {
+            continue;
+        }
+        seen[i] = true;
+        (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        if x > 0 {
+            stack.push((x - 1, y));
+        }
+        if y > 0 {
+            stack.push((x, y - 1));
+        }
+        if x + 1 < img.width {
+            stack.push((x + 1, y));
+        }
+        if y + 1 < img.height {
+            stack.push((x, y + 1));
+        }
+    }
+    (x1 - x0 + 1, y1 - y0 + 1)
+}
+
+/// A 300 × 240 design of round dots (anti-aliased, drawn on its own
+/// canvas `[0, 1.25] × [0, 1]`): the fit's canvas takes the image's aspect,
+/// so the loss at the truth is near zero and far below the loss a little
+/// away from it, and a fit from a perturbed start recovers every parameter
+/// (normalised MSE ≤ 1e-5). The fit used to stretch the image onto `[0, 1]²`,
+/// where the dots are ellipses no circle matches.
+#[test]
+fn a_non_square_target_is_fitted_on_its_own_canvas() {
+    use filigree::pattern::api::{AUTO_GRID, AUTO_POLISH};
+    use filigree::pattern::fit::image_canvas;
+    use filigree::pattern::record::Canvas;
+    let p = Program::parse(DOTS).unwrap();
+    let canvas = Canvas::of_pixels(300, 240);
+    assert_eq!((canvas.w, canvas.h), (1.25, 1.0));
+    let scene = Scene::new(
+        p.record_on(&p.defaults(), &RecordLimits::default(), canvas)
+            .unwrap(),
+    );
+    let img = render::render_wh(&scene, &DOTS_TRUTH, (300, 240), 4).unwrap();
+    assert_eq!((img.width, img.height), (300, 240));
+    assert_eq!(image_canvas(&img), canvas);
+    // The target's dots are round: 2·r·240 = 26.4 px across both ways.
+    let (w, h) = ink_extent(&img, 150, 120);
+    assert!(w.abs_diff(h) <= 1 && (26..=28).contains(&w), "{w} × {h}");
+    let mut o = FitOptions::default();
+    o.loss.grid = AUTO_GRID.1; // what a 300 px wide target gets
+    o.polish = AUTO_POLISH;
+    let t = Target::from_image(&scene, &img, o.loss.grid, o.loss.scale_on(canvas), 60.0).unwrap();
+    assert_eq!((t.grid.w, t.grid.h), (128, 102));
+    let mut obj = Objective::new(scene.clone(), t.clone(), o.loss);
+    let at_truth = obj.loss(&DOTS_TRUTH);
+    let decls = scene.rec.float_decls();
+    let mut start = DOTS_TRUTH;
+    for (k, d) in decls.iter().enumerate() {
+        start[k] += if k % 2 == 0 { 0.03 } else { -0.03 } * (d.hi - d.lo);
+    }
+    let mut rng = Rng::new(11);
+    for _ in 0..8 {
+        // 1% of each range away, in a random direction.
+        let q: Vec<f64> = DOTS_TRUTH
+            .iter()
+            .zip(&decls)
+            .map(|(v, d)| v + 0.01 * (d.hi - d.lo) * if rng.below(2) == 0 { 1.0 } else { -1.0 })
+            .collect();
+        let l = obj.loss(&q);
+        assert!(
+            at_truth < 0.02 * l,
+            "loss {at_truth} at the truth, {l} at {q:?}"
+        );
+    }
+    assert!(at_truth < 0.05, "loss {at_truth} at the truth");
+    let r = run_quietly(FitJob::refine_from(scene.clone(), t, o, &[start.to_vec()])).unwrap();
+    let mse = (0..5)
+        .map(|k| ((r.params[k] - DOTS_TRUTH[k]) / (decls[k].hi - decls[k].lo)).powi(2))
+        .sum::<f64>()
+        / 5.0;
+    eprintln!("loss at the truth {at_truth:.3e}; fitted normalised MSE {mse:.3e}");
+    assert!(
+        mse <= 1e-5,
+        "normalised MSE {mse:.3e}: fitted {:?}, truth {DOTS_TRUTH:?}",
+        r.params
+    );
+}
+
+/// `filigree fit --out fitted.png --svg fitted.svg` on a 300 × 240 target:
+/// both are 300 × 240 and the dots in them are round (the fitted PNG was a
+/// square render stretched to the target's shape, its dots ellipses 25%
+/// wider than high); the SVG's viewBox has the target's aspect and it is
+/// not told to stretch.
+#[test]
+fn cli_fit_outputs_of_a_non_square_target_have_its_size_and_round_dots() {
+    use filigree::pattern::record::Canvas;
+    let exe = env!("CARGO_BIN_EXE_filigree");
+    let dir = std::env::temp_dir().join(format!("filigree-fit-aspect-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (program, target) = (dir.join("dots.flg"), dir.join("t.png"));
+    let (out, svg) = (dir.join("fitted.png"), dir.join("fitted.svg"));
+    std::fs::write(&program, DOTS).unwrap();
+    let p = Program::parse(DOTS).unwrap();
+    let scene = Scene::new(
+        p.record_on(
+            &p.defaults(),
+            &RecordLimits::default(),
+            Canvas::of_pixels(300, 240),
+        )
+        .unwrap(),
+    );
+    let img = render::render_wh(&scene, &DOTS_TRUTH, (300, 240), 1).unwrap();
+    std::fs::write(&target, encode_png(&img).unwrap()).unwrap();
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let o = std::process::Command::new(exe)
+        .args([
+            "fit",
+            "--program",
+            &path(&program),
+            "--target",
+            &path(&target),
+            "--grid",
+            "48",
+            "--polish",
+            "0",
+            "--json",
+            "--threads",
+            "1",
+            "--out",
+            &path(&out),
+            "--svg",
+            &path(&svg),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fitted = decode(&std::fs::read(&out).unwrap(), Limits::default()).unwrap();
+    assert_eq!((fitted.width, fitted.height), (300, 240));
+    for (cx, cy) in [(150, 120), (60, 60), (240, 190)] {
+        let (w, h) = ink_extent(&fitted, cx, cy);
+        assert!(
+            w.abs_diff(h) <= 1,
+            "a fitted dot near ({cx}, {cy}) is {w} × {h} px"
+        );
+        assert!(w >= 10, "a fitted dot near ({cx}, {cy}) is {w} × {h} px");
+    }
+    let doc = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        doc.starts_with(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"300\" height=\"240\" viewBox=\"0 0 300 240\">"
+        ),
+        "{}",
+        &doc[..doc.len().min(200)]
+    );
+    assert!(!doc.contains("preserveAspectRatio"));
+    assert!(doc.contains("<rect width=\"300\" height=\"240\""));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -366,6 +366,7 @@ fn write_seeds() {
             program: grid.into(),
             params: [("r".to_string(), 0.06)].into(),
             size: 16,
+            height: None,
             supersample: 1,
         })
         .and_then(filigree::core::job::run_quietly)

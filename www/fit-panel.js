@@ -10,6 +10,8 @@ import { LossPlot } from './loss-plot.js';
 import { createCodeEditor } from './code-editor.js';
 import { radioGroup } from './radio-group.js';
 
+// The target's longer side (a drawn target is square; an upload keeps its
+// aspect, and the fit's canvas follows it: src/pattern/state.rs).
 const TARGET_SIZE = 256;
 // A target made from known values is drawn anti-aliased, as a user's image
 // of the design would be: the target's fields read the outline from the
@@ -134,22 +136,29 @@ function indexTarget(t) {
     }
     out[i] = k;
   }
-  return { palette: new Uint8Array(new Uint32Array(palette).buffer), indices: out };
+  return { palette: new Uint8Array(new Uint32Array(palette).buffer), indices: out, width: t.width, height: t.height };
 }
 
+// (A link from before uploads kept their aspect has no width and height: square.)
 function unindexTarget(x) {
-  if (!(x?.palette instanceof Uint8Array) || x.palette.length % 4 || !(x.indices instanceof Uint8Array) || x.indices.length !== TARGET_SIZE * TARGET_SIZE) {
+  const width = x?.width ?? TARGET_SIZE;
+  const height = x?.height ?? TARGET_SIZE;
+  if (!(x?.palette instanceof Uint8Array) || x.palette.length % 4 || !(x.indices instanceof Uint8Array)
+    || !Number.isInteger(width) || !Number.isInteger(height) || x.indices.length !== width * height) {
     throw invalid('target', 'is damaged');
   }
-  const rgba = new Uint8Array(TARGET_SIZE * TARGET_SIZE * 4);
+  const rgba = new Uint8Array(width * height * 4);
   const n = x.palette.length / 4;
   for (let i = 0; i < x.indices.length; i++) {
     const k = x.indices[i];
     if (k >= n) throw invalid('target', 'is damaged');
     rgba.set(x.palette.subarray(4 * k, 4 * k + 4), 4 * i);
   }
-  return { width: TARGET_SIZE, height: TARGET_SIZE, rgba };
+  return { width, height, rgba };
 }
+
+/** The `render-pattern` size fields of a picture `k` times the target's, on the target's canvas. */
+const sizeOf = (t, k = 1) => (t ? { size: k * t.width, height: k * t.height } : { size: k * TARGET_SIZE });
 
 const fitState = {
   version: 1,
@@ -204,6 +213,7 @@ function mount(el, ctx) {
     return ed;
   });
   const targetCanvas = q('canvas.target');
+  const stack = q('.stack');
   const tctx = targetCanvas.getContext('2d', { willReadFrequently: true });
   const overlay = q('canvas.overlay');
   const plot = new LossPlot(q('canvas.plot'));
@@ -343,7 +353,8 @@ function mount(el, ctx) {
       lastPreviewAt = performance.now();
       try {
         if (vals.length !== info.params.length) return;
-        const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, vals), size: TARGET_SIZE });
+        // On the target's canvas, at its size: the overlay is not stretched.
+        const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, vals), ...sizeOf(doc().target) });
         // Only the shapes: background pixels become transparent, so the
         // target shows through wherever the pattern has nothing.
         const [br, bg, bb] = palette()[0];
@@ -363,12 +374,20 @@ function mount(el, ctx) {
   // ---- target: drawing, upload, make from values ----------------------------------------
 
   function storeTarget(extra = {}) {
-    const rgba = new Uint8Array(tctx.getImageData(0, 0, TARGET_SIZE, TARGET_SIZE).data.buffer);
-    ctx.commit({ ...doc(), ...extra, target: { width: TARGET_SIZE, height: TARGET_SIZE, rgba } });
+    const { width, height } = targetCanvas;
+    const rgba = new Uint8Array(tctx.getImageData(0, 0, width, height).data.buffer);
+    ctx.commit({ ...doc(), ...extra, target: { width, height, rgba } });
   }
 
+  // The target at its own size and aspect; the overlay takes the same.
   function drawTarget(t) {
-    if (t) tctx.putImageData(new ImageData(new Uint8ClampedArray(t.rgba), t.width, t.height), 0, 0);
+    if (!t) return;
+    if (targetCanvas.width !== t.width || targetCanvas.height !== t.height) {
+      targetCanvas.width = overlay.width = t.width;
+      targetCanvas.height = overlay.height = t.height;
+    }
+    stack.style.aspectRatio = `${t.width} / ${t.height}`;
+    tctx.putImageData(new ImageData(new Uint8ClampedArray(t.rgba), t.width, t.height), 0, 0);
   }
 
   // Paint exact palette colours (no anti-aliasing): a disc of `size` pixels.
@@ -378,7 +397,7 @@ function mount(el, ctx) {
     const size = Number(q('[name=brush]').value) || 8;
     const rad = size / 2;
     const x0 = Math.max(0, Math.floor(x - rad)), y0 = Math.max(0, Math.floor(y - rad));
-    const x1 = Math.min(TARGET_SIZE, Math.ceil(x + rad)), y1 = Math.min(TARGET_SIZE, Math.ceil(y + rad));
+    const x1 = Math.min(targetCanvas.width, Math.ceil(x + rad)), y1 = Math.min(targetCanvas.height, Math.ceil(y + rad));
     if (x1 <= x0 || y1 <= y0) return;
     const img = tctx.getImageData(x0, y0, x1 - x0, y1 - y0);
     for (let j = 0; j < y1 - y0; j++) {
@@ -393,8 +412,7 @@ function mount(el, ctx) {
 
   let painting = null;
   let box = null;
-  const toTarget = (e) => [(e.clientX - box.left) / box.width * TARGET_SIZE, (e.clientY - box.top) / box.height * TARGET_SIZE];
-  const stack = q('.stack');
+  const toTarget = (e) => [(e.clientX - box.left) / box.width * targetCanvas.width, (e.clientY - box.top) / box.height * targetCanvas.height];
   stack.addEventListener('pointerdown', (e) => {
     if (!info || e.button > 0 || ctx.readOnly) return;
     stack.setPointerCapture(e.pointerId);
@@ -604,7 +622,8 @@ function mount(el, ctx) {
   const baseName = () => doc()?.generator || 'pattern';
   q('[data-act=export-svg]').onclick = async () => {
     try {
-      const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, doc().values), size: 512 });
+      // Twice the target's size, on its canvas (512 px along the longer side).
+      const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, doc().values), ...sizeOf(doc().target, 2) });
       download(`${baseName()}.svg`, r.svg, 'image/svg+xml');
     } catch (err) {
       ctx.error(err);

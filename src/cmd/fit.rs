@@ -22,6 +22,9 @@ use std::time::Instant;
                       (0 after --loss image)
   --max-seconds 30    generations and iterations are scaled down when the fit's
                       estimated time (from the work of one evaluation) exceeds it
+The canvas takes the target image's aspect, its shorter side 1 (a 300x240 target
+is [0, 1.25] x [0, 1]; programs read WIDTH and HEIGHT); the grid is its longer
+side, and --out and the SVG are the target's size: nothing is stretched.
 The loss printed is the fit's own (--loss, sdf by default), named; with a polish
 the image-space loss after it is printed too."
 )]
@@ -47,7 +50,7 @@ pub struct FitArgs {
     /// genetic (default, ga) | random | nelder-mead (nm)
     #[arg(long)]
     init: Option<String>,
-    /// Loss grid side in pixels, 8..=256 (default: an image target's longer side, 32..=128;
+    /// Loss grid's longer side in pixels, 8..=256 (default: an image target's longer side, 32..=128;
     /// the budget's, 64 quick / 128 paper, for --target-params).
     #[arg(long)]
     grid: Option<usize>,
@@ -97,9 +100,13 @@ pub struct RenderArgs {
     /// Output file; .png or .svg.
     #[arg(long)]
     out: PathBuf,
-    /// Side in pixels, 1..=2048 (default 512).
+    /// Width in pixels, 1..=2048 (default 512).
     #[arg(long)]
     size: Option<usize>,
+    /// Height in pixels, 1..=2048 (default: the width). The canvas takes the
+    /// picture's aspect, its shorter side 1 (WIDTH and HEIGHT in the program).
+    #[arg(long)]
+    height: Option<usize>,
     /// Samples per pixel side for PNG anti-aliasing, 1..=4 (default 1 = exact palette colours).
     #[arg(long)]
     supersample: Option<usize>,
@@ -191,41 +198,26 @@ fn output_kind(path: &Path) -> Result<String, String> {
 }
 
 /// The fitted pattern as a PNG of `width × height`: the same
-/// `render-pattern` request the browser sends (a square of the longer side),
-/// stretched to the target's shape (nearest) when it is not square.
+/// `render-pattern` request the browser sends, on the target's canvas (its
+/// aspect), so nothing is stretched.
 fn fitted_png(
     req: &FitRequest,
     out: &filigree::pattern::api::FitOutput,
     origins: &Origins,
 ) -> Result<Vec<u8>, String> {
-    let (w, h) = (out.width, out.height);
-    let side = w.max(h);
     let mut params = req.params.clone();
     params.extend(out.named.iter().map(|(k, v)| (k.clone(), *v)));
     let r = RenderPatternRequest {
         program: req.program.clone(),
         params,
-        size: side as usize,
+        size: out.width as usize,
+        height: Some(out.height as usize),
         ..RenderPatternRequest::default()
     };
     let job = start_render(r).map_err(|e| explain(e, origins))?;
     let r = drive(job, true, origins)?;
-    let square =
-        filigree::raster::Rgba8Image::from_raw(r.image.width, r.image.height, r.image.rgba)
-            .map_err(|e| e.to_string())?;
-    let img = if w == h {
-        square
-    } else {
-        let mut img = filigree::raster::Rgba8Image::new(w, h);
-        for y in 0..h {
-            for x in 0..w {
-                let sx = ((x as u64 * 2 + 1) * side as u64 / (2 * w as u64)) as u32;
-                let sy = ((y as u64 * 2 + 1) * side as u64 / (2 * h as u64)) as u32;
-                img.put(x, y, square.get(sx.min(side - 1), sy.min(side - 1)));
-            }
-        }
-        img
-    };
+    let img = filigree::raster::Rgba8Image::from_raw(r.image.width, r.image.height, r.image.rgba)
+        .map_err(|e| e.to_string())?;
     filigree::raster::encode_png(&img).map_err(|e| e.to_string())
 }
 
@@ -307,6 +299,7 @@ pub fn run_render(a: RenderArgs) -> Result<(), String> {
     let origins: Origins = vec![("program", name), ("params", "--params".into())];
     let mut o = Map::new();
     put(&mut o, "size", "--size", a.size)?;
+    put(&mut o, "height", "--height", a.height)?;
     put(&mut o, "supersample", "--supersample", a.supersample)?;
     let mut req: RenderPatternRequest = request("render-pattern", Value::Object(o), &origins)?;
     req.program = program;

@@ -12,7 +12,7 @@ use super::field::Scene;
 use super::fit::{Budget, FitJob, FitOptions, FitResult, Preparation, TargetData, TargetSource};
 use super::loss::{LossKind, Objective, SdfUnits};
 use super::optim::InitMethod;
-use super::record::{Program, RecordLimits};
+use super::record::{Canvas, Program, RecordLimits};
 use super::render;
 use super::target::Target;
 use crate::api::RawImage;
@@ -75,12 +75,22 @@ fn float_values(program: &Program, all: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Record a program with named values: the scene and its float values.
+/// Record a program with named values on the square canvas: the scene
+/// and its float values.
 fn scene_of(src: &str, named: &BTreeMap<String, f64>) -> Result<(Program, Scene, Vec<f64>)> {
+    scene_on(src, named, Canvas::SQUARE)
+}
+
+/// [`scene_of`] on `canvas`.
+fn scene_on(
+    src: &str,
+    named: &BTreeMap<String, f64>,
+    canvas: Canvas,
+) -> Result<(Program, Scene, Vec<f64>)> {
     let p = parse(src)?;
     let vals = named_values(&p, named)?;
     let rec = p
-        .record(&vals, &RecordLimits::default())
+        .record_on(&vals, &RecordLimits::default(), canvas)
         .map_err(|e| e.at("program"))?;
     let fl = rec.float_values();
     Ok((p, Scene::new(rec), fl))
@@ -162,8 +172,13 @@ pub struct RenderPatternRequest {
     pub program: String,
     /// Values by name; missing ones take their defaults.
     pub params: BTreeMap<String, f64>,
-    /// Side in pixels, 1..=2048 (512).
+    /// Width in pixels, 1..=2048 (512).
     pub size: usize,
+    /// Height in pixels, 1..=2048; without it, `size` (a square). The
+    /// canvas takes the picture's aspect, its shorter side 1 program unit
+    /// (`Canvas::of_pixels`), as a fit to a target of that size does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height: Option<usize>,
     /// Samples per pixel side, 1..=4 (1 = exact palette colours).
     pub supersample: usize,
 }
@@ -174,12 +189,13 @@ impl Default for RenderPatternRequest {
             program: String::new(),
             params: BTreeMap::new(),
             size: 512,
+            height: None,
             supersample: 1,
         }
     }
 }
 
-/// A drawn pattern: `size × size` RGBA and the SVG (`size` px wide).
+/// A drawn pattern: `size × height` RGBA and the SVG of the same size.
 #[derive(Debug, Clone, Serialize)]
 pub struct RenderResponse {
     #[serde(flatten)]
@@ -189,8 +205,8 @@ pub struct RenderResponse {
 
 enum RenderPhase {
     Record(RenderPatternRequest),
-    Raster(Scene, Vec<f64>, usize, Box<render::Raster>),
-    Svg(Scene, Vec<f64>, usize, Rgba8Image),
+    Raster(Scene, Vec<f64>, (usize, usize), Box<render::Raster>),
+    Svg(Scene, Vec<f64>, (usize, usize), Rgba8Image),
     Finished,
 }
 
@@ -207,10 +223,12 @@ impl Job for RenderJob {
     fn step(&mut self) -> Result<Step<RenderResponse>> {
         match std::mem::replace(&mut self.0, RenderPhase::Finished) {
             RenderPhase::Record(req) => {
-                let (_, scene, fl) = scene_of(&req.program, &req.params)?;
-                let raster = render::Raster::new(&scene, &fl, req.size, req.supersample)?;
+                let size = (req.size, req.height.unwrap_or(req.size));
+                let canvas = Canvas::of_pixels(size.0, size.1);
+                let (_, scene, fl) = scene_on(&req.program, &req.params, canvas)?;
+                let raster = render::Raster::with_size(&scene, &fl, size, req.supersample)?;
                 let stage = raster.stage();
-                self.0 = RenderPhase::Raster(scene, fl, req.size, Box::new(raster));
+                self.0 = RenderPhase::Raster(scene, fl, size, Box::new(raster));
                 Ok(Step::Running(Progress::new(0.05, stage)))
             }
             RenderPhase::Raster(scene, fl, size, mut raster) => {
@@ -223,7 +241,7 @@ impl Job for RenderJob {
                 Ok(Step::Running(p))
             }
             RenderPhase::Svg(scene, fl, size, img) => Ok(Step::Done(RenderResponse {
-                svg: render::svg(&scene, &fl, size as f64)?,
+                svg: render::svg_sized(&scene, &fl, size.0 as f64, size.1 as f64)?,
                 image: RawImage::from(img),
             })),
             RenderPhase::Finished => Err(Error::input("this job has already finished")),
@@ -234,6 +252,9 @@ impl Job for RenderJob {
 /// Check a `render-pattern` request and start it.
 pub fn start_render(req: RenderPatternRequest) -> Result<RenderJob> {
     lim::int_in("size", req.size, lim::RENDER_SIZE)?;
+    if let Some(h) = req.height {
+        lim::int_in("height", h, lim::RENDER_SIZE)?;
+    }
     lim::int_in("supersample", req.supersample, lim::SUPERSAMPLE)?;
     for (k, v) in &req.params {
         lim::finite_in(
@@ -257,7 +278,9 @@ pub struct PatternSnapRequest {
     /// The uploaded image file.
     #[serde(with = "serde_bytes")]
     pub bytes: Vec<u8>,
-    /// Side of the snapped square, 8..=2048 (256).
+    /// Longer side of the snapped picture, 8..=2048 (256); the shorter
+    /// side keeps the upload's aspect (`Canvas::grid`), so a fit to it
+    /// sees the design unstretched.
     pub size: usize,
     /// RGB distance counted as "far", 0..=442 (60).
     pub tolerance: f64,
@@ -278,7 +301,8 @@ impl Default for PatternSnapRequest {
 /// A target image snapped to a program's palette.
 #[derive(Debug, Clone, Serialize)]
 pub struct SnapResponse {
-    /// `size × size`: every pixel one of the program's colours, or, where
+    /// `size` along the longer side, the upload's aspect: every pixel one
+    /// of the program's colours, or, where
     /// the upload blends two of them (an anti-aliased edge), that blend of
     /// the two, so the fit still reads its outlines to a fraction of a
     /// pixel (see `geom::aa_distance`).
@@ -288,7 +312,8 @@ pub struct SnapResponse {
     pub unmatched: f64,
 }
 
-/// Decode an uploaded target, resample it to `size × size` (nearest) and
+/// Decode an uploaded target, resample it to `size` pixels along its
+/// longer side (nearest; the aspect kept) and
 /// snap every pixel to the nearest colour the program draws with (or its
 /// background), or to the blend of two of them that explains it better (an
 /// anti-aliased edge), so the user sees exactly what the fit will compare
@@ -299,9 +324,9 @@ pub fn snap_target(req: &PatternSnapRequest) -> Result<SnapResponse> {
     let img = decode(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
     let (_, scene, _) = scene_of(&req.program, &req.params)?;
     let colours = &scene.rec.colours;
-    let (idx, mix, unmatched) =
-        super::target::snap_to_palette_wh(&img, colours, size, size, tolerance);
-    let mut image = Rgba8Image::new(size as u32, size as u32);
+    let (w, h) = super::fit::image_canvas(&img).grid(size);
+    let (idx, mix, unmatched) = super::target::snap_to_palette_wh(&img, colours, w, h, tolerance);
+    let mut image = Rgba8Image::new(w as u32, h as u32);
     for (i, (&k, &(other, t))) in idx.iter().zip(&mix).enumerate() {
         let (a, b) = (colours[k as usize], colours[other as usize]);
         let c = |j: usize| (t * a[j] as f64 + (1.0 - t) * b[j] as f64).round() as u8;
@@ -380,6 +405,10 @@ pub struct FitRequestOf<X> {
     pub program: String,
     /// Values by name for integer (structural) parameters; others default.
     pub params: BTreeMap<String, f64>,
+    /// The target image (or `target_rgba`, its pixels). The fit's canvas
+    /// takes its aspect, shorter side 1 (`Canvas::of_pixels`; a square image
+    /// gives `[0, 1]²`), so the CLI and the browser, sending the same image,
+    /// fit on the same canvas; `target_params` draws on the square canvas.
     #[serde(with = "serde_bytes", skip_serializing_if = "Option::is_none")]
     pub target_png: Option<Vec<u8>>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -739,18 +768,20 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
     let max_seconds = lim::finite_in("max_seconds", req.max_seconds, lim::FIT_SECONDS)?;
     {
         // One field evaluation at the defaults: the work a loss costs.
+        let canvas = t.canvas();
         let rec = p
-            .record(&vals, &RecordLimits::default())
+            .record_on(&vals, &RecordLimits::default(), canvas)
             .map_err(|e| e.at("program"))?;
         let scene = Scene::new(rec);
-        let mut ev = super::field::Evaluator::new(opts.loss.grid, opts.loss.scale());
+        let grid = super::field::Grid::on(canvas, opts.loss.grid);
+        let mut ev = super::field::Evaluator::on(grid, opts.loss.scale_on(canvas));
         let mut nodes = vec![];
         scene
             .rec
             .tape
             .forward(&scene.rec.float_values(), &mut nodes);
         ev.eval(&scene, &nodes, false);
-        let fields = opts.loss.grid * opts.loss.grid * scene.channels.len();
+        let fields = grid.len() * scene.channels.len();
         fit_time_bound(&mut opts, ev.work, fields, max_seconds);
     }
     let job = FitJob::start(&p, &vals, t, opts).map_err(|e| e.at("program"))?;
@@ -896,7 +927,11 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
     }
     let (scene, prep) =
         super::fit::begin_prepare(&p, &vals, t, &opts.loss).map_err(|e| e.at("program"))?;
-    let pending = Target::pending(opts.loss.grid, opts.loss.scale());
+    let canvas = scene.rec.canvas;
+    let pending = Target::pending(
+        super::field::Grid::on(canvas, opts.loss.grid),
+        opts.loss.scale_on(canvas),
+    );
     Ok(EvalJob {
         obj: Objective::new(scene, pending, opts.loss),
         prep: Some(prep),
@@ -916,6 +951,54 @@ mod tests {
 
     fn named(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
         pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    }
+
+    /// A picture that is not square: `render-pattern` with `height` draws
+    /// on the canvas of that aspect (round dots, an SVG of that size),
+    /// `pattern-snap` keeps an upload's aspect, and a request written before
+    /// `height` existed (no such field) is still the square it was.
+    #[test]
+    fn pictures_that_are_not_square_keep_their_aspect() {
+        let src = "background \"#ffffff\";\ncircle(WIDTH / 2, HEIGHT / 2, 0.3, fill: \"#000000\");";
+        let req = RenderPatternRequest {
+            program: src.into(),
+            size: 150,
+            height: Some(100),
+            ..Default::default()
+        };
+        let r = run_quietly(start_render(req).unwrap()).unwrap();
+        assert_eq!((r.image.width, r.image.height), (150, 100));
+        let dark = |x: u32, y: u32| r.image.rgba[4 * (y * 150 + x) as usize] < 128;
+        // Radius 0.3 of the shorter side: 30 px both ways from (75, 50).
+        assert!(dark(75, 50) && dark(75 + 29, 50) && dark(75, 50 + 29));
+        assert!(!dark(75 + 31, 50) && !dark(75, 50 + 31));
+        assert!(
+            r.svg.starts_with(
+                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"150\" height=\"100\" viewBox=\"0 0 150 100\">"
+            ),
+            "{}",
+            r.svg
+        );
+        assert!(
+            r.svg.contains("<circle cx=\"75\" cy=\"50\" r=\"30\""),
+            "{}",
+            r.svg
+        );
+        let old: RenderPatternRequest =
+            serde_json::from_str(&format!("{{\"program\": {src:?}, \"size\": 40}}")).unwrap();
+        assert_eq!(old.height, None);
+        let r = run_quietly(start_render(old).unwrap()).unwrap();
+        assert_eq!((r.image.width, r.image.height), (40, 40));
+        // An upload of 300 × 240 snapped to 128 along its longer side.
+        let img = crate::raster::Rgba8Image::new(300, 240);
+        let snapped = snap_target(&PatternSnapRequest {
+            program: src.into(),
+            bytes: crate::raster::encode_png(&img).unwrap(),
+            size: 128,
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!((snapped.image.width, snapped.image.height), (128, 102));
     }
 
     #[test]

@@ -2,9 +2,9 @@
 //! §5 "Pattern Optimization": GA initialisation of 25 generations of 250,
 //! then Adam for 250 iterations from each of the 10 best candidates with
 //! patience 100 and 3 refinements; the best result is returned).
-use super::field::{Evaluator, Scene};
+use super::field::{Evaluator, Grid, Scene};
 use super::loss::{LossKind, LossOptions, Objective};
-use super::record::{Program, RecordLimits};
+use super::record::{Canvas, Program, RecordLimits};
 use super::target::{BuildWork, Target, TargetBuild};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
@@ -169,29 +169,44 @@ pub(crate) fn prepare(
     target: &TargetSource,
     loss: &LossOptions,
 ) -> Result<(Scene, Target)> {
-    let scene = fit_scene(program, values, loss)?;
+    let canvas = match target {
+        TargetSource::Image(img, _) => image_canvas(img),
+        TargetSource::Params(_) => Canvas::SQUARE,
+    };
+    let scene = fit_scene(program, values, loss, canvas)?;
+    let scale = loss.scale_on(canvas);
     let t = match target {
-        TargetSource::Image(img, tol) => {
-            Target::from_image(&scene, img, loss.grid, loss.scale(), *tol)?
-        }
+        TargetSource::Image(img, tol) => Target::from_image(&scene, img, loss.grid, scale, *tol)?,
         TargetSource::Params(p) => {
             let idx = colour_indices(&scene, p, loss.grid)?;
-            Target::from_indices(&scene, &idx, loss.grid, loss.scale())
+            Target::from_indices(&scene, &idx, loss.grid, scale)
         }
     };
     Ok((scene, t))
 }
 
-/// The scene of a fit (recorded with `values`), checked: a grid in range,
-/// shapes to draw and float parameters to fit.
-fn fit_scene(program: &Program, values: &[f64], loss: &LossOptions) -> Result<Scene> {
+/// The canvas of a fit to an image: the image's aspect, its shorter side 1
+/// ([`Canvas::of_pixels`]), so nothing is stretched. A target drawn from
+/// parameters is on the square canvas.
+pub fn image_canvas(img: &Rgba8Image) -> Canvas {
+    Canvas::of_pixels(img.width as usize, img.height as usize)
+}
+
+/// The scene of a fit (recorded with `values` on `canvas`), checked: a
+/// grid in range, shapes to draw and float parameters to fit.
+fn fit_scene(
+    program: &Program,
+    values: &[f64],
+    loss: &LossOptions,
+    canvas: Canvas,
+) -> Result<Scene> {
     if !(8..=1024).contains(&loss.grid) {
         return Err(Error::input(format!(
             "loss grid {} is outside 8..=1024 pixels",
             loss.grid
         )));
     }
-    let rec = program.record(values, &RecordLimits::default())?;
+    let rec = program.record_on(values, &RecordLimits::default(), canvas)?;
     let scene = Scene::new(rec);
     if scene.channels.is_empty() {
         return Err(Error::input(
@@ -213,6 +228,16 @@ pub enum TargetData {
     Image(Rgba8Image, f64),
     /// The program itself drawn with these float parameter values.
     Params(Vec<f64>),
+}
+
+impl TargetData {
+    /// The canvas the fit draws on ([`image_canvas`], or square).
+    pub fn canvas(&self) -> Canvas {
+        match self {
+            TargetData::Image(img, _) => image_canvas(img),
+            TargetData::Params(_) => Canvas::SQUARE,
+        }
+    }
 }
 
 /// Work units of one step of a target's preparation ([`BuildWork`]: about
@@ -253,16 +278,16 @@ impl Preparation {
             .target
             .as_ref()
             .expect("a target while normals are built");
-        let n = t.n;
-        let nn = n * n;
+        let (w, h) = (t.grid.w, t.grid.h);
+        let nn = t.grid.len();
         let channels = t.sdf.len() / nn;
         let mut spent: BuildWork = 0;
         while self.channel < channels && spent < budget.max(1) {
             let f = &t.sdf[self.channel * nn..(self.channel + 1) * nn];
-            super::loss::normals_rows(f, n, self.row..self.row + 1, &mut self.normals);
-            spent += 4 * n as BuildWork;
+            super::loss::normals_rows(f, w, h, self.row..self.row + 1, &mut self.normals);
+            spent += 4 * w as BuildWork;
             self.row += 1;
-            if self.row == n {
+            if self.row == h {
                 self.row = 0;
                 self.channel += 1;
             }
@@ -279,7 +304,7 @@ impl Preparation {
         match (&self.build, &self.target) {
             (Some(b), _) => 0.9 * b.fraction(scene),
             (None, Some(t)) => {
-                let nn = (t.n * t.n).max(1);
+                let nn = t.grid.len().max(1);
                 0.9 + 0.1 * self.normals.len() as f64 / t.sdf.len().max(nn) as f64
             }
             (None, None) => 1.0,
@@ -296,12 +321,12 @@ pub(crate) fn begin_prepare(
     target: TargetData,
     loss: &LossOptions,
 ) -> Result<(Scene, Preparation)> {
-    let scene = fit_scene(program, values, loss)?;
+    let canvas = target.canvas();
+    let scene = fit_scene(program, values, loss, canvas)?;
+    let scale = loss.scale_on(canvas);
     let build = match target {
-        TargetData::Image(img, tol) => {
-            TargetBuild::image(&scene, img, loss.grid, loss.scale(), tol)?
-        }
-        TargetData::Params(p) => TargetBuild::drawn(&scene, &p, loss.grid, loss.scale())?,
+        TargetData::Image(img, tol) => TargetBuild::image(&scene, img, loss.grid, scale, tol)?,
+        TargetData::Params(p) => TargetBuild::drawn(&scene, &p, loss.grid, scale)?,
     };
     Ok((
         scene,
@@ -315,10 +340,11 @@ pub(crate) fn begin_prepare(
     ))
 }
 
-/// Palette index per pixel of the scene drawn with `params` on an `n × n` grid.
+/// Palette index per pixel of the scene drawn with `params` on the grid of
+/// `n` pixels along the longer side of its canvas (`n × n` on a square).
 pub fn colour_indices(scene: &Scene, params: &[f64], n: usize) -> Result<Vec<u16>> {
     let nodes = super::render::checked_nodes(scene, params)?;
-    let mut ev = Evaluator::new(n, 1.0);
+    let mut ev = Evaluator::on(Grid::on(scene.rec.canvas, n), 1.0);
     ev.eval(scene, &nodes, false);
     Ok(ev.colour_indices(scene))
 }
@@ -418,7 +444,8 @@ impl FitJob {
         opts: FitOptions,
     ) -> Result<FitJob> {
         let (scene, prep) = begin_prepare(program, values, target, &opts.loss)?;
-        let pending = Target::pending(opts.loss.grid, opts.loss.scale());
+        let canvas = scene.rec.canvas;
+        let pending = Target::pending(Grid::on(canvas, opts.loss.grid), opts.loss.scale_on(canvas));
         let mut job = FitJob::from_parts(scene, pending, opts);
         job.prep = Some(prep);
         job.phase = Phase::Prepare;
@@ -942,7 +969,7 @@ mod tests {
             .map(|v| v * 1.04)
             .collect();
         let img = {
-            let scene = fit_scene(&p, &vals, &small(64).loss).unwrap();
+            let scene = fit_scene(&p, &vals, &small(64).loss, Canvas::SQUARE).unwrap();
             let mut ev = Evaluator::new(150, 1.0);
             let nodes = crate::pattern::render::checked_nodes(&scene, &truth).unwrap();
             ev.eval(&scene, &nodes, false);

@@ -19,6 +19,11 @@
 //! and `col` defined inside; the copies are those that can touch the canvas
 //! for any parameter values in range (see `record::tile`).
 //!
+//! The canvas is `[0, WIDTH] × [0, HEIGHT]`, y down, its shorter side 1:
+//! `[0, 1]²` for a square target, `[0, 1.25] × [0, 1]` for a 300 × 240 one.
+//! `WIDTH` and `HEIGHT` (like `PI` and `TAU`) are constants a program can
+//! read to place shapes relative to the canvas.
+//!
 //! Statements: `let x = e;`, `x = e;`, `if c { } else { }`, `for i in a..b { }`,
 //! `return e;`, calls (shapes, transforms, user functions) optionally followed
 //! by a `{ block }`. Expressions: numbers, strings, `+ - * / %`, `^` (power),

@@ -15,7 +15,8 @@
 //! the loss grid (the default) `L_S` is ~1–100 and leads, with `L_N`
 //! refining near convergence as the paper describes. `filigree bench fit`
 //! reports both.
-use super::field::{Evaluator, Scene};
+use super::field::{Evaluator, Grid, Scene};
+use super::record::Canvas;
 use super::target::Target;
 use serde::{Deserialize, Serialize};
 
@@ -53,10 +54,11 @@ impl LossKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum SdfUnits {
-    /// Pixels of the loss grid (canvas distance × grid size). Default.
+    /// Pixels of the loss grid (canvas distance × grid pixels per canvas
+    /// unit: × grid size on the square canvas). Default.
     #[default]
     Pixels,
-    /// Canvas units (the canvas is 1 wide).
+    /// Canvas units (the canvas's shorter side is 1).
     Canvas,
 }
 
@@ -64,7 +66,8 @@ pub enum SdfUnits {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LossOptions {
     pub kind: LossKind,
-    /// Loss grid side in pixels (default 128; at least 8, at most 1024).
+    /// Loss grid side in pixels (default 128; at least 8, at most 1024);
+    /// on a canvas that is not square, its longer side ([`Grid::on`]).
     pub grid: usize,
     /// α_N, the weight of the normal-alignment term (default 0.05).
     pub normal_weight: f64,
@@ -83,38 +86,45 @@ impl Default for LossOptions {
 }
 
 impl LossOptions {
-    /// Field units per canvas unit.
+    /// Field units per canvas unit on the square canvas.
     pub fn scale(&self) -> f64 {
+        self.scale_on(Canvas::SQUARE)
+    }
+
+    /// Field units per canvas unit on `canvas`: in pixels, the grid's
+    /// pixels per canvas unit along the longer side ([`Grid::long_ppu`]).
+    pub fn scale_on(&self, canvas: Canvas) -> f64 {
         match self.units {
-            SdfUnits::Pixels => self.grid as f64,
+            SdfUnits::Pixels => Grid::on(canvas, self.grid).long_ppu(),
             SdfUnits::Canvas => 1.0,
         }
     }
 }
 
-/// Unit central-difference normals of channel fields (zero where flat).
-fn normals(s: &[f64], n: usize, out: &mut Vec<[f64; 2]>) {
+/// Unit central-difference normals of channel fields (zero where flat) on `g`.
+fn normals(s: &[f64], g: &Grid, out: &mut Vec<[f64; 2]>) {
     out.clear();
-    let nn = n * n;
+    let nn = g.len();
     for c in 0..s.len() / nn {
-        normals_rows(&s[c * nn..(c + 1) * nn], n, 0..n, out);
+        normals_rows(&s[c * nn..(c + 1) * nn], g.w, g.h, 0..g.h, out);
     }
 }
 
-/// Rows `rows` of one channel field's normals (see [`normals`]), appended
-/// to `out`: a job builds the normals a few rows at a time with it.
+/// Rows `rows` of one `w × h` channel field's normals (see [`normals`]),
+/// appended to `out`: a job builds the normals a few rows at a time with it.
 pub(crate) fn normals_rows(
     f: &[f64],
-    n: usize,
+    w: usize,
+    h: usize,
     rows: std::ops::Range<usize>,
     out: &mut Vec<[f64; 2]>,
 ) {
     for y in rows {
-        for x in 0..n {
-            let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
-            let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
-            let gx = (f[y * n + xp] - f[y * n + xm]) / (xp - xm).max(1) as f64;
-            let gy = (f[yp * n + x] - f[ym * n + x]) / (yp - ym).max(1) as f64;
+        for x in 0..w {
+            let (xm, xp) = (x.saturating_sub(1), (x + 1).min(w - 1));
+            let (ym, yp) = (y.saturating_sub(1), (y + 1).min(h - 1));
+            let gx = (f[y * w + xp] - f[y * w + xm]) / (xp - xm).max(1) as f64;
+            let gy = (f[yp * w + x] - f[ym * w + x]) / (yp - ym).max(1) as f64;
             let l = (gx * gx + gy * gy).sqrt();
             out.push(if l > 1e-12 {
                 [gx / l, gy / l]
@@ -136,39 +146,40 @@ pub(crate) fn coverage(d_px: f64) -> f64 {
     (0.5 - d_px).clamp(0.0, 1.0)
 }
 
-/// One 3×3 binomial blur + decimation by two, clamped borders.
-fn down(src: &[f64], n: usize) -> (Vec<f64>, usize) {
-    let m = n.div_ceil(2);
-    let w = [0.25, 0.5, 0.25];
-    let mut out = vec![0.0; m * m];
-    for y in 0..m {
-        for x in 0..m {
+/// One 3×3 binomial blur + decimation by two of a `w × h` field, clamped
+/// borders; the result and its size.
+fn down(src: &[f64], (w, h): (usize, usize)) -> (Vec<f64>, (usize, usize)) {
+    let (mw, mh) = (w.div_ceil(2), h.div_ceil(2));
+    let k = [0.25, 0.5, 0.25];
+    let mut out = vec![0.0; mw * mh];
+    for y in 0..mh {
+        for x in 0..mw {
             let mut acc = 0.0;
-            for (dy, wy) in w.iter().enumerate() {
-                let sy = (2 * y + dy).saturating_sub(1).min(n - 1);
-                for (dx, wx) in w.iter().enumerate() {
-                    let sx = (2 * x + dx).saturating_sub(1).min(n - 1);
-                    acc += wy * wx * src[sy * n + sx];
+            for (dy, wy) in k.iter().enumerate() {
+                let sy = (2 * y + dy).saturating_sub(1).min(h - 1);
+                for (dx, wx) in k.iter().enumerate() {
+                    let sx = (2 * x + dx).saturating_sub(1).min(w - 1);
+                    acc += wy * wx * src[sy * w + sx];
                 }
             }
-            out[y * m + x] = acc;
+            out[y * mw + x] = acc;
         }
     }
-    (out, m)
+    (out, (mw, mh))
 }
 
-/// Transpose of [`down`]: scatter `g` (m × m) back onto an n × n grid.
-fn down_t(g: &[f64], n: usize, out: &mut [f64]) {
-    let m = n.div_ceil(2);
-    let w = [0.25, 0.5, 0.25];
-    for y in 0..m {
-        for x in 0..m {
-            let v = g[y * m + x];
-            for (dy, wy) in w.iter().enumerate() {
-                let sy = (2 * y + dy).saturating_sub(1).min(n - 1);
-                for (dx, wx) in w.iter().enumerate() {
-                    let sx = (2 * x + dx).saturating_sub(1).min(n - 1);
-                    out[sy * n + sx] += wy * wx * v;
+/// Transpose of [`down`]: scatter `g` (its output) back onto the `w × h` grid.
+fn down_t(g: &[f64], (w, h): (usize, usize), out: &mut [f64]) {
+    let (mw, mh) = (w.div_ceil(2), h.div_ceil(2));
+    let k = [0.25, 0.5, 0.25];
+    for y in 0..mh {
+        for x in 0..mw {
+            let v = g[y * mw + x];
+            for (dy, wy) in k.iter().enumerate() {
+                let sy = (2 * y + dy).saturating_sub(1).min(h - 1);
+                for (dx, wx) in k.iter().enumerate() {
+                    let sx = (2 * x + dx).saturating_sub(1).min(w - 1);
+                    out[sy * w + sx] += wy * wx * v;
                 }
             }
         }
@@ -198,8 +209,8 @@ fn loss_with(
     if opts.kind != LossKind::Sdf {
         return loss_reference(opts, s, t, t_normals, ds);
     }
-    let n = t.n;
-    let nn = n * n;
+    let g = (t.grid.w, t.grid.h);
+    let nn = t.grid.len();
     let channels = s.len() / nn;
     if channels == 0 {
         return 0.0;
@@ -210,8 +221,8 @@ fn loss_with(
     let (mut sum_s, mut sum_n) = (0.0, 0.0);
     match ds {
         None => {
-            for r in 0..channels * n {
-                let (a, b) = sdf_row::<false>(s, &t.sdf, t_normals, n, r, normals, 0.0, &mut []);
+            for r in 0..channels * g.1 {
+                let (a, b) = sdf_row::<false>(s, &t.sdf, t_normals, g, r, normals, 0.0, &mut []);
                 sum_s += a;
                 sum_n += b;
             }
@@ -221,14 +232,14 @@ fn loss_with(
                 *d = 2.0 * (a - b) * norm;
             }
             scratch.clear();
-            scratch.resize(n, [0.0; 2]);
-            for r in 0..channels * n {
+            scratch.resize(g.0, [0.0; 2]);
+            for r in 0..channels * g.1 {
                 let (a, b) =
-                    sdf_row::<true>(s, &t.sdf, t_normals, n, r, normals, norm * w, scratch);
+                    sdf_row::<true>(s, &t.sdf, t_normals, g, r, normals, norm * w, scratch);
                 sum_s += a;
                 sum_n += b;
                 if normals {
-                    scatter_row(d, n, r, scratch);
+                    scatter_row(d, g, r, scratch);
                 }
             }
         }
@@ -281,7 +292,8 @@ fn squared_differences4(a: &[f64], b: &[f64]) -> [f64; 4] {
     }
     acc
 }
-/// Row `r` (channel `r / n`, row `r % n`) of the SDF loss: the sums of
+/// Row `r` (channel `r / h`, row `r % h`) of the SDF loss on a `w × h`
+/// grid `(w, h)`: the sums of
 /// `(S − T)²` and of the normal terms (central differences, one-sided at
 /// the borders), each in four partial sums. With `G`, `gg[x]` receives the
 /// normal term's derivative with respect to the pixel's stencil difference
@@ -294,14 +306,15 @@ fn sdf_row<const G: bool>(
     s: &[f64],
     t: &[f64],
     tn: &[[f64; 2]],
-    n: usize,
+    (n, h): (usize, usize),
     r: usize,
     normals: bool,
     gscale: f64,
     gg: &mut [[f64; 2]],
 ) -> (f64, f64) {
-    let nn = n * n;
-    let (c, y) = (r / n, r % n);
+    // (`n` is the row length: the square grid's side, as this was written.)
+    let nn = n * h;
+    let (c, y) = (r / h, r % h);
     let o = c * nn;
     let f = &s[o..o + nn];
     let row = &f[y * n..y * n + n];
@@ -311,7 +324,7 @@ fn sdf_row<const G: bool>(
     if !normals {
         return (ls, 0.0);
     }
-    let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
+    let (ym, yp) = (y.saturating_sub(1), (y + 1).min(h - 1));
     let ihy = 1.0 / (yp - ym).max(1) as f64;
     let (up, dn) = (&f[ym * n..ym * n + n], &f[yp * n..yp * n + n]);
     let tnr = &tn[o + y * n..o + y * n + n];
@@ -371,12 +384,12 @@ fn sdf_row<const G: bool>(
 }
 
 /// Add the normal term's gradient of row `r` (from [`sdf_row`]'s `gg`)
-/// into `d` through the central-difference stencil.
-fn scatter_row(d: &mut [f64], n: usize, r: usize, gg: &[[f64; 2]]) {
-    let nn = n * n;
-    let (c, y) = (r / n, r % n);
+/// into `d` through the central-difference stencil (`n` wide, `h` high).
+fn scatter_row(d: &mut [f64], (n, h): (usize, usize), r: usize, gg: &[[f64; 2]]) {
+    let nn = n * h;
+    let (c, y) = (r / h, r % h);
     let o = c * nn;
-    let (ym, yp) = (y.saturating_sub(1), (y + 1).min(n - 1));
+    let (ym, yp) = (y.saturating_sub(1), (y + 1).min(h - 1));
     {
         let row = &mut d[o + y * n..o + y * n + n];
         if n < 3 {
@@ -415,8 +428,8 @@ pub fn loss_reference(
     t_normals: &[[f64; 2]],
     ds: Option<&mut [f64]>,
 ) -> f64 {
-    let n = t.n;
-    let nn = n * n;
+    let g = (t.grid.w, t.grid.h);
+    let nn = t.grid.len();
     let channels = s.len() / nn;
     if channels == 0 {
         return 0.0;
@@ -439,7 +452,7 @@ pub fn loss_reference(
             }
             if opts.normal_weight != 0.0 {
                 total += opts.normal_weight
-                    * normal_term(s, n, t_normals, norm * opts.normal_weight, ds);
+                    * normal_term(s, g, t_normals, norm * opts.normal_weight, ds);
             }
         }
         LossKind::L1 => {
@@ -452,7 +465,7 @@ pub fn loss_reference(
             }
         }
         LossKind::Image => {
-            let to_px = n as f64 / t.scale;
+            let to_px = t.grid.long_ppu() / t.scale;
             for i in 0..s.len() {
                 let a = coverage(s[i] * to_px);
                 let e = a - t.cover[i];
@@ -473,7 +486,7 @@ pub fn loss_reference(
                     &mut total,
                     &s[lo..lo + nn],
                     &t.sdf[lo..lo + nn],
-                    n,
+                    g,
                     channels,
                     d,
                 );
@@ -483,27 +496,28 @@ pub fn loss_reference(
     total
 }
 
-/// One channel of the pyramid loss: each level's share added to `total`
-/// in turn; with `ds` (this channel's part), dL/dS too.
+/// One channel (`w × h`) of the pyramid loss: each level's share added to
+/// `total` in turn; with `ds` (this channel's part), dL/dS too. Levels stop
+/// when the shorter side is under 16 pixels.
 fn pyramid_channel(
     total: &mut f64,
     s: &[f64],
     t: &[f64],
-    n: usize,
+    size: (usize, usize),
     channels: usize,
     ds: Option<&mut [f64]>,
 ) {
     let mut level: Vec<f64> = s.iter().zip(t).map(|(a, b)| a - b).collect();
-    let mut sizes = vec![n];
+    let mut sizes = vec![size];
     let mut grads: Vec<Vec<f64>> = vec![];
     loop {
         let m = *sizes.last().expect("size");
-        let k = 1.0 / (channels * m * m) as f64;
+        let k = 1.0 / (channels * m.0 * m.1) as f64;
         *total += level.iter().map(|e| e * e).sum::<f64>() * k;
         if ds.is_some() {
             grads.push(level.iter().map(|e| 2.0 * e * k).collect());
         }
-        if m < 16 || sizes.len() >= 5 {
+        if m.0.min(m.1) < 16 || sizes.len() >= 5 {
             break;
         }
         let (next, mm) = down(&level, m);
@@ -532,17 +546,25 @@ fn stencil(n: usize) -> Vec<(usize, usize, f64)> {
         .collect()
 }
 
-/// `Σ (1 − ⟨n_G, n_T⟩²) / (|C|·n²)` and its gradient (× `gscale`) through the stencil.
-fn normal_term(s: &[f64], n: usize, tn: &[[f64; 2]], gscale: f64, ds: Option<&mut [f64]>) -> f64 {
-    let nn = n * n;
+/// `Σ (1 − ⟨n_G, n_T⟩²) / (|C|·w·h)` and its gradient (× `gscale`) through
+/// the stencil, on a `w × h` grid `(n, h)`.
+fn normal_term(
+    s: &[f64],
+    (n, h): (usize, usize),
+    tn: &[[f64; 2]],
+    gscale: f64,
+    ds: Option<&mut [f64]>,
+) -> f64 {
+    let nn = n * h;
     let channels = s.len() / nn;
     let st = stencil(n);
+    let sty = stencil(h);
     let mut sum = 0.0;
     let mut ds = ds;
     for c in 0..channels {
         let o = c * nn;
         let f = &s[o..o + nn];
-        for (y, &(ym, yp, ihy)) in st.iter().enumerate() {
+        for (y, &(ym, yp, ihy)) in sty.iter().enumerate() {
             let (row, rm, rp) = (y * n, ym * n, yp * n);
             // A row-local sum keeps the accumulator in a register.
             let mut row_sum = 0.0;
@@ -608,8 +630,8 @@ impl LossPass {
         t_normals: &[[f64; 2]],
         budget: usize,
     ) -> Option<f64> {
-        let n = t.n;
-        let nn = n * n;
+        let g = (t.grid.w, t.grid.h);
+        let nn = t.grid.len();
         let channels = s.len() / nn;
         if channels == 0 {
             return Some(0.0);
@@ -621,12 +643,12 @@ impl LossPass {
             (LossKind::Sdf, _) => {
                 // Rows of every channel, in order, through `sdf_row` as
                 // `loss` takes them: the main and normal sums in `acc[0..2]`.
-                let rows = channels * n;
-                let end = rows.min(self.pos.saturating_add(budget.div_ceil(n)));
+                let rows = channels * g.1;
+                let end = rows.min(self.pos.saturating_add(budget.div_ceil(g.0)));
                 let normals = opts.normal_weight != 0.0;
                 for r in self.pos..end {
                     let (a, b) =
-                        sdf_row::<false>(s, &t.sdf, t_normals, n, r, normals, 0.0, &mut []);
+                        sdf_row::<false>(s, &t.sdf, t_normals, g, r, normals, 0.0, &mut []);
                     self.acc[0] += a;
                     self.acc[1] += b;
                 }
@@ -638,7 +660,7 @@ impl LossPass {
             }
             (LossKind::L1 | LossKind::Image, _) => {
                 let end = s.len().min(self.pos.saturating_add(budget));
-                let to_px = n as f64 / t.scale;
+                let to_px = t.grid.long_ppu() / t.scale;
                 let (sv, tv, tm) = (
                     &s[self.pos..end],
                     &t.sdf[self.pos..end],
@@ -667,7 +689,7 @@ impl LossPass {
                         &mut self.total,
                         &s[lo..lo + nn],
                         &t.sdf[lo..lo + nn],
-                        n,
+                        g,
                         channels,
                         None,
                     );
@@ -716,8 +738,9 @@ impl Objective {
     /// Combine a scene and a target built for the same grid and units.
     pub fn new(scene: Scene, target: Target, opts: LossOptions) -> Objective {
         let mut tn = vec![];
-        normals(&target.sdf, target.n, &mut tn);
-        let eval = Evaluator::new(opts.grid, opts.scale());
+        normals(&target.sdf, &target.grid, &mut tn);
+        let canvas = scene.rec.canvas;
+        let eval = Evaluator::on(Grid::on(canvas, opts.grid), opts.scale_on(canvas));
         Objective {
             scene,
             target,
@@ -898,30 +921,49 @@ mod tests {
     use crate::pattern::record::{Program, RecordLimits};
 
     fn objective(src: &str, truth: &[f64], kind: LossKind, n: usize) -> Objective {
+        objective_on(src, truth, kind, n, Canvas::SQUARE)
+    }
+
+    /// [`objective`] on `canvas` (`n` the grid's longer side).
+    fn objective_on(
+        src: &str,
+        truth: &[f64],
+        kind: LossKind,
+        n: usize,
+        canvas: Canvas,
+    ) -> Objective {
         let p = Program::parse(src).unwrap();
-        let rec = p.record(&p.defaults(), &RecordLimits::default()).unwrap();
+        let rec = p
+            .record_on(&p.defaults(), &RecordLimits::default(), canvas)
+            .unwrap();
         let scene = Scene::new(rec);
         let opts = LossOptions {
             kind,
             grid: n,
             ..Default::default()
         };
-        let mut ev = Evaluator::new(n, opts.scale());
+        let mut ev = Evaluator::on(Grid::on(canvas, n), opts.scale_on(canvas));
         let mut nodes = vec![];
         scene.rec.tape.forward(truth, &mut nodes);
         ev.eval(&scene, &nodes, false);
         let idx = ev.colour_indices(&scene);
-        let t = Target::from_indices(&scene, &idx, n, opts.scale());
+        let t = Target::from_indices(&scene, &idx, n, opts.scale_on(canvas));
         Objective::new(scene, t, opts)
     }
 
-    /// [`objective`] with the target an image of the truth rendered
+    /// [`objective_on`] with the target an image of the truth rendered
     /// anti-aliased (4×4 samples) at twice the grid's side: its fields and
     /// coverage are sub-pixel, the coverage fractional along outlines.
-    fn objective_aa(src: &str, truth: &[f64], kind: LossKind, n: usize) -> Objective {
-        let o = objective(src, truth, kind, n);
+    fn objective_aa(
+        src: &str,
+        truth: &[f64],
+        kind: LossKind,
+        n: usize,
+        canvas: Canvas,
+    ) -> Objective {
+        let o = objective_on(src, truth, kind, n, canvas);
         let img = crate::pattern::render::render(&o.scene, truth, 2 * n, 4).unwrap();
-        let t = Target::from_image(&o.scene, &img, n, o.opts.scale(), 60.0).unwrap();
+        let t = Target::from_image(&o.scene, &img, n, o.opts.scale_on(canvas), 60.0).unwrap();
         let soft = t.cover.iter().filter(|&&a| a > 0.01 && a < 0.99).count();
         assert!(soft > 50, "{soft} fractional pixels");
         Objective::new(o.scene, t, o.opts)
@@ -936,7 +978,8 @@ mod tests {
 
     /// Every loss's analytic gradient matches central differences, against
     /// a target drawn on the grid (hard masks) and against an anti-aliased
-    /// image (sub-pixel fields, fractional coverage).
+    /// image (sub-pixel fields, fractional coverage), on the square canvas
+    /// and on a wide and a tall one (rectangular grids).
     #[test]
     fn gradients_match_central_differences_for_every_loss() {
         let kinds = [
@@ -946,12 +989,27 @@ mod tests {
             LossKind::Image,
         ];
         let truth = [0.22, 0.06, 0.2, 0.015];
-        for (kind, aa) in kinds.into_iter().flat_map(|k| [(k, false), (k, true)]) {
+        // (Grids an even number of pixels wide: on an odd one a pixel centre
+        // lies at x = 0.5, midway between two circles of SRC at `p`, where
+        // the loss has a kink that central differences average over.)
+        let canvases = [
+            Canvas::SQUARE,
+            Canvas::of_pixels(300, 240),
+            Canvas::of_pixels(200, 240),
+        ];
+        let cases = kinds
+            .into_iter()
+            .flat_map(|k| [(k, false), (k, true)])
+            .flat_map(|c| canvases.map(|v| (c, v)));
+        for ((kind, aa), canvas) in cases {
             let mut o = if aa {
-                objective_aa(SRC, &truth, kind, 48)
+                objective_aa(SRC, &truth, kind, 48, canvas)
             } else {
-                objective(SRC, &truth, kind, 48)
+                objective_on(SRC, &truth, kind, 48, canvas)
             };
+            if !canvas.is_square() {
+                assert!(o.target.grid.w != o.target.grid.h);
+            }
             let p = [0.2, 0.045, 0.05, 0.012];
             let mut g = [0.0; 4];
             let l = o.loss_grad(&p, &mut g);
@@ -965,7 +1023,7 @@ mod tests {
                 let tol = 1e-3 * (1.0 + fd.abs().max(g[k].abs()));
                 assert!(
                     (fd - g[k]).abs() < tol,
-                    "{kind:?} (anti-aliased target: {aa}) param {k}: fd {fd} vs analytic {}",
+                    "{kind:?} (anti-aliased target: {aa}, {canvas:?}) param {k}: fd {fd} vs analytic {}",
                     g[k]
                 );
             }
@@ -983,8 +1041,13 @@ mod tests {
             LossKind::Pyramid,
             LossKind::Image,
         ] {
-            for n in [37, 48] {
-                let mut o = objective(SRC, &[0.22, 0.06, 0.2, 0.015], kind, n);
+            let sizes = [
+                (37, Canvas::SQUARE),
+                (48, Canvas::SQUARE),
+                (41, Canvas::of_pixels(300, 240)),
+            ];
+            for (n, canvas) in sizes {
+                let mut o = objective_on(SRC, &[0.22, 0.06, 0.2, 0.015], kind, n, canvas);
                 let p = [0.2, 0.045, 0.05, 0.012];
                 let want = o.loss(&p);
                 for nw in [0.05, 0.0] {
@@ -1013,7 +1076,7 @@ mod tests {
                             "{kind:?} n {n} budget {budget}"
                         );
                         if budget == 1 && kind != LossKind::Pyramid {
-                            assert!(calls >= n, "{calls}");
+                            assert!(calls >= o.target.grid.h, "{calls}");
                         }
                     }
                 }
@@ -1034,15 +1097,18 @@ mod tests {
     /// The fast SDF loss (fused rows, no square root, gathered gradients)
     /// equals the per-pixel reference, loss and dL/dS, to 1e-12 relative,
     /// on random fields with flat patches (vanishing gradients), zero target
-    /// normals, every grid side from 1 to 9 and odd sizes, 1 to 3
-    /// channels, with and without the normal term.
+    /// normals, every grid side from 1 to 9 and odd sizes, rectangles
+    /// (wide and tall, a canvas that is not square), 1 to 3 channels, with
+    /// and without the normal term.
     #[test]
     fn fast_sdf_loss_equals_the_reference_on_random_fields() {
         let mut rng = crate::core::rng::Rng::new(9);
-        for n in (1..10).chain([17, 37, 64]) {
+        let squares = (1..10).chain([17, 37, 64]).map(|n| (n, n));
+        let rects = [(1, 5), (5, 1), (2, 7), (7, 3), (17, 9), (9, 17), (37, 64)];
+        for (w, h) in squares.chain(rects) {
             for channels in 1..4 {
                 for nw in [0.05, 0.0, 1.0] {
-                    let len = channels * n * n;
+                    let len = channels * w * h;
                     let field = |rng: &mut crate::core::rng::Rng| -> Vec<f64> {
                         (0..len)
                             .map(|_| {
@@ -1057,17 +1123,22 @@ mod tests {
                             .collect()
                     };
                     let s = field(&mut rng);
+                    let grid = Grid {
+                        w,
+                        h,
+                        canvas: Canvas::of_pixels(w, h),
+                    };
                     let t = Target {
-                        n,
-                        scale: n as f64,
+                        grid,
+                        scale: grid.long_ppu(),
                         sdf: field(&mut rng),
                         cover: vec![0.0; len],
                         unmatched: 0.0,
                     };
                     let mut tn = vec![];
-                    normals(&t.sdf, n, &mut tn);
+                    normals(&t.sdf, &t.grid, &mut tn);
                     let opts = LossOptions {
-                        grid: n,
+                        grid: w.max(h),
                         normal_weight: nw,
                         ..Default::default()
                     };
@@ -1075,16 +1146,16 @@ mod tests {
                     let want = loss_reference(&opts, &s, &t, &tn, Some(&mut d1));
                     let got = loss(&opts, &s, &t, &tn, Some(&mut d2));
                     let plain = loss(&opts, &s, &t, &tn, None);
-                    assert_eq!(got.to_bits(), plain.to_bits(), "n {n}");
+                    assert_eq!(got.to_bits(), plain.to_bits(), "{w}×{h}");
                     assert!(
                         (got - want).abs() <= 1e-12 * want.abs().max(1e-300),
-                        "n {n} c {channels} nw {nw}: {got} vs {want}"
+                        "{w}×{h} c {channels} nw {nw}: {got} vs {want}"
                     );
                     let scale = d1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                     for (i, (a, b)) in d2.iter().zip(&d1).enumerate() {
                         assert!(
                             (a - b).abs() <= 1e-12 * scale,
-                            "n {n} c {channels} nw {nw} ds[{i}]: {a} vs {b}"
+                            "{w}×{h} c {channels} nw {nw} ds[{i}]: {a} vs {b}"
                         );
                     }
                 }
@@ -1129,7 +1200,7 @@ mod tests {
     fn the_image_loss_on_an_antialiased_target_is_lowest_at_the_truth() {
         let truth = [0.22, 0.06, 0.2, 0.015];
         let n = 48;
-        let mut o = objective_aa(SRC, &truth, LossKind::Image, n);
+        let mut o = objective_aa(SRC, &truth, LossKind::Image, n, Canvas::SQUARE);
         let px = 1.0 / n as f64;
         // Steps moving outlines by about 0.1 pixel: dx moves the third
         // circle twice as far, the rectangle's corners lie ~0.17 from its

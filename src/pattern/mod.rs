@@ -46,7 +46,13 @@
 //! **Units.** Fields are compared in pixels of the loss grid by default
 //! ([`loss::SdfUnits`]); see [`loss`] and `filigree bench fit` (`units`).
 //!
-//! **Coordinates.** The canvas is `[0, 1]²`, y down; angles in radians.
+//! **Coordinates.** The canvas ([`record::Canvas`]) is `[0, W] × [0, H]`,
+//! y down, its shorter side 1: `[0, 1]²` for a square target (so every
+//! square fit, render and golden file is what it was before, bit for bit),
+//! the target image's aspect otherwise, so a non-square design is never
+//! stretched (a 300 × 240 target is `[0, 1.25] × [0, 1]`; programs read
+//! `WIDTH` and `HEIGHT`). Loss and raster grids ([`field::Grid`]) have the
+//! canvas's aspect, their longer side the requested size; angles in radians.
 //!
 //! **Public surface.** The request API ([`api`]) plus what the CLI, the
 //! benchmarks and `tests/fit.rs` drive directly (programs, scenes, targets,

@@ -1,6 +1,6 @@
 //! Drawing a pattern: a raster from the same colour fields the loss uses
 //! (so targets made from parameters match the fields exactly), and SVG.
-use super::field::{Evaluator, Scene};
+use super::field::{Evaluator, Grid, Scene};
 use super::record::{BoolOp, Geom, Rgb};
 use super::sdf::PrimKind;
 use crate::core::error::{Error, Result};
@@ -10,15 +10,29 @@ use std::fmt::Write;
 /// Largest raster side [`render`] accepts (pixels × supersampling).
 pub use crate::core::limits::MAX_RENDER_SIDE;
 
-/// Rasterise the scene with `params` (float parameters) at `size × size`,
-/// averaging `supersample²` samples per pixel (1 = crisp palette colours).
+/// Rasterise the scene with `params` (float parameters) with `size`
+/// pixels along the longer side of its canvas (`size × size` on a square
+/// one, see [`crate::pattern::record::Canvas::grid`]), averaging
+/// `supersample²` samples per pixel (1 = crisp palette colours).
 pub fn render(
     scene: &Scene,
     params: &[f64],
     size: usize,
     supersample: usize,
 ) -> Result<Rgba8Image> {
-    let mut r = Raster::new(scene, params, size, supersample)?;
+    let (w, h) = scene.rec.canvas.grid(size);
+    render_wh(scene, params, (w, h), supersample)
+}
+
+/// [`render`] at `width × height` pixels laid over the canvas (pixels are
+/// square when the two have the same aspect).
+pub fn render_wh(
+    scene: &Scene,
+    params: &[f64],
+    size: (usize, usize),
+    supersample: usize,
+) -> Result<Rgba8Image> {
+    let mut r = Raster::with_size(scene, params, size, supersample)?;
     while !r.run(scene, u64::MAX) {}
     Ok(r.into_image())
 }
@@ -36,7 +50,8 @@ enum RasterPhase {
 /// fields are evaluated a few tiles at a time, then the pixels are made a
 /// few rows at a time. The image is bit for bit that of [`render`].
 pub struct Raster {
-    size: usize,
+    /// Output width and height in pixels.
+    size: (usize, usize),
     ss: usize,
     ev: Evaluator,
     img: Rgba8Image,
@@ -45,26 +60,43 @@ pub struct Raster {
 
 impl Raster {
     /// Check the arguments and the parameters (a shape whose coordinates
-    /// are not finite is an error) and prepare the evaluation.
+    /// are not finite is an error) and prepare the evaluation, `size`
+    /// pixels along the longer side of the canvas (as [`render`]).
     pub fn new(scene: &Scene, params: &[f64], size: usize, supersample: usize) -> Result<Raster> {
+        Raster::with_size(scene, params, scene.rec.canvas.grid(size), supersample)
+    }
+
+    /// [`Raster::new`] at `width × height` pixels (as [`render_wh`]).
+    pub fn with_size(
+        scene: &Scene,
+        params: &[f64],
+        (width, height): (usize, usize),
+        supersample: usize,
+    ) -> Result<Raster> {
         let ss = supersample.max(1);
-        let n = match size.checked_mul(ss) {
-            Some(n) if size > 0 && n <= MAX_RENDER_SIDE => n,
-            _ => {
-                return Err(Error::limit(format!(
-                    "render size {size} pixels × {ss} samples per side is outside 1..={MAX_RENDER_SIDE} samples; \
-                     lower the size or the supersampling"
-                )))
-            }
+        let side = |size: usize| {
+            match size.checked_mul(ss) {
+            Some(n) if size > 0 && n <= MAX_RENDER_SIDE => Ok(n),
+            _ => Err(Error::limit(format!(
+                "render size {size} pixels × {ss} samples per side is outside 1..={MAX_RENDER_SIDE} samples; \
+                 lower the size or the supersampling"
+            ))),
+        }
         };
+        let (w, h) = (side(width)?, side(height)?);
         let nodes = checked_nodes(scene, params)?;
-        let mut ev = Evaluator::new(n, 1.0);
+        let grid = Grid {
+            w,
+            h,
+            canvas: scene.rec.canvas,
+        };
+        let mut ev = Evaluator::on(grid, 1.0);
         ev.begin(scene, &nodes, false);
         Ok(Raster {
-            size,
+            size: (width, height),
             ss,
             ev,
-            img: Rgba8Image::new(size as u32, size as u32),
+            img: Rgba8Image::new(width as u32, height as u32),
             phase: RasterPhase::Fields(0),
         })
     }
@@ -89,8 +121,8 @@ impl Raster {
                 }
                 RasterPhase::Pixels(y) => {
                     self.row(scene, y);
-                    spent += (self.size * self.ss * self.ss * scene.channels.len().max(1)) as u64;
-                    self.phase = if y + 1 >= self.size {
+                    spent += (self.size.0 * self.ss * self.ss * scene.channels.len().max(1)) as u64;
+                    self.phase = if y + 1 >= self.size.1 {
                         RasterPhase::Done
                     } else {
                         RasterPhase::Pixels(y + 1)
@@ -106,9 +138,9 @@ impl Raster {
 
     /// Output row `y`: the average colour of each pixel's samples.
     fn row(&mut self, scene: &Scene, y: usize) {
-        let (ss, n) = (self.ss, self.ev.n);
+        let (ss, n) = (self.ss, self.ev.grid.w);
         let pal = &scene.rec.colours;
-        for x in 0..self.size {
+        for x in 0..self.size.0 {
             let mut acc = [0u32; 3];
             for sy in 0..ss {
                 for sx in 0..ss {
@@ -137,7 +169,7 @@ impl Raster {
     pub fn fraction(&self) -> f64 {
         match self.phase {
             RasterPhase::Fields(t) => 0.75 * t as f64 / self.ev.tiles().max(1) as f64,
-            RasterPhase::Pixels(y) => 0.75 + 0.25 * y as f64 / self.size.max(1) as f64,
+            RasterPhase::Pixels(y) => 0.75 + 0.25 * y as f64 / self.size.1.max(1) as f64,
             RasterPhase::Done => 1.0,
         }
     }
@@ -195,6 +227,8 @@ struct SvgOut<'a> {
     scene: &'a Scene,
     vals: &'a [f64],
     k: f64,
+    /// The viewBox's width and height (the canvas in pixels), as written.
+    view: (String, String),
     defs: String,
     masks: usize,
 }
@@ -323,38 +357,27 @@ impl SvgOut<'_> {
         }
         let _ = write!(
             self.defs,
-            "<mask id=\"{id}\" maskUnits=\"userSpaceOnUse\" x=\"0\" y=\"0\" width=\"{0}\" height=\"{0}\">{body}</mask>",
-            num(self.k)
+            "<mask id=\"{id}\" maskUnits=\"userSpaceOnUse\" x=\"0\" y=\"0\" width=\"{}\" height=\"{}\">{body}</mask>",
+            self.view.0,
+            self.view.1
         );
         id
     }
 }
 
-/// An SVG document of the scene with `params`, `size` pixels wide. Strokes
-/// of boolean shapes are not exported (SVG cannot stroke a mask).
+/// An SVG document of the scene with `params`, `size` pixels along the
+/// longer side of its canvas (`size × size` on a square one). Strokes of
+/// boolean shapes are not exported (SVG cannot stroke a mask).
 pub fn svg(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
-    svg_sized(scene, params, size, size)
+    let c = scene.rec.canvas;
+    let long = c.w.max(c.h);
+    svg_sized(scene, params, size * (c.w / long), size * (c.h / long))
 }
 
-/// [`svg`] `width × height` pixels: the square canvas stretched to that
-/// rectangle, as a fit stretches a target image of that size onto it.
+/// [`svg`] `width × height` pixels: the canvas scaled uniformly to fit
+/// (its `viewBox` is the canvas in pixels, so a size of the canvas's
+/// aspect is filled exactly and nothing is ever stretched).
 pub fn svg_sized(scene: &Scene, params: &[f64], width: f64, height: f64) -> Result<String> {
-    let size = width.max(height);
-    let doc = svg_square(scene, params, size)?;
-    if width == height {
-        return Ok(doc);
-    }
-    let s = num(size);
-    let square = format!("width=\"{s}\" height=\"{s}\" viewBox=");
-    let stretched = format!(
-        "width=\"{}\" height=\"{}\" preserveAspectRatio=\"none\" viewBox=",
-        num(width),
-        num(height)
-    );
-    Ok(doc.replacen(&square, &stretched, 1))
-}
-
-fn svg_square(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
     if params.len() != scene.rec.float_params.len() {
         return Err(Error::input(format!(
             "the program has {} float parameters but {} values were given",
@@ -364,10 +387,15 @@ fn svg_square(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
     }
     let mut vals = vec![];
     scene.rec.tape.forward(params, &mut vals);
+    let c = scene.rec.canvas;
+    // Pixels per canvas unit (`size` on a square canvas drawn square).
+    let k = (width / c.w).min(height / c.h);
+    let (vw, vh) = (num(k * c.w), num(k * c.h));
     let mut out = SvgOut {
         scene,
         vals: &vals,
-        k: size,
+        k,
+        view: (vw.clone(), vh.clone()),
         defs: String::new(),
         masks: 0,
     };
@@ -389,9 +417,10 @@ fn svg_square(scene: &Scene, params: &[f64], size: f64) -> Result<String> {
         body += &out.element(&s.geom, &style);
         body.push('\n');
     }
-    let s = num(size);
     Ok(format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{s}\" height=\"{s}\" viewBox=\"0 0 {s} {s}\">\n<defs>{}</defs>\n<rect width=\"{s}\" height=\"{s}\" fill=\"{}\"/>\n{body}</svg>\n",
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" viewBox=\"0 0 {vw} {vh}\">\n<defs>{}</defs>\n<rect width=\"{vw}\" height=\"{vh}\" fill=\"{}\"/>\n{body}</svg>\n",
+        num(width),
+        num(height),
         out.defs,
         hex(pal[0])
     ))

@@ -4,14 +4,17 @@
 //!
 //! ```text
 //! { generator: name | null, program: text, values: [number],
-//!   target: {width: 256, height: 256, rgba: bytes} | null, truth: [number] | null,
+//!   target: {width, height, rgba: bytes} | null, truth: [number] | null,
 //!   result: {params: [number], loss, names?: [text], evaluations} | null,
 //!   settings: {budget: "quick" | "paper", loss: "sdf" | ..., seed} }
 //! ```
 //!
 //! The program's size is the core's program limit
 //! ([`crate::core::limits::MAX_PROGRAM_BYTES`]); budgets and losses are the
-//! core's `fit` request names.
+//! core's `fit` request names. A target is 256 px along its longer side
+//! ([`TARGET_SIDE`]): square when drawn or made from values, the upload's
+//! aspect when uploaded (the fit's canvas follows it); files from before
+//! uploads kept their aspect hold 256 × 256 targets, which still check.
 use super::fit::Budget;
 use super::loss::LossKind;
 use crate::api::project::{invalid, js_len, js_text, Value, MAX_SAFE_INTEGER};
@@ -22,7 +25,8 @@ use serde::{Deserialize, Serialize};
 
 /// Schema version of the Fit state (the page's `state.version`).
 pub const STATE_VERSION: u32 = 1;
-/// Side of the target the page draws on, in pixels.
+/// Longer side of the target the page keeps, in pixels (the side of a
+/// drawn one).
 pub const TARGET_SIDE: u32 = 256;
 /// Most numbers in `values`, `truth` and `result.params` (and names).
 pub const MAX_VALUES: usize = 1000;
@@ -123,18 +127,29 @@ pub fn check(raw: &Value) -> Result<FitState> {
     let target = match raw.get("target") {
         None | Some(Value::Null) => None,
         Some(t) => {
-            let side = |k: &str| t.get(k).and_then(Value::as_f64) == Some(TARGET_SIDE as f64);
-            if !side("width") || !side("height") {
-                return Err(invalid(
-                    "target",
-                    format!("must be {TARGET_SIDE}×{TARGET_SIDE} pixels"),
-                ));
-            }
-            let n = TARGET_SIDE as usize * TARGET_SIDE as usize * 4;
+            let side = |k: &str| {
+                t.get(k)
+                    .and_then(Value::as_f64)
+                    .filter(|v| v.fract() == 0.0 && (1.0..=TARGET_SIDE as f64).contains(v))
+                    .map(|v| v as u32)
+            };
+            let (width, height) = match (side("width"), side("height")) {
+                (Some(w), Some(h)) if w.max(h) == TARGET_SIDE => (w, h),
+                _ => {
+                    return Err(invalid(
+                        "target",
+                        format!(
+                            "must be {TARGET_SIDE} pixels along its longer side \
+                             (and at least 1 along the other)"
+                        ),
+                    ))
+                }
+            };
+            let n = width as usize * height as usize * 4;
             match t.get("rgba") {
                 Some(Value::Bytes(b)) if b.len() == n => Some(Target {
-                    width: TARGET_SIDE,
-                    height: TARGET_SIDE,
+                    width,
+                    height,
                     rgba: b.clone(),
                 }),
                 _ => return Err(invalid("target.rgba", format!("must hold {n} bytes"))),

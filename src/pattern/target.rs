@@ -22,7 +22,7 @@
 //!
 //! The distance transforms themselves are shared:
 //! [`crate::geom::distance_transform`], [`crate::geom::aa_distance`].
-use super::field::{edge_cap, Evaluator, Scene, CAP};
+use super::field::{edge_cap, Evaluator, Grid, Scene, CAP};
 use super::loss::coverage;
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
@@ -33,8 +33,8 @@ use crate::raster::Rgba8Image;
 /// A target: per-channel masks and signed fields on the loss grid.
 #[derive(Debug, Clone)]
 pub struct Target {
-    /// Grid side.
-    pub n: usize,
+    /// The loss grid (over the program's canvas).
+    pub grid: Grid,
     /// Field units per canvas unit (see `LossOptions::units`).
     pub scale: f64,
     /// Channel-major signed fields, same layout as `Evaluator::s`.
@@ -190,15 +190,24 @@ fn snap_rows(
     }
 }
 
-/// The side of the raster an image target's fields are computed on: the
-/// image's own (up to [`MAX_FIELD_SIDE`]), or the grid's when the image is
-/// no bigger than the grid.
-fn field_side(img: &Rgba8Image, n: usize) -> (usize, usize) {
+/// The size of the raster an image target's fields are computed on: the
+/// image's own (its longer side at most [`MAX_FIELD_SIDE`] or the grid's
+/// longer side, the aspect kept), or the grid's when the image is no
+/// bigger than the grid.
+fn field_side(img: &Rgba8Image, grid: &Grid) -> (usize, usize) {
     let (w, h) = (img.width as usize, img.height as usize);
-    let fw = w.min(MAX_FIELD_SIDE.max(n));
-    let fh = h.min(MAX_FIELD_SIDE.max(n));
-    if fw <= n && fh <= n {
-        (n, n)
+    let cap = MAX_FIELD_SIDE.max(grid.w.max(grid.h));
+    let (fw, fh) = if w.max(h) <= cap {
+        (w, h)
+    } else if w == h {
+        (cap, cap)
+    } else {
+        let k = cap as f64 / w.max(h) as f64;
+        let r = |v: usize| ((v as f64 * k).round() as usize).clamp(1, cap);
+        (r(w), r(h))
+    };
+    if fw <= grid.w && fh <= grid.h {
+        (grid.w, grid.h)
     } else {
         (fw.max(1), fh.max(1))
     }
@@ -235,16 +244,19 @@ fn bilinear(f: &[f64], w: usize, h: usize, u: f64, v: f64) -> f64 {
 }
 
 impl Target {
-    /// Build the per-channel target fields from palette indices on an `n × n` grid.
+    /// Build the per-channel target fields from palette indices on the
+    /// grid of `n` pixels along the longer side of the scene's canvas
+    /// ([`Grid::on`]; `n × n` on a square one).
     pub fn from_indices(scene: &Scene, idx: &[u16], n: usize, scale: f64) -> Target {
-        TargetBuild::fields(idx.to_vec(), vec![], n, n, n, scale, 0.0).finish(scene)
+        let g = Grid::on(scene.rec.canvas, n);
+        TargetBuild::fields(idx.to_vec(), vec![], g.w, g.h, g, scale, 0.0).finish(scene)
     }
 
-    /// A target with no fields yet (on an `n × n` grid), to be replaced by
-    /// one a [`TargetBuild`] completes.
-    pub(crate) fn pending(n: usize, scale: f64) -> Target {
+    /// A target with no fields yet (on `grid`), to be replaced by one a
+    /// [`TargetBuild`] completes.
+    pub(crate) fn pending(grid: Grid, scale: f64) -> Target {
         Target {
-            n,
+            grid,
             scale,
             sdf: vec![],
             cover: vec![],
@@ -252,9 +264,12 @@ impl Target {
         }
     }
 
-    /// Build a target from an image: snap pixels to the program's palette
-    /// (background included) and compute the fields. The image is stretched
-    /// to the square canvas (nearest neighbour).
+    /// Build a target from an image on the grid of `n` pixels along the
+    /// longer side of the scene's canvas: snap pixels to the program's
+    /// palette (background included) and compute the fields. The image is
+    /// laid over the canvas; record the program on the image's canvas
+    /// ([`crate::pattern::record::Canvas::of_pixels`]) so nothing is
+    /// stretched (a fit does).
     ///
     /// Fails when more than half of the pixels are farther than `tolerance`
     /// (RGB distance, 0..441) from every colour the program uses.
@@ -268,12 +283,13 @@ impl Target {
         if img.width == 0 || img.height == 0 {
             return Err(Error::input("the target image is empty"));
         }
-        let (fw, fh) = field_side(img, n);
+        let g = Grid::on(scene.rec.canvas, n);
+        let (fw, fh) = field_side(img, &g);
         let (idx, mix, far) = snap_to_palette_wh(img, &scene.rec.colours, fw, fh, tolerance);
         if far > 0.5 {
             return Err(unmatched_error(scene, far, tolerance));
         }
-        Ok(TargetBuild::fields(idx, mix, fw, fh, n, scale, far).finish(scene))
+        Ok(TargetBuild::fields(idx, mix, fw, fh, g, scale, far).finish(scene))
     }
 }
 
@@ -289,7 +305,7 @@ pub type BuildWork = u64;
 /// The result is bit for bit [`Target::from_image`] / [`Target::from_indices`]
 /// of the same input.
 pub struct TargetBuild {
-    n: usize,
+    grid: Grid,
     scale: f64,
     stage: Stage,
     sdf: Vec<f64>,
@@ -356,8 +372,8 @@ impl TargetBuild {
         if img.width == 0 || img.height == 0 {
             return Err(Error::input("the target image is empty"));
         }
-        let _ = scene;
-        let (fw, fh) = field_side(&img, n);
+        let g = Grid::on(scene.rec.canvas, n);
+        let (fw, fh) = field_side(&img, &g);
         Ok(TargetBuild {
             stage: Stage::Snap {
                 img,
@@ -368,26 +384,27 @@ impl TargetBuild {
                 mix: Vec::with_capacity(fw * fh),
                 far: 0,
             },
-            ..TargetBuild::empty(n, scale)
+            ..TargetBuild::empty(g, scale)
         })
     }
 
-    /// The target of the program drawn with `params` on the `n × n` grid
+    /// The target of the program drawn with `params` on the grid
     /// (palette index per pixel, as [`crate::pattern::fit::colour_indices`]).
     /// Fails at once when the parameters give shapes that are not finite.
     pub fn drawn(scene: &Scene, params: &[f64], n: usize, scale: f64) -> Result<TargetBuild> {
         let nodes = super::render::checked_nodes(scene, params)?;
-        let mut ev = Evaluator::new(n, 1.0);
+        let g = Grid::on(scene.rec.canvas, n);
+        let mut ev = Evaluator::on(g, 1.0);
         ev.begin(scene, &nodes, false);
         Ok(TargetBuild {
             stage: Stage::Draw { ev, next_tile: 0 },
-            ..TargetBuild::empty(n, scale)
+            ..TargetBuild::empty(g, scale)
         })
     }
 
-    fn empty(n: usize, scale: f64) -> TargetBuild {
+    fn empty(grid: Grid, scale: f64) -> TargetBuild {
         TargetBuild {
-            n,
+            grid,
             scale,
             stage: Stage::Done,
             sdf: vec![],
@@ -397,15 +414,15 @@ impl TargetBuild {
     }
 
     /// The fields of palette indices on a `fw × fh` raster covering the
-    /// canvas: computed there, then taken as they are (`fw = fh = n`) or
-    /// sampled bilinearly at the centres of the `n × n` grid; the coverage
-    /// is read from the field in grid pixels ([`coverage`]).
+    /// canvas: computed there, then taken as they are (the grid's own
+    /// size) or sampled bilinearly at the centres of the grid's pixels;
+    /// the coverage is read from the field in grid pixels ([`coverage`]).
     fn fields(
         idx: Vec<u16>,
         mix: Vec<Mix>,
         fw: usize,
         fh: usize,
-        n: usize,
+        grid: Grid,
         scale: f64,
         unmatched: f64,
     ) -> TargetBuild {
@@ -419,7 +436,7 @@ impl TargetBuild {
                 sd: None,
             },
             unmatched,
-            ..TargetBuild::empty(n, scale)
+            ..TargetBuild::empty(grid, scale)
         }
     }
 
@@ -443,7 +460,7 @@ impl TargetBuild {
             Stage::Pick { .. } => 0.2,
             Stage::Field { channel, .. } => 0.2 + 0.8 * *channel as f64 / nc,
             Stage::Sample { channel, row, .. } => {
-                0.2 + 0.8 * (*channel as f64 + 0.9 + 0.1 * *row as f64 / self.n as f64) / nc
+                0.2 + 0.8 * (*channel as f64 + 0.9 + 0.1 * *row as f64 / self.grid.h as f64) / nc
             }
             Stage::Done => 1.0,
         }
@@ -456,7 +473,10 @@ impl TargetBuild {
     pub fn step(&mut self, scene: &Scene, budget: BuildWork) -> Result<Option<Target>> {
         let budget = budget.max(1);
         let mut spent: BuildWork = 0;
-        let (n, scale) = (self.n, self.scale);
+        let (g, scale) = (self.grid, self.scale);
+        let (gw, gh, nn) = (g.w, g.h, g.len());
+        // Grid pixels per canvas unit (`n` on an `n × n` square).
+        let ppu = g.long_ppu();
         while spent < budget {
             match &mut self.stage {
                 Stage::Snap {
@@ -487,7 +507,7 @@ impl TargetBuild {
                     }
                     let idx = std::mem::take(idx);
                     let mix = std::mem::take(mix);
-                    *self = TargetBuild::fields(idx, mix, fw, fh, n, scale, far);
+                    *self = TargetBuild::fields(idx, mix, fw, fh, g, scale, far);
                 }
                 Stage::Draw { ev, next_tile } => {
                     let before = ev.raw_work();
@@ -502,18 +522,18 @@ impl TargetBuild {
                         let ev = std::mem::replace(ev, Evaluator::new(0, 1.0));
                         self.stage = Stage::Pick {
                             ev,
-                            idx: Vec::with_capacity(n * n),
+                            idx: Vec::with_capacity(nn),
                         };
                     }
                 }
                 Stage::Pick { ev, idx } => {
                     let i = idx.len();
-                    let end = (i + n).min(n * n);
+                    let end = (i + gw).min(nn);
                     idx.extend((i..end).map(|i| ev.colour_index(scene, i)));
                     spent = spent.saturating_add(((end - i) * scene.channels.len()) as BuildWork);
-                    if end == n * n {
+                    if end == nn {
                         let idx = std::mem::take(idx);
-                        *self = TargetBuild::fields(idx, vec![], n, n, n, scale, 0.0);
+                        *self = TargetBuild::fields(idx, vec![], gw, gh, g, scale, 0.0);
                     }
                 }
                 Stage::Field {
@@ -527,7 +547,7 @@ impl TargetBuild {
                     let (fw, fh, c) = (*fw, *fh, *channel);
                     if c == scene.channels.len() {
                         let t = Target {
-                            n,
+                            grid: g,
                             scale,
                             sdf: std::mem::take(&mut self.sdf),
                             cover: std::mem::take(&mut self.cover),
@@ -537,7 +557,7 @@ impl TargetBuild {
                         return Ok(Some(t));
                     }
                     if c == 0 && self.sdf.is_empty() {
-                        let cap = scene.channels.len() * n * n;
+                        let cap = scene.channels.len() * nn;
                         self.sdf.reserve_exact(cap);
                         self.cover.reserve_exact(cap);
                     }
@@ -546,10 +566,10 @@ impl TargetBuild {
                         None => {
                             let colour = scene.channels[c].colour;
                             spent = spent.saturating_add((fw * fh) as BuildWork);
-                            let big = if (fw, fh) == (n, n) {
-                                CAP * n as f64
+                            let big = if (fw, fh) == (gw, gh) {
+                                CAP * ppu
                             } else {
-                                CAP / fine_pixel(fw, fh)
+                                CAP / fine_pixel(&g, fw, fh)
                             };
                             sd.insert(Transform::new(idx, mix, colour, fw, fh, big))
                         }
@@ -594,38 +614,38 @@ impl TargetBuild {
                     row,
                 } => {
                     let (fw, fh, c) = (*fw, *fh, *channel);
-                    if (fw, fh) == (n, n) {
+                    if (fw, fh) == (gw, gh) {
                         // The grid's own fields: all rows at once (a copy).
-                        let px_to_units = scale / n as f64;
+                        let px_to_units = scale / ppu;
                         self.sdf.extend(
-                            d.iter()
-                                .enumerate()
-                                .map(|(i, v)| edge_clamp(v * px_to_units, i % n, i / n, n, scale)),
+                            d.iter().enumerate().map(|(i, v)| {
+                                edge_clamp(v * px_to_units, i % gw, i / gw, &g, scale)
+                            }),
                         );
                         self.cover.extend(d.iter().map(|&v| coverage(v)));
-                        spent = spent.saturating_add((n * n / 4) as BuildWork);
-                        *row = n;
+                        spent = spent.saturating_add((nn / 4) as BuildWork);
+                        *row = gh;
                     } else {
-                        let px = fine_pixel(fw, fh);
-                        let (sx, sy) = (fw as f64 / n as f64, fh as f64 / n as f64);
+                        let px = fine_pixel(&g, fw, fh);
+                        let (sx, sy) = (fw as f64 / gw as f64, fh as f64 / gh as f64);
                         let y = *row;
                         let v = (y as f64 + 0.5) * sy - 0.5;
-                        for x in 0..n {
+                        for x in 0..gw {
                             let u = (x as f64 + 0.5) * sx - 0.5;
                             let canvas = match aa {
                                 Some(t) => t.sample(u, v),
                                 None => bilinear(d, fw, fh, u, v),
                             } * px;
-                            self.cover.push(coverage(canvas * n as f64));
-                            self.sdf.push(edge_clamp(canvas * scale, x, y, n, scale));
+                            self.cover.push(coverage(canvas * ppu));
+                            self.sdf.push(edge_clamp(canvas * scale, x, y, &g, scale));
                         }
                         // (Away from the outline an anti-aliased field
                         // looks at up to 16 edge pieces a pixel.)
                         let per_pixel = if aa.is_some() { 20 } else { 4 };
-                        spent = spent.saturating_add(per_pixel * n as BuildWork);
+                        spent = spent.saturating_add(per_pixel * gw as BuildWork);
                         *row += 1;
                     }
-                    if *row == n {
+                    if *row == gh {
                         let idx = std::mem::take(idx);
                         let mix = std::mem::take(mix);
                         self.stage = Stage::Field {
@@ -698,20 +718,21 @@ impl Transform {
     }
 }
 
-/// A target value `v` (in `scale` units per canvas unit) at grid pixel
-/// `(x, y)`, its magnitude taken no farther than the canvas edge, as the
+/// A target value `v` (in `scale` units per canvas unit) at pixel `(x, y)`
+/// of `grid`, its magnitude taken no farther than the canvas edge, as the
 /// pattern's fields are ([`edge_cap`]): the image shows nothing past the
 /// edge, so both sides see the same world.
 #[inline]
-fn edge_clamp(v: f64, x: usize, y: usize, n: usize, scale: f64) -> f64 {
-    let cap = edge_cap(x, y, n) * scale;
+fn edge_clamp(v: f64, x: usize, y: usize, grid: &Grid, scale: f64) -> f64 {
+    let cap = edge_cap(x, y, grid) * scale;
     v.clamp(-cap, cap)
 }
 
-/// The size of one pixel of a `fw × fh` raster covering the canvas, in
-/// canvas units: distances there are measured in pixels of the mean size.
-fn fine_pixel(fw: usize, fh: usize) -> f64 {
-    1.0 / ((fw * fh) as f64).sqrt()
+/// The size of one pixel of a `fw × fh` raster covering the canvas of
+/// `grid`, in canvas units: distances there are measured in pixels of the
+/// mean size (square pixels when the raster has the canvas's aspect).
+fn fine_pixel(grid: &Grid, fw: usize, fh: usize) -> f64 {
+    (grid.canvas.w * grid.canvas.h).sqrt() / ((fw * fh) as f64).sqrt()
 }
 
 #[cfg(test)]
@@ -805,11 +826,15 @@ mod tests {
             let m: Vec<bool> = idx.iter().map(|&i| i == ch.colour).collect();
             if (fw, fh) == (n, n) {
                 let d = signed_distance(&m, n, n, CAP * n as f64);
-                sdf.extend(
-                    d.iter()
-                        .enumerate()
-                        .map(|(i, v)| edge_clamp(v * (scale / n as f64), i % n, i / n, n, scale)),
-                );
+                sdf.extend(d.iter().enumerate().map(|(i, v)| {
+                    edge_clamp(
+                        v * (scale / n as f64),
+                        i % n,
+                        i / n,
+                        &Grid::square(n),
+                        scale,
+                    )
+                }));
                 // A hard channel's coverage is its mask.
                 mask.extend(m.iter().map(|&b| if b { 1.0 } else { 0.0 }));
             } else {
@@ -820,14 +845,14 @@ mod tests {
                     for x in 0..n {
                         let (u, v) = ((x as f64 + 0.5) * sx - 0.5, (y as f64 + 0.5) * sy - 0.5);
                         let value = bilinear(&d, fw, fh, u, v) * px;
-                        sdf.push(edge_clamp(value * scale, x, y, n, scale));
+                        sdf.push(edge_clamp(value * scale, x, y, &Grid::square(n), scale));
                         mask.push((0.5 - value * n as f64).clamp(0.0, 1.0));
                     }
                 }
             }
         }
         Target {
-            n,
+            grid: Grid::square(n),
             scale,
             sdf,
             cover: mask,
@@ -836,7 +861,7 @@ mod tests {
     }
 
     fn same_bits(a: &Target, b: &Target) -> bool {
-        a.n == b.n
+        a.grid == b.grid
             && a.sdf.len() == b.sdf.len()
             && a.sdf
                 .iter()
@@ -868,7 +893,7 @@ mod tests {
         for (side, n) in [(100, 32), (32, 32), (20, 32), (37, 16)] {
             let (scene, img, _) = disc(side, (0.45, 0.55), 0.3);
             let one_go = Target::from_image(&scene, &img, n, n as f64, 60.0).unwrap();
-            let (fw, fh) = field_side(&img, n);
+            let (fw, fh) = field_side(&img, &Grid::square(n));
             let (idx, _, _) = snap_to_palette_wh(&img, &scene.rec.colours, fw, fh, 60.0);
             assert!(same_bits(
                 &one_go,
@@ -1003,7 +1028,7 @@ mod tests {
         colour: Rgb,
         exact: &dyn Fn(f64, f64) -> f64,
     ) -> (f64, usize) {
-        let n = t.n;
+        let n = t.grid.w;
         let k = scene
             .channels
             .iter()
@@ -1102,10 +1127,10 @@ mod tests {
                 let (worst, count) = worst_error(&scene, &t, [0, 0, 0], exact);
                 assert!(count > 100, "{count} pixels near the outline");
                 // The same image as hard masks: the fields before.
-                let (fw, fh) = field_side(&img, n);
+                let (fw, fh) = field_side(&img, &Grid::square(n));
                 let (idx, _, _) = snap_to_palette_wh(&img, &scene.rec.colours, fw, fh, 60.0);
-                let hard =
-                    TargetBuild::fields(idx, vec![], fw, fh, n, n as f64, 0.0).finish(&scene);
+                let hard = TargetBuild::fields(idx, vec![], fw, fh, Grid::square(n), n as f64, 0.0)
+                    .finish(&scene);
                 let (before, _) = worst_error(&scene, &hard, [0, 0, 0], exact);
                 eprintln!(
                     "{shape} {side}→{n}: largest error {worst:.3} px (hard masks {before:.3})"
@@ -1157,12 +1182,66 @@ mod tests {
             images.push(grey);
         }
         for img in images {
-            for n in [1, 16, 33] {
-                match Target::from_image(&scene, &img, n, n as f64, 200.0) {
-                    Ok(t) => assert!(t.sdf.iter().all(|v| v.is_finite())),
-                    Err(e) => assert!(e.to_string().contains("not close to any colour"), "{e}"),
+            // On the square canvas (stretched) and on the image's own.
+            let canvas = crate::pattern::fit::image_canvas(&img);
+            let rec = scene.rec.clone();
+            let own = Scene::new(crate::pattern::record::Recording { canvas, ..rec });
+            for sc in [&scene, &own] {
+                for n in [1, 16, 33] {
+                    match Target::from_image(sc, &img, n, n as f64, 200.0) {
+                        Ok(t) => {
+                            assert_eq!((t.grid.w, t.grid.h), canvas_grid(sc, n));
+                            assert_eq!(t.sdf.len(), sc.channels.len() * t.grid.len());
+                            assert!(t.sdf.iter().all(|v| v.is_finite()));
+                        }
+                        Err(e) => {
+                            assert!(e.to_string().contains("not close to any colour"), "{e}")
+                        }
+                    }
                 }
             }
         }
+    }
+
+    fn canvas_grid(scene: &Scene, n: usize) -> (usize, usize) {
+        scene.rec.canvas.grid(n)
+    }
+
+    /// A 300 × 240 disc image on its own canvas ([0, 1.25] × [0, 1]) on a
+    /// grid of its size: the target's field is the disc's exact distance
+    /// (a round disc, not an ellipse), to half a pixel, the grid 300 × 240.
+    #[test]
+    fn a_non_square_image_gives_round_fields_on_its_canvas() {
+        use crate::pattern::record::Canvas;
+        let canvas = Canvas::of_pixels(300, 240);
+        let src = "background \"#ffffff\";\ncircle(0.7, 0.45, 0.3, fill: \"#000000\");";
+        let p = Program::parse(src).unwrap();
+        let rec = p
+            .record_on(&p.defaults(), &RecordLimits::default(), canvas)
+            .unwrap();
+        let scene = Scene::new(rec);
+        let img = crate::pattern::render::render(&scene, &[], 300, 1).unwrap();
+        assert_eq!((img.width, img.height), (300, 240));
+        let t = Target::from_image(&scene, &img, 300, 240.0, 60.0).unwrap();
+        assert_eq!((t.grid.w, t.grid.h), (300, 240));
+        let k = scene
+            .channels
+            .iter()
+            .position(|ch| scene.rec.colours[ch.colour as usize] == [0, 0, 0])
+            .unwrap();
+        let f = &t.sdf[k * t.grid.len()..(k + 1) * t.grid.len()];
+        let mut near = 0;
+        for y in 0..240 {
+            for x in 0..300 {
+                let (u, v) = ((x as f64 + 0.5) / 240.0, (y as f64 + 0.5) / 240.0);
+                let truth = ((u - 0.7).hypot(v - 0.45) - 0.3) * 240.0;
+                if truth.abs() < 3.0 {
+                    near += 1;
+                    let e = (f[y * 300 + x] - truth).abs();
+                    assert!(e <= 0.75, "pixel ({x}, {y}): {} vs {truth}", f[y * 300 + x]);
+                }
+            }
+        }
+        assert!(near > 1000, "{near} pixels near the outline");
     }
 }

@@ -1,7 +1,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import { launch, pickGenerator } from './harness.mjs';
+import { launch, pickGenerator, rgbPng } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -126,4 +126,95 @@ test('the generator picker offers the designer examples, written with tile()', a
   await page.click('button[data-act=make-target]');
   await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
   assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
+});
+
+/** Width and height of the blob of pixels `ink(x, y)` holds nearest (cx, cy), 4-connected. */
+function blobExtent(width, height, ink, cx, cy) {
+  let seed = null;
+  let best = Infinity;
+  for (let y = 0; y < height; y++) {
+    for (let x = 0; x < width; x++) {
+      const d = (x - cx) ** 2 + (y - cy) ** 2;
+      if (d < best && ink(x, y)) { best = d; seed = [x, y]; }
+    }
+  }
+  assert.ok(seed, 'some ink');
+  const seen = new Uint8Array(width * height);
+  const stack = [seed];
+  let [x0, x1, y0, y1] = [seed[0], seed[0], seed[1], seed[1]];
+  while (stack.length) {
+    const [x, y] = stack.pop();
+    if (x < 0 || y < 0 || x >= width || y >= height || seen[y * width + x] || !ink(x, y)) continue;
+    seen[y * width + x] = 1;
+    x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
+    stack.push([x - 1, y], [x + 1, y], [x, y - 1], [x, y + 1]);
+  }
+  return [x1 - x0 + 1, y1 - y0 + 1];
+}
+
+test('a non-square upload keeps its aspect: the target, the fitted overlay and the SVG are not stretched', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await pickGenerator(page, 'dots');
+  // A 300 × 240 design of round dots drawn as the dots program would on the
+  // canvas [0, 1.25] × [0, 1] (240 px a unit): pitch 0.18, offsets 0.05,
+  // radius 0.035, rows shifted by half a pitch.
+  const [d, o, r, u] = [0.18, 0.05, 0.035, 240];
+  const dot = (x, y) => {
+    const [px, py] = [(x + 0.5) / u, (y + 0.5) / u];
+    for (let row = -1; row < 8; row++) {
+      for (let col = -2; col < 10; col++) {
+        if (Math.hypot(px - (o + col * d + row * 0.5 * d), py - (o + row * d)) < r) return true;
+      }
+    }
+    return false;
+  };
+  const bytes = await rgbPng(300, 240, (x, y) => (dot(x, y) ? [0xc0, 0x39, 0x2b] : [0xfd, 0xf2, 0xe9]));
+  const [chooser] = await Promise.all([page.waitForEvent('filechooser'), page.click('.fit-target button.pick')]);
+  await chooser.setFiles({ name: 'dots-300x240.png', mimeType: 'image/png', buffer: bytes });
+  await page.waitForFunction(() => /snapped/.test(document.querySelector('[data-testid=fit-status]').textContent)
+    || !document.querySelector('[data-testid=doc-error]').hidden);
+  assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
+  // The target keeps the upload's aspect, 256 px along its longer side, and
+  // is shown with it (the page used to squash it into a 256² square).
+  const t = await page.evaluate(() => ({ width: window.filigreeFit.state().target.width, height: window.filigreeFit.state().target.height }));
+  assert.deepEqual(t, { width: 256, height: 205 });
+  const shown = await page.locator('[data-testid=fit-target]').boundingBox();
+  assert.ok(Math.abs(shown.width / shown.height - 256 / 205) < 0.02, `the target is shown ${shown.width} × ${shown.height}`);
+  const over = await page.locator('[data-testid=fit-overlay]').boundingBox();
+  assert.ok(Math.abs(over.width - shown.width) < 1 && Math.abs(over.height - shown.height) < 1, 'the overlay covers the target exactly');
+
+  await runFit(page);
+  // The fitted pattern over the target: the canvas is the target's, its dots round.
+  await page.waitForFunction(() => document.querySelector('[data-testid=fit-overlay]').height === 205);
+  const overlay = await page.evaluate(() => {
+    const c = document.querySelector('[data-testid=fit-overlay]');
+    return { width: c.width, height: c.height, rgba: Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data) };
+  });
+  assert.deepEqual([overlay.width, overlay.height], [256, 205]);
+  const ink = (x, y) => overlay.rgba[4 * (y * overlay.width + x) + 3] > 0;
+  for (const [cx, cy] of [[128, 102], [50, 50], [200, 160]]) {
+    const [w, h] = blobExtent(overlay.width, overlay.height, ink, cx, cy);
+    assert.ok(w >= 8 && Math.abs(w - h) <= 1, `a fitted dot near (${cx}, ${cy}) is ${w} × ${h} px`);
+  }
+  const { values, params } = await page.evaluate(() => ({ values: window.filigreeFit.state().values, params: window.filigreeFit.info().params }));
+  const truth = { d, ox: o, oy: o, r };
+  for (const [i, p] of params.entries()) {
+    const err = Math.abs(values[i] - truth[p.name]) / (p.hi - p.lo);
+    assert.ok(err < 0.05, `${p.name}: fitted ${values[i]}, drawn ${truth[p.name]}`);
+  }
+
+  // The exported SVG has the target's aspect (twice its size).
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-svg]')]);
+  const svg = fs.readFileSync(await download.path(), 'utf8');
+  assert.match(svg, /^<svg xmlns="http:\/\/www.w3.org\/2000\/svg" width="512" height="410" viewBox="0 0 512 410">/);
+  assert.doesNotMatch(svg, /preserveAspectRatio/);
+
+  // A share link carries the target with its aspect, pixel for pixel.
+  const want = await page.evaluate(() => Array.from(window.filigreeFit.state().target.rgba));
+  const { fragment } = await page.evaluate(() => window.filigree.currentShare());
+  const b = await env.newPage({ path: `#${fragment}` });
+  await b.waitForFunction(() => window.filigreeFit?.state()?.target?.height === 205);
+  const got = await b.evaluate(() => ({ width: window.filigreeFit.state().target.width, rgba: Array.from(window.filigreeFit.state().target.rgba) }));
+  assert.equal(got.width, 256);
+  assert.ok(got.rgba.length === want.length && got.rgba.every((v, i) => v === want[i]), 'the same target pixels');
 });

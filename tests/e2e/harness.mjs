@@ -94,11 +94,9 @@ export async function dropFile(page, selector, file) {
   await page.dispatchEvent(selector, 'drop', { dataTransfer: dt });
 }
 
-/** A real, valid 1-bit greyscale PNG of the given size (tiny on disk, huge when decoded). */
-export async function bigPng(width, height) {
+/** A PNG file of `ihdr` (its 13 bytes) and the raw, filtered scanlines `raw`. */
+async function png(ihdr, raw) {
   const zlib = await import('node:zlib');
-  const rowBytes = 1 + Math.ceil(width / 8);
-  const raw = Buffer.alloc(rowBytes * height);
   const crcTable = Array.from({ length: 256 }, (_, n) => {
     let c = n;
     for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
@@ -115,11 +113,30 @@ export async function bigPng(width, height) {
     const c = Buffer.alloc(4); c.writeUInt32BE(crc(td));
     return Buffer.concat([len, td, c]);
   };
-  const ihdr = Buffer.alloc(13);
-  ihdr.writeUInt32BE(width, 0); ihdr.writeUInt32BE(height, 4);
-  ihdr[8] = 1; ihdr[9] = 0;
   return Buffer.concat([
     Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a]),
     chunk('IHDR', ihdr), chunk('IDAT', zlib.deflateSync(raw)), chunk('IEND', Buffer.alloc(0)),
   ]);
+}
+
+/** A real, valid 1-bit greyscale PNG of the given size (tiny on disk, huge when decoded). */
+export async function bigPng(width, height) {
+  const rowBytes = 1 + Math.ceil(width / 8);
+  const raw = Buffer.alloc(rowBytes * height);
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0); ihdr.writeUInt32BE(height, 4);
+  ihdr[8] = 1; ihdr[9] = 0;
+  return png(ihdr, raw);
+}
+
+/** An RGB PNG of `width × height` whose pixel (x, y) is `colour(x, y)` ([r, g, b]). */
+export async function rgbPng(width, height, colour) {
+  const raw = Buffer.alloc((1 + 3 * width) * height);
+  for (let y = 0; y < height; y++) {
+    for (let x = 0; x < width; x++) raw.set(colour(x, y), y * (1 + 3 * width) + 1 + 3 * x);
+  }
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(width, 0); ihdr.writeUInt32BE(height, 4);
+  ihdr[8] = 8; ihdr[9] = 2;
+  return png(ihdr, raw);
 }

@@ -399,9 +399,24 @@ fn fit_rules() {
         ),
         (
             "target",
-            json!({"width": 128, "height": 256, "rgba": b64(&[0; 4])}),
+            json!({"width": 128, "height": 128, "rgba": b64(&[0; 4])}),
             "target",
-            "target must be 256×256 pixels".into(),
+            "target must be 256 pixels along its longer side (and at least 1 along the other)"
+                .into(),
+        ),
+        (
+            "target",
+            json!({"width": 256.5, "height": 256, "rgba": b64(&[0; 4])}),
+            "target",
+            "target must be 256 pixels along its longer side (and at least 1 along the other)"
+                .into(),
+        ),
+        (
+            // An upload's aspect (256 × 205) is a target; its pixels must fit.
+            "target",
+            json!({"width": 256, "height": 205, "rgba": b64(&[0; 4])}),
+            "target.rgba",
+            "target.rgba must hold 209920 bytes".into(),
         ),
         (
             "target",

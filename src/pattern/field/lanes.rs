@@ -26,7 +26,7 @@ impl Evaluator {
     ) {
         const L: usize = T2 * T2;
         debug_assert!(x1 - x0 <= T2 && y1 - y0 <= T2);
-        let n = self.n;
+        let (gw, nn) = (self.grid.w, self.grid.len());
         {
             let mut b = [init * CAP; L];
             let mut wi = [NONE; L];
@@ -117,14 +117,14 @@ impl Evaluator {
             }
             let (bw, bh) = (x1 - x0, y1 - y0);
             for j in 0..bh {
-                let row = c * n * n + (y0 + j) * n + x0;
-                let ey = self.edge[y0 + j];
+                let row = c * nn + (y0 + j) * gw + x0;
+                let ey = self.edge_y[y0 + j];
                 for i in 0..bw {
                     let k = j * T2 + i;
                     let idx = row + i;
                     let mut v = b[k];
                     let mut w = wi[k];
-                    let cap = CAP.min(self.edge[x0 + i].min(ey));
+                    let cap = CAP.min(self.edge_x[x0 + i].min(ey));
                     if v.abs() >= cap {
                         v = v.clamp(-cap, cap);
                         w = NONE;
@@ -165,8 +165,8 @@ impl Evaluator {
         let mut cx = [0.0; T2];
         let mut cy = [0.0; T2];
         for i in 0..T2 {
-            cx[i] = self.centres[(x0 + i).min(x1 - 1)];
-            cy[i] = self.centres[(y0 + i).min(y1 - 1)];
+            cx[i] = self.centres_x[(x0 + i).min(x1 - 1)];
+            cy[i] = self.centres_y[(y0 + i).min(y1 - 1)];
         }
         let mut px = [0.0; T2 * T2];
         let mut py = [0.0; T2 * T2];

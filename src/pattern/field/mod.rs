@@ -41,13 +41,91 @@ mod scene;
 mod tiles;
 
 pub use scene::{prim_kinds, Channel, Scene};
+
+use crate::pattern::record::Canvas;
 pub use tiles::Evaluator;
 
 /// "Farther than anything on the canvas", in canvas units.
 pub(crate) const CAP: f64 = 2.0;
 
-/// The largest field magnitude at pixel `(x, y)` of an `n × n` grid, in
-/// canvas units: the distance from the pixel's centre to the canvas edge.
+/// A loss or raster grid laid over a canvas: `w × h` pixels covering
+/// `[0, canvas.w] × [0, canvas.h]`. Pixels are square when `w : h` is the
+/// canvas's aspect, and nearly so otherwise (the shorter side is rounded);
+/// on the square canvas an `n × n` grid is exactly the grid as it always was.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid {
+    pub w: usize,
+    pub h: usize,
+    pub canvas: Canvas,
+}
+
+impl Grid {
+    /// `n × n` on the square canvas.
+    pub fn square(n: usize) -> Grid {
+        Grid {
+            w: n,
+            h: n,
+            canvas: Canvas::SQUARE,
+        }
+    }
+
+    /// The grid on `canvas` whose longer side has `n` pixels ([`Canvas::grid`]).
+    pub fn on(canvas: Canvas, n: usize) -> Grid {
+        let (w, h) = canvas.grid(n);
+        Grid { w, h, canvas }
+    }
+
+    /// Pixels in the grid.
+    pub fn len(&self) -> usize {
+        self.w * self.h
+    }
+
+    /// Whether it has no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Pixels per canvas unit along x and y (`n` both on an `n × n` square).
+    #[inline]
+    pub fn ppu(&self) -> (f64, f64) {
+        (self.w as f64 / self.canvas.w, self.h as f64 / self.canvas.h)
+    }
+
+    /// Pixels per canvas unit along the longer side: the unit of the
+    /// "pixels" loss units (`n` on an `n × n` square).
+    pub fn long_ppu(&self) -> f64 {
+        if self.canvas.w >= self.canvas.h {
+            self.w as f64 / self.canvas.w
+        } else {
+            self.h as f64 / self.canvas.h
+        }
+    }
+
+    /// Centres of the pixel columns and rows in canvas units, `(i + ½)·cell`.
+    pub fn centres(&self) -> (Vec<f64>, Vec<f64>) {
+        let (px, py) = self.ppu();
+        let (ix, iy) = (1.0 / px, 1.0 / py);
+        (
+            (0..self.w).map(|i| (i as f64 + 0.5) * ix).collect(),
+            (0..self.h).map(|i| (i as f64 + 0.5) * iy).collect(),
+        )
+    }
+
+    /// [`edge_cap`] of the columns and of the rows: `edge_cap(x, y) =
+    /// min(cols[x], rows[y])`.
+    pub(crate) fn edges(&self) -> (Vec<f64>, Vec<f64>) {
+        let (px, py) = self.ppu();
+        let axis = |n: usize, p: f64| -> Vec<f64> {
+            (0..n)
+                .map(|i| (i.min(n - 1 - i) as f64 + 0.5) / p)
+                .collect()
+        };
+        (axis(self.w, px), axis(self.h, py))
+    }
+}
+
+/// The largest field magnitude at pixel `(x, y)` of `grid`, in canvas
+/// units: the distance from the pixel's centre to the canvas edge.
 ///
 /// A target image shows only the canvas, so its distance transform cannot
 /// see a shape (or a shape's outside) beyond the edge, while a pattern's
@@ -63,9 +141,11 @@ pub(crate) const CAP: f64 = 2.0;
 /// just outside the canvas is both inside and outside every colour.) The
 /// sign, and so every colour, is unchanged.
 #[inline]
-pub(crate) fn edge_cap(x: usize, y: usize, n: usize) -> f64 {
-    let px = x.min(n - 1 - x).min(y).min(n - 1 - y);
-    (px as f64 + 0.5) / n as f64
+pub(crate) fn edge_cap(x: usize, y: usize, grid: &Grid) -> f64 {
+    let (px, py) = grid.ppu();
+    let ex = (x.min(grid.w - 1 - x) as f64 + 0.5) / px;
+    let ey = (y.min(grid.h - 1 - y) as f64 + 0.5) / py;
+    ex.min(ey)
 }
 pub(crate) const NONE: u32 = u32::MAX;
 /// Big and small tile sides in pixels (two-level culling).
@@ -131,7 +211,7 @@ mod tests {
             .iter()
             .position(|ch| sc.rec.colours[ch.colour as usize] == colour)
             .expect("channel");
-        let n = e.n;
+        let n = e.grid.w;
         let (i, j) = ((x * n as f64) as usize, (y * n as f64) as usize);
         e.s[c * n * n + j * n + i]
     }
@@ -240,7 +320,7 @@ mod tests {
                             CombineOp::Diff => b.max(-v),
                         };
                     }
-                    let cap = CAP.min(edge_cap(x, y, n));
+                    let cap = CAP.min(edge_cap(x, y, &Grid::square(n)));
                     let want = b.clamp(-cap, cap);
                     let got = e.s[c * n * n + y * n + x];
                     // The winner record explains the value exactly.

@@ -1,18 +1,18 @@
-//! The evaluator: every colour's field on an `n × n` grid with two-level
+//! The evaluator: every colour's field on a `w × h` grid with two-level
 //! tile culling (see [`cull`]), per-pixel evaluation of what survives, and
 //! the backward pass from field adjoints to tape nodes.
 use super::scene::{GeomCache, Scene};
-use super::{edge_cap, CombineOp, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+use super::{CombineOp, Grid, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
 use crate::pattern::sdf::{self, Fields, PrimKind};
 
-/// Scratch and results of evaluating all colour fields on an `n × n` grid.
+/// Scratch and results of evaluating all colour fields on a grid.
 #[derive(Debug, Clone)]
 pub struct Evaluator {
-    /// Grid side in pixels.
-    pub n: usize,
+    /// The grid (`w × h` pixels over the canvas).
+    pub grid: Grid,
     /// Multiplier from canvas units to the stored field units.
     pub scale: f64,
-    /// Field values, channel-major: `s[c * n² + y * n + x]`, in `scale` units,
+    /// Field values, channel-major: `s[c * w·h + y * w + x]`, in `scale` units,
     /// clamped to `±CAP·scale` and to the distance to the canvas edge
     /// ([`super::edge_cap`]).
     pub s: Vec<f64>,
@@ -32,13 +32,17 @@ pub struct Evaluator {
     pub(super) ranges2: Vec<(usize, usize)>,
     pub(super) gcache: GeomCache,
     pub(super) lane_channels: Vec<bool>,
-    /// `edge[i]`: [`super::edge_cap`] of a pixel whose nearer border is in
-    /// column (or row) `i`, so `edge_cap(x, y) = min(edge[x], edge[y])`
-    /// (the same bits: the map is monotone and exact per integer).
-    pub(super) edge: Vec<f64>,
-    /// `centres[i]`: the centre of pixel column (row) `i` in canvas units,
-    /// `(i + ½) / n` computed as everywhere else (the same bits).
-    pub(super) centres: Vec<f64>,
+    /// `edge_x[x]`, `edge_y[y]`: [`super::edge_cap`] by column and by row,
+    /// so `edge_cap(x, y) = min(edge_x[x], edge_y[y])` (the same bits: the
+    /// map is monotone and exact per integer) ([`Grid::edges`]).
+    pub(super) edge_x: Vec<f64>,
+    pub(super) edge_y: Vec<f64>,
+    /// `centres_x[i]`, `centres_y[i]`: the centre of pixel column (row) `i`
+    /// in canvas units ([`Grid::centres`], the same bits everywhere).
+    pub(super) centres_x: Vec<f64>,
+    pub(super) centres_y: Vec<f64>,
+    /// The grid `edge_*` and `centres_*` were made for.
+    made_for: Option<Grid>,
     /// Culling stamp of the current big tile (counts on across `eval_tiles` calls).
     tile_id: u32,
     /// Unweighted item evaluations of the evaluation in progress.
@@ -46,10 +50,16 @@ pub struct Evaluator {
 }
 
 impl Evaluator {
-    /// An evaluator for `n × n` grids whose values are canvas distances × `scale`.
+    /// An evaluator for `n × n` grids on the square canvas whose values
+    /// are canvas distances × `scale`.
     pub fn new(n: usize, scale: f64) -> Self {
+        Self::on(Grid::square(n), scale)
+    }
+
+    /// An evaluator for `grid` whose values are canvas distances × `scale`.
+    pub fn on(grid: Grid, scale: f64) -> Self {
         Evaluator {
-            n,
+            grid,
             scale,
             s: vec![],
             win: vec![],
@@ -66,8 +76,11 @@ impl Evaluator {
             ranges2: vec![],
             gcache: GeomCache::default(),
             lane_channels: vec![],
-            edge: vec![],
-            centres: vec![],
+            edge_x: vec![],
+            edge_y: vec![],
+            centres_x: vec![],
+            centres_y: vec![],
+            made_for: None,
             tile_id: 0,
             raw_work: 0,
         }
@@ -100,10 +113,9 @@ impl Evaluator {
     }
 
     /// Big tiles (`T1 × T1` pixels) of the grid, the unit of
-    /// [`Evaluator::eval_tiles`]: row-major, `n.div_ceil(T1)` per row.
+    /// [`Evaluator::eval_tiles`]: row-major, `w.div_ceil(T1)` per row.
     pub fn tiles(&self) -> usize {
-        let k = self.n.div_ceil(T1);
-        k * k
+        self.grid.w.div_ceil(T1) * self.grid.h.div_ceil(T1)
     }
 
     /// Start an evaluation in parts: [`Evaluator::begin`], then
@@ -114,22 +126,23 @@ impl Evaluator {
     pub fn begin(&mut self, scene: &Scene, nodes: &[f64], winners: bool) {
         self.gather(scene, nodes);
         self.gcache.start(scene.rec.shapes.len());
-        let n = self.n;
-        if self.edge.len() != n {
-            self.edge = (0..n).map(|i| edge_cap(i, n / 2, n)).collect();
-            let inv = 1.0 / n as f64;
-            self.centres = (0..n).map(|i| (i as f64 + 0.5) * inv).collect();
+        let g = self.grid;
+        if self.made_for != Some(g) {
+            (self.edge_x, self.edge_y) = g.edges();
+            (self.centres_x, self.centres_y) = g.centres();
+            self.made_for = Some(g);
         }
+        let nn = g.len();
         let nc = scene.channels.len();
-        if self.s.capacity() < nc * n * n {
+        if self.s.capacity() < nc * nn {
             // Every value is written by the evaluation: a fresh zeroed
             // allocation (pages the system zeroes when first touched) spares
             // this call from writing up to hundreds of megabytes at once.
-            self.s = vec![0.0; nc * n * n];
+            self.s = vec![0.0; nc * nn];
         }
-        self.s.resize(nc * n * n, 0.0);
+        self.s.resize(nc * nn, 0.0);
         if winners {
-            self.win.resize(nc * n * n, NO_WIN);
+            self.win.resize(nc * nn, NO_WIN);
         }
         self.centre_vals.resize(scene.items.len(), 0.0);
         self.stamp.resize(scene.items.len(), u32::MAX);
@@ -151,9 +164,13 @@ impl Evaluator {
     /// Evaluate the big tiles `tiles` (see [`Evaluator::tiles`]); the
     /// ranges of one evaluation must follow each other in order.
     pub fn eval_tiles(&mut self, scene: &Scene, winners: bool, tiles: std::ops::Range<usize>) {
-        let n = self.n;
-        let inv = 1.0 / n as f64;
-        // Half diagonals (canvas units) of the two tile levels, a hair larger for rounding.
+        let (gw, gh) = (self.grid.w, self.grid.h);
+        let nn = self.grid.len();
+        let (ppx, ppy) = self.grid.ppu();
+        let (ix, iy) = (1.0 / ppx, 1.0 / ppy);
+        // Half diagonals (canvas units) of the two tile levels, a hair larger
+        // for rounding (pixels taken as squares of the larger side).
+        let inv = ix.max(iy);
         let h1 = (T1 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
         let h2 = (T2 as f64 * inv) * std::f64::consts::FRAC_1_SQRT_2 * 1.000001;
         let mut work = 0u64;
@@ -161,12 +178,12 @@ impl Evaluator {
         let mut chain2 = std::mem::take(&mut self.chain2);
         let mut used = std::mem::take(&mut self.used);
         let mut tile_id = self.tile_id;
-        let per_row = n.div_ceil(T1);
+        let per_row = gw.div_ceil(T1);
         {
-            for t in tiles.start..tiles.end.min(per_row * per_row) {
+            for t in tiles.start..tiles.end.min(per_row * gh.div_ceil(T1)) {
                 let (tx, ty) = (t % per_row, t / per_row);
                 let (x0, y0) = (tx * T1, ty * T1);
-                let pc = [(x0 + T1 / 2) as f64 * inv, (y0 + T1 / 2) as f64 * inv];
+                let pc = [(x0 + T1 / 2) as f64 * ix, (y0 + T1 / 2) as f64 * iy];
                 self.gcache.next();
                 for (i, it) in scene.items.iter().enumerate() {
                     self.centre_vals[i] = scene
@@ -198,9 +215,9 @@ impl Evaluator {
                     }
                 }
                 // Level 2: small tiles, only the items level 1 kept.
-                for sy in (y0..(y0 + T1).min(n)).step_by(T2) {
-                    for sx in (x0..(x0 + T1).min(n)).step_by(T2) {
-                        let pc = [(sx + T2 / 2) as f64 * inv, (sy + T2 / 2) as f64 * inv];
+                for sy in (y0..(y0 + T1).min(gh)).step_by(T2) {
+                    for sx in (x0..(x0 + T1).min(gw)).step_by(T2) {
+                        let pc = [(sx + T2 / 2) as f64 * ix, (sy + T2 / 2) as f64 * iy];
                         self.gcache.next();
                         for &it in &used {
                             let it_ = &scene.items[it as usize];
@@ -224,7 +241,7 @@ impl Evaluator {
                             );
                             self.ranges2.push((start, chain2.len()));
                         }
-                        let (xe, ye) = ((sx + T2).min(n), (sy + T2).min(n));
+                        let (xe, ye) = ((sx + T2).min(gw), (sy + T2).min(gh));
                         // Chains of single circles, points and segments: a 4-lane kernel.
                         self.lane_channels.clear();
                         let (lx, ly) = self.lane_centres((sx, xe), (sy, ye));
@@ -261,7 +278,7 @@ impl Evaluator {
                         let scalar = !self.lane_channels.iter().all(|&l| l);
                         for y in (sy..ye).filter(|_| scalar) {
                             for x in sx..xe {
-                                let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                                let p = [self.centres_x[x], self.centres_y[y]];
                                 self.gcache.next();
                                 for (c, ch) in scene.channels.iter().enumerate() {
                                     if self.lane_channels[c] {
@@ -270,8 +287,8 @@ impl Evaluator {
                                     let (a, b) = self.ranges2[c];
                                     let ops = &chain2[a..b];
                                     work += ops.len() as u64;
-                                    let idx = c * n * n + y * n + x;
-                                    let cap = self.edge[x].min(self.edge[y]);
+                                    let idx = c * nn + y * gw + x;
+                                    let cap = self.edge_x[x].min(self.edge_y[y]);
                                     self.pixel(scene, ch.init, ops, p, cap, idx, winners);
                                 }
                             }
@@ -373,20 +390,19 @@ impl Evaluator {
     /// [`Evaluator::s`]) to the tape nodes: adds into `node_adj`.
     /// Needs the winners of the last [`Evaluator::eval`].
     pub fn backward(&self, scene: &Scene, ds: &[f64], node_adj: &mut [f64]) {
-        let n = self.n;
-        let inv = 1.0 / n as f64;
+        let (gw, gh, nn) = (self.grid.w, self.grid.h, self.grid.len());
         let mut prim_adj = vec![[0.0f64; 6]; scene.rec.prims.len()];
         let mut g = [0.0; 6];
         for c in 0..scene.channels.len() {
-            for y in 0..n {
-                for x in 0..n {
-                    let idx = c * n * n + y * n + x;
+            for y in 0..gh {
+                for x in 0..gw {
+                    let idx = c * nn + y * gw + x;
                     let a = ds[idx] * self.scale;
                     let w = self.win[idx];
                     if a == 0.0 || w.prim == NONE {
                         continue;
                     }
-                    let p = [(x as f64 + 0.5) * inv, (y as f64 + 0.5) * inv];
+                    let p = [self.centres_x[x], self.centres_y[y]];
                     let kind = scene.rec.prims[w.prim as usize].kind;
                     let f = &self.prim_vals[w.prim as usize];
                     let k = a * w.psign as f64;
@@ -423,16 +439,16 @@ impl Evaluator {
     /// The palette index at every pixel, by the fields: the colour whose
     /// field is most negative, or the background where none is.
     pub fn colour_indices(&self, scene: &Scene) -> Vec<u16> {
-        (0..self.n * self.n)
+        (0..self.grid.len())
             .map(|i| self.colour_index(scene, i))
             .collect()
     }
 
-    /// The palette index at pixel `i` (`y * n + x`), as in
+    /// The palette index at pixel `i` (`y * w + x`), as in
     /// [`Evaluator::colour_indices`].
     #[inline]
     pub fn colour_index(&self, scene: &Scene, i: usize) -> u16 {
-        let nn = self.n * self.n;
+        let nn = self.grid.len();
         let mut best = (0.0, 0u16);
         for (c, ch) in scene.channels.iter().enumerate() {
             let v = self.s[c * nn + i];

@@ -90,6 +90,8 @@ pub(super) struct Rec<'a> {
     pub(super) colours: Vec<Rgb>,
     /// Range of each float parameter (tape `Param(k)`), for `tile` bounds.
     pub(super) ranges: Vec<(f64, f64)>,
+    /// The canvas (`WIDTH`, `HEIGHT`, the copies of `tile`).
+    pub(super) canvas: super::Canvas,
 }
 
 impl<'a> Rec<'a> {
@@ -112,6 +114,7 @@ impl<'a> Rec<'a> {
             shapes: vec![],
             colours: vec![[255, 255, 255]],
             ranges: vec![],
+            canvas: super::Canvas::SQUARE,
         }
     }
 
@@ -419,6 +422,8 @@ impl<'a> Rec<'a> {
                 None => match n.as_str() {
                     "PI" => Val::Num(V::C(std::f64::consts::PI)),
                     "TAU" => Val::Num(V::C(std::f64::consts::TAU)),
+                    "WIDTH" => Val::Num(V::C(self.canvas.w)),
+                    "HEIGHT" => Val::Num(V::C(self.canvas.h)),
                     _ => return Err(pos.err(format!("'{n}' is not defined"))),
                 },
             },

@@ -62,6 +62,47 @@ impl Default for RecordLimits {
 /// An RGB colour.
 pub type Rgb = [u8; 3];
 
+/// The canvas a program draws on: `[0, w] × [0, h]` in program units, y
+/// down, its shorter side 1 (a square canvas is `[0, 1]²`). A fit takes its
+/// target image's aspect; programs read the size as `WIDTH` and `HEIGHT`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Canvas {
+    pub w: f64,
+    pub h: f64,
+}
+
+impl Canvas {
+    /// `[0, 1]²`.
+    pub const SQUARE: Canvas = Canvas { w: 1.0, h: 1.0 };
+
+    /// The canvas of a `width × height` picture: the picture's aspect with
+    /// its shorter side 1 (a square picture gives exactly [`Canvas::SQUARE`]).
+    pub fn of_pixels(width: usize, height: usize) -> Canvas {
+        let (w, h) = (width.max(1), height.max(1));
+        let m = w.min(h) as f64;
+        Canvas {
+            w: w as f64 / m,
+            h: h as f64 / m,
+        }
+    }
+
+    /// Pixels `(columns, rows)` of a grid on this canvas whose longer side
+    /// has `n` (the shorter one rounded, at least 1): `(n, n)` on a square.
+    pub fn grid(&self, n: usize) -> (usize, usize) {
+        let short = |a: f64, b: f64| ((n as f64 * a / b).round() as usize).clamp(1, n.max(1));
+        if self.w >= self.h {
+            (n, short(self.h, self.w))
+        } else {
+            (short(self.w, self.h), n)
+        }
+    }
+
+    /// Whether this is the square canvas.
+    pub fn is_square(&self) -> bool {
+        self.w == self.h
+    }
+}
+
 /// One recorded primitive: its kind and the tape nodes of its fields.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Prim {
@@ -105,7 +146,7 @@ pub struct Shape {
 }
 
 /// The result of running a program: shapes in drawing order, their
-/// primitives and the tape. Canvas coordinates are `[0, 1]²`, y down.
+/// primitives and the tape, on its [`Canvas`] (y down).
 #[derive(Debug, Clone)]
 pub struct Recording {
     /// The tape computing every field from the float parameters.
@@ -120,6 +161,8 @@ pub struct Recording {
     pub shapes: Vec<Shape>,
     /// Palette; index 0 is the background.
     pub colours: Vec<Rgb>,
+    /// The canvas it was recorded on.
+    pub canvas: Canvas,
 }
 
 impl Recording {
@@ -169,8 +212,20 @@ impl Program {
         self.ast.params.iter().map(|p| p.default).collect()
     }
     /// Run the program with `values` (one per declared parameter, declaration
-    /// order; integer ones are rounded) and record shapes and tape.
+    /// order; integer ones are rounded) and record shapes and tape on the
+    /// square canvas.
     pub fn record(&self, values: &[f64], limits: &RecordLimits) -> Result<Recording> {
+        self.record_on(values, limits, Canvas::SQUARE)
+    }
+
+    /// [`Program::record`] on `canvas` (`WIDTH`, `HEIGHT` and the copies
+    /// of `tile` follow it).
+    pub fn record_on(
+        &self,
+        values: &[f64],
+        limits: &RecordLimits,
+        canvas: Canvas,
+    ) -> Result<Recording> {
         if values.len() != self.ast.params.len() {
             return Err(Error::input(format!(
                 "the program declares {} parameters but {} values were given",
@@ -178,7 +233,11 @@ impl Program {
                 values.len()
             )));
         }
+        if !(canvas.w.is_finite() && canvas.h.is_finite() && canvas.w > 0.0 && canvas.h > 0.0) {
+            return Err(Error::input("the canvas must have a positive, finite size"));
+        }
         let mut r = Rec::new(&self.ast, *limits);
+        r.canvas = canvas;
         let mut float_params = vec![];
         let mut vals = vec![];
         for (i, (d, &v)) in self.ast.params.iter().zip(values).enumerate() {
@@ -215,6 +274,7 @@ impl Program {
             prims: r.prims,
             shapes: r.shapes,
             colours: r.colours,
+            canvas,
         })
     }
 }

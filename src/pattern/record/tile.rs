@@ -8,7 +8,7 @@
 //! lies on top of an earlier one (painter's order, e.g. fish scales).
 //!
 //! **Which copies.** The recorder emits every copy that can touch the
-//! canvas `[0, 1]²` for *some* values of the float parameters within their
+//! canvas `[0, WIDTH] × [0, HEIGHT]` (`[0, 1]²` when square) for *some* values of the float parameters within their
 //! declared ranges, and only those; the set depends on the ranges (and the
 //! integer parameters), never on the float values, so one tape serves a
 //! whole fit. It is found from interval bounds over the ranges
@@ -208,21 +208,23 @@ impl Rec<'_> {
                 c.pos.line, c.pos.column, pxb.0, pyb.0
             ))
         };
-        // Candidate index range for offsets k·[lo, hi] + s with the box [e0, e1]:
-        // k·p + s + e1 ≥ 0 and k·p + s + e0 ≤ 1 for some p in [lo, hi].
-        let candidates = |(lo, hi): Iv, s: Iv, e: Iv| -> (f64, f64) {
+        // Candidate index range for offsets k·[lo, hi] + s with the box [e0, e1]
+        // on an axis of the canvas `[0, side]`: k·p + s + e1 ≥ 0 and
+        // k·p + s + e0 ≤ side for some p in [lo, hi].
+        let (cw, ch) = (self.canvas.w, self.canvas.h);
+        let candidates = |(lo, hi): Iv, s: Iv, e: Iv, side: f64| -> (f64, f64) {
             let a = -e.1 - s.1;
-            let b = 1.0 - e.0 - s.0;
+            let b = side - e.0 - s.0;
             (
                 (a / lo).min(a / hi).floor() - 1.0,
                 (b / lo).max(b / hi).ceil() + 1.0,
             )
         };
-        let touches = |k: f64, p: Iv, s: Iv, e: Iv| {
+        let touches = |k: f64, p: Iv, s: Iv, e: Iv, side: f64| {
             let o = scale_iv(k, p);
-            o.1 + s.1 + e.1 >= 0.0 && o.0 + s.0 + e.0 <= 1.0
+            o.1 + s.1 + e.1 >= 0.0 && o.0 + s.0 + e.0 <= side
         };
-        let (j0, j1) = candidates(pyb, (0.0, 0.0), ye);
+        let (j0, j1) = candidates(pyb, (0.0, 0.0), ye, ch);
         // Non-finite ends (pitches near 0 or huge extents) are refused too,
         // so the loops below always end.
         if !(j0.is_finite() && j1.is_finite() && j1 - j0 <= limit as f64) {
@@ -231,9 +233,9 @@ impl Rec<'_> {
         let mut copies: Vec<(f64, f64)> = vec![];
         let mut j = j0;
         while j <= j1 {
-            if touches(j, pyb, (0.0, 0.0), ye) {
+            if touches(j, pyb, (0.0, 0.0), ye, ch) {
                 let s = scale_iv(j, shb);
-                let (i0, i1) = candidates(pxb, s, xe);
+                let (i0, i1) = candidates(pxb, s, xe, cw);
                 if !(i0.is_finite() && i1.is_finite())
                     || i1 - i0 + copies.len() as f64 > 2.0 * limit as f64
                 {
@@ -241,7 +243,7 @@ impl Rec<'_> {
                 }
                 let mut i = i0;
                 while i <= i1 {
-                    if touches(i, pxb, s, xe) {
+                    if touches(i, pxb, s, xe, cw) {
                         copies.push((j, i));
                     }
                     i += 1.0;
@@ -312,6 +314,36 @@ mod tests {
         // And it is no larger than needed: at most one extra copy per row
         // and column beyond what the smallest pitches need (10 + 2 by 8.3 + 2).
         assert!(counts[0].0 <= 13 * 11, "{counts:?}");
+    }
+
+    /// On a canvas that is not square the copies cover all of it, and only
+    /// the copies that touch it are emitted: `[0, 1.5] × [0, 1]` holds
+    /// columns 0..=6 and rows 0..=4 of a 0.25 lattice; `[0, 1] × [0, 1.25]`
+    /// columns 0..=4 and rows 0..=5. `WIDTH` and `HEIGHT` read the canvas.
+    #[test]
+    fn a_tile_covers_a_canvas_that_is_not_square() {
+        use super::super::Canvas;
+        let p = Program::parse("tile(0.25, 0.25) { circle(0, 0, 0.05); }").unwrap();
+        for ((w, h), copies) in [((300, 200), 7 * 5), ((200, 250), 5 * 6), ((64, 64), 25)] {
+            let canvas = Canvas::of_pixels(w, h);
+            let r = p.record_on(&[], &RecordLimits::default(), canvas).unwrap();
+            assert_eq!(r.shapes.len(), copies, "{w} × {h}");
+            assert_eq!(r.canvas, canvas);
+        }
+        let centre = |src: &str, canvas: Canvas| -> (f64, f64) {
+            let p = Program::parse(src).unwrap();
+            let r = p.record_on(&[], &RecordLimits::default(), canvas).unwrap();
+            let mut v = vec![];
+            r.tape.forward(&[], &mut v);
+            let f = r.prims[0].fields;
+            (v[f[0] as usize], v[f[1] as usize])
+        };
+        let src = "circle(WIDTH / 2, HEIGHT / 2, 0.1);";
+        assert_eq!(centre(src, Canvas::of_pixels(300, 240)), (0.625, 0.5));
+        assert_eq!(centre(src, Canvas::SQUARE), (0.5, 0.5));
+        // A name the program defines itself wins over the canvas's.
+        let src = "let WIDTH = 3; circle(WIDTH, 0, 0.1);";
+        assert_eq!(centre(src, Canvas::SQUARE), (3.0, 0.0));
     }
 
     /// At the ends of every range (smallest and largest pitch, offset and
