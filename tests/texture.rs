@@ -51,6 +51,15 @@ fn small_index() -> &'static Vec<u8> {
     })
 }
 
+/// The `texture-index` request's answer for `bytes` (the worker now holds it).
+fn load_index(bytes: &[u8]) -> serde_json::Value {
+    filigree::api::run_json(
+        "texture-index",
+        &serde_json::json!({ "bytes": bytes }).to_string(),
+    )
+    .unwrap()
+}
+
 fn png_of(model: &str, size: usize) -> Vec<u8> {
     let m = models::lookup(model).unwrap();
     let g = models::render(m, &m.defaults(), 5, size).unwrap();
@@ -138,11 +147,7 @@ fn the_cli_names_bad_indexes_images_and_scales() {
 #[test]
 fn requests_load_the_index_by_id_and_answer_like_the_library() {
     let bytes = small_index();
-    let loaded = filigree::api::run_json(
-        "texture-index",
-        &serde_json::json!({ "bytes": bytes }).to_string(),
-    )
-    .unwrap();
+    let loaded = load_index(bytes);
     let id = loaded["id"].as_str().unwrap().to_string();
     assert_eq!(id, api::index_id(bytes));
     assert_eq!(loaded["models"].as_array().unwrap().len(), MODELS.len());
@@ -200,12 +205,7 @@ fn write_fuzz_seeds() {
 /// network's window (16 pixels for this index's 32).
 #[test]
 fn a_tiny_example_is_refused_with_its_size_and_the_minimum() {
-    let bytes = small_index();
-    let loaded = filigree::api::run_json(
-        "texture-index",
-        &serde_json::json!({ "bytes": bytes }).to_string(),
-    )
-    .unwrap();
+    let loaded = load_index(small_index());
     let id = loaded["id"].as_str().unwrap().to_string();
     let analyse = |side: usize| {
         filigree::api::run_json(
