@@ -80,7 +80,8 @@ pub struct QueryArgs {
     /// The index file (`filigree build-index`).
     #[arg(long)]
     index: Option<PathBuf>,
-    /// An example texture (PNG, JPEG, ...).
+    /// An example texture (PNG, JPEG, ...), at least half the network's window on its short side
+    /// (64 px with the shipped index; a smaller picture is refused, not enlarged into a blur).
     #[arg(long)]
     image: Option<PathBuf>,
     /// Change a predicted scale, `name=value` with value 1–9 (repeatable),
