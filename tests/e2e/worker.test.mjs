@@ -35,7 +35,10 @@ test('a worker that crashes mid-job is reported and replaced; the next job succe
   const outcome = await page.evaluate(async () => {
     const progress = [];
     try {
-      await window.filigree.pool.run('debug-abort', { steps: 40 }, { onProgress: (p) => progress.push(p.fraction) });
+      // The worker reports progress once a slice has run 15 ms: 40 steps
+      // once crashed before the first report (a fresh-clone CI run on a
+      // quiet machine); 400 steps are ten times the work.
+      await window.filigree.pool.run('debug-abort', { steps: 400 }, { onProgress: (p) => progress.push(p.fraction) });
       return { ok: true };
     } catch (e) {
       return { ok: false, kind: e.kind, message: e.message, progress };
