@@ -26,6 +26,7 @@ pub mod distance_transform;
 pub mod fft;
 pub mod mvc;
 pub mod noise;
+pub mod offset;
 pub mod polygon;
 pub mod primitives;
 pub mod sdf3;

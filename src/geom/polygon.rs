@@ -1,6 +1,7 @@
 //! Polygons with holes as highly tessellated closed curves (glam `DVec2`),
-//! with booleans, slicing by polylines and insets from `i_overlay` (the
-//! engine under `geo`): nothing here clips by hand.
+//! with booleans, slicing by polylines and offsets from `i_overlay` (the
+//! engine under `geo`) and insets from `cavalier_contours` ([`super::offset`]):
+//! nothing here clips by hand.
 //!
 //! A [`Polygon`] is one outer ring (counter-clockwise, y up; clockwise on a
 //! y-down screen) and any number of holes (the other way round), rings
@@ -44,6 +45,22 @@ pub fn ring_area2(ring: &[DVec2]) -> f64 {
         s += a.x * b.y - b.x * a.y;
     }
     s
+}
+
+/// Whether `p` is inside the closed ring (even-odd crossings; a point on
+/// an edge may go either way).
+pub fn ring_contains(r: &[DVec2], p: DVec2) -> bool {
+    let mut inside = false;
+    let n = r.len();
+    let mut j = n.wrapping_sub(1);
+    for i in 0..n {
+        let (a, b) = (r[i], r[j]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x {
+            inside = !inside;
+        }
+        j = i;
+    }
+    inside
 }
 
 /// Length of a closed ring.
@@ -186,20 +203,7 @@ impl Polygon {
 
     /// Whether `p` is inside (even-odd over all rings; boundary undefined).
     pub fn contains(&self, p: DVec2) -> bool {
-        let mut inside = false;
-        for r in &self.rings {
-            let n = r.len();
-            let mut j = n.wrapping_sub(1);
-            for i in 0..n {
-                let (a, b) = (r[i], r[j]);
-                if (a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x
-                {
-                    inside = !inside;
-                }
-                j = i;
-            }
-        }
-        inside
+        self.rings.iter().filter(|r| ring_contains(r, p)).count() % 2 == 1
     }
 
     /// Distance from `p` to the nearest boundary point.
@@ -293,11 +297,16 @@ impl Polygon {
         from_shapes(self.rings.slice_by(&paths, FillRule::NonZero))
     }
 
-    /// The polygon shrunk by `d` > 0 (mitred corners, cut off below 30°:
-    /// a finely sampled wobbly outline gets no extra points): none when it
-    /// vanishes, several when it pinches off.
+    /// The polygon shrunk by `d` > 0: none when it vanishes, several when
+    /// it pinches off. By `cavalier_contours` ([`super::offset::inset`]:
+    /// sharp where the outline turns inwards, round where it turns
+    /// outwards); a polygon that engine cannot take (rings wound the wrong
+    /// way) goes through [`Polygon::offset`].
     pub fn inset(&self, d: f64) -> Vec<Polygon> {
-        self.offset(-d)
+        if !(d.is_finite() && d > 0.0) {
+            return self.offset(-d);
+        }
+        super::offset::inset(self, d).unwrap_or_else(|| self.offset(-d))
     }
 
     /// The polygon grown (`d` > 0) or shrunk (`d` < 0) by `|d|`, corners
