@@ -35,6 +35,7 @@ pub const TARGETS: &[(&str, Body)] = &[
     ("project", project),
     ("tangle_grammar", tangle_grammar),
     ("tangle_start", tangle_start),
+    ("inset", inset),
     ("micro_scene", micro_scene),
     ("texture_ratings", texture_ratings),
     ("texture_index", texture_index),
@@ -527,6 +528,50 @@ pub fn tangle_start(data: &[u8]) {
         };
         assert!(r.points.iter().all(|v| v.is_finite()));
         assert!(r.stats.shapes <= 400);
+    }
+}
+
+/// Insets (`geom::offset`, cavalier_contours) of polygons read from raw
+/// bytes: the first byte picks the distance, then each 5-byte record is a
+/// point (two little-endian i16 coordinates on a 1/64 grid, so repeated,
+/// collinear and nearly equal points are common) with a flag byte whose low
+/// bit starts a new ring and whose next bit nudges the point by 1e-9 (the
+/// near-coincident vertices real outlines have). What `Polygon::new` makes
+/// of the rings is inset: no panic, and every piece is finite, inside its
+/// polygon's box, no larger than it, outline counter-clockwise, holes
+/// clockwise.
+pub fn inset(data: &[u8]) {
+    use filigree::geom::polygon::{ring_area2, Polygon};
+    use glam::DVec2;
+    let Some((&first, rest)) = data.split_first() else {
+        return;
+    };
+    let d = 0.01 + f64::from(first) * 0.05;
+    let mut rings: Vec<Vec<DVec2>> = vec![vec![]];
+    for rec in rest.chunks_exact(5).take(4_000) {
+        let x = f64::from(i16::from_le_bytes([rec[0], rec[1]])) / 64.0;
+        let y = f64::from(i16::from_le_bytes([rec[2], rec[3]])) / 64.0;
+        let nudge = if rec[4] & 2 != 0 { 1e-9 } else { 0.0 };
+        if rec[4] & 1 != 0 && !rings.last().is_some_and(Vec::is_empty) {
+            rings.push(vec![]);
+        }
+        rings.last_mut().expect("one ring").push(DVec2::new(x + nudge, y - nudge));
+    }
+    let Some(polys) = Polygon::new(rings) else {
+        return;
+    };
+    for p in polys {
+        let (lo, hi) = p.bbox();
+        let pieces = p.inset(d);
+        let area: f64 = pieces.iter().map(Polygon::area).sum();
+        assert!(area <= p.area() * (1.0 + 1e-9) + 1e-6, "inset {area} > {}", p.area());
+        for q in &pieces {
+            assert!(q.rings.iter().flatten().all(|v| v.is_finite()));
+            let (a, b) = q.bbox();
+            assert!(a.cmpge(lo - 1e-6).all() && b.cmple(hi + 1e-6).all(), "{a} {b} outside {lo} {hi}");
+            assert!(ring_area2(&q.rings[0]) > 0.0, "outline clockwise");
+            assert!(q.rings[1..].iter().all(|h| ring_area2(h) < 0.0), "hole counter-clockwise");
+        }
     }
 }
 

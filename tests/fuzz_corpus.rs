@@ -89,6 +89,11 @@ fn pending_findings_now_pass() {
 }
 
 #[test]
+fn inset_corpus_replays() {
+    replay("inset");
+}
+
+#[test]
 fn lang_corpus_replays() {
     replay("lang");
 }
