@@ -5,7 +5,8 @@
 //! sub-pixel one of an anti-aliased coverage raster ([`aa_distance`]).
 //!
 //! Tangle's building blocks work on glam `DVec2`: polygons with holes and
-//! their booleans, slices and insets through `i_overlay` ([`polygon`]),
+//! their booleans and slices through `i_overlay` ([`polygon`]), insets
+//! through `cavalier_contours` ([`offset`]),
 //! outlines from SVG and font glyphs ([`svg`]), Perlin noise ([`noise`]).
 //!
 //! The Fit kernels use plain `[f64; 2]` points ([`Vec2`]): small scalar

@@ -299,9 +299,9 @@ impl Polygon {
 
     /// The polygon shrunk by `d` > 0: none when it vanishes, several when
     /// it pinches off. By `cavalier_contours` ([`super::offset::inset`]:
-    /// sharp where the outline turns inwards, round where it turns
-    /// outwards); a polygon that engine cannot take (rings wound the wrong
-    /// way) goes through [`Polygon::offset`].
+    /// the points farther than `d` from the boundary, so sharp at convex
+    /// corners and round at reflex ones); a polygon that engine cannot take
+    /// (rings wound the wrong way) goes through [`Polygon::offset`].
     pub fn inset(&self, d: f64) -> Vec<Polygon> {
         if !(d.is_finite() && d > 0.0) {
             return self.offset(-d);
