@@ -19,7 +19,9 @@
 //! meet, so convex corners stay sharp.
 use super::polygon::{ring_area2, ring_contains, Polygon, Ring, SLIVER_AREA};
 use cavalier_contours::core::traits::{FuzzyEq, FuzzyOrd, Real};
-use cavalier_contours::polyline::{PlineCreation, PlineSource, PlineSourceMut, Polyline};
+use cavalier_contours::polyline::{
+    PlineCreation, PlineOrientation, PlineSource, PlineSourceMut, Polyline,
+};
 use cavalier_contours::shape_algorithms::{Shape, ShapeOffsetOptions};
 use glam::DVec2;
 use num_traits::{Bounded, Float, Num, NumCast, One, ToPrimitive, Zero};
@@ -267,7 +269,12 @@ fn to_pline(ring: &[DVec2]) -> Option<Polyline<Lf64>> {
 /// The engine's polyline (arcs flattened) as a ring.
 fn to_ring(pl: &Polyline<Lf64>, tolerance: f64) -> Option<Ring> {
     let lines = pl.arcs_to_approx_lines(Lf64(tolerance))?;
-    Some(lines.iter_vertexes().map(|v| DVec2::new(v.x.0, v.y.0)).collect())
+    Some(
+        lines
+            .iter_vertexes()
+            .map(|v| DVec2::new(v.x.0, v.y.0))
+            .collect(),
+    )
 }
 
 /// The polygon shrunk by `d` > 0 (see the module docs for its corners):
@@ -287,13 +294,39 @@ pub fn inset(poly: &Polygon, d: f64) -> Option<Vec<Polygon>> {
         };
         plines.push(pl);
     }
+    let tol = arc_tolerance(d);
+    if poly.rings.len() == 1 {
+        // One ring: the polyline's own offset, without the shape's
+        // stitching between rings (a fifth of the work).
+        let Some(pl) = plines.pop() else {
+            return Some(vec![]);
+        };
+        if pl.orientation() != PlineOrientation::CounterClockwise {
+            return None;
+        }
+        let (mut outers, mut holes) = (vec![], vec![]);
+        for r in pl
+            .parallel_offset(Lf64(d))
+            .iter()
+            .filter_map(|p| to_ring(p, tol))
+        {
+            let a = ring_area2(&r);
+            if r.len() >= 3 && a.abs() * 0.5 >= SLIVER_AREA {
+                if a > 0.0 {
+                    outers.push(r)
+                } else {
+                    holes.push(r)
+                }
+            }
+        }
+        return Some(assemble(outers, holes));
+    }
     let shape = Shape::from_plines(plines);
     // The outer ring must be counter-clockwise and the holes clockwise.
     if shape.ccw_plines.len() != 1 || shape.cw_plines.len() + 1 != poly.rings.len() {
         return None;
     }
     let out = shape.parallel_offset(Lf64(d), &ShapeOffsetOptions::default());
-    let tol = arc_tolerance(d);
     let rings = |v: &[cavalier_contours::shape_algorithms::IndexedPolyline<Lf64>]| -> Vec<Ring> {
         v.iter()
             .filter_map(|ip| to_ring(&ip.polyline, tol))
@@ -346,7 +379,10 @@ mod tests {
             assert_eq!(v.cos().0.to_bits(), libm::cos(x).to_bits());
             assert_eq!(v.tan().0.to_bits(), libm::tan(x).to_bits());
             assert_eq!(v.atan().0.to_bits(), libm::atan(x).to_bits());
-            assert_eq!(v.atan2(Lf64(0.3)).0.to_bits(), libm::atan2(x, 0.3).to_bits());
+            assert_eq!(
+                v.atan2(Lf64(0.3)).0.to_bits(),
+                libm::atan2(x, 0.3).to_bits()
+            );
             assert_eq!(
                 Lf64(x / 7.0).acos().0.to_bits(),
                 libm::acos(x / 7.0).to_bits()
@@ -451,7 +487,9 @@ mod tests {
             "degenerate",
             |(outer, holes)| {
                 let scale = |r: Vec<(f64, f64)>, s: f64| -> Ring {
-                    r.into_iter().map(|(x, y)| DVec2::new(x * s, y * s)).collect()
+                    r.into_iter()
+                        .map(|(x, y)| DVec2::new(x * s, y * s))
+                        .collect()
                 };
                 let mut rings = vec![scale(outer, 1.0)];
                 rings.extend(holes.into_iter().map(|h| scale(h, 0.4)));
