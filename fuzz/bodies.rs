@@ -555,7 +555,10 @@ pub fn inset(data: &[u8]) {
         if rec[4] & 1 != 0 && !rings.last().is_some_and(Vec::is_empty) {
             rings.push(vec![]);
         }
-        rings.last_mut().expect("one ring").push(DVec2::new(x + nudge, y - nudge));
+        rings
+            .last_mut()
+            .expect("one ring")
+            .push(DVec2::new(x + nudge, y - nudge));
     }
     let Some(polys) = Polygon::new(rings) else {
         return;
@@ -564,13 +567,23 @@ pub fn inset(data: &[u8]) {
         let (lo, hi) = p.bbox();
         let pieces = p.inset(d);
         let area: f64 = pieces.iter().map(Polygon::area).sum();
-        assert!(area <= p.area() * (1.0 + 1e-9) + 1e-6, "inset {area} > {}", p.area());
+        assert!(
+            area <= p.area() * (1.0 + 1e-9) + 1e-6,
+            "inset {area} > {}",
+            p.area()
+        );
         for q in &pieces {
             assert!(q.rings.iter().flatten().all(|v| v.is_finite()));
             let (a, b) = q.bbox();
-            assert!(a.cmpge(lo - 1e-6).all() && b.cmple(hi + 1e-6).all(), "{a} {b} outside {lo} {hi}");
+            assert!(
+                a.cmpge(lo - 1e-6).all() && b.cmple(hi + 1e-6).all(),
+                "{a} {b} outside {lo} {hi}"
+            );
             assert!(ring_area2(&q.rings[0]) > 0.0, "outline clockwise");
-            assert!(q.rings[1..].iter().all(|h| ring_area2(h) < 0.0), "hole counter-clockwise");
+            assert!(
+                q.rings[1..].iter().all(|h| ring_area2(h) < 0.0),
+                "hole counter-clockwise"
+            );
         }
     }
 }
