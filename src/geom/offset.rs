@@ -498,6 +498,59 @@ mod tests {
         )
     }
 
+    /// A densely sampled wobbly outline, as tangle shapes are (a radius
+    /// that waves with the angle, each point jittered), with or without a
+    /// wobbly hole in the middle.
+    fn arb_wobbly() -> impl Strategy<Value = Polygon> {
+        (
+            60usize..400,
+            2.0f64..9.0,
+            0.0f64..0.35,
+            proptest::collection::vec(-1.0f64..1.0, 400),
+            any::<bool>(),
+        )
+            .prop_filter_map("degenerate", |(n, k, a, jitter, hole)| {
+                let ring = |r0: f64, n: usize, sign: f64| -> Ring {
+                    (0..n)
+                        .map(|i| {
+                            let t = sign * std::f64::consts::TAU * i as f64 / n as f64;
+                            let r = r0 * (1.0 + a * (k * t).sin()) + 0.3 * jitter[i % 400];
+                            DVec2::new(r * t.cos(), r * t.sin())
+                        })
+                        .collect()
+                };
+                let mut rings = vec![ring(40.0, n, 1.0)];
+                if hole {
+                    rings.push(ring(8.0, n / 2, -1.0));
+                }
+                Polygon::new(rings)?.into_iter().next()
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+        /// The same on tangle-like outlines: many points, small turns both
+        /// ways, insets that pinch off lobes.
+        #[test]
+        fn wobbly_outlines_are_inset_by_distance(p in arb_wobbly(), d in 0.2f64..14.0,
+            probes in proptest::collection::vec((-55.0f64..55.0, -55.0f64..55.0), 200)) {
+            let parts = inset(&p, d).expect("normalised polygons are the engine's input");
+            let slack = arc_tolerance(d) + 1e-6;
+            for (x, y) in probes {
+                let q = DVec2::new(x, y);
+                let b = p.boundary_distance(q);
+                let inside = parts.iter().filter(|r| r.contains(q)).count();
+                prop_assert!(inside <= 1, "pieces overlap at {:?}", q);
+                if p.contains(q) && b > d + slack {
+                    prop_assert!(inside == 1, "{:?} is {b} from the boundary, d = {d}", q);
+                }
+                if !p.contains(q) || b < d - slack {
+                    prop_assert!(inside == 0, "{:?} is {b} from the boundary, d = {d}", q);
+                }
+            }
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(96))]
         /// The inset is exactly the points of the polygon farther than `d`
