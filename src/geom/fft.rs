@@ -770,27 +770,59 @@ impl RealFft3 {
     fn split_z(&mut self, c0: usize, w: usize) {
         let m = self.dims[2] / 2;
         let plane = self.dims[0] * self.dims[1];
-        for k in 0..=m {
-            // Z[k] is in row `fz.rev[k]` (the z pass leaves them so).
-            let (a, b) = (self.fz.rev[k % m], self.fz.rev[(m - k) % m]);
+        // k = 0 and k = m (from Z[0] alone), then k and m − k together:
+        // one load of Z[k] and Z[m − k] and their sums (which commute
+        // exactly) serve both, each X computed by the formula's own
+        // operations (the same bits as one k at a time).
+        {
+            let a = self.fz.rev[0];
             let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
-            let (br, bi) = (&self.pr[b * LANES..][..w], &self.pi[b * LANES..][..w]);
-            let xr = &mut self.ar[k * plane + c0..][..w];
-            let xi = &mut self.ai[k * plane + c0..][..w];
-            if k == 0 || k == m {
-                let sign = if k == 0 { 1.0 } else { -1.0 };
+            for (k, sign) in [(0, 1.0), (m, -1.0)] {
+                let xr = &mut self.ar[k * plane + c0..][..w];
                 for l in 0..w {
                     xr[l] = ar[l] + sign * ai[l];
-                    xi[l] = 0.0;
+                }
+                self.ai[k * plane + c0..][..w].fill(0.0);
+            }
+        }
+        for k in 1..=m / 2 {
+            let j = m - k;
+            let (a, b) = (self.fz.rev[k], self.fz.rev[j]);
+            if k == j {
+                // X[m/2] alone (its partner is itself).
+                let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
+                let (wr, wi) = (self.zr[k], self.zi[k]);
+                let xr = &mut self.ar[k * plane + c0..][..w];
+                let xi = &mut self.ai[k * plane + c0..][..w];
+                for l in 0..w {
+                    let (er, ei) = ((ar[l] + ar[l]) * 0.5, (ai[l] - ai[l]) * 0.5);
+                    let (or, oi) = ((ai[l] + ai[l]) * 0.5, (ar[l] - ar[l]) * 0.5);
+                    xr[l] = er + (wr * or - wi * oi);
+                    xi[l] = ei + (wr * oi + wi * or);
                 }
                 continue;
             }
+            let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
+            let (br, bi) = (&self.pr[b * LANES..][..w], &self.pi[b * LANES..][..w]);
             let (wr, wi) = (self.zr[k], self.zi[k]);
+            let (vr, vi) = (self.zr[j], self.zi[j]);
+            let (lo_r, hi_r) = self.ar.split_at_mut(j * plane);
+            let (lo_i, hi_i) = self.ai.split_at_mut(j * plane);
+            let (xr, xi) = (
+                &mut lo_r[k * plane + c0..][..w],
+                &mut lo_i[k * plane + c0..][..w],
+            );
+            let (yr, yi) = (&mut hi_r[c0..][..w], &mut hi_i[c0..][..w]);
             for l in 0..w {
-                let (er, ei) = ((ar[l] + br[l]) * 0.5, (ai[l] - bi[l]) * 0.5);
-                let (or, oi) = ((ai[l] + bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
-                xr[l] = er + (wr * or - wi * oi);
-                xi[l] = ei + (wr * oi + wi * or);
+                let (sr, si) = ((ar[l] + br[l]) * 0.5, (ai[l] + bi[l]) * 0.5);
+                // X[k] = E + W^k O: E = (sr, (ai − bi)/2), O = (si, (br − ar)/2).
+                let (ei, oi) = ((ai[l] - bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
+                xr[l] = sr + (wr * si - wi * oi);
+                xi[l] = ei + (wr * oi + wi * si);
+                // X[m − k]: E = (sr, (bi − ai)/2), O = (si, (ar − br)/2).
+                let (ei, oi) = ((bi[l] - ai[l]) * 0.5, (ar[l] - br[l]) * 0.5);
+                yr[l] = sr + (vr * si - vi * oi);
+                yi[l] = ei + (vr * oi + vi * si);
             }
         }
     }

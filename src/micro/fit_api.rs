@@ -299,13 +299,14 @@ fn sample_grid(
             (lead.unwrap_or(term.len()), term.len())
         })
         .collect();
-    // Every value starts as the constant; each plane then adds its terms
-    // in place (a kernel per plane and term: rows of 32 spent more on
-    // their loops' set-up than on their values), and the sheet and the
-    // finish run over the whole volume at once, by elementwise arithmetic
-    // and selects (no branches: the compiler vectorises them).
+    // Plane by plane (one stays in the L1 cache throughout): every value
+    // starts as the constant, the plane adds its terms in place (one
+    // kernel per term over all its rows: rows of 32 spent more on their
+    // loops' set-up than on their values), then the sheet and the finish,
+    // by elementwise arithmetic and selects (no branches: the compiler
+    // vectorises them).
     out.clear();
-    out.resize(nx * ny * nz, t.constant);
+    out.reserve(nx * ny * nz);
     let (thick, inv) = (t.thickness, t.inv_bound);
     // `stored` with the clamp hoisted. Without one, NaN and ±∞ all become
     // `MAX_VALUE`, as the clamped path's NaN → +∞ → unclamped does.
@@ -332,7 +333,10 @@ fn sample_grid(
     // then one kernel over the plane.
     let (mut c, mut w) = (vec![0.0; ny], vec![0.0; ny]);
     let mut prods = vec![0.0; nx * ny];
-    for (z, plane) in out.chunks_exact_mut(nx * ny).enumerate() {
+    for z in 0..nz {
+        let start = out.len();
+        out.resize(start + nx * ny, t.constant);
+        let plane = &mut out[start..];
         for (term, &(lead, len)) in tables.iter().zip(&plans) {
             let at = |a: usize, vals: &[f64], y: usize| if a == 1 { vals[y] } else { vals[z] };
             for (y, c) in c.iter_mut().enumerate() {
@@ -371,11 +375,11 @@ fn sample_grid(
                 }
             }
         }
+        if thick > 0.0 {
+            plane.iter_mut().for_each(|v| *v = v.abs() - thick);
+        }
+        finish(plane);
     }
-    if thick > 0.0 {
-        out.iter_mut().for_each(|v| *v = v.abs() - thick);
-    }
-    finish(out);
     true
 }
 
