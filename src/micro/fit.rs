@@ -125,11 +125,6 @@ pub fn sum8(v: &[f64]) -> f64 {
     for (k, x) in chunks.remainder().iter().enumerate() {
         s[k] += x;
     }
-    sum8_finish(s)
-}
-
-/// The last step of [`sum8`]: its eight running sums added pairwise.
-fn sum8_finish(s: [f64; 8]) -> f64 {
     ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]))
 }
 
@@ -251,31 +246,13 @@ impl Fourier {
                 target.amp.len()
             )));
         }
-        // Amplitudes and their largest, in one pass (a maximum is exact
-        // in any order: the same as `max_of`), by chunks of 8 indexed over
-        // slices of one length, so that it vectorises.
+        // Indexed over slices of one length, so that it vectorises.
         let (amp, cr, ci) = (&mut self.amp[..m], &re[..m], &im[..m]);
-        let mut top = [0.0f64; 8];
-        let whole = m - m % 8;
-        for c in (0..whole).step_by(8) {
-            for k in 0..8 {
-                let a = (cr[c + k] * cr[c + k] + ci[c + k] * ci[c + k]).sqrt();
-                amp[c + k] = a;
-                top[k] = if a > top[k] { a } else { top[k] };
-            }
-        }
-        for l in whole..m {
+        for l in 0..m {
             amp[l] = (cr[l] * cr[l] + ci[l] * ci[l]).sqrt();
-            top[0] = top[0].max(amp[l]);
         }
-        let floor = top.iter().copied().fold(0.0, f64::max) * PHASE_FLOOR;
+        let floor = max_of(&self.amp) * PHASE_FLOOR;
         let plane = nx * ny;
-        // With planes of whole blocks, each block's terms go straight into
-        // the eight running sums of `sum8` (block k's term j into sum j, in
-        // the order `sum8` adds them: the same sum to the bit) and are not
-        // stored; otherwise into `terms`, summed after.
-        let direct = plane.is_multiple_of(LOSS_BLOCK);
-        let mut sums = [0.0f64; LOSS_BLOCK];
         for kz in 0..m / plane {
             let w = plane_weight(kz, nz);
             let r = kz * plane..(kz + 1) * plane;
@@ -286,7 +263,10 @@ impl Fourier {
             // floor has every phase 0 and skips the atan2s (most of a
             // periodic structure's spectrum: near the truth, gyroid 1D
             // (Eq. 40) has 79 bins above it at 32³, in 51 of 2,176 blocks;
-            // `bench micro`'s gyroid 2,032 bins in 688 blocks).
+            // `bench micro`'s gyroid 2,032 bins in 688 blocks). Fusing the
+            // maximum into the amplitudes' pass, or these terms into
+            // `sum8`'s running sums, cost more instructions than the
+            // passes they save (callgrind), so both stay separate.
             let mut l = 0;
             let mut blocks = terms.chunks_exact_mut(LOSS_BLOCK);
             for t in &mut blocks {
@@ -294,27 +274,14 @@ impl Fourier {
                 let a = &amp[b.clone()];
                 let phases = a.iter().fold(false, |any, &a| any | (a > floor));
                 let (cr, ci, ta, tp) = (&cr[b.clone()], &ci[b.clone()], &ta[b.clone()], &tp[b]);
-                if direct {
-                    let mut block = [0.0; LOSS_BLOCK];
-                    loss_terms(&mut block, [a, cr, ci, ta, tp], w, floor, phases);
-                    for (s, t) in sums.iter_mut().zip(block) {
-                        *s += t;
-                    }
-                } else {
-                    loss_terms(t, [a, cr, ci, ta, tp], w, floor, phases);
-                }
+                loss_terms(t, [a, cr, ci, ta, tp], w, floor, phases);
                 l += LOSS_BLOCK;
             }
             let t = blocks.into_remainder();
             let rest = [&amp[l..], &cr[l..], &ci[l..], &ta[l..], &tp[l..]];
             loss_terms(t, rest, w, floor, true);
         }
-        let sum = if direct {
-            sum8_finish(sums)
-        } else {
-            sum8(&self.terms)
-        };
-        Ok(loss_of_sum(sum, self.len() as f64))
+        Ok(loss_of_sum(sum8(&self.terms), self.len() as f64))
     }
 
     /// Amplitudes alone, of the whole spectrum (the image loss, Eq. 39,
@@ -364,8 +331,6 @@ pub fn fourier_loss(a: &Spectrum, b: &Spectrum) -> f64 {
 /// simd128), and a block that computes them costs only the test more (a
 /// dense spectrum's loss is no slower, measured).
 const LOSS_BLOCK: usize = 8;
-// `half_loss` adds a block's terms into the eight sums of `sum8` directly.
-const _: () = assert!(LOSS_BLOCK == 8);
 
 /// The loss terms `w·((a − â)² + (θ − θ̂)²)` of a run of bins, `v` =
 /// [amplitudes, real parts, imaginary parts, target amplitudes, target
