@@ -789,14 +789,16 @@ impl RealFft3 {
             let j = m - k;
             let (a, b) = (self.fz.rev[k], self.fz.rev[j]);
             if k == j {
-                // X[m/2] alone (its partner is itself).
+                // X[m/2] alone: the formula with Z[m − k] = Z[k] (x − x
+                // is 0 only for finite x, so it is computed as written).
                 let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
+                let (br, bi) = (ar, ai);
                 let (wr, wi) = (self.zr[k], self.zi[k]);
                 let xr = &mut self.ar[k * plane + c0..][..w];
                 let xi = &mut self.ai[k * plane + c0..][..w];
                 for l in 0..w {
-                    let (er, ei) = ((ar[l] + ar[l]) * 0.5, (ai[l] - ai[l]) * 0.5);
-                    let (or, oi) = ((ai[l] + ai[l]) * 0.5, (ar[l] - ar[l]) * 0.5);
+                    let (er, ei) = ((ar[l] + br[l]) * 0.5, (ai[l] - bi[l]) * 0.5);
+                    let (or, oi) = ((ai[l] + bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
                     xr[l] = er + (wr * or - wi * oi);
                     xi[l] = ei + (wr * oi + wi * or);
                 }

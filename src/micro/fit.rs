@@ -12,7 +12,9 @@
 //! without allocating. Phases come from [`atan2`], a polynomial (pure
 //! `f64` arithmetic, within 3e-13 of libm's, which moves a loss by less
 //! than 1e-12 of itself; the same bytes natively and in wasm, and
-//! vectorised by the compiler); sums run over eight
+//! vectorised by the compiler), computed only in blocks of bins that
+//! have an amplitude above the phase floor (a periodic structure's
+//! spectrum is mostly below it); sums run over eight
 //! accumulators in a fixed order ([`sum8`]). The image loss of analysis by
 //! synthesis (Eq. 39) compares amplitudes only ([`amplitude_loss`]). The
 //! fit itself (request, job, optimisers) is in [`super::fit_api`].
