@@ -543,21 +543,23 @@ fn lattice_sampling_equals_pointwise_sampling_bit_for_bit() {
         .to_string(),
         json!({"type": "sphere", "radius": 0.1}).to_string(),
     ];
+    // Grids of 8 and, for the plane kernels' other shapes, 2 (planes of
+    // 4) and 32 (the bench's).
     for (i, scene) in scenes.iter().enumerate() {
-        for volume in [false, true] {
+        for (volume, grid) in [(false, 8), (true, 8), (false, 2), (true, 32)] {
             let target = match volume {
                 false => FitTarget::Scene {
                     scene: scene.clone(),
                 },
                 true => FitTarget::Volume {
-                    values: vec![0.0; 8 * 8 * 8],
+                    values: vec![0.0; grid * grid * grid],
                 },
             };
             let mut req = MicroFitRequest {
                 scene: scene.clone(),
                 params: vec![],
                 target,
-                grid: 8,
+                grid: grid as u32,
                 center: [0.1, -0.2, 0.3],
                 half: 0.37,
                 ..gyroid_request(Optimizer::Cmaes, 10)
@@ -580,16 +582,17 @@ fn lattice_sampling_equals_pointwise_sampling_bit_for_bit() {
             let mut job = start_fit(req).unwrap();
             job.step().unwrap();
             let s = job.scene_for(&[0.37]).expect("a valid scene");
-            let grid = job.sample(&s, false).unwrap();
+            let lattice = job.sample(&s, false).unwrap();
             let points = job.sample(&s, true).unwrap();
-            assert_eq!(grid.len(), 512);
+            assert_eq!(lattice.len(), grid * grid * grid);
             assert!(
-                grid.iter()
+                lattice
+                    .iter()
                     .zip(&points)
                     .all(|(a, b)| a.to_bits() == b.to_bits()),
-                "scene {i}"
+                "scene {i}, grid {grid}"
             );
-            assert!(job.loss_of_samples(&grid).unwrap().is_finite());
+            assert!(job.loss_of_samples(&lattice).unwrap().is_finite());
         }
     }
 }

@@ -155,10 +155,11 @@ const LANES: usize = 64;
 /// vectorises and which rounds the same way on every target (Rust neither
 /// fuses multiply-adds nor reorders float operations). Decimation in
 /// frequency, radix 4 (each stage reads and writes the rows once where two
-/// radix-2 stages would twice) and one radix-2 stage when log₂ n is odd,
-/// twiddles from the `libm` crate (`W = 1` and `W = −i` exact). The output
-/// rows come in bit-reversed order, as radix 2 leaves them: [`LaneFft::run`]
-/// puts them back, or the caller reads row `rev[k]` for coefficient k.
+/// radix-2 stages would twice) and one radix-2 stage when log₂ n is odd
+/// (fused with the last radix-4 one by [`LaneFft::run_to`]), twiddles from
+/// the `libm` crate (`W = 1` and `W = −i` exact). The output rows come in
+/// bit-reversed order, as radix 2 leaves them: [`LaneFft::run_to`] stores
+/// them in order, or the caller reads row `rev[k]` for coefficient k.
 #[derive(Debug, Clone)]
 struct LaneFft {
     n: usize,
@@ -167,8 +168,6 @@ struct LaneFft {
     wi: Vec<f64>,
     /// Where coefficient k is before reordering (bit reversal of k).
     rev: Vec<usize>,
-    /// The row swaps of the bit reversal: (r, reversed r) with r below.
-    swaps: Vec<(usize, usize)>,
 }
 
 /// `(a, b) ← (a + b, a − b)` over lanes: the radix-2 butterfly with `w = 1`.
@@ -268,6 +267,181 @@ fn four_rows(v: &mut [f64], stride: usize, r: usize, q: usize, c0: usize, w: usi
     [&mut a[..w], &mut b[..w], &mut c[..w], &mut e[..w]]
 }
 
+/// Rows `r, r + q, ..., r + (K − 1)·q` (q ≥ 1, at `stride`), lanes
+/// `c0..c0 + w` (within a row), of one array; with `rev_order`, slot k
+/// holds row `r + rev(k)·q` (`rev`: K's bit reversal).
+#[inline(always)]
+fn rows_mut<const K: usize>(
+    v: &mut [f64],
+    stride: usize,
+    r: usize,
+    q: usize,
+    c0: usize,
+    w: usize,
+    rev_order: bool,
+) -> [&mut [f64]; K] {
+    let d = q * stride;
+    let mut rest = &mut v[r * stride + c0..];
+    let mut rows: [&mut [f64]; K] = std::array::from_fn(|k| {
+        let tail = std::mem::take(&mut rest);
+        if k + 1 < K {
+            let (row, tail) = tail.split_at_mut(d);
+            rest = tail;
+            &mut row[..w]
+        } else {
+            &mut tail[..w]
+        }
+    });
+    if rev_order {
+        let bits = K.trailing_zeros();
+        for k in 0..K {
+            let j = k.reverse_bits() >> (usize::BITS - bits);
+            if k < j {
+                rows.swap(k, j);
+            }
+        }
+    }
+    rows
+}
+
+/// Rows `r..r + K` (at `stride`), lanes `c0..c0 + w`, of one array.
+#[inline(always)]
+fn rows_at<const K: usize>(v: &[f64], stride: usize, r: usize, c0: usize, w: usize) -> [&[f64]; K] {
+    std::array::from_fn(|k| &v[(r + k) * stride + c0..][..w])
+}
+
+/// Lanes per chunk of the fused kernels: values of a chunk are loaded into
+/// local arrays, transformed and stored, so the compiler keeps them in
+/// vector registers without alias checks between the 32 rows.
+const CHUNK: usize = 4;
+
+/// The fused radix-8 butterfly (see [`radix8_last`]) on `L` lanes: `x[r]`
+/// and `x[8 + r]` are row r's real and imaginary parts; returns the rows.
+#[inline(always)]
+fn radix8_lanes<const L: usize>(x: &[[f64; L]; 16], w: [(f64, f64); 3]) -> [[f64; L]; 16] {
+    let [(w1r, w1i), (w2r, w2i), (w3r, w3i)] = w;
+    let mut y = [[0.0; L]; 16];
+    for l in 0..L {
+        let (r, i) = (|k: usize| x[k][l], |k: usize| x[8 + k][l]);
+        // Rows 0, 2, 4, 6: radix 4, twiddles 1.
+        let (t0r, t0i) = (r(0) + r(4), i(0) + i(4));
+        let (t1r, t1i) = (r(0) - r(4), i(0) - i(4));
+        let (t2r, t2i) = (r(2) + r(6), i(2) + i(6));
+        let (t3r, t3i) = (i(2) - i(6), r(6) - r(2));
+        let (y0r, y0i) = (t0r + t2r, t0i + t2i);
+        let (y2r, y2i) = (t0r - t2r, t0i - t2i);
+        let (y4r, y4i) = (t1r + t3r, t1i + t3i);
+        let (y6r, y6i) = (t1r - t3r, t1i - t3i);
+        // Rows 1, 3, 5, 7: radix 4 with twiddles.
+        let (t0r, t0i) = (r(1) + r(5), i(1) + i(5));
+        let (t1r, t1i) = (r(1) - r(5), i(1) - i(5));
+        let (t2r, t2i) = (r(3) + r(7), i(3) + i(7));
+        let (t3r, t3i) = (i(3) - i(7), r(7) - r(3));
+        let (y1r, y1i) = (t0r + t2r, t0i + t2i);
+        let (ar, ai) = (t0r - t2r, t0i - t2i);
+        let (y3r, y3i) = (ar * w2r - ai * w2i, ar * w2i + ai * w2r);
+        let (br, bi) = (t1r + t3r, t1i + t3i);
+        let (y5r, y5i) = (br * w1r - bi * w1i, br * w1i + bi * w1r);
+        let (cr, ci) = (t1r - t3r, t1i - t3i);
+        let (y7r, y7i) = (cr * w3r - ci * w3i, cr * w3i + ci * w3r);
+        // Radix 2 on the pairs.
+        let out = [
+            y0r + y1r,
+            y0r - y1r,
+            y2r + y3r,
+            y2r - y3r,
+            y4r + y5r,
+            y4r - y5r,
+            y6r + y7r,
+            y6r - y7r,
+            y0i + y1i,
+            y0i - y1i,
+            y2i + y3i,
+            y2i - y3i,
+            y4i + y5i,
+            y4i - y5i,
+            y6i + y7i,
+            y6i - y7i,
+        ];
+        for (k, v) in out.into_iter().enumerate() {
+            y[k][l] = v;
+        }
+    }
+    y
+}
+
+/// The last two stages of a transform whose length has an odd log₂,
+/// fused: over lanes, the eight rows of a sub-transform of length 8
+/// (`src`, consecutive) go through the radix-4 butterflies of that stage
+/// (rows 0, 2, 4, 6 without twiddles; rows 1, 3, 5, 7 with `w`) and then
+/// the radix-2 butterflies of rows (0, 1), (2, 3), (4, 5), (6, 7): the same
+/// operations as [`radix4`] then [`butterfly_one`], in registers, written
+/// to the rows `dst` (one memory pass where those are two).
+#[inline(always)]
+fn radix8_last(
+    sr: [&[f64]; 8],
+    si: [&[f64]; 8],
+    dr: [&mut [f64]; 8],
+    di: [&mut [f64]; 8],
+    w: [(f64, f64); 3],
+) {
+    let n = sr[0].len();
+    let src: [&[f64]; 16] =
+        std::array::from_fn(|k| if k < 8 { &sr[k][..n] } else { &si[k - 8][..n] });
+    let [d0, d1, d2, d3, d4, d5, d6, d7] = dr;
+    let [e0, e1, e2, e3, e4, e5, e6, e7] = di;
+    let mut dst: [&mut [f64]; 16] = [
+        d0, d1, d2, d3, d4, d5, d6, d7, e0, e1, e2, e3, e4, e5, e6, e7,
+    ];
+    let whole = n - n % CHUNK;
+    let mut l = 0;
+    while l < whole {
+        let x: [[f64; CHUNK]; 16] =
+            std::array::from_fn(|k| src[k][l..l + CHUNK].try_into().expect("chunk"));
+        let y = radix8_lanes(&x, w);
+        for (d, y) in dst.iter_mut().zip(&y) {
+            d[l..l + CHUNK].copy_from_slice(y);
+        }
+        l += CHUNK;
+    }
+    while l < n {
+        let x: [[f64; 1]; 16] = std::array::from_fn(|k| [src[k][l]]);
+        let y = radix8_lanes(&x, w);
+        for (d, y) in dst.iter_mut().zip(&y) {
+            d[l] = y[0];
+        }
+        l += 1;
+    }
+}
+
+/// The last stage of a transform whose length has an even log₂: the four
+/// rows of a sub-transform of length 4 (`src`, consecutive) through
+/// [`radix4`] without twiddles, written to the rows `dst`.
+#[inline(always)]
+fn radix4_last(sr: [&[f64]; 4], si: [&[f64]; 4], dr: [&mut [f64]; 4], di: [&mut [f64]; 4]) {
+    let n = sr[0].len();
+    let sr = sr.map(|s| &s[..n]);
+    let si = si.map(|s| &s[..n]);
+    let [d0, d1, d2, d3] = dr;
+    let [e0, e1, e2, e3] = di;
+    let (d0, d1, d2, d3) = (&mut d0[..n], &mut d1[..n], &mut d2[..n], &mut d3[..n]);
+    let (e0, e1, e2, e3) = (&mut e0[..n], &mut e1[..n], &mut e2[..n], &mut e3[..n]);
+    for l in 0..n {
+        let (t0r, t0i) = (sr[0][l] + sr[2][l], si[0][l] + si[2][l]);
+        let (t1r, t1i) = (sr[0][l] - sr[2][l], si[0][l] - si[2][l]);
+        let (t2r, t2i) = (sr[1][l] + sr[3][l], si[1][l] + si[3][l]);
+        let (t3r, t3i) = (si[1][l] - si[3][l], sr[3][l] - sr[1][l]);
+        d0[l] = t0r + t2r;
+        e0[l] = t0i + t2i;
+        d1[l] = t0r - t2r;
+        e1[l] = t0i - t2i;
+        d2[l] = t1r + t3r;
+        e2[l] = t1i + t3i;
+        d3[l] = t1r - t3r;
+        e3[l] = t1i - t3i;
+    }
+}
+
 impl LaneFft {
     fn new(n: usize) -> LaneFft {
         let (mut wr, mut wi) = (vec![], vec![]);
@@ -286,51 +460,112 @@ impl LaneFft {
                 }
             })
             .collect();
-        let swaps = (0..n)
-            .filter_map(|r| (r < rev[r]).then_some((r, rev[r])))
-            .collect();
-        LaneFft {
-            n,
-            wr,
-            wi,
-            rev,
-            swaps,
-        }
+        LaneFft { n, wr, wi, rev }
     }
 
     /// Transform lanes `from..to` of the `n` rows of `re`/`im` that start
     /// every `stride` values (row r's lane l at `r · stride + l`), in place;
-    /// `ordered`: rows put in order, else coefficient k left in row `rev[k]`.
-    fn run(
+    /// coefficient k is left in row `rev[k]`.
+    fn run(&self, re: &mut [f64], im: &mut [f64], stride: usize, from: usize, to: usize) {
+        let mut c0 = from;
+        while c0 < to {
+            let w = (c0 + LANES).min(to) - c0;
+            self.stages(re, im, stride, c0, w, 1);
+            if self.n.trailing_zeros() % 2 == 1 {
+                for b in (0..self.n).step_by(2) {
+                    let (ar, br) = two_rows(re, stride, b, b + 1, c0, w);
+                    let (ai, bi) = two_rows(im, stride, b, b + 1, c0, w);
+                    butterfly_one(ar, ai, br, bi);
+                }
+            }
+            c0 += w;
+        }
+    }
+
+    /// [`LaneFft::run`] with its last stage out of place: lanes `from..to`
+    /// of the rows of `re`/`im` are transformed (and overwritten on the
+    /// way), the coefficients written to the rows of `dr`/`di` (same
+    /// `stride`): coefficient k to row k when `ordered`, else to row
+    /// `rev[k]` as `run` leaves them. The same numbers as `run`, bit for
+    /// bit, with one memory pass less when log₂ n is odd (the last radix-4
+    /// and the radix-2 stage fused, [`radix8_last`]), and the reordering
+    /// (a pass of row swaps) folded into the last stage's stores.
+    #[allow(clippy::too_many_arguments)]
+    fn run_to(
         &self,
         re: &mut [f64],
         im: &mut [f64],
+        dr: &mut [f64],
+        di: &mut [f64],
         stride: usize,
         from: usize,
         to: usize,
         ordered: bool,
     ) {
+        let n = self.n;
+        // The last stage's length: 8 (fused) or 4; the radix-4 stages
+        // before it in place.
+        let last = if n.trailing_zeros() % 2 == 1 { 8 } else { 4 };
         let mut c0 = from;
         while c0 < to {
-            let c1 = (c0 + LANES).min(to);
-            self.block(re, im, stride, c0, c1 - c0);
-            if ordered {
-                for &(r, s) in &self.swaps {
-                    let (a, b) = two_rows(re, stride, r, s, c0, c1 - c0);
-                    a.swap_with_slice(b);
-                    let (a, b) = two_rows(im, stride, r, s, c0, c1 - c0);
-                    a.swap_with_slice(b);
+            let w = (c0 + LANES).min(to) - c0;
+            if n < last {
+                // n = 1 or 2: in order as they are.
+                self.run(re, im, stride, c0, c0 + w);
+                for r in 0..n {
+                    dr[r * stride + c0..][..w].copy_from_slice(&re[r * stride + c0..][..w]);
+                    di[r * stride + c0..][..w].copy_from_slice(&im[r * stride + c0..][..w]);
+                }
+            } else {
+                self.stages(re, im, stride, c0, w, last);
+                // Block b's output k is coefficient rev[b + k] = rev[b] +
+                // rev_last(k)·(n/last): in order, the rows rev[b] + j·n/last
+                // in the bit-reversed order of j.
+                let q = n / last;
+                let to_row = |b: usize| if ordered { (self.rev[b], q) } else { (b, 1) };
+                if last == 8 {
+                    let tw = [1, 2, 3].map(|m| (self.wr[m * q], self.wi[m * q]));
+                    for b in (0..n).step_by(8) {
+                        let (r, d) = to_row(b);
+                        radix8_last(
+                            rows_at(re, stride, b, c0, w),
+                            rows_at(im, stride, b, c0, w),
+                            rows_mut(dr, stride, r, d, c0, w, ordered),
+                            rows_mut(di, stride, r, d, c0, w, ordered),
+                            tw,
+                        );
+                    }
+                } else {
+                    for b in (0..n).step_by(4) {
+                        let (r, d) = to_row(b);
+                        radix4_last(
+                            rows_at(re, stride, b, c0, w),
+                            rows_at(im, stride, b, c0, w),
+                            rows_mut(dr, stride, r, d, c0, w, ordered),
+                            rows_mut(di, stride, r, d, c0, w, ordered),
+                        );
+                    }
                 }
             }
-            c0 = c1;
+            c0 += w;
         }
     }
 
-    fn block(&self, re: &mut [f64], im: &mut [f64], stride: usize, c0: usize, w: usize) {
+    /// The radix-4 stages for lanes `c0..c0 + w`, in place, from the whole
+    /// length down to sub-transforms of length `last` (exclusive).
+    fn stages(
+        &self,
+        re: &mut [f64],
+        im: &mut [f64],
+        stride: usize,
+        c0: usize,
+        w: usize,
+        last: usize,
+    ) {
         let n = self.n;
         // Sub-transforms of length `len`, four rows `q` apart each.
         let mut len = n;
-        while len >= 4 {
+        while len >= 4 && len > last {
             let q = len / 4;
             let step = n / len;
             for b in (0..n).step_by(len) {
@@ -345,13 +580,6 @@ impl LaneFft {
                 }
             }
             len = q;
-        }
-        if len == 2 {
-            for b in (0..n).step_by(2) {
-                let (ar, br) = two_rows(re, stride, b, b + 1, c0, w);
-                let (ai, bi) = two_rows(im, stride, b, b + 1, c0, w);
-                butterfly_one(ar, ai, br, bi);
-            }
         }
     }
 }
@@ -508,26 +736,29 @@ impl RealFft3 {
                     self.pi[j * LANES..][..w]
                         .copy_from_slice(&values[(2 * j + 1) * plane + c0..][..w]);
                 }
-                self.fz.run(&mut self.pr, &mut self.pi, LANES, 0, w, false);
+                self.fz.run(&mut self.pr, &mut self.pi, LANES, 0, w);
                 self.split_z(c0, w);
                 c0 += w;
             }
         }
-        // y: per kz plane, lanes along x (coefficient ky left in row
-        // `fy.rev[ky]`, read so by the transpose).
+        // y: per kz plane, lanes along x, from `a` into `b` (coefficient
+        // ky left in row `fy.rev[ky]`, read so by the transpose).
         for kz in 0..self.planes {
             let r = kz * plane..(kz + 1) * plane;
-            self.fy
-                .run(&mut self.ar[r.clone()], &mut self.ai[r], nx, 0, nx, false);
+            let (sr, si) = (&mut self.ar[r.clone()], &mut self.ai[r.clone()]);
+            let (dr, di) = (&mut self.br[r.clone()], &mut self.bi[r]);
+            self.fy.run_to(sr, si, dr, di, nx, 0, nx, false);
         }
-        // x: per plane, transposed so that the lanes run along ky.
+        // x: per plane, transposed back into `a` so that the lanes run
+        // along ky, then transformed into `b`, in order.
         for kz in 0..self.planes {
             let r = kz * plane..(kz + 1) * plane;
-            for (src, dst) in [(&self.ar, &mut self.br), (&self.ai, &mut self.bi)] {
+            for (src, dst) in [(&self.br, &mut self.ar), (&self.bi, &mut self.ai)] {
                 transpose(&src[r.clone()], &mut dst[r.clone()], &self.fy.rev, nx, ny);
             }
-            self.fx
-                .run(&mut self.br[r.clone()], &mut self.bi[r], ny, 0, ny, true);
+            let (sr, si) = (&mut self.ar[r.clone()], &mut self.ai[r.clone()]);
+            let (dr, di) = (&mut self.br[r.clone()], &mut self.bi[r]);
+            self.fx.run_to(sr, si, dr, di, ny, 0, ny, true);
         }
         Ok((&self.br, &self.bi))
     }
@@ -539,27 +770,61 @@ impl RealFft3 {
     fn split_z(&mut self, c0: usize, w: usize) {
         let m = self.dims[2] / 2;
         let plane = self.dims[0] * self.dims[1];
-        for k in 0..=m {
-            // Z[k] is in row `fz.rev[k]` (the z pass leaves them so).
-            let (a, b) = (self.fz.rev[k % m], self.fz.rev[(m - k) % m]);
+        // k = 0 and k = m (from Z[0] alone), then k and m − k together:
+        // one load of Z[k] and Z[m − k] and their sums (which commute
+        // exactly) serve both, each X computed by the formula's own
+        // operations (the same bits as one k at a time).
+        {
+            let a = self.fz.rev[0];
             let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
-            let (br, bi) = (&self.pr[b * LANES..][..w], &self.pi[b * LANES..][..w]);
-            let xr = &mut self.ar[k * plane + c0..][..w];
-            let xi = &mut self.ai[k * plane + c0..][..w];
-            if k == 0 || k == m {
-                let sign = if k == 0 { 1.0 } else { -1.0 };
+            for (k, sign) in [(0, 1.0), (m, -1.0)] {
+                let xr = &mut self.ar[k * plane + c0..][..w];
                 for l in 0..w {
                     xr[l] = ar[l] + sign * ai[l];
-                    xi[l] = 0.0;
+                }
+                self.ai[k * plane + c0..][..w].fill(0.0);
+            }
+        }
+        for k in 1..=m / 2 {
+            let j = m - k;
+            let (a, b) = (self.fz.rev[k], self.fz.rev[j]);
+            if k == j {
+                // X[m/2] alone: the formula with Z[m − k] = Z[k] (x − x
+                // is 0 only for finite x, so it is computed as written).
+                let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
+                let (br, bi) = (ar, ai);
+                let (wr, wi) = (self.zr[k], self.zi[k]);
+                let xr = &mut self.ar[k * plane + c0..][..w];
+                let xi = &mut self.ai[k * plane + c0..][..w];
+                for l in 0..w {
+                    let (er, ei) = ((ar[l] + br[l]) * 0.5, (ai[l] - bi[l]) * 0.5);
+                    let (or, oi) = ((ai[l] + bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
+                    xr[l] = er + (wr * or - wi * oi);
+                    xi[l] = ei + (wr * oi + wi * or);
                 }
                 continue;
             }
+            let (ar, ai) = (&self.pr[a * LANES..][..w], &self.pi[a * LANES..][..w]);
+            let (br, bi) = (&self.pr[b * LANES..][..w], &self.pi[b * LANES..][..w]);
             let (wr, wi) = (self.zr[k], self.zi[k]);
+            let (vr, vi) = (self.zr[j], self.zi[j]);
+            let (lo_r, hi_r) = self.ar.split_at_mut(j * plane);
+            let (lo_i, hi_i) = self.ai.split_at_mut(j * plane);
+            let (xr, xi) = (
+                &mut lo_r[k * plane + c0..][..w],
+                &mut lo_i[k * plane + c0..][..w],
+            );
+            let (yr, yi) = (&mut hi_r[c0..][..w], &mut hi_i[c0..][..w]);
             for l in 0..w {
-                let (er, ei) = ((ar[l] + br[l]) * 0.5, (ai[l] - bi[l]) * 0.5);
-                let (or, oi) = ((ai[l] + bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
-                xr[l] = er + (wr * or - wi * oi);
-                xi[l] = ei + (wr * oi + wi * or);
+                let (sr, si) = ((ar[l] + br[l]) * 0.5, (ai[l] + bi[l]) * 0.5);
+                // X[k] = E + W^k O: E = (sr, (ai − bi)/2), O = (si, (br − ar)/2).
+                let (ei, oi) = ((ai[l] - bi[l]) * 0.5, (br[l] - ar[l]) * 0.5);
+                xr[l] = sr + (wr * si - wi * oi);
+                xi[l] = ei + (wr * oi + wi * si);
+                // X[m − k]: E = (sr, (bi − ai)/2), O = (si, (ar − br)/2).
+                let (ei, oi) = ((bi[l] - ai[l]) * 0.5, (ar[l] - br[l]) * 0.5);
+                yr[l] = sr + (vr * si - vi * oi);
+                yi[l] = ei + (vr * oi + vi * si);
             }
         }
     }
@@ -708,6 +973,45 @@ mod tests {
             .unwrap()
             .forward(&[0.0; 8])
             .is_err());
+    }
+
+    /// [`LaneFft::run_to`] (fused last stages, out of place, in order or
+    /// not) gives [`LaneFft::run`]'s numbers bit for bit, rows reordered:
+    /// every length to 512, lane counts that fill no chunk or block (1, 3,
+    /// 67), lanes starting inside a row.
+    #[test]
+    fn the_fused_out_of_place_lane_fft_equals_the_staged_one_bit_for_bit() {
+        let mut r = Rng::new(5);
+        for bits in 0..=9 {
+            let n = 1usize << bits;
+            let f = LaneFft::new(n);
+            for (stride, from, to) in [(1, 0, 1), (3, 0, 3), (70, 2, 69), (130, 1, 130)] {
+                let re: Vec<f64> = (0..n * stride).map(|_| r.f64() - 0.5).collect();
+                let im: Vec<f64> = (0..n * stride).map(|_| r.f64() - 0.5).collect();
+                let (mut wr, mut wi) = (re.clone(), im.clone());
+                f.run(&mut wr, &mut wi, stride, from, to);
+                for ordered in [false, true] {
+                    let (mut sr, mut si) = (re.clone(), im.clone());
+                    let (mut dr, mut di) = (vec![7.0; n * stride], vec![7.0; n * stride]);
+                    f.run_to(
+                        &mut sr, &mut si, &mut dr, &mut di, stride, from, to, ordered,
+                    );
+                    for k in 0..n {
+                        let row = if ordered { f.rev[k] } else { k };
+                        for l in 0..stride {
+                            let (a, b) = (k * stride + l, row * stride + l);
+                            let want = if (from..to).contains(&l) {
+                                (wr[b].to_bits(), wi[b].to_bits())
+                            } else {
+                                (7f64.to_bits(), 7f64.to_bits())
+                            };
+                            let got = (dr[a].to_bits(), di[a].to_bits());
+                            assert_eq!(got, want, "n {n}, row {k}, lane {l}, ordered {ordered}");
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// A random `w × h` signal's [`fft2`] against the naive DFT, within

@@ -290,7 +290,8 @@ fn sample_grid(
     // are one number for the row (`c`), the rest multiply a row of x
     // values, each in the term's order (so the products round as in
     // `raw`). The common shapes (nothing after the first x factor, or one
-    // more factor) are one fused pass over the row; others use `prod`.
+    // more factor) are one fused kernel over a plane's rows; others are
+    // multiplied out in `prods` first.
     let plans: Vec<(usize, usize)> = tables
         .iter()
         .map(|term| {
@@ -298,12 +299,14 @@ fn sample_grid(
             (lead.unwrap_or(term.len()), term.len())
         })
         .collect();
-    // Each row is built and finished in `row` by passes of elementwise
-    // arithmetic and selects (no branches: the compiler vectorises them),
-    // then appended.
+    // Plane by plane (one stays in the L1 cache throughout): every value
+    // starts as the constant, the plane adds its terms in place (one
+    // kernel per term over all its rows: rows of 32 spent more on their
+    // loops' set-up than on their values), then the sheet and the finish,
+    // by elementwise arithmetic and selects (no branches: the compiler
+    // vectorises them).
     out.clear();
     out.reserve(nx * ny * nz);
-    let (mut row, mut prod) = (vec![0.0; nx], vec![0.0; nx]);
     let (thick, inv) = (t.thickness, t.inv_bound);
     // `stored` with the clamp hoisted. Without one, NaN and ±∞ all become
     // `MAX_VALUE`, as the clamped path's NaN → +∞ → unclamped does.
@@ -325,52 +328,101 @@ fn sample_grid(
             *v = if s.is_finite() { s } else { MAX_VALUE };
         }),
     };
-    for r in 0..ny * nz {
-        let (y, z) = (r % ny, r / ny);
-        let at = |a: usize, vals: &[f64]| if a == 1 { vals[y] } else { vals[z] };
-        row.fill(t.constant);
+    // Per plane z, per term: its per-row numbers (`c`, the factors before
+    // the first along x; `w`, one more factor along y or z) for every y,
+    // then one kernel over the plane.
+    let (mut c, mut w) = (vec![0.0; ny], vec![0.0; ny]);
+    let mut prods = vec![0.0; nx * ny];
+    for z in 0..nz {
+        let start = out.len();
+        out.resize(start + nx * ny, t.constant);
+        let plane = &mut out[start..];
         for (term, &(lead, len)) in tables.iter().zip(&plans) {
-            let mut c = 1.0;
-            for (a, vals) in &term[..lead] {
-                c *= at(*a, vals);
+            let at = |a: usize, vals: &[f64], y: usize| if a == 1 { vals[y] } else { vals[z] };
+            for (y, c) in c.iter_mut().enumerate() {
+                *c = 1.0;
+                for (a, vals) in &term[..lead] {
+                    *c *= at(*a, vals, y);
+                }
             }
             if lead == len {
-                row.iter_mut().for_each(|s| *s += c);
+                add_rows(plane, &c);
                 continue;
             }
             let vx = &term[lead].1[..nx];
             match &term[lead + 1..] {
-                [] => row.iter_mut().zip(vx).for_each(|(s, v)| *s += c * v),
-                [(0, v2)] => row
-                    .iter_mut()
-                    .zip(vx)
-                    .zip(&v2[..nx])
-                    .for_each(|((s, v), w)| *s += c * v * w),
+                [] => add_rows_x(plane, &c, vx),
+                [(0, v2)] => add_rows_xx(plane, &c, vx, v2),
                 [(a, v2)] => {
-                    let w = at(*a, v2);
-                    row.iter_mut().zip(vx).for_each(|(s, v)| *s += c * v * w);
+                    for (y, w) in w.iter_mut().enumerate() {
+                        *w = at(*a, v2, y);
+                    }
+                    add_rows_xw(plane, &c, vx, &w);
                 }
                 rest => {
-                    prod.iter_mut().zip(vx).for_each(|(p, v)| *p = c * v);
-                    for (a, vals) in rest {
-                        if *a == 0 {
-                            prod.iter_mut().zip(vals).for_each(|(p, v)| *p *= v);
-                        } else {
-                            let v = at(*a, vals);
-                            prod.iter_mut().for_each(|p| *p *= v);
+                    for (y, row) in prods.chunks_exact_mut(nx).enumerate() {
+                        row.iter_mut().zip(vx).for_each(|(p, v)| *p = c[y] * v);
+                        for (a, vals) in rest {
+                            if *a == 0 {
+                                row.iter_mut().zip(vals).for_each(|(p, v)| *p *= v);
+                            } else {
+                                let v = at(*a, vals, y);
+                                row.iter_mut().for_each(|p| *p *= v);
+                            }
                         }
                     }
-                    row.iter_mut().zip(&prod).for_each(|(s, p)| *s += p);
+                    plane.iter_mut().zip(&prods).for_each(|(s, p)| *s += p);
                 }
             }
         }
         if thick > 0.0 {
-            row.iter_mut().for_each(|v| *v = v.abs() - thick);
+            plane.iter_mut().for_each(|v| *v = v.abs() - thick);
         }
-        finish(&mut row);
-        out.extend_from_slice(&row);
+        finish(plane);
     }
     true
+}
+
+/// `plane[y·nx + x] += c[y]` (nx = plane.len() / c.len()). These kernels
+/// take the plane and the tables as separate slices, which the compiler
+/// knows do not overlap: each row is one vectorised loop without checks.
+#[inline(never)]
+fn add_rows(plane: &mut [f64], c: &[f64]) {
+    let nx = plane.len() / c.len();
+    for (row, &c) in plane.chunks_exact_mut(nx).zip(c) {
+        row.iter_mut().for_each(|s| *s += c);
+    }
+}
+
+/// `plane[y·nx + x] += c[y]·vx[x]`.
+#[inline(never)]
+fn add_rows_x(plane: &mut [f64], c: &[f64], vx: &[f64]) {
+    let nx = vx.len();
+    for (row, &c) in plane.chunks_exact_mut(nx).zip(c) {
+        row.iter_mut().zip(vx).for_each(|(s, v)| *s += c * v);
+    }
+}
+
+/// `plane[y·nx + x] += c[y]·vx[x]·w[y]`.
+#[inline(never)]
+fn add_rows_xw(plane: &mut [f64], c: &[f64], vx: &[f64], w: &[f64]) {
+    let nx = vx.len();
+    for ((row, &c), &w) in plane.chunks_exact_mut(nx).zip(c).zip(w) {
+        row.iter_mut().zip(vx).for_each(|(s, v)| *s += c * v * w);
+    }
+}
+
+/// `plane[y·nx + x] += c[y]·vx[x]·v2[x]`.
+#[inline(never)]
+fn add_rows_xx(plane: &mut [f64], c: &[f64], vx: &[f64], v2: &[f64]) {
+    let nx = vx.len();
+    let v2 = &v2[..nx];
+    for (row, &c) in plane.chunks_exact_mut(nx).zip(c) {
+        row.iter_mut()
+            .zip(vx)
+            .zip(v2)
+            .for_each(|((s, v), w)| *s += c * v * w);
+    }
 }
 
 impl Work {
