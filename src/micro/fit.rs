@@ -644,6 +644,7 @@ mod tests {
                 sigma: 0.6,
                 generations: 30,
                 tolerance: 1e-10,
+                restarts: false,
             },
         );
         let mut rng = Rng::new(1);

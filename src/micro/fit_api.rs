@@ -879,6 +879,7 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
                     sigma: req.sigma,
                     generations: inner / lambda,
                     tolerance: 1e-10,
+                    restarts: true,
                 },
             ))
         }

@@ -23,7 +23,22 @@ pub struct CmaesOptions {
     pub generations: usize,
     /// Stop when σ · the largest axis of the search ellipsoid is below this.
     pub tolerance: f64,
+    /// Restarts with a growing population (IPOP-CMA-ES, Auger & Hansen
+    /// 2005) for landscapes with many local minima: a run whose σ · largest
+    /// axis falls below [`RESTART_SHRINK`] · its initial σ has found its
+    /// basin; while more than a quarter of the budget (`population ·
+    /// generations` evaluations) is left, the next run starts from a random
+    /// mean with twice the population. The last quarter polishes: one run
+    /// from the best point so far with the first population and σ =
+    /// [`POLISH_SIGMA`], until `tolerance` or the budget.
+    pub restarts: bool,
 }
+
+/// A run that has shrunk its search ellipsoid by this factor has settled in
+/// a basin (with restarts on, the next run begins).
+pub const RESTART_SHRINK: f64 = 1e-2;
+/// The polishing run's initial step (normalised units).
+pub const POLISH_SIGMA: f64 = 1e-2;
 
 impl Default for CmaesOptions {
     fn default() -> Self {
@@ -32,6 +47,7 @@ impl Default for CmaesOptions {
             sigma: 0.3,
             generations: 100,
             tolerance: 1e-9,
+            restarts: false,
         }
     }
 }
@@ -60,6 +76,14 @@ pub struct Cmaes {
     generation: usize,
     opts: CmaesOptions,
     best: Option<Scored>,
+    /// Evaluations told so far (all runs) and the whole budget.
+    used: usize,
+    total: usize,
+    /// The initial σ of the current run; whether it is the polishing run.
+    sigma0: f64,
+    polishing: bool,
+    /// The first run's population (the polishing run's too).
+    lambda0: usize,
 }
 
 impl Cmaes {
@@ -115,7 +139,59 @@ impl Cmaes {
             generation: 0,
             opts,
             best: None,
+            used: 0,
+            total: lambda * opts.generations,
+            sigma0: opts.sigma,
+            polishing: false,
+            lambda0: lambda,
         }
+    }
+
+    /// Whether the current run has settled (restarts) or converged.
+    fn run_over(&self) -> bool {
+        let axis = self.d.iter().copied().fold(0.0, f64::max);
+        let spread = self.sigma * axis;
+        let settled =
+            self.opts.restarts && !self.polishing && spread < RESTART_SHRINK * self.sigma0;
+        settled || spread < self.opts.tolerance
+    }
+
+    /// With restarts: replace a finished run by the next one (a random
+    /// mean and twice the population, or the polishing run from the best
+    /// point); `false` when the budget allows no further run.
+    fn restart(&mut self, rng: &mut Rng) -> bool {
+        let left = self.total.saturating_sub(self.used);
+        let (mean, lambda, sigma, polish) = match &self.best {
+            _ if self.polishing => return false,
+            Some(b) if 4 * left <= self.total || left < 4 * 2 * self.lambda => {
+                (b.u.clone(), self.lambda0, POLISH_SIGMA, true)
+            }
+            _ => (
+                (0..self.n).map(|_| rng.f64()).collect(),
+                2 * self.lambda,
+                self.opts.sigma,
+                false,
+            ),
+        };
+        if left < lambda {
+            return false;
+        }
+        let mut next = Cmaes::new(
+            &mean,
+            CmaesOptions {
+                population: lambda,
+                sigma,
+                generations: left / lambda,
+                ..self.opts
+            },
+        );
+        next.best = self.best.take();
+        next.used = self.used;
+        next.total = self.total;
+        next.polishing = polish;
+        next.lambda0 = self.lambda0;
+        *self = next;
+        true
     }
 
     /// The current mean and step size.
@@ -196,6 +272,10 @@ pub fn jacobi_eigen(a: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
 
 impl AskTell for Cmaes {
     fn ask(&mut self, rng: &mut Rng) -> Vec<Vec<f64>> {
+        let polish_due = !self.polishing && 4 * self.total.saturating_sub(self.used) <= self.total;
+        if self.opts.restarts && (self.run_over() || polish_due) && !self.restart(rng) {
+            self.total = self.used;
+        }
         if self.done() {
             return vec![];
         }
@@ -217,6 +297,7 @@ impl AskTell for Cmaes {
 
     fn tell(&mut self, batch: Vec<Vec<f64>>, losses: &[f64]) {
         let n = self.n;
+        self.used += batch.len();
         let mut order: Vec<usize> = (0..batch.len()).collect();
         order.sort_by(|&a, &b| losses[a].total_cmp(&losses[b]).then(a.cmp(&b)));
         if let Some(&i) = order.first() {
@@ -287,8 +368,11 @@ impl AskTell for Cmaes {
     }
 
     fn done(&self) -> bool {
-        let axis = self.d.iter().copied().fold(0.0, f64::max);
-        self.generation >= self.opts.generations || self.sigma * axis < self.opts.tolerance
+        if self.opts.restarts {
+            // Another run may follow a finished one (see `ask`).
+            return self.used + self.lambda > self.total;
+        }
+        self.generation >= self.opts.generations || self.run_over()
     }
 
     fn best(&self) -> Option<&Scored> {
@@ -296,7 +380,7 @@ impl AskTell for Cmaes {
     }
 
     fn budget(&self) -> usize {
-        self.lambda * self.opts.generations
+        self.total
     }
 }
 
@@ -351,6 +435,66 @@ mod tests {
             1,
         );
         assert_eq!(best, again);
+    }
+
+    /// Runs with restarts evaluate at most their budget and end empty-handed
+    /// only when `done` says so.
+    fn run_counted(f: impl Fn(&[f64]) -> f64, opts: CmaesOptions, seed: u64) -> (Scored, usize) {
+        let mut es = Cmaes::new(&[0.8], opts);
+        let mut rng = Rng::new(seed);
+        let mut evals = 0;
+        loop {
+            let batch = es.ask(&mut rng);
+            if batch.is_empty() {
+                assert!(es.done());
+                break;
+            }
+            evals += batch.len();
+            let losses: Vec<f64> = batch.iter().map(|x| f(x)).collect();
+            es.tell(batch, &losses);
+        }
+        assert!(
+            evals <= es.budget() && es.budget() <= 20 * 75,
+            "{evals} {}",
+            es.budget()
+        );
+        (es.best().unwrap().clone(), evals)
+    }
+
+    #[test]
+    fn restarts_find_a_narrow_basin_a_single_run_misses() {
+        // A wide bowl around the start (0.8) and a deeper, narrow well at
+        // 0.2: the gyroid frequency's landscape in one dimension.
+        let f = |x: &[f64]| {
+            let w = (x[0] - 0.2) / 0.01;
+            (x[0] - 0.8).powi(2) - 10.0 * libm::exp(-w * w)
+        };
+        let opts = |restarts| CmaesOptions {
+            population: 20,
+            sigma: 0.3,
+            generations: 75,
+            tolerance: 1e-10,
+            restarts,
+        };
+        let mut single_missed = 0;
+        for seed in 1..=6 {
+            let (best, _) = run_counted(f, opts(true), seed);
+            assert!((best.u[0] - 0.2).abs() < 1e-3, "seed {seed}: {best:?}");
+            assert_eq!(
+                run_counted(f, opts(true), seed).0,
+                best,
+                "same seed, same run"
+            );
+            let (single, _) = run_counted(f, opts(false), seed);
+            if (single.u[0] - 0.2).abs() > 0.05 {
+                single_missed += 1;
+            }
+        }
+        assert!(
+            single_missed >= 3,
+            "one run found the well {} times in 6",
+            6 - single_missed
+        );
     }
 
     #[test]
