@@ -110,7 +110,8 @@ const WEIGHT_HI: f64 = 0.6;
 /// ones (textons, cell walls), so the fusion is then that other
 /// ingredient's picture alone (at weight 0.5 and 16 textons per side, the
 /// cellular-texton and Perlin-texton fusions are the same texton grid),
-/// whatever the weight. 6 is the smallest default among them.
+/// whatever the weight. (`fusion-perlin-texton`'s default frequency, 4,
+/// is below it: the sliders' default picture was left as it was.)
 const BACKGROUND_FLOOR: f64 = 6.0;
 
 fn fuse(a: Vec<f32>, b: Vec<f32>, w: f64) -> Vec<f32> {
