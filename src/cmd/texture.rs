@@ -14,7 +14,8 @@ use std::time::Instant;
 pub enum Which {
     /// Render one model's shaded texture (or height map) to a grey PNG.
     Render(RenderArgs),
-    /// List the models, their families and parameters (JSON).
+    /// List the models, their families and parameters (JSON; `dataset` is
+    /// the part of a parameter's range the training dataset samples).
     Models,
     /// Raw perceptual-scale estimates (JSON) of a model's texture, or of
     /// every model at its defaults when no --model is given.
@@ -74,7 +75,7 @@ pub fn run(w: Which) -> Result<(), String> {
                         "index": i, "id": m.id, "name": m.name, "family": m.family.name(),
                         "params": m.params.iter().map(|p| json!({
                             "name": p.name, "lo": p.lo, "hi": p.hi, "default": p.default,
-                            "integer": p.integer,
+                            "integer": p.integer, "dataset": [p.dataset_lo, p.dataset_hi],
                         })).collect::<Vec<_>>(),
                     })
                 })

@@ -12,6 +12,17 @@
 //! models × 32–40 = 808 base samples (see the test). Parameters are
 //! listed most important first in every model, so they vary first.
 //!
+//! The levels span each parameter's *dataset range*
+//! ([`crate::texture::models::ParamSpec::dataset`]), not always its whole
+//! range: as the paper kept only samples "with obviously different
+//! appearances" (§4.3), a model is sampled only where its picture is its
+//! own, not where it draws another model's (a random grid without jitter
+//! is a regular grid, a folding at one fold is its input, a fusion near
+//! one end of its weight is one ingredient, an automaton that has not
+//! organised is blurred random cells). Each range is declared, with its
+//! reason, next to the parameter; `models/tests.rs` checks the
+//! coincidences and that no grid point comes near them.
+//!
 //! With crops on, the height map is rendered at twice the size and shaded,
 //! and its four quadrants are the samples (the paper cut its 512² textures
 //! into four 256² ones), so every image has side `size`.
@@ -142,7 +153,7 @@ pub fn levels(model: &Model, per_model: usize) -> Vec<usize> {
     let cap = |i: usize| {
         let p = &model.params[i];
         if p.integer {
-            (p.hi - p.lo) as usize + 1
+            (p.dataset_hi - p.dataset_lo) as usize + 1
         } else {
             usize::MAX
         }
@@ -163,13 +174,19 @@ pub fn levels(model: &Model, per_model: usize) -> Vec<usize> {
     }
 }
 
-/// The value of level `j` of `levels` for parameter `i` of `model`.
+/// The value of level `j` of `levels` for parameter `i` of `model`: the
+/// levels span the parameter's dataset range ([`ParamSpec::dataset`]); a
+/// single level is the default, moved into that range.
+///
+/// [`ParamSpec::dataset`]: crate::texture::models::ParamSpec::dataset
 fn level_value(model: &Model, i: usize, j: usize, levels: usize) -> f64 {
     let p = &model.params[i];
-    if levels <= 1 {
-        return p.default;
-    }
-    let v = (p.lo + (p.hi - p.lo) * j as f64 / (levels - 1) as f64).clamp(p.lo, p.hi);
+    let (lo, hi) = (p.dataset_lo, p.dataset_hi);
+    let v = if levels <= 1 {
+        p.default.clamp(lo, hi)
+    } else {
+        (lo + (hi - lo) * j as f64 / (levels - 1) as f64).clamp(lo, hi)
+    };
     if p.integer {
         v.round()
     } else {

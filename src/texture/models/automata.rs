@@ -35,8 +35,15 @@ fn finish(mut h: Vec<f32>, g: usize, blur: usize, n: usize) -> Vec<f32> {
 
 const FOREST_PARAMS: &[ParamSpec] = &[
     int("grid", 64.0, 160.0, 96.0),
-    real("growth", 0.005, 0.08, 0.03),
-    real("lightning", 0.00002, 0.001, 0.0002),
+    // Dataset: growth 0.015..0.04 and lightning 8e-5..2e-4, where fires
+    // leave burn scars (square fronts, regrowth of another age). With more
+    // lightning (up to 1e-3) fires start everywhere, and with too little
+    // (2e-5) none has started in the first steps; slow growth (0.005)
+    // leaves the initial random trees; all three draw the blurred speckle
+    // of random cells that `ca-excitable-media` draws where it does not
+    // organise (rendered side by side, 2026-12-02).
+    real("growth", 0.005, 0.08, 0.03).dataset(0.015, 0.04),
+    real("lightning", 0.00002, 0.001, 0.0002).dataset(0.00008, 0.0002),
     int("steps", 20.0, 150.0, 80.0),
 ];
 
@@ -136,9 +143,15 @@ fn surface_tension(p: &[f64], seed: u64, n: usize) -> Vec<f32> {
 
 const EXCITABLE_PARAMS: &[ParamSpec] = &[
     int("grid", 64.0, 160.0, 112.0),
-    int("states", 3.0, 12.0, 5.0),
-    int("threshold", 1.0, 3.0, 2.0),
-    int("steps", 10.0, 120.0, 80.0),
+    // Dataset: states 4–5, threshold 2–3, steps 60–120, where the automaton
+    // organises into waves and spirals. Elsewhere it stays the blurred
+    // speckle of random states: with threshold 1 every cell advances at
+    // once, with many states and threshold 3 none does, and after 10–50
+    // steps a fine grid has not organised yet; that speckle is also the
+    // forest fire's picture without fires (see `FOREST_PARAMS`).
+    int("states", 3.0, 12.0, 5.0).dataset(4.0, 5.0),
+    int("threshold", 1.0, 3.0, 2.0).dataset(2.0, 3.0),
+    int("steps", 10.0, 120.0, 80.0).dataset(60.0, 120.0),
 ];
 
 /// Griffeath's cyclic automaton: a cell in state s moves to s+1 (mod

@@ -5,7 +5,11 @@ use super::{int, real, Family, Model, ParamSpec};
 
 const PARAMS: &[ParamSpec] = &[
     int("cells", 3.0, 24.0, 8.0),
-    real("jitter", 0.0, 1.0, 0.8),
+    // Dataset from 0.5: with little jitter the cells are a square lattice
+    // of domes or pyramids, `texton-regular`'s picture (at 0.25 still
+    // visibly a lattice); from 0.5 they are irregular Voronoi cells
+    // (rendered side by side, 2026-12-02).
+    real("jitter", 0.0, 1.0, 0.8).dataset(0.5, 1.0),
     real("crack", 0.0, 1.0, 0.3),
     real("power", 0.5, 2.0, 1.0),
 ];

@@ -45,7 +45,20 @@ pub mod texton;
 pub const MIN_SIZE: usize = 8;
 pub const MAX_SIZE: usize = 2048;
 
-/// One parameter of a model: its range, default, and whether it is an integer.
+/// One parameter of a model: its range, default, whether it is an
+/// integer, and the part of the range the dataset samples.
+///
+/// `lo..=hi` is what a user may set (sliders, CLI, documents) and what
+/// [`Model::check`] clamps to. `dataset_lo..=dataset_hi` (inside it) is
+/// where the dataset's linear grid takes its values
+/// ([`crate::texture::dataset`]): the paper kept only samples "with
+/// obviously different appearances" (§4.3), so where a model draws
+/// another model's picture at the end of a parameter (a random grid with
+/// no jitter is a regular grid, a folding at one fold is its input, a
+/// fusion at one end of its weight is mostly one ingredient), the dataset
+/// range stops short of that end. Declared with [`ParamSpec::dataset`]
+/// next to the parameter, with the reason; by default it is the whole
+/// range.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParamSpec {
     pub name: &'static str,
@@ -53,6 +66,20 @@ pub struct ParamSpec {
     pub hi: f64,
     pub default: f64,
     pub integer: bool,
+    pub dataset_lo: f64,
+    pub dataset_hi: f64,
+}
+
+impl ParamSpec {
+    /// The same parameter with the dataset sampling only `lo..=hi` (which
+    /// must lie inside the user range; a test checks every model).
+    pub const fn dataset(self, lo: f64, hi: f64) -> ParamSpec {
+        ParamSpec {
+            dataset_lo: lo,
+            dataset_hi: hi,
+            ..self
+        }
+    }
 }
 
 const fn real(name: &'static str, lo: f64, hi: f64, default: f64) -> ParamSpec {
@@ -62,6 +89,8 @@ const fn real(name: &'static str, lo: f64, hi: f64, default: f64) -> ParamSpec {
         hi,
         default,
         integer: false,
+        dataset_lo: lo,
+        dataset_hi: hi,
     }
 }
 
@@ -72,6 +101,8 @@ const fn int(name: &'static str, lo: f64, hi: f64, default: f64) -> ParamSpec {
         hi,
         default,
         integer: true,
+        dataset_lo: lo,
+        dataset_hi: hi,
     }
 }
 
