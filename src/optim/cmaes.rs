@@ -8,6 +8,12 @@
 //! update uses the clamped points, so the mean stays inside. The covariance
 //! is decomposed by cyclic Jacobi rotations (fixed sweep order: the same
 //! bits natively and in wasm; dimensions here are small).
+//!
+//! With [`CmaesOptions::restarts`] (what Micro's reconstruction uses) a run
+//! that has settled restarts from a random mean with twice the population
+//! (IPOP-CMA-ES), and the last quarter of the budget polishes the best point
+//! found: landscapes such as a gyroid's frequency, a narrow well in a wide
+//! plateau of local minima, are then found from any start.
 #![allow(clippy::needless_range_loop)] // small dense matrix code reads best indexed
 
 use super::{gauss, AskTell, Scored};
