@@ -147,7 +147,7 @@ export function mountHome(el, { pool }, tools) {
     <div class="home-intro">
       <h1>Filigree</h1>
       <p>A studio for procedural patterns and pixel art that runs in your browser, also offline.</p>
-      <p class="muted">Fit pattern programs to a drawing, texture pixel art with oriented elements, read an image's palette — pick a tool to start.</p>
+      <p class="muted">Fit pattern programs to a drawing, texture pixel art with oriented elements, grow pen-and-ink tangles from a grammar, model microstructures as implicit surfaces, find a procedural texture like an example, read an image's palette — pick a tool to start.</p>
     </div>
     <ul class="home-cards" data-testid="home-cards"></ul>`;
   const list = el.querySelector('.home-cards');
