@@ -228,12 +228,27 @@ fn loss_with(
             }
         }
         Some(d) => {
-            for ((d, a), b) in d.iter_mut().zip(s).zip(&t.sdf) {
-                *d = 2.0 * (a - b) * norm;
-            }
+            // dL_S/dS row by row, each row set just before the normal
+            // term's stencil first adds into it (while it is in cache).
+            let set_row = |d: &mut [f64], r: usize| {
+                let row = r * g.0..(r + 1) * g.0;
+                for ((d, a), b) in d[row.clone()]
+                    .iter_mut()
+                    .zip(&s[row.clone()])
+                    .zip(&t.sdf[row])
+                {
+                    *d = 2.0 * (a - b) * norm;
+                }
+            };
             scratch.clear();
             scratch.resize(g.0, [0.0; 2]);
             for r in 0..channels * g.1 {
+                if r % g.1 == 0 {
+                    set_row(d, r);
+                }
+                if (r + 1) % g.1 != 0 {
+                    set_row(d, r + 1);
+                }
                 let (a, b) =
                     sdf_row::<true>(s, &t.sdf, t_normals, g, r, normals, norm * w, scratch);
                 sum_s += a;

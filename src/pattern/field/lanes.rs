@@ -29,14 +29,16 @@ impl Evaluator {
         let (gw, nn) = (self.grid.w, self.grid.len());
         {
             let mut b = [init * CAP; L];
-            let mut wi = [NONE; L];
+            // Winners as 64-bit lanes beside the values, so that the
+            // selects below vectorise: item, distance, flipped (1) or not.
+            let mut wi = [NONE as u64; L];
             let mut wd = [0.0f64; L];
-            let mut flip = [false; L];
+            let mut flip = [0u64; L];
             let mut i = 0;
             while i < ops.len() {
                 let op = ops[i].0;
                 let mut best = [f64::INFINITY; L];
-                let mut bi = [NONE; L];
+                let mut bi = [NONE as u64; L];
                 let mut bd = [0.0f64; L];
                 while i < ops.len() && ops[i].0 == op {
                     let it = ops[i].1;
@@ -69,25 +71,23 @@ impl Evaluator {
                         Part::Fill => {}
                         Part::Stroke => vs.iter_mut().for_each(|v| *v = v.abs() - hw),
                     }
+                    // Selects, not branches, and no `min` (its choice
+                    // between ±0 is not specified): the first smallest wins.
                     for k in 0..L {
-                        let v = vs[k];
+                        let m = vs[k] < best[k];
+                        best[k] = if m { vs[k] } else { best[k] };
                         if W {
-                            if v < best[k] {
-                                best[k] = v;
-                                bi[k] = it;
-                                bd[k] = d[k];
-                            }
-                        } else {
-                            // Selects, exactly the branch above (no `min`:
-                            // its choice between ±0 is not specified).
-                            best[k] = if v < best[k] { v } else { best[k] };
+                            bi[k] = if m { it as u64 } else { bi[k] };
+                            bd[k] = if m { d[k] } else { bd[k] };
                         }
                     }
                     i += 1;
                 }
+                // A union takes the run's value where it is below B, a
+                // difference its negation where that is above B (selects).
+                let diff = op == CombineOp::Diff;
                 for k in 0..L {
                     if !W {
-                        // The branches below as selects.
                         b[k] = match op {
                             CombineOp::Union if best[k] < b[k] => best[k],
                             CombineOp::Diff if -best[k] > b[k] => -best[k],
@@ -95,27 +95,19 @@ impl Evaluator {
                         };
                         continue;
                     }
-                    match op {
-                        CombineOp::Union => {
-                            if best[k] < b[k] {
-                                b[k] = best[k];
-                                wi[k] = bi[k];
-                                wd[k] = bd[k];
-                                flip[k] = false;
-                            }
-                        }
-                        CombineOp::Diff => {
-                            if -best[k] > b[k] {
-                                b[k] = -best[k];
-                                wi[k] = bi[k];
-                                wd[k] = bd[k];
-                                flip[k] = true;
-                            }
-                        }
-                    }
+                    let v = if diff { -best[k] } else { best[k] };
+                    let m = if diff { v > b[k] } else { v < b[k] };
+                    b[k] = if m { v } else { b[k] };
+                    wi[k] = if m { bi[k] } else { wi[k] };
+                    wd[k] = if m { bd[k] } else { wd[k] };
+                    flip[k] = if m { diff as u64 } else { flip[k] };
                 }
             }
             let (bw, bh) = (x1 - x0, y1 - y0);
+            // The last winner record built: neighbouring pixels mostly share
+            // their winner, and the record depends only on the item, the
+            // side of its primitive (as `win_of` reads it) and the flip.
+            let mut memo = (NONE, false, 0, NO_WIN);
             for j in 0..bh {
                 let row = c * nn + (y0 + j) * gw + x0;
                 let ey = self.edge_y[y0 + j];
@@ -123,7 +115,7 @@ impl Evaluator {
                     let k = j * T2 + i;
                     let idx = row + i;
                     let mut v = b[k];
-                    let mut w = wi[k];
+                    let mut w = wi[k] as u32;
                     let cap = CAP.min(self.edge_x[x0 + i].min(ey));
                     if v.abs() >= cap {
                         v = v.clamp(-cap, cap);
@@ -131,8 +123,11 @@ impl Evaluator {
                     }
                     self.s[idx] = v * self.scale;
                     if W {
+                        let key = (w, wd[k] >= 0.0, flip[k]);
                         self.win[idx] = if w == NONE {
                             NO_WIN
+                        } else if key == (memo.0, memo.1, memo.2) {
+                            memo.3
                         } else {
                             let item = &scene.items[w as usize];
                             let h = Hit {
@@ -141,10 +136,11 @@ impl Evaluator {
                                 sign: 1.0,
                             };
                             let mut rec = scene.win_of(item, &h);
-                            if flip[k] {
+                            if flip[k] != 0 {
                                 rec.psign = -rec.psign;
                                 rec.wcoef = -rec.wcoef;
                             }
+                            memo = (key.0, key.1, key.2, rec);
                             rec
                         };
                     }

@@ -417,6 +417,22 @@ impl Evaluator {
                             pa[1] -= kl * dy;
                         }
                         pa[2] -= k;
+                    } else if kind == PrimKind::Segment {
+                        // Fast path of sdf::grad for segments (one division
+                        // by the length instead of two).
+                        let (a, b) = ([f[0], f[1]], [f[2], f[3]]);
+                        let t = crate::geom::primitives::segment_closest_t(a, b, p);
+                        let dx = p[0] - (a[0] + t * (b[0] - a[0]));
+                        let dy = p[1] - (a[1] + t * (b[1] - a[1]));
+                        let l2 = dx * dx + dy * dy;
+                        if l2 > 0.0 {
+                            let kl = k / l2.sqrt();
+                            let (u, v) = ((1.0 - t) * kl, t * kl);
+                            pa[0] -= u * dx;
+                            pa[1] -= u * dy;
+                            pa[2] -= v * dx;
+                            pa[3] -= v * dy;
+                        }
                     } else {
                         sdf::grad(kind, f, p, &mut g);
                         for j in 0..kind.field_count() {
