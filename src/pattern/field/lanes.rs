@@ -29,17 +29,17 @@ impl Evaluator {
         let (gw, nn) = (self.grid.w, self.grid.len());
         {
             let mut b = [init * CAP; L];
-            // Winners as 64-bit lanes beside the values, so that the
-            // selects below vectorise: item, distance, flipped (1) or not.
-            let mut wi = [NONE as u64; L];
-            let mut wd = [0.0f64; L];
-            let mut flip = [0u64; L];
+            // Winners as 64-bit codes beside the values, so that the
+            // selects below vectorise: `item << 2 | below << 1 | flipped`,
+            // `below` when the primitive's distance is not ≥ 0 (the side
+            // `Scene::win_of` reads), `flipped` after a difference; all
+            // ones: none.
+            let mut wi = [u64::MAX; L];
             let mut i = 0;
             while i < ops.len() {
                 let op = ops[i].0;
                 let mut best = [f64::INFINITY; L];
-                let mut bi = [NONE as u64; L];
-                let mut bd = [0.0f64; L];
+                let mut bi = [u64::MAX; L];
                 while i < ops.len() && ops[i].0 == op {
                     let it = ops[i].1;
                     let item = &scene.items[it as usize];
@@ -77,8 +77,8 @@ impl Evaluator {
                         let m = vs[k] < best[k];
                         best[k] = if m { vs[k] } else { best[k] };
                         if W {
-                            bi[k] = if m { it as u64 } else { bi[k] };
-                            bd[k] = if m { d[k] } else { bd[k] };
+                            let code = (it as u64) << 2 | ((!(d[k] >= 0.0)) as u64) << 1;
+                            bi[k] = if m { code } else { bi[k] };
                         }
                     }
                     i += 1;
@@ -98,16 +98,14 @@ impl Evaluator {
                     let v = if diff { -best[k] } else { best[k] };
                     let m = if diff { v > b[k] } else { v < b[k] };
                     b[k] = if m { v } else { b[k] };
-                    wi[k] = if m { bi[k] } else { wi[k] };
-                    wd[k] = if m { bd[k] } else { wd[k] };
-                    flip[k] = if m { diff as u64 } else { flip[k] };
+                    wi[k] = if m { bi[k] | diff as u64 } else { wi[k] };
                 }
             }
             let (bw, bh) = (x1 - x0, y1 - y0);
             // The last winner record built: neighbouring pixels mostly share
             // their winner, and the record depends only on the item, the
-            // side of its primitive (as `win_of` reads it) and the flip.
-            let mut memo = (NONE, false, 0, NO_WIN);
+            // side of its primitive and the flip: its code.
+            let mut memo = (u64::MAX, NO_WIN);
             for j in 0..bh {
                 let row = c * nn + (y0 + j) * gw + x0;
                 let ey = self.edge_y[y0 + j];
@@ -115,7 +113,7 @@ impl Evaluator {
                     let k = j * T2 + i;
                     let idx = row + i;
                     let mut v = b[k];
-                    let mut w = wi[k] as u32;
+                    let mut w = (wi[k] >> 2) as u32;
                     let cap = CAP.min(self.edge_x[x0 + i].min(ey));
                     if v.abs() >= cap {
                         v = v.clamp(-cap, cap);
@@ -123,24 +121,24 @@ impl Evaluator {
                     }
                     self.s[idx] = v * self.scale;
                     if W {
-                        let key = (w, wd[k] >= 0.0, flip[k]);
+                        let code = wi[k];
                         self.win[idx] = if w == NONE {
                             NO_WIN
-                        } else if key == (memo.0, memo.1, memo.2) {
-                            memo.3
+                        } else if code == memo.0 {
+                            memo.1
                         } else {
                             let item = &scene.items[w as usize];
                             let h = Hit {
-                                d: wd[k],
+                                d: if code & 2 != 0 { -1.0 } else { 1.0 },
                                 prim: item.prim,
                                 sign: 1.0,
                             };
                             let mut rec = scene.win_of(item, &h);
-                            if flip[k] != 0 {
+                            if code & 1 != 0 {
                                 rec.psign = -rec.psign;
                                 rec.wcoef = -rec.wcoef;
                             }
-                            memo = (key.0, key.1, key.2, rec);
+                            memo = (code, rec);
                             rec
                         };
                     }
