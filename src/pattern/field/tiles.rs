@@ -496,18 +496,18 @@ fn cull(
     out: &mut Vec<(CombineOp, u32)>,
 ) {
     keep.clear();
+    keep.resize(chain.len(), false);
     let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
-    for &(op, it) in chain.iter().rev() {
+    for (&(op, it), k) in chain.iter().zip(keep.iter_mut()).rev() {
         let v = vals[it as usize];
         let suf = if op == CombineOp::Union {
             &mut suf_u
         } else {
             &mut suf_d
         };
-        keep.push(v - h < *suf);
+        *k = v - h < *suf;
         *suf = suf.min(v + h);
     }
-    keep.reverse();
     let (mut blo, mut bhi) = (init * CAP, init * CAP);
     let mut i = 0;
     while i < chain.len() {
