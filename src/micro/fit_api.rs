@@ -25,6 +25,12 @@
 //! `nelder-mead`, `powell`, all ask/tell in [`crate::optim`]) works in
 //! normalised coordinates; the start is the scene's own values.
 //!
+//! Coarse to fine ([`MicroFitRequest::coarse_to_fine`], volume targets):
+//! the paper's loss of a periodic structure is a needle in its frequencies,
+//! so the budget is split into stages that compare coarser views first
+//! ([`COARSE_TO_FINE`]); each evaluation still computes the paper's loss,
+//! which alone picks the best point and is the loss reported.
+//!
 //! Parallel: `shards: [k, n]` makes this job shard k of n of one fit. Every
 //! shard asks the same batch, evaluates points `k, k + n, ...`, and the
 //! shards exchange their losses ([`Job::outbox`]/[`Job::inbox`]), so each
