@@ -314,9 +314,9 @@ impl Fourier {
         loss_of_sum(sum8(&self.terms[..m]), self.len() as f64)
     }
 
-    /// The coarse loss ([`Marginals`]) of the values last given to
+    /// The coarse loss ([`Profiles`]) of the values last given to
     /// [`Fourier::half_loss`] (its amplitudes reused: no transform).
-    pub fn last_marginal_loss(&self, target: &Marginals) -> f64 {
+    pub fn last_profile_loss(&self, target: &Profiles) -> f64 {
         target.loss(&self.amp)
     }
 
@@ -329,108 +329,122 @@ impl Fourier {
 }
 
 /// The coarse view of a spectrum that a coarse-to-fine fit compares first
-/// (see `micro::fit_api`): per axis, the power of the half spectrum summed
-/// over the other two axes at each |k| (0 to n/2; the DC bin left out, so
-/// an offset such as a sheet's thickness does not count), blurred by a
-/// Gaussian of `sigma` bins (reflected at 0 and n/2), square-rooted and
-/// scaled to unit length. The loss is `1 − ⟨p, p̂⟩` averaged over the axes
-/// longer than one: 0 for the same profiles up to scale, at most 1.
+/// (see `micro::fit_api`): on each coordinate plane of frequencies (kx ky,
+/// ky kz, kz kx), the power of the whole spectrum summed over the third
+/// axis (the DC bin left out, so an offset such as a sheet's thickness does
+/// not count), blurred by a periodic Gaussian of `sigma` bins,
+/// square-rooted and scaled to unit length. The loss is `1 − ⟨p, p̂⟩`
+/// averaged over the planes of more than one bin: 0 for the same profiles
+/// up to scale, at most 1.
 ///
 /// Why: the paper's loss of a periodic structure is a needle in its
-/// frequencies (phases of the leakage bins match only at the exact value,
+/// frequencies (phases of the leakage bins match only at the exact value;
 /// gyroid 1D scores −27.6 at η = 100 and about +1 two percent away), so a
 /// search over several frequencies meets a plateau. Blurred profiles of
 /// peaks at different frequencies still overlap, and their products fall
-/// smoothly toward the true frequencies along each axis.
+/// smoothly toward the true frequencies. Planes rather than one profile
+/// per axis: folding each axis to |k| made fibres turned by θ and by −θ
+/// the same (bench micro's fibres 2D then ended on the mirror image).
 #[derive(Debug, Clone)]
-pub struct Marginals {
+pub struct Profiles {
     dims: [usize; 3],
-    /// Per axis, the `(h + 1)²` blur weights (h = n/2), row `i` the
-    /// weights of the bins blurred into bin `i`.
+    /// Per axis, the `n × n` blur weights (row `i`: the weights of the
+    /// bins blurred into bin `i`).
     kernels: [Vec<f64>; 3],
-    /// The target's profiles.
+    /// The target's profiles, one per plane.
     target: [Vec<f64>; 3],
 }
 
-impl Marginals {
+/// The coordinate planes: (row axis, column axis) of each.
+const PLANES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
+
+impl Profiles {
     /// The target's profiles, from its half spectrum ([`Fourier::half_spectrum`])
     /// of a `dims` volume; `sigma` in bins (> 0).
-    pub fn new(target: &Spectrum, dims: [usize; 3], sigma: f64) -> Marginals {
+    pub fn new(target: &Spectrum, dims: [usize; 3], sigma: f64) -> Profiles {
         let kernels = dims.map(|n| {
-            let h = n / 2;
-            let g = |d: f64| libm::exp(-0.5 * (d / sigma) * (d / sigma));
-            let mut k = vec![0.0; (h + 1) * (h + 1)];
-            for i in 0..=h {
-                for j in 0..=h {
-                    let (fi, fj, fh) = (i as f64, j as f64, h as f64);
-                    let mut w = g(fj - fi);
-                    if j > 0 {
-                        w += g(fj + fi);
-                    }
-                    if j < h {
-                        w += g(2.0 * fh - fj - fi);
-                    }
-                    k[i * (h + 1) + j] = w;
+            let mut k = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    let d = i.abs_diff(j).min(n - i.abs_diff(j)) as f64 / sigma;
+                    k[i * n + j] = libm::exp(-0.5 * d * d);
                 }
             }
             k
         });
-        let mut m = Marginals {
+        let mut p = Profiles {
             dims,
             kernels,
-            target: dims.map(|n| vec![0.0; n / 2 + 1]),
+            target: PLANES.map(|(a, b)| vec![0.0; dims[a] * dims[b]]),
         };
-        let mut t = m.target.clone();
-        m.profiles(&target.amp, &mut t);
-        m.target = t;
-        m
+        p.target = p.profiles(&target.amp);
+        p
     }
 
-    /// The profiles of the half-spectrum amplitudes `amp` into `out`.
-    fn profiles(&self, amp: &[f64], out: &mut [Vec<f64>; 3]) {
+    /// The profiles of the half-spectrum amplitudes `amp` (laid out as
+    /// [`RealFft3::forward`]).
+    fn profiles(&self, amp: &[f64]) -> [Vec<f64>; 3] {
         let [nx, ny, nz] = self.dims;
         let planes = amp.len() / (nx * ny).max(1);
-        let mut raw = [nx, ny, nz].map(|n| vec![0.0; n / 2 + 1]);
+        let mut out = PLANES.map(|(a, b)| vec![0.0; self.dims[a] * self.dims[b]]);
         for kz in 0..planes {
-            let w = plane_weight(kz, nz);
-            let fz = kz.min(nz - kz);
+            // A bin on a plane of weight 2 stands for its conjugate too,
+            // at (−kx, −ky, −kz); the others' conjugates are kept.
+            let both = plane_weight(kz, nz) > 1.0;
+            let cz = (nz - kz) % nz;
             for kx in 0..nx {
-                let fx = kx.min(nx - kx);
+                let cx = (nx - kx) % nx;
                 let row = &amp[(kz * nx + kx) * ny..][..ny];
                 for (ky, &a) in row.iter().enumerate() {
                     if kz == 0 && kx == 0 && ky == 0 {
                         continue;
                     }
-                    let p = w * a * a;
-                    raw[0][fx] += p;
-                    raw[1][ky.min(ny - ky)] += p;
-                    raw[2][fz] += p;
+                    let p = a * a;
+                    let cy = (ny - ky) % ny;
+                    out[0][kx * ny + ky] += p;
+                    out[1][ky * nz + kz] += p;
+                    out[2][kz * nx + kx] += p;
+                    if both {
+                        out[0][cx * ny + cy] += p;
+                        out[1][cy * nz + cz] += p;
+                        out[2][cz * nx + cx] += p;
+                    }
                 }
             }
         }
-        for a in 0..3 {
-            let h1 = raw[a].len();
-            let o = &mut out[a];
-            o.clear();
-            for i in 0..h1 {
-                let k = &self.kernels[a][i * h1..][..h1];
-                let s: f64 = k.iter().zip(&raw[a]).map(|(k, r)| k * r).sum();
-                o.push(s.max(0.0).sqrt());
+        for (o, &(a, b)) in out.iter_mut().zip(&PLANES) {
+            let (na, nb) = (self.dims[a], self.dims[b]);
+            let (ka, kb) = (&self.kernels[a], &self.kernels[b]);
+            // Along b (each row), then along a (each column).
+            let mut t = vec![0.0; na * nb];
+            for r in 0..na {
+                let src = &o[r * nb..][..nb];
+                for c in 0..nb {
+                    let k = &kb[c * nb..][..nb];
+                    t[r * nb + c] = k.iter().zip(src).map(|(k, v)| k * v).sum();
+                }
+            }
+            for r in 0..na {
+                let k = &ka[r * na..][..na];
+                for c in 0..nb {
+                    let s: f64 = (0..na).map(|i| k[i] * t[i * nb + c]).sum();
+                    o[r * nb + c] = s.max(0.0).sqrt();
+                }
             }
             let norm = o.iter().map(|v| v * v).sum::<f64>().sqrt();
             if norm > 0.0 {
                 o.iter_mut().for_each(|v| *v /= norm);
             }
         }
+        out
     }
 
     /// The loss of the half-spectrum amplitudes `amp` against the target.
     fn loss(&self, amp: &[f64]) -> f64 {
-        let mut p = self.target.clone();
-        self.profiles(amp, &mut p);
-        let (mut sum, mut axes) = (0.0, 0);
-        for (a, (p, t)) in p.iter().zip(&self.target).enumerate() {
-            if self.dims[a] < 2 {
+        let p = self.profiles(amp);
+        let (mut sum, mut planes) = (0.0, 0);
+        for (p, t) in p.iter().zip(&self.target) {
+            if p.len() < 2 {
                 continue;
             }
             let dot: f64 = p.iter().zip(t).map(|(x, y)| x * y).sum();
@@ -440,9 +454,9 @@ impl Marginals {
                 (false, false) => (1.0 - dot).max(0.0),
                 _ => 1.0,
             };
-            axes += 1;
+            planes += 1;
         }
-        sum / axes.max(1) as f64
+        sum / planes.max(1) as f64
     }
 }
 
@@ -781,10 +795,10 @@ mod tests {
         let mut f = Fourier::new([n, n, n]).unwrap();
         let truth = gyroid_1d(100.0, n, h);
         let t = f.half_spectrum(&truth).unwrap();
-        let m = Marginals::new(&t, [n, n, n], 2.0);
+        let m = Profiles::new(&t, [n, n, n], 2.0);
         let mut at = |v: &[f64]| {
             let exact = f.half_loss(v, &t).unwrap();
-            (f.last_marginal_loss(&m), exact, f.last_amplitude_loss(&t))
+            (f.last_profile_loss(&m), exact, f.last_amplitude_loss(&t))
         };
         let (coarse, exact, amp) = at(&truth);
         assert!(

@@ -40,7 +40,7 @@
 //! The response carries no time (the core reads no clock): the CLI and the
 //! page measure seconds around the job.
 use super::api::{start_render, MicroRenderRequest, RenderJob};
-use super::fit::{amplitude_loss, Fourier, Marginals, Spectrum};
+use super::fit::{amplitude_loss, Fourier, Profiles, Spectrum};
 use super::periodic::Wave;
 use super::scene::{self, Node, Op, Scene};
 use crate::core::error::{Error, Result};
@@ -153,8 +153,8 @@ pub struct MicroFitRequest {
     pub shards: Option<(usize, usize)>,
     /// Coarse to fine (volume targets only): the budget in three stages,
     /// each optimiser run starting from the last one's best point. The
-    /// first compares per-axis power profiles blurred over
-    /// [`COARSE_SIGMA_BINS`] frequency bins ([`Marginals`]: a wide basin
+    /// first compares power profiles on the frequency planes blurred over
+    /// [`COARSE_SIGMA_BINS`] frequency bins ([`Profiles`]: a wide basin
     /// around the true frequencies, which the paper's loss hides in a
     /// needle), the second amplitude spectra alone (the loss without its
     /// phase term), the last the paper's loss ([`COARSE_TO_FINE`] has the
@@ -166,10 +166,11 @@ pub struct MicroFitRequest {
 /// [`MicroFitRequest::coarse_to_fine`]'s stages: what each compares, the
 /// fraction of the budget spent when it ends, and its optimiser's initial
 /// step (CMA-ES; normalised units, `None`: the request's `sigma`, with
-/// restarts). Measured on `bench micro`'s gyroid 3D and 5D: the profiles
-/// find every frequency to about 0.5 %, the amplitudes to the paper's
-/// loss's needle (about 1 % wide) and the thickness, the last stage
-/// polishes.
+/// restarts). Measured on `bench micro`'s gyroid 3D and 5D (a NumPy
+/// prototype of the same stages): the profiles find every frequency to
+/// about 0.01 % but not the thickness (it moves only the DC bin), the
+/// amplitudes bring both inside the paper's loss's needle (about 1 %
+/// wide), the last stage polishes.
 pub const COARSE_TO_FINE: [(Compare, f64, Option<f64>); 3] = [
     (Compare::Profiles, 0.4, None),
     (Compare::Amplitudes, 0.7, Some(0.01)),
@@ -182,7 +183,7 @@ pub const COARSE_SIGMA_BINS: f64 = 2.0;
 /// What a stage of a fit compares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Compare {
-    /// Blurred per-axis power profiles ([`Marginals`]).
+    /// Blurred power profiles on the frequency planes ([`Profiles`]).
     Profiles,
     /// Amplitude spectra ([`Fourier::last_amplitude_loss`]).
     Amplitudes,
@@ -595,7 +596,7 @@ pub struct MicroFitJob {
     /// the current one) and the coarse target once known.
     make: MakeOpt,
     stages: Vec<(Compare, f64, Option<f64>)>,
-    profiles: Option<Marginals>,
+    profiles: Option<Profiles>,
     rng: Rng,
     phase: Phase,
     work: Option<Work>,
@@ -1118,10 +1119,10 @@ impl MicroFitJob {
                     Compare::Profiles => {
                         if self.profiles.is_none() {
                             let dims = self.fourier.dims();
-                            self.profiles = Some(Marginals::new(t, dims, COARSE_SIGMA_BINS));
+                            self.profiles = Some(Profiles::new(t, dims, COARSE_SIGMA_BINS));
                         }
                         let m = self.profiles.as_ref().expect("profiles");
-                        finite(self.fourier.last_marginal_loss(m))
+                        finite(self.fourier.last_profile_loss(m))
                     }
                 };
                 (stage, exact)
