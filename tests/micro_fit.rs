@@ -235,6 +235,23 @@ fn coarse_to_fine_recovers_gyroid_3d_where_the_paper_loss_alone_does_not() {
         "the paper's loss alone found {} of 3",
         3 - plateau
     );
+    // Stages and all, shards give the unsharded run bit for bit (they
+    // exchange both losses of each point).
+    let short = MicroFitRequest {
+        budget: 400,
+        ..req(1, true)
+    };
+    let one = fit(short.clone());
+    let jobs = (0..2)
+        .map(|k| {
+            start_fit(MicroFitRequest {
+                shards: Some((k, 2)),
+                ..short.clone()
+            })
+            .unwrap()
+        })
+        .collect();
+    assert_eq!(run_sharded(jobs, &Cancel::new(), |_, _| {}).unwrap(), one);
 }
 
 const C2F_TEST_BUDGET: u32 = 3000;
