@@ -311,6 +311,14 @@ fn analysis_by_synthesis_lowers_the_image_loss() {
     };
     req.render.width = 32;
     req.render.height = 32;
+    // Coarse to fine compares volume spectra: refused here, naming itself.
+    let refused = start_fit(MicroFitRequest {
+        coarse_to_fine: true,
+        ..req.clone()
+    })
+    .err()
+    .expect("an image target refuses coarse_to_fine");
+    assert!(format!("{:?}", refused.field()).contains("coarse_to_fine"));
     let r = fit(req);
     assert!(
         r.loss < r.initial_loss - 0.5,
