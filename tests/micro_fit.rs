@@ -132,6 +132,130 @@ fn cmaes_fits_two_parameters_of_a_sheet_gyroid() {
     assert!(r.validation.unwrap() < 0.01, "{:?}", r.validation);
 }
 
+/// `bench micro`'s Gyroid [3D] (Table 3): a sheet gyroid's frequency η
+/// (tied along x, y and z), amplitude and thickness, from η = 300, a = 6,
+/// t = 0 to η = 100, a = 7, t = 1.2 on the 32³ grid. The paper's loss is
+/// a needle in η (its phases match only within about 1 % of the truth):
+/// CMA-ES on it alone ends on the plateau for two of these three seeds
+/// (validation error about 3; the third finds η and stops at 1.2e-3).
+/// Coarse to fine (`coarse_to_fine`: blurred power profiles on the
+/// frequency planes, then amplitudes, then the paper's loss) brings every
+/// seed below 1e-3 with the same budget (measured: 3.5e-5, 2.2e-5,
+/// 2.3e-9), and its reported loss is the paper's loss of its answer.
+#[test]
+fn coarse_to_fine_recovers_gyroid_3d_where_the_paper_loss_alone_does_not() {
+    let gyroid = |eta: f64, a: f64, t: f64| {
+        let f =
+            |w: &str, ax: &str, amp: f64| json!({"wave": w, "axis": ax, "freq": eta, "amp": amp});
+        json!({"type": "periodic", "thickness": t, "terms": [
+            [f("sin", "x", a), f("cos", "y", 1.0)],
+            [f("sin", "y", a), f("cos", "z", 1.0)],
+            [f("sin", "z", a), f("cos", "x", 1.0)]]})
+        .to_string()
+    };
+    let p = |pointer: &str, lo: f64, hi: f64, also: &[&str]| FitParam {
+        pointer: pointer.into(),
+        lo,
+        hi,
+        also: also.iter().map(|s| s.to_string()).collect(),
+    };
+    let freqs = ["/terms/0/1/freq", "/terms/1/0/freq", "/terms/1/1/freq"];
+    let rest = ["/terms/2/0/freq", "/terms/2/1/freq"];
+    let req = |seed: u64, coarse_to_fine: bool| MicroFitRequest {
+        scene: gyroid(300.0, 6.0, 0.0),
+        params: vec![
+            p(
+                "/terms/0/0/freq",
+                10.0,
+                400.0,
+                &[&freqs[..], &rest[..]].concat(),
+            ),
+            p(
+                "/terms/0/0/amp",
+                1.0,
+                20.0,
+                &["/terms/1/0/amp", "/terms/2/0/amp"],
+            ),
+            p("/thickness", 0.0, 3.0, &[]),
+        ],
+        target: FitTarget::Scene {
+            scene: gyroid(100.0, 7.0, 1.2),
+        },
+        grid: 32,
+        center: [0.125; 3],
+        half: 0.125,
+        budget: C2F_TEST_BUDGET,
+        population: 20,
+        sigma: 0.3,
+        seed,
+        coarse_to_fine,
+        ..Default::default()
+    };
+    let mut plateau = 0;
+    for seed in 1..=3 {
+        let exact = fit(req(seed, false));
+        let c2f = fit(req(seed, true));
+        eprintln!(
+            "seed {seed}: paper loss alone {:?} (validation {:?}); coarse to fine {:?} \
+             (validation {:?}, loss {})",
+            exact.values, exact.validation, c2f.values, c2f.validation, c2f.loss
+        );
+        plateau += usize::from(exact.validation.unwrap() > 0.1);
+        assert!(
+            c2f.validation.unwrap() < 1e-3,
+            "seed {seed}: {:?}",
+            c2f.validation
+        );
+        assert!(
+            (c2f.values[0] - 100.0).abs() < 0.1,
+            "seed {seed}: {:?}",
+            c2f.values
+        );
+        assert!(c2f.evaluations <= C2F_TEST_BUDGET as u64);
+        // Honest: the reported loss is the paper's loss of the answer.
+        let again = fit(MicroFitRequest {
+            scene: c2f.scene.clone(),
+            budget: 1,
+            ..req(seed, false)
+        });
+        // Only deep in the needle, not equal: the start's values pass
+        // through the normalised coordinates and back, which may move
+        // them an ulp, and that near the minimum moves bins of rounding
+        // noise across the phase floor (seen: −13.4 → −6.0).
+        let l = again.initial_loss;
+        assert!(
+            l < -5.0 && c2f.loss < -5.0,
+            "seed {seed}: {l}, {}",
+            c2f.loss
+        );
+        assert_eq!(c2f.history.last(), Some(&c2f.loss));
+    }
+    assert!(
+        plateau >= 2,
+        "the paper's loss alone found {} of 3",
+        3 - plateau
+    );
+    // Stages and all, shards give the unsharded run bit for bit (they
+    // exchange both losses of each point).
+    let short = MicroFitRequest {
+        budget: 400,
+        ..req(1, true)
+    };
+    let one = fit(short.clone());
+    let jobs = (0..2)
+        .map(|k| {
+            start_fit(MicroFitRequest {
+                shards: Some((k, 2)),
+                ..short.clone()
+            })
+            .unwrap()
+        })
+        .collect();
+    assert_eq!(run_sharded(jobs, &Cancel::new(), |_, _| {}).unwrap(), one);
+}
+
+const C2F_TEST_BUDGET: u32 = 3000;
+
 #[test]
 fn a_seed_fixes_the_run_and_shards_give_the_unsharded_result() {
     let req = MicroFitRequest {
@@ -187,6 +311,14 @@ fn analysis_by_synthesis_lowers_the_image_loss() {
     };
     req.render.width = 32;
     req.render.height = 32;
+    // Coarse to fine compares volume spectra: refused here, naming itself.
+    let refused = start_fit(MicroFitRequest {
+        coarse_to_fine: true,
+        ..req.clone()
+    })
+    .err()
+    .expect("an image target refuses coarse_to_fine");
+    assert!(format!("{:?}", refused.field()).contains("coarse_to_fine"));
     let r = fit(req);
     assert!(
         r.loss < r.initial_loss - 0.5,

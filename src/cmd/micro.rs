@@ -72,6 +72,10 @@ pub struct FitArgs {
     sigma: Option<f64>,
     #[arg(long)]
     seed: Option<u64>,
+    /// Volume targets: fit in coarse-to-fine stages (blurred power
+    /// profiles, then amplitudes, then the paper's loss): true or false.
+    #[arg(long, value_name = "BOOL")]
+    coarse_to_fine: Option<bool>,
     /// Slice targets: the distance that white (and black) stands for.
     #[arg(long)]
     range: Option<f64>,
@@ -317,6 +321,12 @@ fn fit(a: FitArgs) -> Result<(), String> {
     put(&mut o, "population", "--population", a.population)?;
     put(&mut o, "sigma", "--sigma", a.sigma)?;
     put(&mut o, "seed", "--seed", a.seed)?;
+    put(
+        &mut o,
+        "coarse_to_fine",
+        "--coarse-to-fine",
+        a.coarse_to_fine,
+    )?;
     if let Some(c) = &a.center {
         let v: Vec<f64> = c
             .split(',')
