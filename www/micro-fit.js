@@ -28,6 +28,7 @@ const html = `
     <label class="inline">Optimizer <select name="fit-optimizer" data-testid="micro-fit-optimizer"></select></label>
     <label class="inline">Evaluations <input type="number" name="fit-budget" min="2" max="100000" step="1" data-testid="micro-fit-budget"></label>
     <label class="inline">Grid <select name="fit-grid"><option>8</option><option>16</option><option>32</option><option>64</option></select></label>
+    <label class="inline" title="Blurred power profiles first, then amplitudes, then the paper's loss: finds several frequencies at once (gyroid 3D/5D) where the paper's loss alone has needle-thin basins. The loss shown is always the paper's."><input type="checkbox" name="fit-c2f" data-testid="micro-fit-c2f"> Coarse to fine</label>
   </div>
   <div class="micro-fit-actions">
     <button type="button" data-act="fit-run" data-testid="micro-fit-run">Reconstruct</button>
@@ -94,6 +95,7 @@ export function mountReconstruct(el, ctx) {
   }
   const budgetIn = q('[name=fit-budget]');
   const gridSel = q('[name=fit-grid]');
+  const c2fIn = q('[name=fit-c2f]');
   const fileIn = q('[name=fit-slice]');
   const runBtn = q('[data-act=fit-run]');
   const stopBtn = q('[data-act=fit-stop]');
@@ -106,6 +108,7 @@ export function mountReconstruct(el, ctx) {
     optSel.value = d.optimizer;
     budgetIn.value = String(Math.min(d.budget, 400));
     gridSel.value = String(Math.min(d.grid, 16));
+    c2fIn.checked = d.coarse_to_fine;
   }).catch((err) => ctx.error(err, { prefix: 'Reconstruct' }));
 
   let scene = null; // the scene text the rows were built from
@@ -176,6 +179,7 @@ export function mountReconstruct(el, ctx) {
       target,
       grid,
       optimizer: optSel.value,
+      coarse_to_fine: c2fIn.checked,
       budget: Math.max(2, Math.round(Number(budgetIn.value) || defaults.budget)),
     };
   }
@@ -253,6 +257,7 @@ export function mountReconstruct(el, ctx) {
     result: () => result && { scene: result.scene, values: result.values },
     running: () => running !== null,
     plotted: () => plot.points.length,
+    request: () => request(),
   };
   window.filigreeMicroFit = hooks;
 

@@ -70,6 +70,33 @@ test('micro reconstruct: the loss falls, the fitted value is applied and undone'
   await page.context().close();
 });
 
+test('micro reconstruct: coarse to fine goes into the request and its fit lowers the paper loss', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
+  await page.click('[data-example=gyroid]');
+  await page.waitForFunction(() => window.filigreeMicro.state()?.example === 'gyroid');
+  await page.click('[data-testid=micro-fit] > summary');
+  await page.waitForSelector('[data-testid=micro-fit-params] [data-pointer="/period"]');
+  // Off by default (the core's default), on when ticked.
+  assert.equal(await page.isChecked('[data-testid=micro-fit-c2f]'), false);
+  const row = '[data-testid=micro-fit-params] [data-pointer="/period"]';
+  const period0 = JSON.parse((await state(page)).scene).period;
+  await page.check(`${row} [name=fit-on]`);
+  await page.fill(`${row} [name=fit-truth]`, String(period0 * 1.3));
+  await page.fill(`${row} [name=fit-lo]`, String(period0 * 0.5));
+  await page.fill(`${row} [name=fit-hi]`, String(period0 * 2));
+  await page.check('[data-testid=micro-fit-c2f]');
+  await page.fill('[data-testid=micro-fit-budget]', '90');
+  const req = await page.evaluate(() => window.filigreeMicroFit.request());
+  assert.equal(req.coarse_to_fine, true);
+  await page.click('[data-testid=micro-fit-run]');
+  await page.waitForFunction(() => Number(document.querySelector('[data-testid=micro-fit-status]').dataset.fits || 0) >= 1,
+    null, { timeout: 120000 });
+  const st = await page.$eval('[data-testid=micro-fit-status]', (el) => ({ ...el.dataset, text: el.textContent }));
+  assert.ok(Number(st.loss) < Number(st.initial), `the paper loss fell: ${st.initial} → ${st.loss} (${st.text})`);
+  await page.context().close();
+});
+
 /** JSON text with object keys sorted and `undefined` as null: equal text, equal numbers (bit for bit). */
 const canon = (v) => JSON.stringify(v, (k, x) => {
   if (x === undefined) return null;
