@@ -698,7 +698,10 @@ mod tests {
     }
 
     /// The mapped rows' dot product approximates the χ² kernel of the
-    /// histograms (the squared values), within a few percent.
+    /// histograms (the squared values). Order 1 at L = 0.5 is a coarse
+    /// sampling of the kernel's spectrum: a bin with itself comes out at
+    /// L(1 + 2 sech(πL)) ≈ 0.90 of its value, bins a few times apart
+    /// up to ~10% high; over whole histograms the error stays within 15%.
     #[test]
     fn chi2_map_approximates_the_chi2_kernel() {
         let mut r = crate::core::rng::Rng::new(5);
@@ -725,9 +728,10 @@ mod tests {
             let (mh, mg) = (chi2_map(&row(&h)), chi2_map(&row(&g)));
             assert_eq!(mh.len(), 16 * CHI2_MAP_DIMS);
             let approx = dot(&mh, &mg);
-            assert!((approx - k).abs() < 0.03 * k, "{approx} vs {k}");
-            // A histogram with itself: Σ h = 1.
-            assert!((dot(&mh, &mh) - 1.0).abs() < 0.03);
+            assert!((approx - k).abs() < 0.15 * k, "{approx} vs {k}");
+            // A histogram with itself: Σ h = 1, times the map's constant.
+            let own = 0.5 * (1.0 + 2.0 / (std::f64::consts::PI * 0.5).cosh());
+            assert!((dot(&mh, &mh) - own).abs() < 1e-4, "{}", dot(&mh, &mh));
         }
     }
 
