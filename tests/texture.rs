@@ -194,7 +194,7 @@ fn write_fuzz_seeds() {
     std::fs::write(dir.join("flipped.bin"), f).unwrap();
     std::fs::write(dir.join("magic-only.bin"), &b[..20]).unwrap();
     let mut v = b.clone();
-    v[16] = 2;
+    v[16] = filigree::texture::index::VERSION as u8 + 1;
     std::fs::write(dir.join("other-version.bin"), v).unwrap();
     std::fs::write(dir.join("empty.bin"), b"").unwrap();
 }

@@ -60,8 +60,8 @@ pub enum Which {
     /// paper's random image split, space regressions' R²),
     /// PCN-2 seconds per 256² texture, retrieval ms, index size.
     Texture {
-        /// Base textures per model.
-        #[arg(long, default_value_t = 24)]
+        /// Base textures per model (default: the shipped index's).
+        #[arg(long, default_value_t = filigree::texture::build::BuildConfig::default().dataset.per_model)]
         per_model: usize,
         #[arg(long, default_value_t = 128)]
         size: usize,
@@ -69,7 +69,7 @@ pub enum Which {
         #[arg(long)]
         no_augment: bool,
         /// The index settings as JSON (IndexConfig; missing fields default),
-        /// e.g. '{"c_class": 10, "pcn": {"hash_bits": 8}}'.
+        /// e.g. '{"c_model": 1, "pcn": {"hash_bits": 8}}'.
         #[arg(long)]
         index_config: Option<String>,
         #[arg(long)]

@@ -8,7 +8,7 @@ use filigree::texture::build::{self, BuildConfig, BuildStats};
 use filigree::texture::dataset::DatasetConfig;
 use filigree::texture::index::{Index, Training, SCALES};
 use filigree::texture::learn::isomap::pearson;
-use filigree::texture::learn::svm::OneVsRest;
+use filigree::texture::learn::svm::{chi2_map, OneVsRest};
 use filigree::texture::models::MODELS;
 use filigree::texture::pcn::{convolve_direct, convolve_im2col, Pcn, PcnConfig};
 use filigree::texture::scales::parse_ratings;
@@ -297,7 +297,7 @@ pub fn bench(
         .collect();
     let mut confusion = vec![vec![0usize; MODELS.len()]; MODELS.len()];
     for &i in &held_ids {
-        let got = index.model_classifier.predict(&features[i]) as usize;
+        let got = index.predict_model(&features[i]) as usize;
         confusion[samples[i].0.model][got] += 1;
     }
     let held_all_right: usize = (0..MODELS.len()).map(|m| confusion[m][m]).sum();
@@ -321,7 +321,7 @@ pub fn bench(
         })
         .collect();
     // The model classifier's penalty: held-out bases at other values of C.
-    let train_features = rows_of(&by_base);
+    let train_features: Vec<Vec<f32>> = rows_of(&by_base).iter().map(|f| chi2_map(f)).collect();
     let train_models: Vec<u16> = train_rows.iter().map(|t| t.model).collect();
     let c_sweep: Vec<_> = [0.1, 1.0, 10.0, 100.0]
         .iter()
@@ -329,7 +329,7 @@ pub fn bench(
             let clf = OneVsRest::train(&train_features, &train_models, c);
             let right = test_ids
                 .iter()
-                .filter(|&&i| clf.predict(&features[i]) as usize == samples[i].0.model)
+                .filter(|&&i| clf.predict(&chi2_map(&features[i])) as usize == samples[i].0.model)
                 .count();
             json!({"c": c, "model_accuracy": right as f64 / n})
         })
@@ -358,10 +358,18 @@ pub fn bench(
             .collect()
     };
     let p_acc = |k: Option<usize>| -> (f64, f64) {
-        let clf = OneVsRest::train(&p_features, &p_label(k), cfg.index.c_class);
+        let c = if k.is_some() {
+            cfg.index.c_class
+        } else {
+            cfg.index.c_model
+        };
+        // The model classifier reads the features' χ² map, as the index's.
+        let map = |f: &[f32]| if k.is_some() { f.to_vec() } else { chi2_map(f) };
+        let rows: Vec<Vec<f32>> = p_features.iter().map(|f| map(f)).collect();
+        let clf = OneVsRest::train(&rows, &p_label(k), c);
         let (mut exact, mut near) = (0usize, 0usize);
         for &i in &p_test {
-            let got = clf.predict(&features[i]) as i32;
+            let got = clf.predict(&map(&features[i])) as i32;
             let want = k.map_or(samples[i].0.model as i32, |k| samples[i].1[k] as i32);
             exact += (got == want) as usize;
             near += ((got - want).abs() <= 1) as usize;

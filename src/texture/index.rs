@@ -2,8 +2,10 @@
 //! image to a procedural model and its parameters (MISSION X5, X6).
 //!
 //! - a trained [`Pcn`] (both filter banks);
-//! - linear one-vs-rest SVMs from PCN features to the generating model and
-//!   to each of the twelve perceptual scales (1–9), as in Section 4.1;
+//! - linear one-vs-rest SVMs from PCN features to the generating model
+//!   (on the features' explicit χ² map, [`chi2_map`]: a χ²-kernel machine
+//!   kept linear) and to each of the twelve perceptual scales (1–9), as in
+//!   Section 4.1;
 //! - the perceptual texture space: a 3-D Isomap of the samples'
 //!   dissimilarities, with, per axis, the subset of scales that correlate
 //!   with it and a Gaussian SVR from that subset to the coordinate (4.2);
@@ -23,7 +25,7 @@
 //! or other-version file is a clear error, never a panic or a huge
 //! allocation.
 use super::learn::isomap::{isomap, pearson};
-use super::learn::svm::{Linear, OneVsRest, Svr};
+use super::learn::svm::{chi2_map, Linear, OneVsRest, Svr, CHI2_MAP_DIMS};
 use super::pcn::{Pcn, PcnConfig};
 use super::Gray;
 use crate::core::error::{Error, Result};
@@ -34,7 +36,7 @@ pub use super::scales::SCALE_NAMES as SCALES;
 /// Magic bytes at the start of every index file.
 pub const MAGIC: &[u8; 16] = b"FILIGREE-TEXIDX\0";
 /// The index format's version: bump it whenever the layout changes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// One training texture: its grey image, where it came from, and its
 /// scales (1–9). Augmented copies have `base: false`: they train the
@@ -74,7 +76,13 @@ pub struct Axis {
 #[serde(default, deny_unknown_fields)]
 pub struct IndexConfig {
     pub pcn: PcnConfig,
-    /// SVM penalty of the model and scale classifiers.
+    /// SVM penalty of the model classifier. 10, chosen on a validation
+    /// split of the training bases (a third of each model's, never the
+    /// held-out test bases; `examples/texture_validation.rs`): 1 → 10
+    /// raised it by 0.7 and 2 points at 12 and 24 training bases per
+    /// model, 30 gave no more (`docs/bench/texture-accuracy-2026-12-02.md`).
+    pub c_model: f64,
+    /// SVM penalty of the twelve scale classifiers.
     pub c_class: f64,
     /// Neighbours in Isomap's graph.
     pub isomap_k: usize,
@@ -89,6 +97,7 @@ impl Default for IndexConfig {
     fn default() -> Self {
         IndexConfig {
             pcn: PcnConfig::default(),
+            c_model: 10.0,
             c_class: 1.0,
             isomap_k: 10,
             filter_images: 240,
@@ -103,6 +112,7 @@ pub struct Index {
     /// The model names, by model id (checked against the app's models).
     pub model_names: Vec<String>,
     pub pcn: Pcn,
+    /// Reads the features' χ² map ([`Index::predict_model`]).
     pub model_classifier: OneVsRest,
     pub scale_classifiers: Vec<OneVsRest>,
     pub axes: Vec<Axis>,
@@ -259,7 +269,9 @@ impl Index {
         }
         let base: Vec<&Training> = training.iter().filter(|t| t.base).collect();
         let models: Vec<u16> = training.iter().map(|t| t.model).collect();
-        let model_classifier = OneVsRest::train(features, &models, config.c_class);
+        let mapped: Vec<Vec<f32>> = features.iter().map(|f| chi2_map(f)).collect();
+        let model_classifier = OneVsRest::train(&mapped, &models, config.c_model);
+        drop(mapped);
         let scale_ids: Vec<usize> = (0..12).collect();
         let scale_classifiers = par_map(&scale_ids, |&k| {
             let labels: Vec<u16> = training.iter().map(|t| t.scales[k] as u16).collect();
@@ -377,9 +389,15 @@ impl Index {
             *s = c.predict(&f) as u8;
         }
         Ok(Analysis {
-            model: self.model_classifier.predict(&f),
+            model: self.predict_model(&f),
             scales,
         })
+    }
+
+    /// The model of PCN features `f`: the model classifier reads them
+    /// through the χ² map ([`chi2_map`]).
+    pub fn predict_model(&self, f: &[f32]) -> u16 {
+        self.model_classifier.predict(&chi2_map(f))
     }
 
     /// The point of requested scales (1–9, fractional allowed) in the space.
@@ -646,7 +664,7 @@ impl Index {
             })
             .collect::<Result<Vec<_>>>()?;
         let dim = config.feature_len();
-        let model_classifier = r.ovr(dim, "model classifier")?;
+        let model_classifier = r.ovr(dim * CHI2_MAP_DIMS, "model classifier")?;
         if model_classifier
             .classes
             .iter()

@@ -456,6 +456,41 @@ pub fn train_linear_svc(rows: &[Vec<f32>], positive: &[bool], c: f64, seed: u64)
     }
 }
 
+/// Values each feature becomes under [`chi2_map`].
+pub const CHI2_MAP_DIMS: usize = 3;
+/// The map's sampling period L (Vedaldi & Zisserman's usual 0.5 for
+/// order 1).
+const CHI2_L: f64 = 0.5;
+
+/// The explicit feature map of the additive χ² kernel, order 1 (Vedaldi &
+/// Zisserman, "Efficient additive kernels via explicit feature maps",
+/// 2012): a linear machine on the mapped rows is, to a close
+/// approximation, a machine with the kernel Σₖ 2hₖh'ₖ / (hₖ + h'ₖ) on the
+/// histograms. Our PCN features are square-rooted histogram values
+/// (the Hellinger map), so each value `x` is the bin `h = x²`, which
+/// becomes `√(hLκ(0))`, `√(2hLκ(L))·cos(L ln h)`, `√(2hLκ(L))·sin(L ln h)`
+/// with κ(λ) = sech(πλ) (an empty bin is three zeros). libm's functions,
+/// so native and wasm map a row to the same bits.
+pub fn chi2_map(row: &[f32]) -> Vec<f32> {
+    let kappa = |lam: f64| 1.0 / libm::cosh(std::f64::consts::PI * lam);
+    let (a0, a1) = (CHI2_L * kappa(0.0), 2.0 * CHI2_L * kappa(CHI2_L));
+    let mut out = Vec::with_capacity(row.len() * CHI2_MAP_DIMS);
+    for &x in row {
+        let h = x as f64 * x as f64;
+        if h.is_nan() || h <= 0.0 {
+            out.extend([0.0; CHI2_MAP_DIMS]);
+            continue;
+        }
+        let (r, t) = ((a1 * h).sqrt(), CHI2_L * libm::log(h));
+        out.extend([
+            (a0 * h).sqrt() as f32,
+            (r * libm::cos(t)) as f32,
+            (r * libm::sin(t)) as f32,
+        ]);
+    }
+    out
+}
+
 /// One-vs-rest linear classifiers: the class whose machine scores highest.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OneVsRest {
@@ -659,6 +694,44 @@ mod tests {
             } else if a <= 1e-6 {
                 assert!(yf > 1.0 - 0.01, "sample {i} at 0 inside the margin: {yf}");
             }
+        }
+    }
+
+    /// The mapped rows' dot product approximates the χ² kernel of the
+    /// histograms (the squared values). Order 1 at L = 0.5 is a coarse
+    /// sampling of the kernel's spectrum: a bin with itself comes out at
+    /// L(1 + 2 sech(πL)) ≈ 0.90 of its value, bins a few times apart
+    /// up to ~10% high; over whole histograms the error stays within 15%.
+    #[test]
+    fn chi2_map_approximates_the_chi2_kernel() {
+        let mut r = crate::core::rng::Rng::new(5);
+        for _ in 0..20 {
+            let mut h: Vec<f64> = (0..16).map(|_| r.f64().powi(3)).collect();
+            let mut g: Vec<f64> = (0..16).map(|_| r.f64().powi(3)).collect();
+            h[3] = 0.0;
+            for v in [&mut h, &mut g] {
+                let s: f64 = v.iter().sum();
+                v.iter_mut().for_each(|x| *x /= s);
+            }
+            let k: f64 = h
+                .iter()
+                .zip(&g)
+                .map(|(a, b)| {
+                    if a + b > 0.0 {
+                        2.0 * a * b / (a + b)
+                    } else {
+                        0.0
+                    }
+                })
+                .sum();
+            let row = |v: &[f64]| v.iter().map(|x| x.sqrt() as f32).collect::<Vec<f32>>();
+            let (mh, mg) = (chi2_map(&row(&h)), chi2_map(&row(&g)));
+            assert_eq!(mh.len(), 16 * CHI2_MAP_DIMS);
+            let approx = dot(&mh, &mg);
+            assert!((approx - k).abs() < 0.15 * k, "{approx} vs {k}");
+            // A histogram with itself: Σ h = 1, times the map's constant.
+            let own = 0.5 * (1.0 + 2.0 / (std::f64::consts::PI * 0.5).cosh());
+            assert!((dot(&mh, &mh) - own).abs() < 1e-4, "{}", dot(&mh, &mh));
         }
     }
 
