@@ -77,7 +77,8 @@ impl Evaluator {
                         let m = vs[k] < best[k];
                         best[k] = if m { vs[k] } else { best[k] };
                         if W {
-                            let code = (it as u64) << 2 | ((!(d[k] >= 0.0)) as u64) << 1;
+                            let below = (d[k] < 0.0) | d[k].is_nan();
+                            let code = (it as u64) << 2 | (below as u64) << 1;
                             bi[k] = if m { code } else { bi[k] };
                         }
                     }
