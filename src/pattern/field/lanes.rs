@@ -2,9 +2,9 @@
 //! segments is evaluated for a whole small tile (`T2 × T2` pixels) at once,
 //! item by item, so the square roots overlap (and vectorise) and each
 //! item's set-up is paid once per tile, not once per row.
-use super::scene::{Part, Scene};
+use super::scene::{Item, Part, Scene};
 use super::tiles::Evaluator;
-use super::{CombineOp, Hit, CAP, NONE, NO_WIN, T2};
+use super::{lesser, CombineOp, Hit, CAP, NONE, NO_WIN, T2};
 use crate::pattern::sdf::{self, PrimKind};
 
 impl Evaluator {
@@ -43,34 +43,8 @@ impl Evaluator {
                 while i < ops.len() && ops[i].0 == op {
                     let it = ops[i].1;
                     let item = &scene.items[it as usize];
-                    let f = &self.prim_vals[item.prim as usize];
-                    let mut d = [0.0f64; L];
-                    match item.kind {
-                        PrimKind::Circle | PrimKind::Point => {
-                            let r = if item.kind == PrimKind::Circle {
-                                f[2]
-                            } else {
-                                0.0
-                            };
-                            for k in 0..L {
-                                let dx = px[k] - f[0];
-                                let dy = py[k] - f[1];
-                                d[k] = (dx * dx + dy * dy).sqrt() - r;
-                            }
-                        }
-                        _ => {
-                            for k in 0..L {
-                                d[k] = sdf::segment_distance(f, [px[k], py[k]]);
-                            }
-                        }
-                    }
-                    let hw = 0.5 * self.widths[item.shape as usize];
-                    let mut vs = d;
-                    match item.part {
-                        Part::Fill if item.inset => vs.iter_mut().for_each(|v| *v += hw),
-                        Part::Fill => {}
-                        Part::Stroke => vs.iter_mut().for_each(|v| *v = v.abs() - hw),
-                    }
+                    let d = self.lane_distances(item, px, py);
+                    let vs = self.lane_values(item, &d);
                     // Selects, not branches, and no `min` (its choice
                     // between ±0 is not specified): the first smallest wins.
                     for k in 0..L {
@@ -115,7 +89,8 @@ impl Evaluator {
                     let idx = row + i;
                     let mut v = b[k];
                     let mut w = (wi[k] >> 2) as u32;
-                    let cap = CAP.min(self.edge_x[x0 + i].min(ey));
+                    // (Edge values are never NaN.)
+                    let cap = lesser(CAP, lesser(self.edge_x[x0 + i], ey));
                     if v.abs() >= cap {
                         v = v.clamp(-cap, cap);
                         w = NONE;
@@ -146,6 +121,54 @@ impl Evaluator {
                 }
             }
         }
+    }
+
+    /// The distances of a lane item's primitive (circle, point or
+    /// segment) at `N` points: the same operations as
+    /// [`Scene::item_hit`], so the same bits.
+    #[inline(always)]
+    pub(super) fn lane_distances<const N: usize>(
+        &self,
+        item: &Item,
+        px: &[f64; N],
+        py: &[f64; N],
+    ) -> [f64; N] {
+        let f = &self.prim_vals[item.prim as usize];
+        let mut d = [0.0f64; N];
+        match item.kind {
+            PrimKind::Circle | PrimKind::Point => {
+                let r = if item.kind == PrimKind::Circle {
+                    f[2]
+                } else {
+                    0.0
+                };
+                for k in 0..N {
+                    let dx = px[k] - f[0];
+                    let dy = py[k] - f[1];
+                    d[k] = (dx * dx + dy * dy).sqrt() - r;
+                }
+            }
+            _ => {
+                for k in 0..N {
+                    d[k] = sdf::segment_distance(f, [px[k], py[k]]);
+                }
+            }
+        }
+        d
+    }
+
+    /// A lane item's values from its primitive's distances `d` (fill,
+    /// inset fill or stroke), as [`Scene::item_hit`] makes them.
+    #[inline(always)]
+    pub(super) fn lane_values<const N: usize>(&self, item: &Item, d: &[f64; N]) -> [f64; N] {
+        let hw = 0.5 * self.widths[item.shape as usize];
+        let mut vs = *d;
+        match item.part {
+            Part::Fill if item.inset => vs.iter_mut().for_each(|v| *v += hw),
+            Part::Fill => {}
+            Part::Stroke => vs.iter_mut().for_each(|v| *v = v.abs() - hw),
+        }
+        vs
     }
 
     /// The pixel centres of a block for [`Evaluator::lanes`]: lane `k` is

@@ -2,7 +2,10 @@
 //! tile culling (see [`cull`]), per-pixel evaluation of what survives, and
 //! the backward pass from field adjoints to tape nodes.
 use super::scene::{GeomCache, Scene};
-use super::{CombineOp, Grid, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+use super::{greater, lesser, CombineOp, Grid, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+
+/// Small tiles per big tile along each axis.
+const S: usize = T1 / T2;
 use crate::pattern::sdf::{self, Fields, PrimKind};
 
 /// Scratch and results of evaluating all colour fields on a grid.
@@ -32,6 +35,9 @@ pub struct Evaluator {
     pub(super) ranges2: Vec<(usize, usize)>,
     pub(super) gcache: GeomCache,
     pub(super) lane_channels: Vec<bool>,
+    /// Lane items' values at the small-tile centres of the current big
+    /// tile, by position in the big tile's used items.
+    small_vals: Vec<[f64; S * S]>,
     /// `edge_x[x]`, `edge_y[y]`: [`super::edge_cap`] by column and by row,
     /// so `edge_cap(x, y) = min(edge_x[x], edge_y[y])` (the same bits: the
     /// map is monotone and exact per integer) ([`Grid::edges`]).
@@ -76,6 +82,7 @@ impl Evaluator {
             ranges2: vec![],
             gcache: GeomCache::default(),
             lane_channels: vec![],
+            small_vals: vec![],
             edge_x: vec![],
             edge_y: vec![],
             centres_x: vec![],
@@ -214,16 +221,50 @@ impl Evaluator {
                         used.push(it);
                     }
                 }
-                // Level 2: small tiles, only the items level 1 kept.
+                // Level 2: small tiles, only the items level 1 kept. The
+                // lane items' values at all the small tiles' centres at
+                // once (lane `k`: small tile `(k % S, k / S)`), the same
+                // bits as one `item_hit` per centre.
+                let (mut scx, mut scy) = ([0.0; S * S], [0.0; S * S]);
+                for k in 0..S * S {
+                    scx[k] = (x0 + (k % S) * T2 + T2 / 2) as f64 * ix;
+                    scy[k] = (y0 + (k / S) * T2 + T2 / 2) as f64 * iy;
+                }
+                self.small_vals.clear();
+                for &it in &used {
+                    let item = &scene.items[it as usize];
+                    if item.lanes {
+                        let d = self.lane_distances(item, &scx, &scy);
+                        let v = self.lane_values(item, &d);
+                        self.small_vals.push(v);
+                    } else {
+                        self.small_vals.push([f64::NAN; S * S]);
+                    }
+                }
+                let scalar_used = used.iter().any(|&it| !scene.items[it as usize].lanes);
                 for sy in (y0..(y0 + T1).min(gh)).step_by(T2) {
                     for sx in (x0..(x0 + T1).min(gw)).step_by(T2) {
                         let pc = [(sx + T2 / 2) as f64 * ix, (sy + T2 / 2) as f64 * iy];
-                        self.gcache.next();
-                        for &it in &used {
-                            let it_ = &scene.items[it as usize];
-                            self.centre_vals[it as usize] = scene
-                                .item_hit(it_, &self.prim_vals, &self.widths, pc, &mut self.gcache)
-                                .0;
+                        let k = (sy - y0) / T2 * S + (sx - x0) / T2;
+                        for (&it, v) in used.iter().zip(&self.small_vals) {
+                            self.centre_vals[it as usize] = v[k];
+                        }
+                        if scalar_used {
+                            self.gcache.next();
+                            for &it in &used {
+                                let it_ = &scene.items[it as usize];
+                                if !it_.lanes {
+                                    self.centre_vals[it as usize] = scene
+                                        .item_hit(
+                                            it_,
+                                            &self.prim_vals,
+                                            &self.widths,
+                                            pc,
+                                            &mut self.gcache,
+                                        )
+                                        .0;
+                                }
+                            }
                         }
                         work += used.len() as u64;
                         chain2.clear();
@@ -506,7 +547,7 @@ fn cull(
             &mut suf_d
         };
         *k = v - h < *suf;
-        *suf = suf.min(v + h);
+        *suf = lesser(*suf, v + h);
     }
     let (mut blo, mut bhi) = (init * CAP, init * CAP);
     let mut i = 0;
@@ -517,8 +558,8 @@ fn cull(
         while j < chain.len() && chain[j].0 == op {
             if keep[j] {
                 let v = vals[chain[j].1 as usize];
-                m = m.min(v + h);
-                ylo = ylo.min(v - h);
+                m = lesser(m, v + h);
+                ylo = lesser(ylo, v - h);
             }
             j += 1;
         }
@@ -535,12 +576,12 @@ fn cull(
             }
             match op {
                 CombineOp::Union => {
-                    blo = blo.min(ylo);
-                    bhi = bhi.min(m);
+                    blo = lesser(blo, ylo);
+                    bhi = lesser(bhi, m);
                 }
                 CombineOp::Diff => {
-                    blo = blo.max(-m);
-                    bhi = bhi.max(-ylo);
+                    blo = greater(blo, -m);
+                    bhi = greater(bhi, -ylo);
                 }
             }
         }
