@@ -22,7 +22,7 @@ impl Evaluator {
         c: usize,
         (x0, x1): (usize, usize),
         (y0, y1): (usize, usize),
-        (px, py): (&[f64; T2 * T2], &[f64; T2 * T2]),
+        (px, py, caps): (&[f64; T2 * T2], &[f64; T2 * T2], &[f64; T2 * T2]),
     ) {
         const L: usize = T2 * T2;
         debug_assert!(x1 - x0 <= T2 && y1 - y0 <= T2);
@@ -83,19 +83,18 @@ impl Evaluator {
             let mut memo = (u64::MAX, NO_WIN);
             for j in 0..bh {
                 let row = c * nn + (y0 + j) * gw + x0;
-                let ey = self.edge_y[y0 + j];
+                let out = &mut self.s[row..row + bw];
                 for i in 0..bw {
                     let k = j * T2 + i;
                     let idx = row + i;
                     let mut v = b[k];
                     let mut w = (wi[k] >> 2) as u32;
-                    // (Edge values are never NaN.)
-                    let cap = lesser(CAP, lesser(self.edge_x[x0 + i], ey));
+                    let cap = caps[k];
                     if v.abs() >= cap {
                         v = v.clamp(-cap, cap);
                         w = NONE;
                     }
-                    self.s[idx] = v * self.scale;
+                    out[i] = v * self.scale;
                     if W {
                         let code = wi[k];
                         self.win[idx] = if w == NONE {
@@ -171,27 +170,38 @@ impl Evaluator {
         vs
     }
 
-    /// The pixel centres of a block for [`Evaluator::lanes`]: lane `k` is
-    /// pixel `(x0 + k % T2, y0 + k / T2)`, the block's last column (row)
+    /// The pixel centres of a block for [`Evaluator::lanes`], and the
+    /// bounds its values are clamped to (`CAP` and the distance to the
+    /// canvas edge, [`super::edge_cap`]): lane `k` is pixel
+    /// `(x0 + k % T2, y0 + k / T2)`, the block's last column (row)
     /// repeated past its end.
     #[inline(always)]
+    #[allow(clippy::type_complexity)]
     pub(super) fn lane_centres(
         &self,
         (x0, x1): (usize, usize),
         (y0, y1): (usize, usize),
-    ) -> ([f64; T2 * T2], [f64; T2 * T2]) {
+    ) -> ([f64; T2 * T2], [f64; T2 * T2], [f64; T2 * T2]) {
         let mut cx = [0.0; T2];
         let mut cy = [0.0; T2];
+        let mut ex = [0.0; T2];
+        let mut ey = [0.0; T2];
         for i in 0..T2 {
-            cx[i] = self.centres_x[(x0 + i).min(x1 - 1)];
-            cy[i] = self.centres_y[(y0 + i).min(y1 - 1)];
+            let (x, y) = ((x0 + i).min(x1 - 1), (y0 + i).min(y1 - 1));
+            cx[i] = self.centres_x[x];
+            cy[i] = self.centres_y[y];
+            // (Edge values are never NaN.)
+            ex[i] = lesser(CAP, self.edge_x[x]);
+            ey[i] = self.edge_y[y];
         }
         let mut px = [0.0; T2 * T2];
         let mut py = [0.0; T2 * T2];
+        let mut caps = [0.0; T2 * T2];
         for k in 0..T2 * T2 {
             px[k] = cx[k % T2];
             py[k] = cy[k / T2];
+            caps[k] = lesser(ex[k % T2], ey[k / T2]);
         }
-        (px, py)
+        (px, py, caps)
     }
 }

@@ -285,7 +285,7 @@ impl Evaluator {
                         let (xe, ye) = ((sx + T2).min(gw), (sy + T2).min(gh));
                         // Chains of single circles, points and segments: a 4-lane kernel.
                         self.lane_channels.clear();
-                        let (lx, ly) = self.lane_centres((sx, xe), (sy, ye));
+                        let (lx, ly, lcap) = self.lane_centres((sx, xe), (sy, ye));
                         for (c, ch) in scene.channels.iter().enumerate() {
                             let (a, b) = self.ranges2[c];
                             let ops = &chain2[a..b];
@@ -301,7 +301,7 @@ impl Evaluator {
                                         c,
                                         (sx, xe),
                                         (sy, ye),
-                                        (&lx, &ly),
+                                        (&lx, &ly, &lcap),
                                     );
                                 } else {
                                     self.lanes::<false>(
@@ -311,7 +311,7 @@ impl Evaluator {
                                         c,
                                         (sx, xe),
                                         (sy, ye),
-                                        (&lx, &ly),
+                                        (&lx, &ly, &lcap),
                                     );
                                 }
                             }
