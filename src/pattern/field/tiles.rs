@@ -27,6 +27,8 @@ pub struct Evaluator {
     pub(super) widths: Vec<f64>,
     pub(super) centre_vals: Vec<f64>,
     pub(super) keep: Vec<bool>,
+    /// [`cull`]'s scratch for long chains' values.
+    cull_vals: Vec<f64>,
     pub(super) stamp: Vec<u32>,
     pub(super) used: Vec<u32>,
     pub(super) chain1: Vec<(CombineOp, u32)>,
@@ -74,6 +76,7 @@ impl Evaluator {
             widths: vec![],
             centre_vals: vec![],
             keep: vec![],
+            cull_vals: vec![],
             stamp: vec![],
             used: vec![],
             chain1: vec![],
@@ -210,7 +213,7 @@ impl Evaluator {
                         ch.init,
                         &self.centre_vals,
                         h1,
-                        &mut self.keep,
+                        (&mut self.keep, &mut self.cull_vals),
                         &mut chain1,
                     );
                     self.ranges1.push((a, chain1.len()));
@@ -277,7 +280,7 @@ impl Evaluator {
                                 ch.init,
                                 &self.centre_vals,
                                 h2,
-                                &mut self.keep,
+                                (&mut self.keep, &mut self.cull_vals),
                                 &mut chain2,
                             );
                             self.ranges2.push((start, chain2.len()));
@@ -533,14 +536,42 @@ fn cull(
     init: f64,
     vals: &[f64],
     h: f64,
-    keep: &mut Vec<bool>,
+    (keep, vbuf): (&mut Vec<bool>, &mut Vec<f64>),
     out: &mut Vec<(CombineOp, u32)>,
 ) {
-    keep.clear();
-    keep.resize(chain.len(), false);
+    // Short chains (most small tiles) keep their flags and values on the
+    // stack: no resize, and each value is read from `vals` once.
+    const SHORT: usize = 16;
+    if chain.len() <= SHORT {
+        let mut k = [false; SHORT];
+        let mut v = [0.0; SHORT];
+        for (v, &(_, it)) in v.iter_mut().zip(chain) {
+            *v = vals[it as usize];
+        }
+        let n = chain.len();
+        cull_with(chain, init, &v[..n], h, &mut k[..n], out);
+    } else {
+        keep.clear();
+        keep.resize(chain.len(), false);
+        vbuf.clear();
+        vbuf.extend(chain.iter().map(|&(_, it)| vals[it as usize]));
+        cull_with(chain, init, vbuf, h, keep, out);
+    }
+}
+
+/// [`cull`] with the items' values `v` in chain order and room for the
+/// flags in `keep` (both `chain.len()` long).
+#[inline(always)]
+fn cull_with(
+    chain: &[(CombineOp, u32)],
+    init: f64,
+    v: &[f64],
+    h: f64,
+    keep: &mut [bool],
+    out: &mut Vec<(CombineOp, u32)>,
+) {
     let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
-    for (&(op, it), k) in chain.iter().zip(keep.iter_mut()).rev() {
-        let v = vals[it as usize];
+    for ((&(op, _), k), &v) in chain.iter().zip(keep.iter_mut()).zip(v).rev() {
         let suf = if op == CombineOp::Union {
             &mut suf_u
         } else {
@@ -557,9 +588,8 @@ fn cull(
         let (mut m, mut ylo) = (f64::INFINITY, f64::INFINITY);
         while j < chain.len() && chain[j].0 == op {
             if keep[j] {
-                let v = vals[chain[j].1 as usize];
-                m = lesser(m, v + h);
-                ylo = lesser(ylo, v - h);
+                m = lesser(m, v[j] + h);
+                ylo = lesser(ylo, v[j] - h);
             }
             j += 1;
         }
@@ -570,7 +600,7 @@ fn cull(
             };
         if active {
             for k in i..j {
-                if keep[k] && vals[chain[k].1 as usize] - h <= m {
+                if keep[k] && v[k] - h <= m {
                     out.push(chain[k]);
                 }
             }
