@@ -572,13 +572,16 @@ fn cull_with(
 ) {
     let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
     for ((&(op, _), k), &v) in chain.iter().zip(keep.iter_mut()).zip(v).rev() {
-        let suf = if op == CombineOp::Union {
-            &mut suf_u
+        // Both bounds stay in registers (selects, not a pointer to one).
+        let union = op == CombineOp::Union;
+        let suf = if union { suf_u } else { suf_d };
+        *k = v - h < suf;
+        let next = lesser(suf, v + h);
+        (suf_u, suf_d) = if union {
+            (next, suf_d)
         } else {
-            &mut suf_d
+            (suf_u, next)
         };
-        *k = v - h < *suf;
-        *suf = lesser(*suf, v + h);
     }
     let (mut blo, mut bhi) = (init * CAP, init * CAP);
     let mut i = 0;
