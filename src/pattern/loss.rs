@@ -364,15 +364,7 @@ fn sdf_row<const G: bool>(
     let mut an = [0.0f64; 4];
     // One pixel with its own stencil (the borders, and rows under 3 wide).
     let one = |x: usize, an: &mut [f64; 4], gg: &mut [[f64; 2]]| {
-        let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
-        let ihx = 1.0 / (xp - xm).max(1) as f64;
-        let gx = (row[xp] - row[xm]) * ihx;
-        let gy = (dn[x] - up[x]) * ihy;
-        let (term, a, b) = normal_px(gx, gy, tnr[x]);
-        an[0] += term;
-        if G {
-            gg[x] = [a * gscale * ihx, b * gscale * ihy];
-        }
+        edge_px::<G>(x, (row, up, dn), tnr, ihy, gscale, an, gg)
     };
     if n < 3 {
         for x in 0..n {
@@ -422,6 +414,31 @@ fn sdf_row<const G: bool>(
         one(n - 1, &mut an, gg);
     }
     (ls, (an[0] + an[1]) + (an[2] + an[3]))
+}
+
+/// One pixel of [`sdf_row`] with its own stencil (one-sided at the row's
+/// ends): its normal term into `an[0]`, with `G` its derivative into `gg[x]`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn edge_px<const G: bool>(
+    x: usize,
+    (row, up, dn): (&[f64], &[f64], &[f64]),
+    tnr: &[[f64; 2]],
+    ihy: f64,
+    gscale: f64,
+    an: &mut [f64; 4],
+    gg: &mut [[f64; 2]],
+) {
+    let n = row.len();
+    let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
+    let ihx = 1.0 / (xp - xm).max(1) as f64;
+    let gx = (row[xp] - row[xm]) * ihx;
+    let gy = (dn[x] - up[x]) * ihy;
+    let (term, a, b) = normal_px(gx, gy, tnr[x]);
+    an[0] += term;
+    if G {
+        gg[x] = [a * gscale * ihx, b * gscale * ihy];
+    }
 }
 
 /// Add the normal term's gradient of row `r` (from [`sdf_row`]'s `gg`)

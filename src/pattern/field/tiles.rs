@@ -577,11 +577,7 @@ fn cull_with(
         let suf = if union { suf_u } else { suf_d };
         *k = v - h < suf;
         let next = lesser(suf, v + h);
-        (suf_u, suf_d) = if union {
-            (next, suf_d)
-        } else {
-            (suf_u, next)
-        };
+        (suf_u, suf_d) = if union { (next, suf_d) } else { (suf_u, next) };
     }
     let (mut blo, mut bhi) = (init * CAP, init * CAP);
     let mut i = 0;
