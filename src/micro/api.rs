@@ -32,7 +32,8 @@ pub struct MicroRenderRequest {
     /// (the paper's polynomial-selected checks) instead of every N steps.
     pub check_cell: f64,
     pub check_modulus: u32,
-    /// Adaptive: the longest step, as a multiple of the distance.
+    /// Adaptive: the over-relaxed step, as a multiple of the distance (the
+    /// longest step; a gradient check may shorten it, see `render`).
     pub max_relax: f64,
     /// Bisection: step length as a multiple of the distance.
     pub bisection_factor: f64,
@@ -116,7 +117,7 @@ impl Default for MicroRenderRequest {
             check_every: 10,
             check_cell: 0.0,
             check_modulus: 3,
-            max_relax: 4.0,
+            max_relax: 1.5,
             bisection_factor: 1.5,
             max_steps: 512,
             pixel_fraction: 0.5,
