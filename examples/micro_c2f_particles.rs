@@ -2,7 +2,8 @@
 //! (issue 12): `bench micro`'s spheres 2D problem and an ellipsoid cloud
 //! (cell and radius), each optimiser, seeds 1..=3, the same budget, one
 //! thread. Prints one JSON line per fit.
-//! `cargo run --release --example micro_c2f_particles -- [budget] [problem]`
+//! `cargo run --release --example micro_c2f_particles -- [budget] [problem|all] [optimizer]`
+#![allow(clippy::disallowed_methods)] // timing: native only
 use filigree::core::job::run_quietly;
 use filigree::micro::fit_api::{start_fit, FitParam, FitTarget, MicroFitRequest, Optimizer};
 use serde_json::json;
@@ -22,7 +23,8 @@ fn cloud(cell: f64, radius: f64, shape: &str) -> String {
 fn main() {
     let a: Vec<String> = std::env::args().collect();
     let budget: u32 = a.get(1).and_then(|s| s.parse().ok()).unwrap_or(1500);
-    let only = a.get(2).cloned();
+    let only = a.get(2).cloned().filter(|s| s != "all");
+    let only_opt = a.get(3).cloned();
     let param = |p: &str, lo: f64, hi: f64| FitParam {
         pointer: p.into(),
         lo,
@@ -47,6 +49,9 @@ fn main() {
             continue;
         }
         for opt in [Optimizer::Cmaes, Optimizer::NelderMead, Optimizer::Powell] {
+            if only_opt.as_deref().is_some_and(|o| json!(opt) != json!(o)) {
+                continue;
+            }
             for seed in 1..=3 {
                 for c2f in [false, true] {
                     let req = MicroFitRequest {

@@ -4,6 +4,7 @@
 //! weigh on all alike. Each pixel: trace, and for a hit the central-
 //! difference normal (6 evaluations), as `micro-render` does.
 //! `cargo run --release --example micro_table2 -- [size] [repeats] [scene.json]`
+#![allow(clippy::disallowed_methods)] // timing: native only
 use filigree::geom::sdf3;
 use filigree::micro::render::{self, Camera, Rays, Stats, StepMode, Trace};
 use filigree::micro::Scene;

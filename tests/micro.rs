@@ -339,11 +339,10 @@ fn adaptive_hits_agree_with_fixed_steps_and_dense_marching_on_every_preset() {
                 };
             }
         }
-        for k in 0..3 {
+        for (k, a) in agree.iter().enumerate() {
             assert!(
-                agree[k] as f64 >= 0.95 * n as f64,
-                "{name} #{k}: {}/{n} agree with fixed",
-                agree[k]
+                *a as f64 >= 0.95 * n as f64,
+                "{name} #{k}: {a}/{n} agree with fixed"
             );
         }
         assert!(hits[0] > 5, "{name}: only {} hits", hits[0]);
