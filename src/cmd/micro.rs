@@ -107,7 +107,7 @@ pub struct RenderArgs {
     /// Step strategy: fixed, bisection or adaptive.
     #[arg(long)]
     steps: Option<String>,
-    /// Adaptive steps: a gradient check every N steps.
+    /// Adaptive steps: a gradient check every N steps (from step N on).
     #[arg(long)]
     check_every: Option<u32>,
     /// Most steps along one ray.

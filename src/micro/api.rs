@@ -25,14 +25,16 @@ pub struct MicroRenderRequest {
     pub camera: Camera,
     /// Step strategy: `fixed`, `bisection` or `adaptive`.
     pub steps: StepMode,
-    /// Adaptive: a gradient check every N steps (1: fully adaptive).
+    /// Adaptive: a gradient check every N steps, from step N on (1: every
+    /// step, fully adaptive).
     pub check_every: u32,
     /// Adaptive: when > 0, check gradients where the ray enters a new cell
     /// of this size (world units) selected by a congruence of its index
     /// (the paper's polynomial-selected checks) instead of every N steps.
     pub check_cell: f64,
     pub check_modulus: u32,
-    /// Adaptive: the longest step, as a multiple of the distance.
+    /// Adaptive: the over-relaxed step, as a multiple of the distance (the
+    /// longest step; a gradient check may shorten it, see `render`).
     pub max_relax: f64,
     /// Bisection: step length as a multiple of the distance.
     pub bisection_factor: f64,
@@ -116,7 +118,7 @@ impl Default for MicroRenderRequest {
             check_every: 10,
             check_cell: 0.0,
             check_modulus: 3,
-            max_relax: 4.0,
+            max_relax: 1.5,
             bisection_factor: 1.5,
             max_steps: 512,
             pixel_fraction: 0.5,

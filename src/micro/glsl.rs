@@ -667,30 +667,39 @@ fn main_part(s: &Settings) -> Result<String> {
                     "vec3 qc = floor((o + d * t) / {cc});
       bool fresh = !have_cell || qc != last_cell;
       last_cell = qc; have_cell = true;
-      bool check = i == 0 || (fresh && mod(qc.x + 2.0 * qc.y + 3.0 * qc.z, {m}) == 0.0);",
+      bool check = fresh && i > 0 && mod(qc.x + 2.0 * qc.y + 3.0 * qc.z, {m}) == 0.0;",
                     cc = lit(t.check_cell)?,
                     m = lit(t.check_modulus.max(1) as f64)?
                 )
             } else {
-                format!("bool check = i % {} == 0;", t.check_every.max(1))
+                let n = t.check_every.max(1);
+                if n == 1 {
+                    "bool check = true;".to_string()
+                } else {
+                    format!("bool check = i > 0 && i % {n} == 0;")
+                }
             };
             format!(
                 "{check}
-      if (check) {{
+      if (check && dist >= 2.0 * eps) {{
         g_checks++;
-        float g = length(grad(o + d * t, max(prec * t, 1e-5 * (1.0 + length(o + d * t)))));
-        relax = g < 0.7 ? clamp(0.9 / max(g, 1e-9), 1.0, {mr}) : 1.0;
+        vec3 gr = grad(o + d * t, max(prec * t, 1e-5 * (1.0 + length(o + d * t))));
+        relax = clamp(1.8 / (1.0 + clamp(-dot(gr, d), -1.0, 1.0)), 1.0, {mr});
       }}
+      float w = cooldown ? 1.0 : relax;
+      cooldown = false;
       float tp = t, dp = dist;
-      t += dist * relax;
+      t += dist * w;
       dist = field(o + d * t);
-      if (relax > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12))) {{
+      if (w > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12))) {{
         g_undone++;
-        relax = 1.0;
+        cooldown = true;
+        float tr = t, dr = dist;
         t = tp + dp;
         dist = field(o + d * t);
+        if (dr >= 0.0 && dist + dr >= (tr - t) * (1.0 + 1e-12)) {{ t = tr; dist = dr; }}
       }}",
-                mr = lit(t.max_relax)?
+                mr = lit(t.max_relax.max(1.0))?
             )
         }
     };
@@ -725,7 +734,8 @@ float trace(vec3 o, vec3 d, float prec, out bool hit, out bool exhausted) {{
   float tiny = 1e-12 * (1.0 + t1);
   float t = t0;
   float dist = field(o + d * t);
-  float relax = 1.0;
+  float relax = {relax0};
+  bool cooldown = false;
   vec3 last_cell = vec3(0.0);
   bool have_cell = false;
   for (int i = 0; i < {max_steps}; i++) {{
@@ -768,6 +778,7 @@ void main() {{
 "#,
         b = lit(t.bounds)?,
         max_steps = t.max_steps,
+        relax0 = lit(t.max_relax.max(1.0))?,
         pf = lit(s.pixel_fraction)?,
         bg = col(sh.background),
         color = col(sh.color),

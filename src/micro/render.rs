@@ -22,12 +22,21 @@
 //! - `bisection`: steps of `bisection_factor` × distance; when the field
 //!   turns negative, bisect back to the surface (may skip features thinner
 //!   than the overshoot).
-//! - `adaptive`: every `check_every` steps, estimate the local gradient
-//!   magnitude g (6 evaluations); where the normalised field is clearly
-//!   flatter than its bound (g < 0.7) step `0.9 distance / g` (at most
-//!   `max_relax` × distance). A step whose unbounding spheres do not
-//!   overlap is undone and retaken plainly (over-relaxed sphere tracing,
-//!   Keinert et al. 2014), so it misses nothing fixed steps would find.
+//! - `adaptive`: over-relaxed sphere tracing (Keinert et al. 2014):
+//!   steps of `max_relax` (default 1.5) × distance. A step whose
+//!   unbounding spheres do not overlap is undone and retaken plainly, and
+//!   the next step is plain too; if the retaken step's sphere reaches the
+//!   undone point's, the ray goes on from there (its distance is known),
+//!   so an undone step costs one evaluation. So it never passes a surface
+//!   (the field is 1-Lipschitz). Gradient checks (6 evaluations) every
+//!   `check_every` steps from step N on (every step for N = 1), or by
+//!   cell (`check_cell`, the paper's D(p)), skipped where the ray is within
+//!   twice the hit threshold, set the relaxation from the slope along the
+//!   ray ([`relax_for_slope`]). Measured on the multiscale scene (issue 12,
+//!   `docs/bench/micro-table2-2026-12-03.md`): the rays there are short
+//!   (10–17 steps) and run within a few hit thresholds of fine particles,
+//!   where neither the checks nor the secant slope predict a safe step
+//!   better than the constant factor, so checks are pure cost there.
 use super::scene::Scene;
 use crate::geom::sdf3;
 use glam::DVec3;
@@ -131,6 +140,20 @@ pub fn clip(o: DVec3, d: DVec3, b: f64) -> Option<(f64, f64)> {
     (near <= far && far.is_finite()).then_some((near, far))
 }
 
+/// Adaptive steps: the relaxation `ω` for a ray along which the distance
+/// falls at `slope` per unit length (−∇f·d at a gradient check). With the
+/// field locally linear, a step of `ω d` leaves a distance `d (1 − ω s)`,
+/// and the two unbounding spheres still overlap while `ω ≤ 2 / (1 + s)`;
+/// 0.9 of that, between 1 and `max_relax`.
+pub fn relax_for_slope(slope: f64, max_relax: f64) -> f64 {
+    let s = if slope.is_nan() {
+        1.0
+    } else {
+        slope.clamp(-1.0, 1.0)
+    };
+    (1.8 / (1.0 + s)).clamp(1.0, max_relax.max(1.0))
+}
+
 /// Where a ray hits: distance along it, or `None`.
 pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Option<f64> {
     st.rays += 1;
@@ -142,7 +165,8 @@ pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Op
     let tiny = 1e-12 * (1.0 + t1);
     let mut t = t0;
     let mut dist = f(t, st);
-    let mut relax = 1.0f64;
+    let mut relax = s.max_relax.max(1.0);
+    let mut cooldown = false;
     let mut last_cell = DVec3::NAN;
     for i in 0..s.max_steps {
         let eps = s.precision * t.max(tiny);
@@ -186,40 +210,45 @@ pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Op
                     let fresh = q != last_cell;
                     last_cell = q;
                     let m = s.check_modulus.max(1) as f64;
-                    i == 0 || (fresh && (q.x + 2.0 * q.y + 3.0 * q.z).rem_euclid(m) == 0.0)
+                    fresh && i > 0 && (q.x + 2.0 * q.y + 3.0 * q.z).rem_euclid(m) == 0.0
                 } else {
-                    i % s.check_every.max(1) == 0
+                    i % s.check_every.max(1) == 0 && (i > 0 || s.check_every <= 1)
                 };
-                if check {
+                // No check where the ray is about to hit (its next plain
+                // step would likely end within the threshold).
+                if check && dist >= 2.0 * eps {
                     st.gradient_checks += 1;
                     let h = (s.precision * t).max(1e-9);
-                    let p = o + d * t;
                     let g = sdf3::gradient(
                         &mut |q| {
                             st.sdf_evals += 1;
                             field(scene, s.bounds, q)
                         },
-                        p,
+                        o + d * t,
                         h,
-                    )
-                    .length();
-                    // Over-relax only where the bound is clearly loose
-                    // (g < 0.7), with a 10% margin.
-                    relax = if g < 0.7 {
-                        (0.9 / g.max(1e-9)).clamp(1.0, s.max_relax)
-                    } else {
-                        1.0
-                    };
+                    );
+                    relax = relax_for_slope(-g.dot(d), s.max_relax);
                 }
+                let step = if cooldown { 1.0 } else { relax };
+                cooldown = false;
                 let (tp, dp) = (t, dist);
-                t += dist * relax;
+                t += dist * step;
                 dist = f(t, st);
-                if relax > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12)) {
-                    // The spheres at tp and t do not cover the segment: undo.
+                if step > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12)) {
+                    // The spheres at tp and t do not cover the segment:
+                    // retake the step plainly, and the next one too.
                     st.undone_steps += 1;
-                    relax = 1.0;
+                    cooldown = true;
+                    let (tr, dr) = (t, dist);
                     t = tp + dp;
                     dist = f(t, st);
+                    // Rescue: if the plain step's sphere reaches the
+                    // relaxed point's, the segment up to it is covered
+                    // after all; go on from there (its distance is known).
+                    if dr >= 0.0 && dist + dr >= (tr - t) * (1.0 + 1e-12) {
+                        t = tr;
+                        dist = dr;
+                    }
                 }
             }
         }

@@ -36,10 +36,12 @@ struct Line {
     hi: f64,
     /// Probes so far (t, loss), sorted by t.
     probes: Vec<(f64, f64)>,
+    /// The bracket width at which the search stops.
+    tol: f64,
 }
 
 impl Line {
-    fn new(origin: Vec<f64>, dir: Vec<f64>, f0: f64) -> Line {
+    fn new(origin: Vec<f64>, dir: Vec<f64>, f0: f64, tol: f64) -> Line {
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
         for (x, d) in origin.iter().zip(&dir) {
             if d.abs() > 1e-15 {
@@ -57,6 +59,7 @@ impl Line {
             lo: lo.min(0.0),
             hi: hi.max(0.0),
             probes: vec![(0.0, f0)],
+            tol,
         }
     }
 
@@ -102,7 +105,7 @@ impl Line {
         // Golden section of the larger side of the bracket.
         let a = left.unwrap_or(tb);
         let c = right.unwrap_or(tb);
-        if c - a < LINE_TOL {
+        if c - a < self.tol {
             return None;
         }
         let t = if c - tb > tb - a {
@@ -111,7 +114,7 @@ impl Line {
             tb - GOLD * (tb - a)
         };
         // Too close to an existing probe to tell anything new.
-        if (t - tb).abs() < LINE_TOL * 0.25 {
+        if (t - tb).abs() < self.tol * 0.25 {
             return None;
         }
         Some(t)
@@ -168,6 +171,9 @@ pub struct Powell {
     /// Cycles run and restarts made.
     pub cycles: usize,
     pub restarts: usize,
+    /// A line search stops when its bracket is narrower than this
+    /// (normalised units; [`Powell::with_line_tolerance`]).
+    line_tol: f64,
 }
 
 fn axes(dim: usize) -> Vec<Vec<f64>> {
@@ -199,11 +205,22 @@ impl Powell {
             best: None,
             cycles: 0,
             restarts: 0,
+            line_tol: LINE_TOL,
         }
     }
 
+    /// Stop each line search at a bracket of width `tol` (default 1e-7):
+    /// a coarse loss (a first stage) gains nothing from polishing its
+    /// minima, and looser lines leave budget for more restarts.
+    pub fn with_line_tolerance(mut self, tol: f64) -> Powell {
+        if tol.is_finite() && tol > 0.0 {
+            self.line_tol = tol;
+        }
+        self
+    }
+
     fn start_line(&mut self, dir: Vec<f64>) {
-        self.line = Some(Line::new(self.x.clone(), dir, self.fx));
+        self.line = Some(Line::new(self.x.clone(), dir, self.fx, self.line_tol));
     }
 
     fn begin_cycle(&mut self) {

@@ -123,10 +123,12 @@ test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fi
 // One scene per step mode and shading here (every scene with fixed steps
 // above): the shader's step loops are the same code for every scene, and
 // every scene's generated GLSL is checked natively (src/micro/glsl.rs tests).
+// Adaptive on gyroid: its rays are long enough at 64² for gradient checks
+// (from step N = 10 on; piled's rays end within a few steps).
 test('micro-gl: adaptive and bisection steps, GGX shading and absorption agree with the CPU too', async () => {
   const page = await env.newPage({ path: '#tool=micro' });
   const ggx = { shading: 'ggx', roughness: 0.3, specular: 0.04, absorption: 0.8 };
-  for (const [steps, extra, only] of [['adaptive', {}, ['piled']], ['bisection', {}, ['spheres']], ['fixed', ggx, ['gyroid']]]) {
+  for (const [steps, extra, only] of [['adaptive', {}, ['gyroid']], ['bisection', {}, ['spheres']], ['fixed', ggx, ['gyroid']]]) {
     const rows = await compareAll(page, { side: 64, steps, cameras: [VIEWS[0]], extra, only });
     assert.equal(rows.length, 1, `${only}: one scene`);
     for (const r of rows) {
