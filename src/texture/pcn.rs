@@ -185,6 +185,33 @@ impl PcnConfig {
         prepare_window(img, self.side, self.window(img.width.min(img.height)))
     }
 
+    /// What the network reads of `img` for a query, several windows of it
+    /// summed (test-time augmentation): when the [`PcnConfig::window`] is
+    /// smaller than the image's centred square, the four windows in that
+    /// square's corners (for an image of at least `2 · window`, its four
+    /// quadrants: the dataset's crops of a `texture_side` render are
+    /// exactly these), each resampled to `side × side`; otherwise the one
+    /// [`PcnConfig::view`].
+    pub fn views(&self, img: &Gray) -> Result<Vec<Gray>> {
+        let s = img.width.min(img.height);
+        let w = self.window(s);
+        if img.width == 0 || img.height == 0 || w >= s {
+            return Ok(vec![self.view(img)?]);
+        }
+        let (x0, y0) = ((img.width - s) / 2, (img.height - s) / 2);
+        [(0, 0), (s - w, 0), (0, s - w), (s - w, s - w)]
+            .iter()
+            .map(|&(dx, dy)| {
+                let mut sub = Gray::new(w, w);
+                for y in 0..w {
+                    let from = (y0 + dy + y) * img.width + x0 + dx;
+                    sub.data[y * w..(y + 1) * w].copy_from_slice(&img.data[from..from + w]);
+                }
+                prepare(&sub, self.side)
+            })
+            .collect()
+    }
+
     /// The indexing matrix's rows (identity when none is given).
     pub fn subsets(&self) -> Vec<Vec<usize>> {
         if self.combination.is_empty() {
