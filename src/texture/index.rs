@@ -7,7 +7,7 @@
 //!   kept linear, beside the image's standardised global values,
 //!   [`super::globals`]) and to each of the twelve perceptual scales
 //!   (1–9), as in Section 4.1;
-//! - queries read several windows of a large image and sum the machines'
+//! - queries read two windows of a large image and sum the machines'
 //!   scores ([`PcnConfig::views`], test-time augmentation);
 //! - the perceptual texture space: a 3-D Isomap of the samples'
 //!   dissimilarities, with, per axis, the subset of scales that correlate
