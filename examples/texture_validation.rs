@@ -97,7 +97,13 @@ fn compute(cfg: &BuildConfig) -> (Vec<Row>, Vec<bool>) {
         .collect();
     let t = Instant::now();
     let pcn = Index::train_pcn(&train, &cfg.index).unwrap();
-    let feats = Index::features(&pcn, &all).unwrap();
+    // The PCN features only (Index::features appends the global values).
+    let dim = pcn.config.feature_len();
+    let feats: Vec<Vec<f32>> = Index::features(&pcn, &all)
+        .unwrap()
+        .into_iter()
+        .map(|f| f[..dim].to_vec())
+        .collect();
     eprintln!(
         "features in {:.0} s, dim {}",
         t.elapsed().as_secs_f64(),

@@ -4,8 +4,11 @@
 //! - a trained [`Pcn`] (both filter banks);
 //! - linear one-vs-rest SVMs from PCN features to the generating model
 //!   (on the features' explicit χ² map, [`chi2_map`]: a χ²-kernel machine
-//!   kept linear) and to each of the twelve perceptual scales (1–9), as in
-//!   Section 4.1;
+//!   kept linear, beside the image's standardised global values,
+//!   [`super::globals`]) and to each of the twelve perceptual scales
+//!   (1–9), as in Section 4.1;
+//! - queries read two windows of a large image and sum the machines'
+//!   scores ([`PcnConfig::views`], test-time augmentation);
 //! - the perceptual texture space: a 3-D Isomap of the samples'
 //!   dissimilarities, with, per axis, the subset of scales that correlate
 //!   with it and a Gaussian SVR from that subset to the coordinate (4.2);
@@ -24,6 +27,7 @@
 //! them and every length against the bytes left, so a truncated, corrupt
 //! or other-version file is a clear error, never a panic or a huge
 //! allocation.
+use super::globals::{self, GLOBALS};
 use super::learn::isomap::{isomap, pearson};
 use super::learn::svm::{chi2_map, Linear, OneVsRest, Svr, CHI2_MAP_DIMS};
 use super::pcn::{Pcn, PcnConfig};
@@ -36,7 +40,10 @@ pub use super::scales::SCALE_NAMES as SCALES;
 /// Magic bytes at the start of every index file.
 pub const MAGIC: &[u8; 16] = b"FILIGREE-TEXIDX\0";
 /// The index format's version: bump it whenever the layout changes.
-pub const VERSION: u32 = 2;
+///
+/// 3: the model classifier also reads 28 global values
+/// ([`super::globals`]), standardised by a [`GlobalScaler`] stored after it.
+pub const VERSION: u32 = 3;
 
 /// One training texture: its grey image, where it came from, and its
 /// scales (1–9). Augmented copies have `base: false`: they train the
@@ -84,6 +91,12 @@ pub struct IndexConfig {
     pub c_model: f64,
     /// SVM penalty of the twelve scale classifiers.
     pub c_class: f64,
+    /// Weight of the standardised global values ([`super::globals`]) beside
+    /// the χ² map in the model classifier's rows. 1, chosen on the
+    /// validation split (0.3 / 0.6 / 1 / 1.7 / 3: 78.4 / 79.9 / 80.5 /
+    /// 78.8 / 78.4% of validation images, 73.2% without them;
+    /// `docs/bench/texture-accuracy-2026-12-03.md`).
+    pub global_weight: f64,
     /// Neighbours in Isomap's graph.
     pub isomap_k: usize,
     /// At most this many images (spread evenly) learn the PCA filters.
@@ -99,6 +112,7 @@ impl Default for IndexConfig {
             pcn: PcnConfig::default(),
             c_model: 10.0,
             c_class: 1.0,
+            global_weight: 1.0,
             isomap_k: 10,
             filter_images: 240,
             min_correlation: 0.3,
@@ -112,11 +126,75 @@ pub struct Index {
     /// The model names, by model id (checked against the app's models).
     pub model_names: Vec<String>,
     pub pcn: Pcn,
-    /// Reads the features' χ² map ([`Index::predict_model`]).
+    /// Reads [`GlobalScaler::model_row`]s ([`Index::model_scores`]).
     pub model_classifier: OneVsRest,
+    /// Standardises the global values for the model classifier.
+    pub globals: GlobalScaler,
     pub scale_classifiers: Vec<OneVsRest>,
     pub axes: Vec<Axis>,
     pub samples: Vec<Sample>,
+}
+
+/// The training images' mean and standard deviation of every global value
+/// ([`super::globals`]), and the weight of the standardised values beside
+/// the χ² map in the model classifier's rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GlobalScaler {
+    pub mean: Vec<f32>,
+    pub sd: Vec<f32>,
+    pub weight: f32,
+}
+
+/// Standardised global values are clamped to this many standard
+/// deviations, so one odd measure of a user's image cannot outvote the
+/// histograms.
+const GLOBAL_CLAMP: f64 = 5.0;
+
+impl GlobalScaler {
+    /// Fits the standardisation to feature rows (PCN features of length
+    /// `dim`, then the global values).
+    pub fn fit(rows: &[Vec<f32>], dim: usize, weight: f64) -> GlobalScaler {
+        let n = rows.len().max(1) as f64;
+        let k = rows.first().map_or(0, |r| r.len().saturating_sub(dim));
+        let mut mean = vec![0f64; k];
+        for r in rows {
+            for (m, v) in mean.iter_mut().zip(&r[dim..]) {
+                *m += *v as f64 / n;
+            }
+        }
+        let mut var = vec![0f64; k];
+        for r in rows {
+            for ((s, v), m) in var.iter_mut().zip(&r[dim..]).zip(&mean) {
+                *s += (*v as f64 - m).powi(2) / n;
+            }
+        }
+        GlobalScaler {
+            mean: mean.iter().map(|&m| m as f32).collect(),
+            // A constant value is centred and left at its scale.
+            sd: var
+                .iter()
+                .map(|&v| if v > 1e-12 { v.sqrt() as f32 } else { 1.0 })
+                .collect(),
+            weight: weight as f32,
+        }
+    }
+
+    /// The model classifier's row for a feature row (PCN features of
+    /// length `dim`, then the global values): the χ² map of the
+    /// histograms, then the standardised global values times the weight.
+    pub fn model_row(&self, f: &[f32], dim: usize) -> Vec<f32> {
+        let mut out = chi2_map(&f[..dim]);
+        for ((v, m), s) in f[dim..].iter().zip(&self.mean).zip(&self.sd) {
+            let z = ((*v as f64 - *m as f64) / *s as f64).clamp(-GLOBAL_CLAMP, GLOBAL_CLAMP);
+            // NaN (an image the measures cannot read) counts as the mean.
+            out.push(if z.is_nan() {
+                0.0
+            } else {
+                (self.weight as f64 * z) as f32
+            });
+        }
+        out
+    }
 }
 
 /// What the index says about an image.
@@ -192,6 +270,18 @@ fn to_unit_f(s: &[f32; 12], subset: &[u8]) -> Vec<f32> {
         .collect()
 }
 
+/// The first index of the largest value (0 when empty), as
+/// [`OneVsRest::predict`] breaks ties.
+fn argmax(s: &[f64]) -> usize {
+    (0..s.len()).fold(0, |b, i| if s[i] > s[b] { i } else { b })
+}
+
+fn add(sum: &mut [f64], s: &[f64]) {
+    for (a, b) in sum.iter_mut().zip(s) {
+        *a += b;
+    }
+}
+
 /// Cosine similarity of two scale vectors.
 pub fn cosine(a: &[f32], b: &[f32]) -> f64 {
     let ab: f64 = a.iter().zip(b).map(|(x, y)| *x as f64 * *y as f64).sum();
@@ -247,11 +337,22 @@ impl Index {
         Pcn::train(&filter_set, config.pcn.clone())
     }
 
-    /// Every training image's PCN features, on all cores natively.
+    /// Every training image's feature row ([`Index::image_features`]), on
+    /// all cores natively.
     pub fn features(pcn: &Pcn, training: &[Training]) -> Result<Vec<Vec<f32>>> {
-        par_map(training, |t| pcn.features(&t.image))
+        par_map(training, |t| Self::image_features(pcn, &t.image))
             .into_iter()
             .collect()
+    }
+
+    /// An image's feature row: the PCN features of its
+    /// [`PcnConfig::view`] (`pcn.config.feature_len()` values), then that
+    /// view's [`globals::GLOBALS`] global values.
+    pub fn image_features(pcn: &Pcn, img: &Gray) -> Result<Vec<f32>> {
+        let view = pcn.config.view(img)?;
+        let mut f = pcn.features(&view)?;
+        f.extend(globals::measure(&view)?);
+        Ok(f)
     }
 
     /// Everything after the features: the classifiers on `features` (one
@@ -269,13 +370,21 @@ impl Index {
         }
         let base: Vec<&Training> = training.iter().filter(|t| t.base).collect();
         let models: Vec<u16> = training.iter().map(|t| t.model).collect();
-        let mapped: Vec<Vec<f32>> = features.iter().map(|f| chi2_map(f)).collect();
+        let dim = pcn.config.feature_len();
+        if features.iter().any(|f| f.len() != dim + GLOBALS) {
+            return Err(Error::input(
+                "feature rows are PCN features then the global values (Index::features)",
+            ));
+        }
+        let globals = GlobalScaler::fit(features, dim, config.global_weight);
+        let mapped: Vec<Vec<f32>> = features.iter().map(|f| globals.model_row(f, dim)).collect();
         let model_classifier = OneVsRest::train(&mapped, &models, config.c_model);
         drop(mapped);
+        let pcn_only: Vec<Vec<f32>> = features.iter().map(|f| f[..dim].to_vec()).collect();
         let scale_ids: Vec<usize> = (0..12).collect();
         let scale_classifiers = par_map(&scale_ids, |&k| {
             let labels: Vec<u16> = training.iter().map(|t| t.scales[k] as u16).collect();
-            OneVsRest::train(features, &labels, config.c_class)
+            OneVsRest::train(&pcn_only, &labels, config.c_class)
         });
         let (axes, coords) = Self::space(&base, config)?;
         let samples = base
@@ -293,6 +402,7 @@ impl Index {
             model_names,
             pcn,
             model_classifier,
+            globals,
             scale_classifiers,
             axes,
             samples,
@@ -383,21 +493,57 @@ impl Index {
             ))
             .at("bytes"));
         }
-        let f = self.pcn.features(img)?;
+        // Test-time augmentation: every classifier's scores summed over
+        // the image's windows (one for an image the size of the view).
+        let dim = self.pcn.config.feature_len();
+        let mut model = vec![0f64; self.model_classifier.classes.len()];
+        let mut per_scale: Vec<Vec<f64>> = self
+            .scale_classifiers
+            .iter()
+            .map(|c| vec![0f64; c.classes.len()])
+            .collect();
+        for view in self.pcn.config.views(img)? {
+            let f = Self::image_features(&self.pcn, &view)?;
+            add(&mut model, &self.model_scores(&f));
+            for (sum, c) in per_scale.iter_mut().zip(&self.scale_classifiers) {
+                add(sum, &c.scores(&f[..dim]));
+            }
+        }
         let mut scales = [5u8; 12];
-        for (s, c) in scales.iter_mut().zip(&self.scale_classifiers) {
-            *s = c.predict(&f) as u8;
+        for ((s, c), sum) in scales
+            .iter_mut()
+            .zip(&self.scale_classifiers)
+            .zip(&per_scale)
+        {
+            *s = c.classes.get(argmax(sum)).copied().unwrap_or(5) as u8;
         }
         Ok(Analysis {
-            model: self.predict_model(&f),
+            model: self
+                .model_classifier
+                .classes
+                .get(argmax(&model))
+                .copied()
+                .unwrap_or(0),
             scales,
         })
     }
 
-    /// The model of PCN features `f`: the model classifier reads them
-    /// through the χ² map ([`chi2_map`]).
+    /// The model classifier's scores (in its `classes` order) for a feature
+    /// row ([`Index::image_features`]).
+    pub fn model_scores(&self, f: &[f32]) -> Vec<f64> {
+        let dim = self.pcn.config.feature_len();
+        self.model_classifier
+            .scores(&self.globals.model_row(f, dim))
+    }
+
+    /// The model of a feature row ([`Index::image_features`]) of one view.
     pub fn predict_model(&self, f: &[f32]) -> u16 {
-        self.model_classifier.predict(&chi2_map(f))
+        let s = self.model_scores(f);
+        self.model_classifier
+            .classes
+            .get(argmax(&s))
+            .copied()
+            .unwrap_or(0)
     }
 
     /// The point of requested scales (1–9, fractional allowed) in the space.
@@ -585,6 +731,9 @@ impl Index {
             }
         }
         w.ovr(&self.model_classifier);
+        w.f32s(&self.globals.mean);
+        w.f32s(&self.globals.sd);
+        w.f32(self.globals.weight);
         for c in &self.scale_classifiers {
             w.ovr(c);
         }
@@ -664,7 +813,7 @@ impl Index {
             })
             .collect::<Result<Vec<_>>>()?;
         let dim = config.feature_len();
-        let model_classifier = r.ovr(dim * CHI2_MAP_DIMS, "model classifier")?;
+        let model_classifier = r.ovr(dim * CHI2_MAP_DIMS + GLOBALS, "model classifier")?;
         if model_classifier
             .classes
             .iter()
@@ -672,6 +821,16 @@ impl Index {
         {
             return Err(corrupt("the model classifier names an unknown model"));
         }
+        let mean = r.f32s("global means")?;
+        let sd = r.f32s("global deviations")?;
+        let weight = r.f32("global weight")?;
+        if mean.len() != GLOBALS || sd.len() != GLOBALS {
+            return Err(corrupt("the global values' scaler has the wrong length"));
+        }
+        if sd.iter().any(|&v| v <= 0.0) {
+            return Err(corrupt("a global value's deviation is not positive"));
+        }
+        let globals = GlobalScaler { mean, sd, weight };
         let scale_classifiers = (0..12)
             .map(|_| r.ovr(dim, "scale classifier"))
             .collect::<Result<Vec<_>>>()?;
@@ -741,6 +900,7 @@ impl Index {
                 stage2,
             },
             model_classifier,
+            globals,
             scale_classifiers,
             axes,
             samples,

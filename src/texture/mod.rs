@@ -9,11 +9,14 @@
 //! - [`pcn`]: the PCN-2 feature extractor.
 //! - [`learn`]: support vector machines and Isomap.
 //! - [`scales`]: estimators of the twelve perceptual scales, 1–9.
+//! - [`globals`]: global values (scale measures, radial spectrum, grey
+//!   moments) the model classifier reads beside PCN-2 (our addition).
 //! - [`index`]: the trained index the browser loads, and retrieval.
 //! - [`state`]: the Texture document (the page's state) and its checks.
 pub mod api;
 pub mod build;
 pub mod dataset;
+pub mod globals;
 pub mod image;
 pub mod index;
 pub mod learn;

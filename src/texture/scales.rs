@@ -23,6 +23,10 @@
 //! as given (the shaded texture in [0, 1]). Measures that look at offsets
 //! (autocorrelation, spectrum, Tamura windows) treat the image as a torus,
 //! which dataset textures are.
+//!
+//! Transcendental functions are the `libm` crate's, so a measure has the
+//! same bits natively and in wasm (the model classifier reads the raw
+//! measures of the user's image in the browser, [`super::globals`]).
 use crate::core::error::{Error, Result};
 use crate::texture::image::Gray;
 use serde::{Deserialize, Serialize};
@@ -195,7 +199,11 @@ impl Gradient {
                     / 8.0;
             }
         }
-        let mag: Vec<f64> = gx.iter().zip(&gy).map(|(a, b)| a.hypot(*b)).collect();
+        let mag: Vec<f64> = gx
+            .iter()
+            .zip(&gy)
+            .map(|(a, b)| libm::hypot(*a, *b))
+            .collect();
         let jxx = box_mean(&gx.iter().map(|a| a * a).collect::<Vec<_>>(), 3);
         let jyy = box_mean(&gy.iter().map(|a| a * a).collect::<Vec<_>>(), 3);
         let jxy = box_mean(
@@ -339,7 +347,7 @@ pub fn contrast(w: &[f64]) -> f64 {
     }
     let m4 = w.iter().map(|v| (v - m).powi(4)).sum::<f64>() / w.len() as f64;
     let kurt = m4 / sd.powi(4);
-    sd / kurt.powf(0.25)
+    sd / libm::pow(kurt, 0.25)
 }
 
 /// **Repetition**: the height of the strongest autocorrelation peak
@@ -358,12 +366,12 @@ fn regularity(acf: &Autocorrelation) -> f64 {
     let Some(&(x1, y1, a1)) = acf.peaks.first() else {
         return 0.0;
     };
-    let t1 = (y1 as f64).atan2(x1 as f64);
+    let t1 = libm::atan2(y1 as f64, x1 as f64);
     let a2 = acf
         .peaks
         .iter()
         .find(|&&(x, y, _)| {
-            let mut d = ((y as f64).atan2(x as f64) - t1).abs() % std::f64::consts::PI;
+            let mut d = (libm::atan2(y as f64, x as f64) - t1).abs() % std::f64::consts::PI;
             d = d.min(std::f64::consts::PI - d);
             d > 25f64.to_radians()
         })
@@ -414,10 +422,10 @@ fn randomness(w: &[f64]) -> f64 {
         .filter(|&&v| v > 0.0)
         .map(|&v| {
             let pr = v / total;
-            -pr * pr.ln()
+            -pr * libm::log(pr)
         })
         .sum();
-    h / (q.len() as f64).ln()
+    h / libm::log(q.len() as f64)
 }
 
 /// **Granularity**: how much the texture is made of small isotropic
@@ -511,7 +519,7 @@ fn directionality(g: &Gradient) -> f64 {
         if g.mag[i] <= t || g.mag[i] < 1e-9 {
             continue;
         }
-        let th = g.gy[i].atan2(g.gx[i]).rem_euclid(std::f64::consts::PI);
+        let th = libm::atan2(g.gy[i], g.gx[i]).rem_euclid(std::f64::consts::PI);
         let b = ((th / std::f64::consts::PI * BINS as f64) as usize).min(BINS - 1);
         hist[b] += g.mag[i];
     }
@@ -522,9 +530,9 @@ fn directionality(g: &Gradient) -> f64 {
     let h: f64 = hist
         .iter()
         .filter(|&&v| v > 0.0)
-        .map(|&v| -(v / total) * (v / total).ln())
+        .map(|&v| -(v / total) * libm::log(v / total))
         .sum();
-    1.0 - h / (BINS as f64).ln()
+    1.0 - h / libm::log(BINS as f64)
 }
 
 /// **Structural complexity** (Amadasun & King's NGTDM complexity): over
