@@ -84,7 +84,7 @@ impl Evaluator {
             for j in 0..bh {
                 let row = c * nn + (y0 + j) * gw + x0;
                 let out = &mut self.s[row..row + bw];
-                for i in 0..bw {
+                for (i, o) in out.iter_mut().enumerate() {
                     let k = j * T2 + i;
                     let idx = row + i;
                     let mut v = b[k];
@@ -94,7 +94,7 @@ impl Evaluator {
                         v = v.clamp(-cap, cap);
                         w = NONE;
                     }
-                    out[i] = v * self.scale;
+                    *o = v * self.scale;
                     if W {
                         let code = wi[k];
                         self.win[idx] = if w == NONE {

@@ -3,10 +3,10 @@
 //! the backward pass from field adjoints to tape nodes.
 use super::scene::{GeomCache, Scene};
 use super::{greater, lesser, CombineOp, Grid, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+use crate::pattern::sdf::{self, Fields, PrimKind};
 
 /// Small tiles per big tile along each axis.
 const S: usize = T1 / T2;
-use crate::pattern::sdf::{self, Fields, PrimKind};
 
 /// Scratch and results of evaluating all colour fields on a grid.
 #[derive(Debug, Clone)]
