@@ -195,7 +195,15 @@ pub fn loss(
     t_normals: &[[f64; 2]],
     ds: Option<&mut [f64]>,
 ) -> f64 {
-    loss_with(opts, s, t, t_normals, ds, &mut vec![])
+    loss_with(opts, s, t, t_normals, ds, &mut Scratch::default())
+}
+
+/// The normal term's derivatives along one row, by pixel: with respect to
+/// the pixel's x and y stencil differences ([`sdf_row`], [`scatter_row`]).
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    gx: Vec<f64>,
+    gy: Vec<f64>,
 }
 
 /// [`loss`] with a scratch row the caller keeps (no allocation per call).
@@ -205,7 +213,7 @@ fn loss_with(
     t: &Target,
     t_normals: &[[f64; 2]],
     ds: Option<&mut [f64]>,
-    scratch: &mut Vec<[f64; 2]>,
+    scratch: &mut Scratch,
 ) -> f64 {
     if opts.kind != LossKind::Sdf {
         return loss_reference(opts, s, t, t_normals, ds);
@@ -223,7 +231,8 @@ fn loss_with(
     match ds {
         None => {
             for r in 0..channels * g.1 {
-                let (a, b) = sdf_row::<false>(s, &t.sdf, t_normals, g, r, normals, 0.0, &mut []);
+                let (a, b) =
+                    sdf_row::<false>(s, &t.sdf, t_normals, g, r, normals, 0.0, (&mut [], &mut []));
                 sum_s += a;
                 sum_n += b;
             }
@@ -241,8 +250,10 @@ fn loss_with(
                     *d = 2.0 * (a - b) * norm;
                 }
             };
-            scratch.clear();
-            scratch.resize(g.0, [0.0; 2]);
+            for v in [&mut scratch.gx, &mut scratch.gy] {
+                v.clear();
+                v.resize(g.0, 0.0);
+            }
             for r in 0..channels * g.1 {
                 if r % g.1 == 0 {
                     set_row(d, r);
@@ -250,12 +261,20 @@ fn loss_with(
                 if (r + 1) % g.1 != 0 {
                     set_row(d, r + 1);
                 }
-                let (a, b) =
-                    sdf_row::<true>(s, &t.sdf, t_normals, g, r, normals, norm * w, scratch);
+                let (a, b) = sdf_row::<true>(
+                    s,
+                    &t.sdf,
+                    t_normals,
+                    g,
+                    r,
+                    normals,
+                    norm * w,
+                    (&mut scratch.gx, &mut scratch.gy),
+                );
                 sum_s += a;
                 sum_n += b;
                 if normals {
-                    scatter_row(d, g, r, scratch);
+                    scatter_row(d, g, r, (&scratch.gx, &scratch.gy));
                 }
             }
         }
@@ -343,7 +362,7 @@ fn sdf_row<const G: bool>(
     r: usize,
     normals: bool,
     gscale: f64,
-    gg: &mut [[f64; 2]],
+    (ggx, ggy): (&mut [f64], &mut [f64]),
 ) -> (f64, f64) {
     // (`n` is the row length: the square grid's side, as this was written.)
     let nn = n * h;
@@ -363,15 +382,15 @@ fn sdf_row<const G: bool>(
     let tnr = &tn[o + y * n..o + y * n + n];
     let mut an = [0.0f64; 4];
     // One pixel with its own stencil (the borders, and rows under 3 wide).
-    let one = |x: usize, an: &mut [f64; 4], gg: &mut [[f64; 2]]| {
-        edge_px::<G>(x, (row, up, dn), tnr, ihy, gscale, an, gg)
+    let one = |x: usize, an: &mut [f64; 4], ggx: &mut [f64], ggy: &mut [f64]| {
+        edge_px::<G>(x, (row, up, dn), tnr, ihy, gscale, an, (ggx, ggy))
     };
     if n < 3 {
         for x in 0..n {
-            one(x, &mut an, gg);
+            one(x, &mut an, ggx, ggy);
         }
     } else {
-        one(0, &mut an, gg);
+        one(0, &mut an, ggx, ggy);
         // The interior: central differences, four lanes.
         let m = n - 2;
         let (l, rr) = (&row[..m], &row[2..]);
@@ -396,9 +415,8 @@ fn sdf_row<const G: bool>(
                 // (`a · gscale · ½` in that order, as `one` does.)
                 let a = (a * f64x4::splat(gscale) * f64x4::splat(0.5)).to_array();
                 let b = (b * f64x4::splat(gscale) * f64x4::splat(ihy)).to_array();
-                for k in 0..4 {
-                    gg[4 * ch + k + 1] = [a[k], b[k]];
-                }
+                ggx[4 * ch + 1..4 * ch + 5].copy_from_slice(&a);
+                ggy[4 * ch + 1..4 * ch + 5].copy_from_slice(&b);
             }
         }
         an = acc_n.to_array();
@@ -408,10 +426,11 @@ fn sdf_row<const G: bool>(
             let (term, a, b) = normal_px(gx, gy, tm[i]);
             an[0] += term;
             if G {
-                gg[i + 1] = [a * gscale * 0.5, b * gscale * ihy];
+                ggx[i + 1] = a * gscale * 0.5;
+                ggy[i + 1] = b * gscale * ihy;
             }
         }
-        one(n - 1, &mut an, gg);
+        one(n - 1, &mut an, ggx, ggy);
     }
     (ls, (an[0] + an[1]) + (an[2] + an[3]))
 }
@@ -427,7 +446,7 @@ fn edge_px<const G: bool>(
     ihy: f64,
     gscale: f64,
     an: &mut [f64; 4],
-    gg: &mut [[f64; 2]],
+    (ggx, ggy): (&mut [f64], &mut [f64]),
 ) {
     let n = row.len();
     let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
@@ -437,13 +456,14 @@ fn edge_px<const G: bool>(
     let (term, a, b) = normal_px(gx, gy, tnr[x]);
     an[0] += term;
     if G {
-        gg[x] = [a * gscale * ihx, b * gscale * ihy];
+        ggx[x] = a * gscale * ihx;
+        ggy[x] = b * gscale * ihy;
     }
 }
 
 /// Add the normal term's gradient of row `r` (from [`sdf_row`]'s `gg`)
 /// into `d` through the central-difference stencil (`n` wide, `h` high).
-fn scatter_row(d: &mut [f64], (n, h): (usize, usize), r: usize, gg: &[[f64; 2]]) {
+fn scatter_row(d: &mut [f64], (n, h): (usize, usize), r: usize, (gx, gy): (&[f64], &[f64])) {
     let nn = n * h;
     let (c, y) = (r / h, r % h);
     let o = c * nn;
@@ -451,27 +471,27 @@ fn scatter_row(d: &mut [f64], (n, h): (usize, usize), r: usize, gg: &[[f64; 2]])
     {
         let row = &mut d[o + y * n..o + y * n + n];
         if n < 3 {
-            for (x, g) in gg.iter().enumerate().take(n) {
+            for (x, g) in gx.iter().enumerate().take(n) {
                 let (xm, xp) = (x.saturating_sub(1), (x + 1).min(n - 1));
-                row[xp] += g[0];
-                row[xm] -= g[0];
+                row[xp] += g;
+                row[xm] -= g;
             }
         } else {
             // Gather form of `row[x + 1] += g[x]; row[x − 1] −= g[x]`.
             for j in 1..n - 1 {
-                row[j] += gg[j - 1][0] - gg[j + 1][0];
+                row[j] += gx[j - 1] - gx[j + 1];
             }
             // (Pixel 0 differences over [0, 1], pixel n − 1 over [n − 2, n − 1].)
-            row[0] -= gg[0][0] + gg[1][0];
-            row[n - 1] += gg[n - 2][0] + gg[n - 1][0];
+            row[0] -= gx[0] + gx[1];
+            row[n - 1] += gx[n - 2] + gx[n - 1];
         }
     }
     let (dp, dm) = (o + yp * n, o + ym * n);
-    for (x, g) in gg.iter().enumerate() {
-        d[dp + x] += g[1];
+    for (d, g) in d[dp..dp + n].iter_mut().zip(gy) {
+        *d += g;
     }
-    for (x, g) in gg.iter().enumerate() {
-        d[dm + x] -= g[1];
+    for (d, g) in d[dm..dm + n].iter_mut().zip(gy) {
+        *d -= g;
     }
 }
 
@@ -705,8 +725,16 @@ impl LossPass {
                 let end = rows.min(self.pos.saturating_add(budget.div_ceil(g.0)));
                 let normals = opts.normal_weight != 0.0;
                 for r in self.pos..end {
-                    let (a, b) =
-                        sdf_row::<false>(s, &t.sdf, t_normals, g, r, normals, 0.0, &mut []);
+                    let (a, b) = sdf_row::<false>(
+                        s,
+                        &t.sdf,
+                        t_normals,
+                        g,
+                        r,
+                        normals,
+                        0.0,
+                        (&mut [], &mut []),
+                    );
                     self.acc[0] += a;
                     self.acc[1] += b;
                 }
@@ -785,7 +813,7 @@ pub struct Objective {
     /// The loss pass of a loss evaluated in parts, once its fields are done.
     pass: Option<LossPass>,
     /// A row of normal-term derivatives ([`sdf_row`]).
-    scratch: Vec<[f64; 2]>,
+    scratch: Scratch,
     /// Take [`Objective::loss`] and [`Objective::loss_grad`] through
     /// [`loss_reference`] (the "before" figure of `bench fit`).
     #[doc(hidden)]
@@ -812,7 +840,7 @@ impl Objective {
             last_work: 0,
             next_tile: 0,
             pass: None,
-            scratch: vec![],
+            scratch: Scratch::default(),
             reference: false,
         }
     }

@@ -36,6 +36,7 @@
 //! tile culling, per-pixel evaluation, the backward pass), [`lanes`] (the
 //! 4-lane kernel for chains of circles, points and segments).
 
+mod backward;
 mod lanes;
 mod scene;
 mod tiles;

@@ -3,7 +3,7 @@
 //! the backward pass from field adjoints to tape nodes.
 use super::scene::{GeomCache, Scene};
 use super::{greater, lesser, CombineOp, Grid, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
-use crate::pattern::sdf::{self, Fields, PrimKind};
+use crate::pattern::sdf::Fields;
 
 /// Small tiles per big tile along each axis.
 const S: usize = T1 / T2;
@@ -427,72 +427,6 @@ impl Evaluator {
                     w
                 }
             };
-        }
-    }
-
-    /// Chain rule from `ds` (dL/dS per channel-pixel, same layout as
-    /// [`Evaluator::s`]) to the tape nodes: adds into `node_adj`.
-    /// Needs the winners of the last [`Evaluator::eval`].
-    pub fn backward(&self, scene: &Scene, ds: &[f64], node_adj: &mut [f64]) {
-        let (gw, gh, nn) = (self.grid.w, self.grid.h, self.grid.len());
-        let mut prim_adj = vec![[0.0f64; 6]; scene.rec.prims.len()];
-        let mut g = [0.0; 6];
-        for c in 0..scene.channels.len() {
-            for y in 0..gh {
-                for x in 0..gw {
-                    let idx = c * nn + y * gw + x;
-                    let a = ds[idx] * self.scale;
-                    let w = self.win[idx];
-                    if a == 0.0 || w.prim == NONE {
-                        continue;
-                    }
-                    let p = [self.centres_x[x], self.centres_y[y]];
-                    let kind = scene.rec.prims[w.prim as usize].kind;
-                    let f = &self.prim_vals[w.prim as usize];
-                    let k = a * w.psign as f64;
-                    let pa = &mut prim_adj[w.prim as usize];
-                    if kind == PrimKind::Circle {
-                        // Fast path of sdf::grad for the most common primitive.
-                        let (dx, dy) = (p[0] - f[0], p[1] - f[1]);
-                        let l2 = dx * dx + dy * dy;
-                        if l2 > 0.0 {
-                            let kl = k / l2.sqrt();
-                            pa[0] -= kl * dx;
-                            pa[1] -= kl * dy;
-                        }
-                        pa[2] -= k;
-                    } else if kind == PrimKind::Segment {
-                        // Fast path of sdf::grad for segments (one division
-                        // by the length instead of two).
-                        let (a, b) = ([f[0], f[1]], [f[2], f[3]]);
-                        let t = crate::geom::primitives::segment_closest_t(a, b, p);
-                        let dx = p[0] - (a[0] + t * (b[0] - a[0]));
-                        let dy = p[1] - (a[1] + t * (b[1] - a[1]));
-                        let l2 = dx * dx + dy * dy;
-                        if l2 > 0.0 {
-                            let kl = k / l2.sqrt();
-                            let (u, v) = ((1.0 - t) * kl, t * kl);
-                            pa[0] -= u * dx;
-                            pa[1] -= u * dy;
-                            pa[2] -= v * dx;
-                            pa[3] -= v * dy;
-                        }
-                    } else {
-                        sdf::grad(kind, f, p, &mut g);
-                        for j in 0..kind.field_count() {
-                            pa[j] += k * g[j];
-                        }
-                    }
-                    if w.wcoef != 0.0 {
-                        node_adj[w.wnode as usize] += a * w.wcoef as f64;
-                    }
-                }
-            }
-        }
-        for (p, pa) in scene.rec.prims.iter().zip(&prim_adj) {
-            for j in 0..p.kind.field_count() {
-                node_adj[p.fields[j] as usize] += pa[j];
-            }
         }
     }
 
