@@ -1,13 +1,14 @@
 //! The backward pass: from field adjoints (dL/dS per channel-pixel) to the
 //! tape nodes, through the winner of every pixel.
 //!
-//! A row is walked in runs of pixels with the same winner. Within a run,
+//! A row is walked in runs of pixels with the same winner code, whose
+//! record is made once per run. Within a run,
 //! circles and segments are taken four pixels at a time ([`f64x4`]) into
 //! four partial sums per field, added to the primitive's adjoints at the
 //! run's end.
 use super::scene::Scene;
 use super::tiles::Evaluator;
-use super::{Win, NONE};
+use super::{Win, NO_CODE};
 use crate::pattern::sdf::{self, Fields, PrimKind};
 use wide::{f64x4, CmpGt, CmpLt, CmpNe};
 
@@ -24,12 +25,13 @@ impl Evaluator {
                 let (wins, dsr) = (&self.win[row..row + gw], &ds[row..row + gw]);
                 let mut x = 0;
                 while x < gw {
-                    let w = wins[x];
+                    let code = wins[x];
                     let mut e = x + 1;
-                    while e < gw && same_winner(&wins[e], &w) {
+                    while e < gw && wins[e] == code {
                         e += 1;
                     }
-                    if w.prim != NONE {
+                    if code != NO_CODE {
+                        let w = scene.decode_win(code);
                         let run = Run {
                             w,
                             xs: &self.centres_x[x..e],
@@ -137,15 +139,6 @@ struct Run<'a> {
     xs: &'a [f64],
     py: f64,
     ds: &'a [f64],
-}
-
-/// The same winner (bit for bit), so one run.
-#[inline]
-fn same_winner(a: &Win, b: &Win) -> bool {
-    a.prim == b.prim
-        && a.wnode == b.wnode
-        && a.psign.to_bits() == b.psign.to_bits()
-        && a.wcoef.to_bits() == b.wcoef.to_bits()
 }
 
 /// The sum of the lanes, in a fixed order.

@@ -4,7 +4,7 @@
 //! item's set-up is paid once per tile, not once per row.
 use super::scene::{Item, Part, Scene};
 use super::tiles::Evaluator;
-use super::{lesser, CombineOp, Hit, CAP, NONE, NO_WIN, T2};
+use super::{lesser, CombineOp, CAP, NO_CODE, T2};
 use crate::pattern::sdf::{self, PrimKind};
 
 impl Evaluator {
@@ -30,10 +30,8 @@ impl Evaluator {
         {
             let mut b = [init * CAP; L];
             // Winners as 64-bit codes beside the values, so that the
-            // selects below vectorise: `item << 2 | below << 1 | flipped`,
-            // `below` when the primitive's distance is not ≥ 0 (the side
-            // `Scene::win_of` reads), `flipped` after a difference; all
-            // ones: none.
+            // selects below vectorise ([`super::win_code`]; the sign of a
+            // single primitive is +1); all ones: none.
             let mut wi = [u64::MAX; L];
             let mut i = 0;
             while i < ops.len() {
@@ -43,6 +41,7 @@ impl Evaluator {
                 while i < ops.len() && ops[i].0 == op {
                     let it = ops[i].1;
                     let item = &scene.items[it as usize];
+                    let base = (item.prim as u64) << 32 | (it as u64) << 4;
                     let d = self.lane_distances(item, px, py);
                     let vs = self.lane_values(item, &d);
                     // Selects, not branches, and no `min` (its choice
@@ -52,7 +51,7 @@ impl Evaluator {
                         best[k] = if m { vs[k] } else { best[k] };
                         if W {
                             let below = (d[k] < 0.0) | d[k].is_nan();
-                            let code = (it as u64) << 2 | (below as u64) << 1;
+                            let code = base | (below as u64) << 1;
                             bi[k] = if m { code } else { bi[k] };
                         }
                     }
@@ -77,10 +76,6 @@ impl Evaluator {
                 }
             }
             let (bw, bh) = (x1 - x0, y1 - y0);
-            // The last winner record built: neighbouring pixels mostly share
-            // their winner, and the record depends only on the item, the
-            // side of its primitive and the flip: its code.
-            let mut memo = (u64::MAX, NO_WIN);
             for j in 0..bh {
                 let row = c * nn + (y0 + j) * gw + x0;
                 let out = &mut self.s[row..row + bw];
@@ -88,34 +83,14 @@ impl Evaluator {
                     let k = j * T2 + i;
                     let idx = row + i;
                     let mut v = b[k];
-                    let mut w = (wi[k] >> 2) as u32;
                     let cap = caps[k];
-                    if v.abs() >= cap {
+                    let clamped = v.abs() >= cap;
+                    if clamped {
                         v = v.clamp(-cap, cap);
-                        w = NONE;
                     }
                     *o = v * self.scale;
                     if W {
-                        let code = wi[k];
-                        self.win[idx] = if w == NONE {
-                            NO_WIN
-                        } else if code == memo.0 {
-                            memo.1
-                        } else {
-                            let item = &scene.items[w as usize];
-                            let h = Hit {
-                                d: if code & 2 != 0 { -1.0 } else { 1.0 },
-                                prim: item.prim,
-                                sign: 1.0,
-                            };
-                            let mut rec = scene.win_of(item, &h);
-                            if code & 1 != 0 {
-                                rec.psign = -rec.psign;
-                                rec.wcoef = -rec.wcoef;
-                            }
-                            memo = (code, rec);
-                            rec
-                        };
+                        self.win[idx] = if clamped { NO_CODE } else { wi[k] };
                     }
                 }
             }

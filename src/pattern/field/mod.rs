@@ -180,6 +180,26 @@ pub(crate) const NO_WIN: Win = Win {
     wcoef: 0.0,
 };
 
+/// A pixel's winner as the evaluator stores it: 64 bits, `prim << 32 |
+/// item << 4 | (sign < 0) << 2 | below << 1 | flipped`, where `below` is
+/// the primitive's distance not ≥ 0 (the side [`Scene::win_of`] reads for
+/// strokes) and `flipped` a difference's negation; [`NO_CODE`] for none.
+/// Neighbouring pixels mostly share a code, and the record ([`Win`]) is
+/// made from it once per run ([`Scene::decode_win`]). Items are below
+/// 2²⁸ (two per shape at most, and shapes are limited far below that).
+#[inline(always)]
+pub(crate) fn win_code(item: u32, h: &Hit, flipped: bool) -> u64 {
+    debug_assert!(item < 1 << 28);
+    (h.prim as u64) << 32
+        | (item as u64) << 4
+        | ((h.sign < 0.0) as u64) << 2
+        | ((h.d < 0.0 || h.d.is_nan()) as u64) << 1
+        | flipped as u64
+}
+
+/// No winner: the value is clamped (or nothing reached the pixel).
+pub(crate) const NO_CODE: u64 = u64::MAX;
+
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Hit {
     pub(crate) d: f64,
@@ -347,7 +367,7 @@ mod tests {
                     let want = b.clamp(-cap, cap);
                     let got = e.s[c * n * n + y * n + x];
                     // The winner record explains the value exactly.
-                    let w = e.win[c * n * n + y * n + x];
+                    let w = e.winner(&sc, c * n * n + y * n + x);
                     if w.prim != NONE {
                         let prim = &sc.rec.prims[w.prim as usize];
                         let pv = sdf::value(prim.kind, &g.prim_vals[w.prim as usize], p);

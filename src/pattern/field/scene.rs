@@ -1,7 +1,7 @@
 //! Scene compilation: a recording becomes per-colour lists of operations
 //! (the paper's "on top" operator) over fill and stroke items, plus the
 //! geometry of each item at a point (paths with winding, booleans).
-use super::{CombineOp, Hit, Win, NONE};
+use super::{CombineOp, Hit, Win, NONE, NO_CODE, NO_WIN};
 use crate::pattern::record::{BoolOp, Geom, Recording};
 use crate::pattern::sdf::{self, Fields, PrimKind};
 
@@ -343,6 +343,25 @@ impl Scene {
                 }
             }
         }
+    }
+
+    /// The winner record of a [`super::win_code`].
+    pub(super) fn decode_win(&self, code: u64) -> Win {
+        if code == NO_CODE {
+            return NO_WIN;
+        }
+        let item = &self.items[(code >> 4 & 0x0fff_ffff) as usize];
+        let h = Hit {
+            d: if code & 2 != 0 { -1.0 } else { 1.0 },
+            prim: (code >> 32) as u32,
+            sign: if code & 4 != 0 { -1.0 } else { 1.0 },
+        };
+        let mut w = self.win_of(item, &h);
+        if code & 1 != 0 {
+            w.psign = -w.psign;
+            w.wcoef = -w.wcoef;
+        }
+        w
     }
 
     /// Item value with its winner record (used by tests).

@@ -2,7 +2,7 @@
 //! tile culling (see [`cull`]), per-pixel evaluation of what survives, and
 //! the backward pass from field adjoints to tape nodes.
 use super::scene::{GeomCache, Scene};
-use super::{greater, lesser, CombineOp, Grid, Hit, Win, CAP, NONE, NO_WIN, T1, T2};
+use super::{greater, lesser, win_code, CombineOp, Grid, Hit, Win, CAP, NONE, NO_CODE, T1, T2};
 use crate::pattern::sdf::Fields;
 
 /// Small tiles per big tile along each axis.
@@ -19,8 +19,9 @@ pub struct Evaluator {
     /// clamped to `±CAP·scale` and to the distance to the canvas edge
     /// ([`super::edge_cap`]).
     pub s: Vec<f64>,
-    /// Winners, same layout (filled only when asked for).
-    pub win: Vec<Win>,
+    /// Winners as codes ([`super::win_code`]; [`Evaluator::winner`]
+    /// decodes one), same layout (filled only when asked for).
+    pub win: Vec<u64>,
     /// Item evaluations done by the last call (a deterministic work measure).
     pub work: u64,
     pub(super) prim_vals: Vec<Fields>,
@@ -152,7 +153,7 @@ impl Evaluator {
         }
         self.s.resize(nc * nn, 0.0);
         if winners {
-            self.win.resize(nc * nn, NO_WIN);
+            self.win.resize(nc * nn, NO_CODE);
         }
         self.centre_vals.resize(scene.items.len(), 0.0);
         self.stamp.resize(scene.items.len(), u32::MAX);
@@ -417,17 +418,16 @@ impl Evaluator {
         self.s[idx] = b * self.scale;
         if winners {
             self.win[idx] = match win {
-                None => NO_WIN,
-                Some((it, h, flip)) => {
-                    let mut w = scene.win_of(&scene.items[it as usize], &h);
-                    if flip {
-                        w.psign = -w.psign;
-                        w.wcoef = -w.wcoef;
-                    }
-                    w
-                }
+                None => NO_CODE,
+                Some((it, h, flip)) => win_code(it, &h, flip),
             };
         }
+    }
+
+    /// The winner record of channel-pixel `idx` (layout of
+    /// [`Evaluator::s`]) after an evaluation with winners.
+    pub fn winner(&self, scene: &Scene, idx: usize) -> Win {
+        scene.decode_win(self.win[idx])
     }
 
     /// The palette index at every pixel, by the fields: the colour whose
