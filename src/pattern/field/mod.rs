@@ -333,6 +333,23 @@ mod tests {
         );
     }
 
+    /// Blocks where a channel is beyond its cap all over (along the
+    /// canvas border, where the cap is the distance to the edge) are
+    /// written without evaluating items: on both sides of zero, through
+    /// the lane kernel (circles) and the per-pixel path (a rectangle), the
+    /// values still equal brute force.
+    #[test]
+    fn blocks_beyond_the_cap_equal_brute_force() {
+        check_brute_force_with(
+            "circle(0.5, 0.5, 0.9, fill: \"#aa0000\");\n\
+             circle(0.5, 0.5, 0.05, fill: \"#0000aa\");\n\
+             rect(0.3, 0.3, 0.1, 0.2, fill: \"#00aa00\");\n\
+             difference(fill: \"#aaaa00\") { rect(0, 0, 1, 1); circle(0.5, 0.5, 0.3); }",
+            64,
+            false,
+        );
+    }
+
     const SCENE: &str = "for i in 0..6 { for j in 0..6 { circle(0.1 + i * 0.16, 0.1 + j * 0.16, 0.05, fill: \"#112233\"); } }\n\
              for k in 0..5 { segment(0, k * 0.2 + 0.05, 1, k * 0.2 + 0.1, stroke: \"#aa0000\", width: 0.02); }\n\
              path(fill: \"#00aa00\", stroke: \"#112233\", width: 0.01) { move(0.2, 0.2); quad(0.5, 0.0, 0.8, 0.2); line(0.5, 0.8); close(); }\n\

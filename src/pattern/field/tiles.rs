@@ -36,6 +36,9 @@ pub struct Evaluator {
     pub(super) chain2: Vec<(CombineOp, u32)>,
     pub(super) ranges1: Vec<(usize, usize)>,
     pub(super) ranges2: Vec<(usize, usize)>,
+    /// Bounds of each channel's value over the current small tile, from
+    /// [`cull`].
+    bounds2: Vec<(f64, f64)>,
     pub(super) gcache: GeomCache,
     pub(super) lane_channels: Vec<bool>,
     /// Lane items' values at the small-tile centres of the current big
@@ -84,6 +87,7 @@ impl Evaluator {
             chain2: vec![],
             ranges1: vec![],
             ranges2: vec![],
+            bounds2: vec![],
             gcache: GeomCache::default(),
             lane_channels: vec![],
             small_vals: vec![],
@@ -273,10 +277,11 @@ impl Evaluator {
                         work += used.len() as u64;
                         chain2.clear();
                         self.ranges2.clear();
+                        self.bounds2.clear();
                         for (c, ch) in scene.channels.iter().enumerate() {
                             let (a, b) = self.ranges1[c];
                             let start = chain2.len();
-                            cull(
+                            let bounds = cull(
                                 &chain1[a..b],
                                 ch.init,
                                 &self.centre_vals,
@@ -285,12 +290,24 @@ impl Evaluator {
                                 &mut chain2,
                             );
                             self.ranges2.push((start, chain2.len()));
+                            self.bounds2.push(bounds);
                         }
                         let (xe, ye) = ((sx + T2).min(gw), (sy + T2).min(gh));
                         // Chains of single circles, points and segments: a 4-lane kernel.
                         self.lane_channels.clear();
                         let (lx, ly, lcap) = self.lane_centres((sx, xe), (sy, ye));
+                        let cap_max = lcap.iter().fold(0.0, |m, &c| greater(m, c));
                         for (c, ch) in scene.channels.iter().enumerate() {
+                            // A channel whose value is beyond the cap all over
+                            // the block is the cap there (the same bits): no
+                            // item needs evaluating.
+                            let (lo, hi) = self.bounds2[c];
+                            if lo >= cap_max || hi <= -cap_max {
+                                let side = if lo >= cap_max { 1.0 } else { -1.0 };
+                                self.capped(c, side, (sx, xe), (sy, ye), &lcap, winners);
+                                self.lane_channels.push(true);
+                                continue;
+                            }
                             let (a, b) = self.ranges2[c];
                             let ops = &chain2[a..b];
                             let fast = ops.iter().all(|&(_, it)| scene.items[it as usize].lanes);
@@ -430,6 +447,30 @@ impl Evaluator {
         scene.decode_win(self.win[idx])
     }
 
+    /// Channel `c`'s values over a block whose every value is at least
+    /// its cap (`side` 1) or at most minus it (`side` −1): the clamped
+    /// values, as [`Evaluator::lanes`] writes them, and no winners.
+    fn capped(
+        &mut self,
+        c: usize,
+        side: f64,
+        (x0, x1): (usize, usize),
+        (y0, y1): (usize, usize),
+        caps: &[f64; T2 * T2],
+        winners: bool,
+    ) {
+        let (gw, nn) = (self.grid.w, self.grid.len());
+        for j in 0..y1 - y0 {
+            let row = c * nn + (y0 + j) * gw + x0;
+            for (i, o) in self.s[row..row + x1 - x0].iter_mut().enumerate() {
+                *o = side * caps[j * T2 + i] * self.scale;
+            }
+            if winners {
+                self.win[row..row + x1 - x0].fill(NO_CODE);
+            }
+        }
+    }
+
     /// The palette index at every pixel, by the fields: the colour whose
     /// field is most negative, or the background where none is.
     pub fn colour_indices(&self, scene: &Scene) -> Vec<u16> {
@@ -465,6 +506,9 @@ impl Evaluator {
 /// 2. Forward: track an interval for B; a run of unions (differences) that
 ///    cannot go below (above) it is dropped, and inside a run (where `min`
 ///    commutes) items that are never the smallest are dropped.
+///
+/// Returns the interval: the channel's value (before clamping) lies in it
+/// everywhere within `h`.
 fn cull(
     chain: &[(CombineOp, u32)],
     init: f64,
@@ -472,7 +516,7 @@ fn cull(
     h: f64,
     (keep, vbuf): (&mut Vec<bool>, &mut Vec<f64>),
     out: &mut Vec<(CombineOp, u32)>,
-) {
+) -> (f64, f64) {
     // Short chains (most small tiles) keep their flags and values on the
     // stack: no resize, and each value is read from `vals` once.
     const SHORT: usize = 16;
@@ -483,13 +527,13 @@ fn cull(
             *v = vals[it as usize];
         }
         let n = chain.len();
-        cull_with(chain, init, &v[..n], h, &mut k[..n], out);
+        cull_with(chain, init, &v[..n], h, &mut k[..n], out)
     } else {
         keep.clear();
         keep.resize(chain.len(), false);
         vbuf.clear();
         vbuf.extend(chain.iter().map(|&(_, it)| vals[it as usize]));
-        cull_with(chain, init, vbuf, h, keep, out);
+        cull_with(chain, init, vbuf, h, keep, out)
     }
 }
 
@@ -503,7 +547,7 @@ fn cull_with(
     h: f64,
     keep: &mut [bool],
     out: &mut Vec<(CombineOp, u32)>,
-) {
+) -> (f64, f64) {
     let (mut suf_u, mut suf_d) = (f64::INFINITY, f64::INFINITY);
     for ((&(op, _), k), &v) in chain.iter().zip(keep.iter_mut()).zip(v).rev() {
         // Both bounds stay in registers (selects, not a pointer to one).
@@ -550,4 +594,5 @@ fn cull_with(
         }
         i = j;
     }
+    (blo, bhi)
 }
