@@ -30,11 +30,17 @@
 //! form a run (`min` over its items commutes); items whose lower bound
 //! exceeds the run's smallest upper bound, and runs that cannot change the
 //! running interval, are dropped for that tile. Cost then follows the shapes
-//! near each tile, not every shape for every pixel.//!
+//! near each tile, not every shape for every pixel. The same interval
+//! bounds a channel over a small tile: where it lies beyond the cap (along
+//! the canvas border, where the cap is the distance to the edge) the
+//! block is the cap, and no item is evaluated.
+//!
 //! Files: [`scene`] (compiling a recording into per-colour operation lists,
 //! the geometry of compound shapes), [`tiles`] (the evaluator: two-level
-//! tile culling, per-pixel evaluation, the backward pass), [`lanes`] (the
-//! 4-lane kernel for chains of circles, points and segments).
+//! tile culling, per-pixel evaluation), [`lanes`] (the 4-lane kernel for
+//! chains of circles, points and segments), [`backward`] (from field
+//! adjoints to tape nodes through each pixel's winner, kept as a 64-bit
+//! code, [`win_code`]).
 
 mod backward;
 mod lanes;
