@@ -218,8 +218,16 @@ fn compute(cfg: &BuildConfig) -> (Vec<Row>, Vec<Row>) {
             crop: s.crop.unwrap_or(0),
             held: held[s.base],
             f: pcn.features(img).unwrap(),
-            fx: if flips { pcn.features(&mirror(img)).unwrap() } else { Vec::new() },
-            ft: if flips { pcn.features(&transpose(img)).unwrap() } else { Vec::new() },
+            fx: if flips {
+                pcn.features(&mirror(img)).unwrap()
+            } else {
+                Vec::new()
+            },
+            ft: if flips {
+                pcn.features(&transpose(img)).unwrap()
+            } else {
+                Vec::new()
+            },
             g: globals(&pcn.config.view(img).unwrap()),
         }
     });
@@ -522,7 +530,9 @@ fn main() {
                 // Each missed image of these models: base, light, crop, taken for.
                 for (r, s) in ev.iter().zip(&per) {
                     let p = argmax(&s[0]) as usize;
-                    if p != r.model as usize && ids.split(',').any(|i| i == MODELS[r.model as usize].id) {
+                    if p != r.model as usize
+                        && ids.split(',').any(|i| i == MODELS[r.model as usize].id)
+                    {
                         println!(
                             "  miss {} base {} light {} crop {} -> {}",
                             MODELS[r.model as usize].id, r.base, r.light, r.crop, MODELS[p].id

@@ -395,7 +395,11 @@ fn every_fusion_in_the_dataset_shows_both_ingredients() {
         for (p, seed) in dataset_points(m.id) {
             let (a, b) = super::composite::fusion_ingredients(m, &p, seed, 96).unwrap();
             let w = p[0] as f32;
-            let mut blend: Vec<f32> = a.iter().zip(&b).map(|(x, y)| w * x + (1.0 - w) * y).collect();
+            let mut blend: Vec<f32> = a
+                .iter()
+                .zip(&b)
+                .map(|(x, y)| w * x + (1.0 - w) * y)
+                .collect();
             super::common::normalise(&mut blend);
             let drawn = render_height(m, &p, seed, 96).unwrap().data;
             assert!(mean_abs_diff(&drawn, &blend) < 1e-5, "{} {p:?}", m.id);
