@@ -65,6 +65,9 @@ fn transpose(g: &Gray) -> Gray {
 /// Global values of the 128² view: the 12 raw scale measures, the
 /// log power in 13 radial octave-ish bands, and 3 grey-level moments.
 fn globals(v: &Gray) -> Vec<f32> {
+    if std::env::var("SHIPPED_GLOBALS").is_ok() {
+        return filigree::texture::globals::measure(v).unwrap();
+    }
     let mut out: Vec<f32> = filigree::texture::scales::measure(v)
         .unwrap()
         .iter()
@@ -185,6 +188,9 @@ fn load(path: &str) -> Option<(Vec<Row>, Vec<Row>)> {
 }
 
 fn compute(cfg: &BuildConfig) -> (Vec<Row>, Vec<Row>) {
+    // NOFLIP=1: no mirror / transpose features (a third of the time; the
+    // flip variants then read the plain features).
+    let flips = std::env::var("NOFLIP").is_err();
     let mut stats = BuildStats::default();
     let t = Instant::now();
     let samples = build::labelled(&cfg.dataset, &[], &mut stats).unwrap();
@@ -212,8 +218,16 @@ fn compute(cfg: &BuildConfig) -> (Vec<Row>, Vec<Row>) {
             crop: s.crop.unwrap_or(0),
             held: held[s.base],
             f: pcn.features(img).unwrap(),
-            fx: pcn.features(&mirror(img)).unwrap(),
-            ft: pcn.features(&transpose(img)).unwrap(),
+            fx: if flips {
+                pcn.features(&mirror(img)).unwrap()
+            } else {
+                Vec::new()
+            },
+            ft: if flips {
+                pcn.features(&transpose(img)).unwrap()
+            } else {
+                Vec::new()
+            },
             g: globals(&pcn.config.view(img).unwrap()),
         }
     });
@@ -270,6 +284,10 @@ fn main() {
         }
     };
     for r in rows.iter_mut().chain(centre.iter_mut()) {
+        if r.fx.is_empty() {
+            r.fx = r.f.clone();
+            r.ft = r.f.clone();
+        }
         for x in r.g.iter_mut() {
             if !x.is_finite() {
                 *x = -14.0;
@@ -288,7 +306,11 @@ fn main() {
         bases.sort_unstable();
         bases.dedup();
         rng.shuffle(&mut bases);
-        for &b in bases.iter().take(bases.len() / 3) {
+        // FOLD=k (0, 1, 2): which third of the training bases validates
+        // (0 by default; the three folds together cover every training base).
+        let k: usize = std::env::var("FOLD").map_or(0, |v| v.parse().unwrap());
+        let third = bases.len() / 3;
+        for &b in bases.iter().skip(k * third).take(third) {
             val_base.insert(b);
         }
     }
@@ -469,6 +491,56 @@ fn main() {
             pc(q1, qn),
             pc(q3, qn),
         );
+        if std::env::var("CONF").is_ok() {
+            // Per model: right out of its evaluated images, and what the
+            // misses were taken for (all images; first images in brackets).
+            let mut conf = vec![vec![(0usize, 0usize); MODELS.len()]; MODELS.len()];
+            for (r, s) in ev.iter().zip(&per) {
+                let p = argmax(&s[0]) as usize;
+                let e = &mut conf[r.model as usize][p];
+                e.0 += 1;
+                if r.light == 0 && r.crop == 0 {
+                    e.1 += 1;
+                }
+            }
+            for (m, row) in conf.iter().enumerate() {
+                let tot: usize = row.iter().map(|x| x.0).sum();
+                let tot1: usize = row.iter().map(|x| x.1).sum();
+                let mut miss: Vec<(usize, usize, usize)> = row
+                    .iter()
+                    .enumerate()
+                    .filter(|&(p, x)| p != m && x.0 > 0)
+                    .map(|(p, x)| (x.0, x.1, p))
+                    .collect();
+                miss.sort_unstable_by(|a, b| b.cmp(a));
+                println!(
+                    "  {:24} {:3}/{:3} ({}/{}) | {}",
+                    MODELS[m].id,
+                    row[m].0,
+                    tot,
+                    row[m].1,
+                    tot1,
+                    miss.iter()
+                        .map(|(a, b, p)| format!("{} {a} ({b})", MODELS[*p].id))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+            if let Ok(ids) = std::env::var("MISSES") {
+                // Each missed image of these models: base, light, crop, taken for.
+                for (r, s) in ev.iter().zip(&per) {
+                    let p = argmax(&s[0]) as usize;
+                    if p != r.model as usize
+                        && ids.split(',').any(|i| i == MODELS[r.model as usize].id)
+                    {
+                        println!(
+                            "  miss {} base {} light {} crop {} -> {}",
+                            MODELS[r.model as usize].id, r.base, r.light, r.crop, MODELS[p].id
+                        );
+                    }
+                }
+            }
+        }
         if std::env::var("PER").is_ok() {
             println!(
                 "  {}",

@@ -60,9 +60,13 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   assert.match(await page.textContent('[data-testid=texture-estimates-note]'), /estimates.*not human ratings/);
 
   // A forest-fire automaton's texture (a seed outside the index's
-  // samples): irregular, so regularity has room to rise.
+  // samples): irregular, so regularity has room to rise. Retrieval is the
+  // nearest sample in the perceptual space, so regularity does not rise
+  // for every example: seed 11, the example here until the index of
+  // 2026-12-03b, now falls 6 → 3; seed 12 rises 4 → 7. How often it rises
+  // over 46 examples is pinned natively (tests/texture_asset.rs).
   const model = 'ca-forest-fire';
-  const png = await renderedPng(page, model, 11);
+  const png = await renderedPng(page, model, 12);
   await dropFile(page, '[data-testid=texture-drop]', { name: 'forest.png', bytes: png, type: 'image/png' });
   await page.waitForFunction(() => window.filigreeTexture.state()?.source?.kind === 'image', null, { timeout: 30000 });
   await page.waitForFunction(settled, null, { timeout: 30000 });

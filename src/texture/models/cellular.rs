@@ -4,7 +4,10 @@ use super::common::{normalise, worley};
 use super::{int, real, Family, Model, ParamSpec};
 
 const PARAMS: &[ParamSpec] = &[
-    int("cells", 3.0, 24.0, 8.0),
+    // Dataset from 6: with 3 cells per side a training window (a quarter
+    // of the texture) shows one or two cells, a few flat facets rather
+    // than a field of cells (rendered side by side, 2026-12-03).
+    int("cells", 3.0, 24.0, 8.0).dataset(6.0, 24.0),
     // Dataset from 0.5: with little jitter the cells are a square lattice
     // of domes or pyramids, `texton-regular`'s picture (at 0.25 still
     // visibly a lattice); from 0.5 they are irregular Voronoi cells
