@@ -683,8 +683,9 @@ fn main_part(s: &Settings) -> Result<String> {
                 "{check}
       if (check && dist >= 2.0 * eps) {{
         g_checks++;
-        vec3 gr = grad(o + d * t, max(prec * t, 1e-5 * (1.0 + length(o + d * t))));
-        relax = clamp(1.8 / (1.0 + clamp(-dot(gr, d), -1.0, 1.0)), 1.0, {mr});
+        float hc = max(prec * t, 1e-5 * (1.0 + length(o + d * t)));
+        float ahead = field(o + d * (t + hc));
+        relax = clamp(1.8 / (1.0 + clamp(-(ahead - dist) / hc, -1.0, 1.0)), 1.0, {mr});
       }}
       float w = cooldown ? 1.0 : relax;
       cooldown = false;
