@@ -227,9 +227,19 @@ fn main() {
             for x in 0..size {
                 let d = rays.dir(x, y);
                 if trace(
-                    &scene, rays.origin, d, precision, sel, check, w0, wmax, local, &mut c,
+                    &scene,
+                    rays.origin,
+                    d,
+                    precision,
+                    sel,
+                    check,
+                    w0,
+                    wmax,
+                    local,
+                    &mut c,
                 )
-                .is_some() {
+                .is_some()
+                {
                     c.hits += 1;
                 }
             }

@@ -117,16 +117,52 @@ fn main() {
     let variants = [
         v("fixed", false, StepMode::Fixed, 10, 0.0),
         v("bisection", false, StepMode::Bisection, 10, 0.0),
-        v("s17 fully adaptive (6-eval checks)", true, StepMode::Adaptive, 1, 0.0),
+        v(
+            "s17 fully adaptive (6-eval checks)",
+            true,
+            StepMode::Adaptive,
+            1,
+            0.0,
+        ),
         v("s17 adaptive N 10", true, StepMode::Adaptive, 10, 0.0),
-        v("s17 adaptive D(p), cell 0.25", true, StepMode::Adaptive, 10, 0.25),
-        v("fully adaptive (1-eval checks)", false, StepMode::Adaptive, 1, 0.0),
+        v(
+            "s17 adaptive D(p), cell 0.25",
+            true,
+            StepMode::Adaptive,
+            10,
+            0.25,
+        ),
+        v(
+            "fully adaptive (1-eval checks)",
+            false,
+            StepMode::Adaptive,
+            1,
+            0.0,
+        ),
         v("adaptive N 10", false, StepMode::Adaptive, 10, 0.0),
         v("adaptive N 100", false, StepMode::Adaptive, 100, 0.0),
         v("adaptive N 500", false, StepMode::Adaptive, 500, 0.0),
-        v("adaptive D(p), cell 0.25", false, StepMode::Adaptive, 10, 0.25),
-        v("adaptive D(p), cell 0.1", false, StepMode::Adaptive, 10, 0.1),
-        v("adaptive D(p), cell 0.05", false, StepMode::Adaptive, 10, 0.05),
+        v(
+            "adaptive D(p), cell 0.25",
+            false,
+            StepMode::Adaptive,
+            10,
+            0.25,
+        ),
+        v(
+            "adaptive D(p), cell 0.1",
+            false,
+            StepMode::Adaptive,
+            10,
+            0.1,
+        ),
+        v(
+            "adaptive D(p), cell 0.05",
+            false,
+            StepMode::Adaptive,
+            10,
+            0.05,
+        ),
     ];
     let mut ms = vec![vec![]; variants.len()];
     let mut stats = vec![Stats::default(); variants.len()];

@@ -779,3 +779,78 @@ fn wasm_and_native_give_the_same_bytes() {
         assert!(png == want, "{name}: the native bytes differ from {path}");
     }
 }
+
+/// The CLI's `micro slice` and `micro render` write the bytes the requests
+/// give (the shared fixtures of `wasm_and_native_give_the_same_bytes`):
+/// the flags reach the request.
+#[test]
+fn the_cli_slices_and_renders_the_fixture_bytes() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join(format!("filigree-micro-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases: [(&str, &[&str], &str); 2] = [
+        (
+            "slice",
+            &[
+                "slice",
+                "--scene",
+                "agglomerate",
+                "--z",
+                "0.2",
+                "--size",
+                "40x32",
+            ],
+            "slice",
+        ),
+        (
+            "render",
+            &[
+                "render",
+                "--scene",
+                "blood",
+                "--size",
+                "40x32",
+                "--steps",
+                "adaptive",
+                "--check-every",
+                "3",
+                "--absorption",
+                "0.6",
+            ],
+            "adaptive-checks",
+        ),
+    ];
+    for (what, args, fixture) in cases {
+        let out = dir.join(format!("{what}.png"));
+        let args: Vec<String> = args
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                if i > 0 && args[i - 1] == "--scene" {
+                    format!("{root}/assets/micro/{a}.json")
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_filigree"))
+            .arg("micro")
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{what}: {}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        let want =
+            std::fs::read(format!("{root}/tests/fixtures/micro-native/{fixture}.png")).unwrap();
+        assert!(
+            std::fs::read(&out).unwrap() == want,
+            "micro {what}: the CLI's bytes differ from {fixture}.png"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
