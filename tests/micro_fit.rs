@@ -857,3 +857,33 @@ fn powell_coarse_to_fine_recovers_gyroid_5d() {
         assert!(out.evaluations <= 3000);
     }
 }
+
+/// A sampled volume target (`target.values`: what `micro fit --target
+/// V.f32` reads, e.g. from a CT scan) gives back the gyroid's frequency: the
+/// target scene sampled on the fit's own grid gives the scene target's fit,
+/// value for value and loss for loss.
+#[test]
+fn a_sampled_volume_target_gives_the_scene_targets_fit() {
+    let req = gyroid_request(Optimizer::Powell, 800);
+    let job = start_fit(req.clone()).unwrap();
+    let target = filigree::micro::parse(&gyroid_1d(100.0)).unwrap();
+    let values = job.sample(&target, false).unwrap();
+    assert_eq!(values.len(), 16 * 16 * 16);
+    let by_scene = fit(req.clone());
+    let by_volume = fit(MicroFitRequest {
+        target: FitTarget::Volume { values },
+        ..req
+    });
+    eprintln!(
+        "volume: η = {}, loss {} (scene: η = {}, loss {})",
+        by_volume.values[0], by_volume.loss, by_scene.values[0], by_scene.loss
+    );
+    assert!(
+        (by_volume.values[0] - 100.0).abs() < 0.01,
+        "{:?}",
+        by_volume.values
+    );
+    assert!(by_volume.loss < by_volume.initial_loss - 3.0);
+    assert_eq!(by_volume.values, by_scene.values);
+    assert_eq!(by_volume.loss, by_scene.loss);
+}
