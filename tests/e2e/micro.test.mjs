@@ -169,7 +169,7 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
   await page.context().close();
 });
 
-test('micro: pan moves the target, a particle size in the parameters changes the render, the scene JSON exports', async () => {
+test('micro: pan moves the target, a particle size in the parameters changes the render, the scene JSON and a PNG export', async () => {
   const page = await cpuPage('#tool=micro');
   await page.waitForSelector('[data-testid=micro-examples] [data-example=spheres]', { timeout: 30000 });
   let n = await waitForRender(page, 0);
@@ -232,6 +232,15 @@ test('micro: pan moves the target, a particle size in the parameters changes the
   assert.equal(dl.suggestedFilename(), 'multiscale.json');
   const text = fs.readFileSync(await dl.path(), 'utf8');
   assert.equal(text, (await state(page)).scene);
+
+  // Export PNG of the slice view: a full-size PNG of the document's view.
+  await page.check('[data-testid=micro-slice-toggle]');
+  n = await waitForRender(page, n);
+  const [png] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-png]')]);
+  assert.equal(png.suggestedFilename(), 'multiscale-slice.png');
+  const bytes = fs.readFileSync(await png.path());
+  assert.equal(bytes.subarray(1, 4).toString('latin1'), 'PNG');
+  assert.deepEqual([bytes.readUInt32BE(16), bytes.readUInt32BE(20)], [768, 768], 'twice the panel\'s largest side');
   await page.context().close();
 });
 
