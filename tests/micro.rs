@@ -62,6 +62,16 @@ fn scenes() -> Vec<(&'static str, serde_json::Value)> {
             "noise_frequency": 7, "extent": 1.2}),
         ),
         (
+            // θ(p) and P(p) with terms of degree 2 and 3; the extent covers
+            // every point sampled below (|pᵢ| ≤ 1.7).
+            "pile-polynomial",
+            json!({"type": "pile", "cell": 0.2, "radius": 0.5, "axis": [0, 1, 1],
+            "angle": {"value": 0.2, "gradient": [0.5, 0.2, 0],
+                      "terms": [{"c": 0.2, "x": 1, "y": 1}, {"c": -0.15, "z": 2}, {"c": 0.05, "x": 2, "z": 1}]},
+            "deform": {"value": 0.01, "terms": [{"c": 0.02, "x": 2}, {"c": -0.01, "y": 1, "z": 1}]},
+            "noise_frequency": 7, "extent": 1.75}),
+        ),
+        (
             "gyroid-solid",
             json!({"type": "tpms", "surface": "gyroid", "period": 0.4, "level": 0.3}),
         ),
