@@ -165,7 +165,7 @@ impl Poly {
         }
         let (mut vmax, mut dt) = (self.value.abs() + g * e * 3f64.sqrt(), DVec3::ZERO);
         for (i, t) in self.terms.iter().enumerate() {
-            let tp = join(&p, &format!("terms.{i}"));
+            let tp = join(&p, format!("terms.{i}"));
             num(&tp, "c", t.c, -WORLD, WORLD)?;
             let deg = t.x as u64 + t.y as u64 + t.z as u64;
             if deg > MAX_POLY_DEGREE as u64 {
