@@ -1,7 +1,7 @@
 //! Table 2 probe (issue 12): the multiscale scene traced with each step
-//! strategy, plus the adaptive strategy as it was before issue 12
-//! ("old", a copy below), variants alternating per repeat so load changes
-//! weigh on all alike. Each pixel: trace, and for a hit the central-
+//! strategy, plus the adaptive strategy as it was in session 17 ("s17",
+//! 6-evaluation gradient checks, a copy below), variants alternating per
+//! repeat so load changes weigh on all alike. Each pixel: trace, and for a hit the central-
 //! difference normal (6 evaluations), as `micro-render` does.
 //! `cargo run --release --example micro_table2 -- [size] [repeats] [scene.json]`
 #![allow(clippy::disallowed_methods)] // timing: native only
@@ -11,10 +11,11 @@ use filigree::micro::Scene;
 use glam::DVec3;
 use std::time::Instant;
 
-/// `render::trace`'s adaptive branch before issue 12: a 6-evaluation
-/// gradient check every N steps (from step 0), relax `0.9 / g` (≤ 4) where
-/// g < 0.7, an undone step retaken plainly.
-fn old_adaptive(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Option<f64> {
+/// `render::trace`'s adaptive branch as of session 17 (issue 12): the same
+/// loop, but each check a 6-evaluation central-difference gradient of which
+/// only the slope along the ray was used (now: a 1-evaluation forward
+/// difference along the ray).
+fn s17_adaptive(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Option<f64> {
     st.rays += 1;
     let (t0, t1) = render::clip(o, d, s.bounds * (1.0 + 1e-9) + 1e-12)?;
     let f = |t: f64, st: &mut Stats| {
@@ -22,10 +23,14 @@ fn old_adaptive(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) ->
         render::field(scene, s.bounds, o + d * t)
     };
     let tiny = 1e-12 * (1.0 + t1);
-    let (mut t, mut relax, mut last_cell) = (t0, 1.0f64, DVec3::NAN);
+    let mut t = t0;
     let mut dist = f(t, st);
+    let mut relax = s.max_relax.max(1.0);
+    let mut cooldown = false;
+    let mut last_cell = DVec3::NAN;
     for i in 0..s.max_steps {
-        if dist < s.precision * t.max(tiny) {
+        let eps = s.precision * t.max(tiny);
+        if dist < eps {
             return Some(t);
         }
         if t > t1 {
@@ -37,32 +42,38 @@ fn old_adaptive(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) ->
             let fresh = q != last_cell;
             last_cell = q;
             let m = s.check_modulus.max(1) as f64;
-            i == 0 || (fresh && (q.x + 2.0 * q.y + 3.0 * q.z).rem_euclid(m) == 0.0)
+            fresh && i > 0 && (q.x + 2.0 * q.y + 3.0 * q.z).rem_euclid(m) == 0.0
         } else {
-            i % s.check_every.max(1) == 0
+            i % s.check_every.max(1) == 0 && (i > 0 || s.check_every <= 1)
         };
-        if check {
+        if check && dist >= 2.0 * eps {
             st.gradient_checks += 1;
             let h = (s.precision * t).max(1e-9);
-            let mut e = |q| {
-                st.sdf_evals += 1;
-                render::field(scene, s.bounds, q)
-            };
-            let g = sdf3::gradient(&mut e, o + d * t, h).length();
-            relax = if g < 0.7 {
-                (0.9 / g.max(1e-9)).clamp(1.0, 4.0)
-            } else {
-                1.0
-            };
+            let g = sdf3::gradient(
+                &mut |q| {
+                    st.sdf_evals += 1;
+                    render::field(scene, s.bounds, q)
+                },
+                o + d * t,
+                h,
+            );
+            relax = render::relax_for_slope(-g.dot(d), s.max_relax);
         }
+        let step = if cooldown { 1.0 } else { relax };
+        cooldown = false;
         let (tp, dp) = (t, dist);
-        t += dist * relax;
+        t += dist * step;
         dist = f(t, st);
-        if relax > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12)) {
+        if step > 1.0 && (dist < 0.0 || dp + dist < (t - tp) * (1.0 - 1e-12)) {
             st.undone_steps += 1;
-            relax = 1.0;
+            cooldown = true;
+            let (tr, dr) = (t, dist);
             t = tp + dp;
             dist = f(t, st);
+            if dr >= 0.0 && dist + dr >= (tr - t) * (1.0 + 1e-12) {
+                t = tr;
+                dist = dr;
+            }
         }
     }
     st.exhausted += 1;
@@ -106,29 +117,51 @@ fn main() {
     let variants = [
         v("fixed", false, StepMode::Fixed, 10, 0.0),
         v("bisection", false, StepMode::Bisection, 10, 0.0),
-        v("old fully adaptive", true, StepMode::Adaptive, 1, 0.0),
-        v("old adaptive N 10", true, StepMode::Adaptive, 10, 0.0),
-        v("old adaptive N 100", true, StepMode::Adaptive, 100, 0.0),
-        v("old adaptive N 500", true, StepMode::Adaptive, 500, 0.0),
-        v("old adaptive D(p) = 1", true, StepMode::Adaptive, 10, 0.05),
-        v("fully adaptive", false, StepMode::Adaptive, 1, 0.0),
+        v(
+            "s17 fully adaptive (6-eval checks)",
+            true,
+            StepMode::Adaptive,
+            1,
+            0.0,
+        ),
+        v("s17 adaptive N 10", true, StepMode::Adaptive, 10, 0.0),
+        v(
+            "s17 adaptive D(p), cell 0.25",
+            true,
+            StepMode::Adaptive,
+            10,
+            0.25,
+        ),
+        v(
+            "fully adaptive (1-eval checks)",
+            false,
+            StepMode::Adaptive,
+            1,
+            0.0,
+        ),
         v("adaptive N 10", false, StepMode::Adaptive, 10, 0.0),
         v("adaptive N 100", false, StepMode::Adaptive, 100, 0.0),
         v("adaptive N 500", false, StepMode::Adaptive, 500, 0.0),
-        v("adaptive D(p) = 1", false, StepMode::Adaptive, 10, 0.05),
         v(
-            "adaptive D(p) = 1, cell 0.1",
+            "adaptive D(p), cell 0.25",
+            false,
+            StepMode::Adaptive,
+            10,
+            0.25,
+        ),
+        v(
+            "adaptive D(p), cell 0.1",
             false,
             StepMode::Adaptive,
             10,
             0.1,
         ),
         v(
-            "adaptive D(p) = 1, cell 0.25",
+            "adaptive D(p), cell 0.05",
             false,
             StepMode::Adaptive,
             10,
-            0.25,
+            0.05,
         ),
     ];
     let mut ms = vec![vec![]; variants.len()];
@@ -142,7 +175,7 @@ fn main() {
                 for x in 0..size {
                     let d = rays.dir(x, y);
                     let hit = if *old {
-                        old_adaptive(&scene, rays.origin, d, tr, &mut st)
+                        s17_adaptive(&scene, rays.origin, d, tr, &mut st)
                     } else {
                         render::trace(&scene, rays.origin, d, tr, &mut st)
                     };

@@ -62,6 +62,16 @@ fn scenes() -> Vec<(&'static str, serde_json::Value)> {
             "noise_frequency": 7, "extent": 1.2}),
         ),
         (
+            // θ(p) and P(p) with terms of degree 2 and 3; the extent covers
+            // every point sampled below (|pᵢ| ≤ 1.7).
+            "pile-polynomial",
+            json!({"type": "pile", "cell": 0.2, "radius": 0.5, "axis": [0, 1, 1],
+            "angle": {"value": 0.2, "gradient": [0.5, 0.2, 0],
+                      "terms": [{"c": 0.2, "x": 1, "y": 1}, {"c": -0.15, "z": 2}, {"c": 0.05, "x": 2, "z": 1}]},
+            "deform": {"value": 0.01, "terms": [{"c": 0.02, "x": 2}, {"c": -0.01, "y": 1, "z": 1}]},
+            "noise_frequency": 7, "extent": 1.75}),
+        ),
+        (
             "gyroid-solid",
             json!({"type": "tpms", "surface": "gyroid", "period": 0.4, "level": 0.3}),
         ),
@@ -737,8 +747,9 @@ fn tile_errors_name_their_field() {
 }
 
 /// The native core's PNG bytes for the shared requests of
-/// `tests/fixtures/micro-native/requests.json` (one per step mode, a path
-/// traced image, a path-traced tile of a later pass, a slice) are the files
+/// `tests/fixtures/micro-native/requests.json` (one per step mode, adaptive
+/// steps with checks every N and by D(p) cells, a path traced image, a
+/// path-traced tile of a later pass, a slice) are the files
 /// beside it; the browser e2e (`micro.test.mjs`) asks the wasm worker for
 /// the same requests and compares with the same files, so wasm = native
 /// byte for byte. `FILIGREE_BLESS=1` rewrites the files after an intended
@@ -763,6 +774,12 @@ fn wasm_and_native_give_the_same_bytes() {
             .iter()
             .map(|v| v.as_u64().unwrap() as u8)
             .collect();
+        // The adaptive requests with checks do check (at 40×32 most
+        // rays are too short for gradient checks: `adaptive` has none).
+        if name.starts_with("adaptive-") {
+            let checks = out["stats"]["gradient_checks"].as_u64().unwrap();
+            assert!(checks > 50, "{name}: {checks} gradient checks");
+        }
         let path = format!("{dir}/{name}.png");
         if bless {
             std::fs::write(&path, &png).unwrap();
@@ -771,4 +788,79 @@ fn wasm_and_native_give_the_same_bytes() {
             .unwrap_or_else(|e| panic!("{path}: {e} (FILIGREE_BLESS=1 writes it)"));
         assert!(png == want, "{name}: the native bytes differ from {path}");
     }
+}
+
+/// The CLI's `micro slice` and `micro render` write the bytes the requests
+/// give (the shared fixtures of `wasm_and_native_give_the_same_bytes`):
+/// the flags reach the request.
+#[test]
+fn the_cli_slices_and_renders_the_fixture_bytes() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join(format!("filigree-micro-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases: [(&str, &[&str], &str); 2] = [
+        (
+            "slice",
+            &[
+                "slice",
+                "--scene",
+                "agglomerate",
+                "--z",
+                "0.2",
+                "--size",
+                "40x32",
+            ],
+            "slice",
+        ),
+        (
+            "render",
+            &[
+                "render",
+                "--scene",
+                "blood",
+                "--size",
+                "40x32",
+                "--steps",
+                "adaptive",
+                "--check-every",
+                "3",
+                "--absorption",
+                "0.6",
+            ],
+            "adaptive-checks",
+        ),
+    ];
+    for (what, args, fixture) in cases {
+        let out = dir.join(format!("{what}.png"));
+        let args: Vec<String> = args
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                if i > 0 && args[i - 1] == "--scene" {
+                    format!("{root}/assets/micro/{a}.json")
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        let st = std::process::Command::new(env!("CARGO_BIN_EXE_filigree"))
+            .arg("micro")
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{what}: {}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        let want =
+            std::fs::read(format!("{root}/tests/fixtures/micro-native/{fixture}.png")).unwrap();
+        assert!(
+            std::fs::read(&out).unwrap() == want,
+            "micro {what}: the CLI's bytes differ from {fixture}.png"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

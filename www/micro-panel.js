@@ -1,9 +1,11 @@
 // "Micro": multiscale microstructures as implicit functions (MISSION M7,
 // S8–S10). Pick a shipped scene or edit its JSON, and the core sphere-traces
 // it in a worker (`micro-render`) or samples the field on a plane
-// (`micro-slice`). Drag the image to orbit, wheel or +/− to zoom: the camera
-// distance multiplies, so one zoom path goes from the macro- to the
-// microscale with nothing precomputed. While a gesture runs the image is
+// (`micro-slice`). Drag the image to orbit, shift-drag (or the middle
+// button) to pan, wheel or +/− to zoom: the camera distance multiplies, so
+// one zoom path goes from the macro- to the microscale with nothing
+// precomputed. The "Parameters" list has a number field for every number
+// of every node of the scene (an edit rewrites the JSON, like typing). While a gesture runs the image is
 // rendered at a quarter of its size; it is rendered at full size once the
 // gesture pauses. A new render cancels the one before.
 //
@@ -39,6 +41,9 @@ const FULL_SIDE = 384; // full render, pixels a side (at most)
 const PREVIEW_DIV = 4; // while dragging: 1/4 of the full side
 const ZOOM_STEP = 1.5; // one + / − press multiplies the distance by this
 const ORBIT_DEG_PER_PX = 0.4;
+const CAMERA_FOV = 40; // the request's default vertical field of view (degrees)
+const PAN_KEY_PX = 20; // one shift+arrow press pans this many pixels
+const TARGET = [-1e6, 1e6]; // the request's range for camera.target
 const GPU_REFINE_DELAY_MS = 120; // the camera rests this long before refining
 const GPU_FRAME_MS = 30; // aim for frames (and refinement slices) this long
 const GPU_MAX_DIV = 16;
@@ -75,6 +80,7 @@ const html = `
         </span>
         <span class="group">
           <button type="button" data-act="export-png">Export PNG</button>
+          <button type="button" data-act="export-json" data-testid="micro-export-json">Export scene JSON</button>
         </span>
       </div>
       <div class="toolbar micro-shading" role="group" aria-label="Shading">
@@ -93,7 +99,7 @@ const html = `
         </span>
       </div>
       <div class="micro-viewport" data-testid="micro-viewport">
-        <canvas data-testid="micro-canvas" tabindex="0" role="img" aria-label="microstructure: drag or arrow keys to orbit, wheel or + and − to zoom"></canvas>
+        <canvas data-testid="micro-canvas" tabindex="0" role="img" aria-label="microstructure: drag or arrow keys to orbit, shift-drag or shift-arrow keys to pan, wheel or + and − to zoom"></canvas>
       </div>
       <div class="status muted" data-testid="micro-status" aria-live="polite"></div>
       <div class="status muted" data-testid="micro-gpu-note" hidden></div>
@@ -105,6 +111,10 @@ const html = `
       <details class="micro-program" open>
         <summary>Scene JSON</summary>
         <div class="micro-editor"></div>
+      </details>
+      <details class="micro-params" data-testid="micro-params">
+        <summary>Parameters</summary>
+        <div class="micro-param-list"></div>
       </details>
       <details class="micro-fit" data-testid="micro-fit"></details>
     </aside>
@@ -635,10 +645,31 @@ function mount(el, ctx) {
 
   const zoomBy = (f, coalesce = 'micro-zoom') => setCamera((c) => ({ distance: c.distance / f }), coalesce);
 
+  /**
+   * Pan: move the target by (dx, dy) screen pixels in the view plane, so the
+   * picture follows the pointer (the orbit camera's right and up vectors, as
+   * src/micro/render.rs builds them).
+   */
+  function panBy(dx, dy, coalesce) {
+    setCamera((c) => {
+      const [yaw, pitch] = [c.yaw * Math.PI / 180, c.pitch * Math.PI / 180];
+      const dir = [Math.cos(pitch) * Math.cos(yaw), Math.cos(pitch) * Math.sin(yaw), Math.sin(pitch)];
+      const fwd = dir.map((v) => -v);
+      let right = [fwd[1], -fwd[0], 0]; // fwd × z
+      const n = Math.hypot(right[0], right[1]);
+      right = n < 1e-9 ? [1, 0, 0] : [right[0] / n, right[1] / n, 0];
+      const up = [right[1] * fwd[2] - right[2] * fwd[1], right[2] * fwd[0] - right[0] * fwd[2], right[0] * fwd[1] - right[1] * fwd[0]];
+      const perPx = (2 * c.distance * Math.tan((CAMERA_FOV * Math.PI) / 360)) / Math.max(1, canvas.clientHeight || canvas.height);
+      const target = c.target.map((v, i) => clamp(v + (-dx * right[i] + dy * up[i]) * perPx, TARGET[0], TARGET[1]));
+      return { target };
+    }, coalesce);
+  }
+
   canvas.addEventListener('pointerdown', (e) => {
-    if (e.button !== 0) return;
+    if (e.button !== 0 && e.button !== 1) return;
+    if (e.button === 1) e.preventDefault();
     canvas.setPointerCapture?.(e.pointerId);
-    gesture = { x: e.clientX, y: e.clientY, id: e.pointerId };
+    gesture = { x: e.clientX, y: e.clientY, id: e.pointerId, pan: e.shiftKey || e.button === 1 };
   });
   canvas.addEventListener('pointermove', (e) => {
     if (!gesture || e.pointerId !== gesture.id) return;
@@ -647,7 +678,8 @@ function mount(el, ctx) {
     gesture.x = e.clientX;
     gesture.y = e.clientY;
     gesture.moved = true;
-    setCamera((c) => ({ yaw: c.yaw - dx * ORBIT_DEG_PER_PX, pitch: c.pitch + dy * ORBIT_DEG_PER_PX }), 'micro-orbit');
+    if (gesture.pan) panBy(dx, dy, 'micro-pan');
+    else setCamera((c) => ({ yaw: c.yaw - dx * ORBIT_DEG_PER_PX, pitch: c.pitch + dy * ORBIT_DEG_PER_PX }), 'micro-orbit');
   });
   const endGesture = (e) => {
     if (!gesture || e.pointerId !== gesture.id) return;
@@ -665,7 +697,10 @@ function mount(el, ctx) {
   }, { passive: false });
   canvas.addEventListener('keydown', (e) => {
     const orbit = { ArrowLeft: [-10, 0], ArrowRight: [10, 0], ArrowUp: [0, -10], ArrowDown: [0, 10] }[e.key];
-    if (orbit) {
+    if (orbit && e.shiftKey) {
+      e.preventDefault();
+      panBy(-orbit[0] / 10 * PAN_KEY_PX, -orbit[1] / 10 * PAN_KEY_PX, 'micro-keys-pan');
+    } else if (orbit) {
       e.preventDefault();
       setCamera((c) => ({ yaw: c.yaw - orbit[0] * ORBIT_DEG_PER_PX, pitch: c.pitch + orbit[1] * ORBIT_DEG_PER_PX }), 'micro-keys');
     } else if (e.key === '+' || e.key === '=') { e.preventDefault(); zoomBy(ZOOM_STEP); } else if (e.key === '-') { e.preventDefault(); zoomBy(1 / ZOOM_STEP); }
@@ -765,6 +800,91 @@ function mount(el, ctx) {
     }
   };
 
+  q('[data-act=export-json]').onclick = () => {
+    const doc = state();
+    if (!doc) return;
+    download(`${doc.example || 'micro'}.json`, doc.scene, 'application/json');
+    status('exported the scene JSON');
+  };
+
+  // ---- parameters: a number field for every number of every node --------------------
+
+  const paramList = q('.micro-param-list');
+  let paramScene = null; // the scene text the fields show
+  const NODE_KEYS = new Set(['children', 'child', 'base', 'minus']);
+
+  /** Every node of a parsed scene: {path (JSON pointer), type, fields: [{pointer, label, value}]}. */
+  function nodesOf(root) {
+    const out = [];
+    const visit = (node, ptr) => {
+      if (!node || typeof node !== 'object' || Array.isArray(node)) return;
+      const fields = [];
+      const leaves = (v, p, label) => {
+        if (typeof v === 'number') fields.push({ pointer: p, label, value: v });
+        else if (Array.isArray(v)) v.forEach((x, i) => leaves(x, `${p}/${i}`, `${label}[${i}]`));
+        else if (v && typeof v === 'object') for (const [k, x] of Object.entries(v)) leaves(x, `${p}/${k}`, label ? `${label}.${k}` : k);
+      };
+      for (const [k, v] of Object.entries(node)) {
+        if (NODE_KEYS.has(k)) continue;
+        leaves(v, `${ptr}/${k}`, k);
+      }
+      out.push({ path: ptr || '/', type: String(node.type ?? '?'), fields });
+      for (const k of NODE_KEYS) {
+        const v = node[k];
+        if (Array.isArray(v)) v.forEach((c, i) => visit(c, `${ptr}/${k}/${i}`));
+        else if (v) visit(v, `${ptr}/${k}`);
+      }
+    };
+    visit(root, '');
+    return out;
+  }
+
+  function setPointer(root, pointer, value) {
+    const keys = pointer.split('/').slice(1);
+    let o = root;
+    for (const k of keys.slice(0, -1)) o = o[k];
+    o[keys[keys.length - 1]] = value;
+  }
+
+  function renderParams(doc) {
+    if (doc.scene === paramScene) return;
+    paramScene = doc.scene;
+    let root;
+    try { root = JSON.parse(doc.scene); } catch {
+      paramList.replaceChildren(Object.assign(document.createElement('p'), { className: 'muted', textContent: 'The scene JSON does not parse; fix it in the editor.' }));
+      return;
+    }
+    paramList.replaceChildren(...nodesOf(root).map((n) => {
+      const fs = document.createElement('fieldset');
+      fs.className = 'micro-node';
+      fs.dataset.node = n.path;
+      const legend = document.createElement('legend');
+      legend.textContent = `${n.type}${n.path === '/' ? '' : ` (${n.path})`}`;
+      fs.append(legend);
+      for (const f of n.fields) {
+        const label = document.createElement('label');
+        label.className = 'inline';
+        const input = document.createElement('input');
+        input.type = 'number';
+        input.step = 'any';
+        input.value = String(f.value);
+        input.dataset.pointer = f.pointer;
+        input.onchange = () => {
+          const v = Number(input.value);
+          const cur = state();
+          if (!cur || input.value.trim() === '' || !Number.isFinite(v)) { input.value = String(f.value); return; }
+          let obj;
+          try { obj = JSON.parse(cur.scene); } catch { return; }
+          setPointer(obj, f.pointer, v);
+          ctx.commit({ ...cur, scene: JSON.stringify(obj, null, 1), example: null });
+        };
+        label.append(`${f.label} `, input);
+        fs.append(label);
+      }
+      return fs;
+    }));
+  }
+
   // For tests and the console.
   const hooks = {
     state,
@@ -790,6 +910,7 @@ function mount(el, ctx) {
     render(s, prev) {
       if (!s) return;
       recon.render(s);
+      renderParams(s);
       if (editor && editor.getValue() !== s.scene && typingTimer === null) editor.setValue(s.scene);
       if (editor && prev && prev.scene !== s.scene) editor.clearError();
       stepsSel.value = s.steps;

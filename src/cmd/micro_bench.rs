@@ -1,8 +1,10 @@
 //! `filigree bench micro`: the paper's Table 2, Table 1 and Table 3 analogues.
 //!
 //! (a) Table 2: one multiscale scene (`assets/micro/multiscale.json`)
-//! rendered with each step strategy; milliseconds (median of `repeats`),
-//! ratios to fixed steps measured in the same run, and the work counters.
+//! rendered with each step strategy; milliseconds (median of `repeats`,
+//! the strategies alternating in each repeat), wall clock and this
+//! thread's CPU time, ratios to fixed steps measured in the same run, and
+//! the work counters.
 //! (b) Table 1: a fibrous volume made three ways (periodic function,
 //! direct primitive repeated on a grid, agglomeration of a congruence-
 //! selected lattice) at four noise scales η (fibre frequency per world unit).
@@ -183,28 +185,55 @@ pub fn run(repeats: usize, size: u32, parts: Parts) -> Result<(), String> {
     ];
     let mut table2 = vec![];
     for (scene_name, scene) in [("multiscale", MULTISCALE), ("piled", PILED)] {
-        let mut rows = vec![];
-        let mut fixed_ms = None;
-        let mut fixed_evals = None;
-        for (name, mode, n, cell) in variants {
-            let req = MicroRenderRequest {
+        let reqs: Vec<MicroRenderRequest> = variants
+            .iter()
+            .map(|&(_, mode, n, cell)| MicroRenderRequest {
                 scene: scene.to_string(),
                 steps: mode,
                 check_every: n,
                 check_cell: cell,
                 ..base.clone()
-            };
-            let (ms, out) = render(&req, repeats)?;
-            let f = *fixed_ms.get_or_insert(ms);
-            let fe = *fixed_evals.get_or_insert(out.stats.sdf_evals as f64);
-            let paper = TABLE2.iter().find(|r| r.0 == name);
+            })
+            .collect();
+        // The variants alternate within each repeat (as in `tile_scaling`
+        // and `examples/micro_table2.rs`), so a change of the machine's
+        // load weighs on all alike; beside the wall clock, this thread's
+        // time on a core (the render runs on it), which load does not
+        // inflate.
+        let (mut wall, mut cpu) = (vec![vec![]; reqs.len()], vec![vec![]; reqs.len()]);
+        let mut outs: Vec<Option<MicroRenderResponse>> = reqs.iter().map(|_| None).collect();
+        for _ in 0..repeats.max(1) {
+            for (k, req) in reqs.iter().enumerate() {
+                let (t, c) = (Instant::now(), thread_cpu_ns());
+                let job = start_render(req.clone()).map_err(|e| e.to_string())?;
+                let out = run_quietly(job).map_err(|e| e.to_string())?;
+                wall[k].push(t.elapsed().as_secs_f64() * 1e3);
+                let c = thread_cpu_ns()
+                    .zip(c)
+                    .map_or(f64::NAN, |(b, a)| (b - a) as f64 * 1e-6);
+                cpu[k].push(c);
+                outs[k] = Some(out);
+            }
+        }
+        let med = |v: &[f64]| super::min_median(v.to_vec()).1;
+        let (f, fc) = (med(&wall[0]), med(&cpu[0]));
+        let fe = outs[0].as_ref().map_or(1.0, |o| o.stats.sdf_evals as f64);
+        let mut rows = vec![];
+        for (k, (name, ..)) in variants.iter().enumerate() {
+            let out = outs[k].as_ref().ok_or("bench micro: no render")?;
+            let (ms, cpu_ms) = (med(&wall[k]), med(&cpu[k]));
+            let paper = TABLE2.iter().find(|r| r.0 == *name);
             rows.push(json!({
                 "strategy": name, "ms": ms, "ratio_to_fixed": ms / f,
-                "evals_ratio_to_fixed": out.stats.sdf_evals as f64 / fe, "stats": stats(&out),
+                "cpu_ms": cpu_ms, "cpu_ratio_to_fixed": cpu_ms / fc,
+                "evals_ratio_to_fixed": out.stats.sdf_evals as f64 / fe, "stats": stats(out),
                 "paper_ms": paper.map(|r| r.1), "paper_ratio_to_fixed": paper.map(|r| r.1 / TABLE2[0].1),
             }));
         }
-        table2.push(json!({"scene": format!("assets/micro/{scene_name}.json"), "rows": rows}));
+        table2.push(
+            json!({"scene": format!("assets/micro/{scene_name}.json"), "rows": rows,
+            "repeats_alternating": repeats.max(1), "loadavg_1m": loadavg()}),
+        );
     }
     // (b) fibrous volume three ways.
     let mut fib = vec![];
@@ -230,8 +259,9 @@ pub fn run(repeats: usize, size: u32, parts: Parts) -> Result<(), String> {
         "paper_note": "paper: OptiX on an RTX 4090, 1500 steps, Lambertian particles; \
             bisection + adaptive (paper 8.0 ms) is not a separate strategy here; adaptive = \
             over-relaxed steps (max_relax 1.5) with gradient checks every N steps from step N \
-            (D(p): by 0.25-unit cell) setting the relaxation from the slope along the ray \
-            (issue 12, docs/bench/micro-table2-2026-12-03.md)",
+            (D(p): by 0.25-unit cell) setting the relaxation from the slope along the ray, a \
+            1-evaluation forward difference (issue 12, docs/bench/micro-table2-2026-12-03.md, \
+            micro-dp-2026-12-03.md); cpu_ms: this thread's time on a core",
         "table1_fibres": fib,
         "table3_reconstruction": table3,
     });

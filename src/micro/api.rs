@@ -25,8 +25,9 @@ pub struct MicroRenderRequest {
     pub camera: Camera,
     /// Step strategy: `fixed`, `bisection` or `adaptive`.
     pub steps: StepMode,
-    /// Adaptive: a gradient check every N steps, from step N on (1: every
-    /// step, fully adaptive).
+    /// Adaptive: a gradient check (the slope along the ray, one extra
+    /// evaluation) every N steps, from step N on (1: every step, fully
+    /// adaptive).
     pub check_every: u32,
     /// Adaptive: when > 0, check gradients where the ray enters a new cell
     /// of this size (world units) selected by a congruence of its index

@@ -97,6 +97,96 @@ impl Field {
     }
 }
 
+/// One term `c · x^i y^j z^k` of a real polynomial of the world position.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Term {
+    pub c: f64,
+    #[serde(default)]
+    pub x: u32,
+    #[serde(default)]
+    pub y: u32,
+    #[serde(default)]
+    pub z: u32,
+}
+
+/// Highest degree of a [`Term`].
+pub const MAX_POLY_DEGREE: u32 = 6;
+
+/// `v^n` by n − 1 multiplications from the left (the same bits natively and
+/// in wasm, unlike `powi`).
+fn pow_u(v: f64, n: u32) -> f64 {
+    (0..n).fold(1.0, |a, _| a * v)
+}
+
+/// A polynomial of the world position: `value + gradient · p + Σ terms`
+/// (the pile's rotation angle θ(p) and deformation weight P(p), Eq. 10).
+/// Without terms it is the linear [`Field`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Poly {
+    #[serde(default)]
+    pub value: f64,
+    #[serde(default)]
+    pub gradient: [f64; 3],
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub terms: Vec<Term>,
+}
+
+impl Poly {
+    pub const fn constant(value: f64) -> Poly {
+        Poly {
+            value,
+            gradient: [0.0; 3],
+            terms: Vec::new(),
+        }
+    }
+
+    pub(crate) fn at(&self, p: DVec3) -> f64 {
+        let mut v = self.value + DVec3::from_array(self.gradient).dot(p);
+        for t in &self.terms {
+            v += t.c * pow_u(p.x, t.x) * pow_u(p.y, t.y) * pow_u(p.z, t.z);
+        }
+        v
+    }
+
+    /// Checks the numbers; bounds over the cube `|pᵢ| ≤ e`: (largest
+    /// |value|, largest |∇|). Without terms: `|value| + |gradient| e√3` and
+    /// `|gradient|`, the linear field's.
+    fn check(&self, path: &str, name: &str, e: f64) -> Result<(f64, f64)> {
+        let p = join(path, name);
+        num(&p, "value", self.value, -WORLD, WORLD)?;
+        let g = vec3(&p, "gradient", self.gradient, -WORLD, WORLD)?.length();
+        if self.terms.len() > MAX_MICRO_TERMS {
+            return Err(bad(
+                &join(&p, "terms"),
+                format!("at most {MAX_MICRO_TERMS} terms"),
+            ));
+        }
+        let (mut vmax, mut dt) = (self.value.abs() + g * e * 3f64.sqrt(), DVec3::ZERO);
+        for (i, t) in self.terms.iter().enumerate() {
+            let tp = join(&p, format!("terms.{i}"));
+            num(&tp, "c", t.c, -WORLD, WORLD)?;
+            let deg = t.x as u64 + t.y as u64 + t.z as u64;
+            if deg > MAX_POLY_DEGREE as u64 {
+                return Err(bad(&tp, format!("degree {deg}: at most {MAX_POLY_DEGREE}")));
+            }
+            let c = t.c.abs();
+            vmax += c * pow_u(e, deg as u32);
+            // ∂/∂x of x^i y^j z^k is i x^(i−1) y^j z^k: at most i e^(deg−1).
+            let d = |k: u32| {
+                if k == 0 {
+                    0.0
+                } else {
+                    c * k as f64 * pow_u(e, deg as u32 - 1)
+                }
+            };
+            dt += DVec3::new(d(t.x), d(t.y), d(t.z));
+        }
+        Ok((vmax, g + dt.length()))
+    }
+}
+
 // ------------------------------------------------------------- shapes --
 
 /// A particle shape, scaled so that its bounding sphere has radius 1.
@@ -764,8 +854,9 @@ impl Lattice {
 
 /// Piling (§3.3, Eq. 10): a full lattice of spheres seen through
 /// `φ(p) = R_θ(p) p + P(p) N(p)`, with the rotation angle `θ` and the
-/// deformation weight `P` linear polynomials of `p` and `N` a smooth
-/// noise vector. `P` moves grains from convex to concave.
+/// deformation weight `P` polynomials of `p` ([`Poly`]: a linear part plus
+/// terms up to degree 6) and `N` a smooth noise vector. `P` moves grains
+/// from convex to concave.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Pile {
@@ -774,9 +865,9 @@ pub struct Pile {
     pub radius: f64,
     /// Rotation axis and the angle polynomial θ(p) (radians).
     pub axis: [f64; 3],
-    pub angle: Field,
+    pub angle: Poly,
     /// Deformation weight P(p), world units.
-    pub deform: Field,
+    pub deform: Poly,
     /// Noise N(p): amplitude (relative) and frequency (per world unit).
     pub noise_frequency: f64,
     /// Half size of the region the pile is used in (world units): the
@@ -794,8 +885,8 @@ impl Default for Pile {
             cell: 0.1,
             radius: 0.5,
             axis: [0.0, 0.0, 1.0],
-            angle: Field::constant(0.0),
-            deform: Field::constant(0.0),
+            angle: Poly::constant(0.0),
+            deform: Poly::constant(0.0),
             noise_frequency: 10.0,
             extent: 1.0,
             c: Derived::default(),
@@ -816,12 +907,11 @@ impl Pile {
             return Err(bad(&join(path, "axis"), "must not be zero"));
         }
         t.axis_n = a.normalize();
-        let ga = t.angle.check(path, "angle")?;
-        let gp = t.deform.check(path, "deform")?;
+        let (_, ga) = t.angle.check(path, "angle", t.extent)?;
+        let (p_max, gp) = t.deform.check(path, "deform", t.extent)?;
         let r = t.extent * 3f64.sqrt();
-        // ‖Dφ‖ ≤ 1 + |p| |∇θ| + |∇P| |N|max + |P|max |∇N|max, |N|max = √3,
-        // |∇N| ≤ frequency.
-        let p_max = t.deform.value.abs() + gp * r;
+        // Over the cube |pᵢ| ≤ extent: ‖Dφ‖ ≤ 1 + |p| |∇θ| + |∇P| |N|max +
+        // |P|max |∇N|max, |N|max = √3, |∇N| ≤ frequency.
         let lip = 1.0 + r * ga + gp * 3f64.sqrt() + p_max * t.noise_frequency;
         if !lip.is_finite() || lip > 1e9 {
             return Err(Error::input(format!(
@@ -1057,6 +1147,62 @@ mod tests {
             exact += (brute < c) as usize;
         }
         assert!(exact > 700, "{exact}");
+    }
+
+    /// `Poly::at` is the polynomial, and `Poly::check`'s bounds hold over
+    /// the cube (value and gradient by central differences, sampled).
+    #[test]
+    fn polynomial_fields_stay_within_their_bounds() {
+        let f: Poly = serde_json::from_value(serde_json::json!({
+            "value": 0.3, "gradient": [0.5, -0.2, 0.1],
+            "terms": [{"c": 0.8, "x": 1, "y": 1}, {"c": -0.4, "z": 2}, {"c": 0.3, "x": 2, "y": 1, "z": 1}]
+        }))
+        .unwrap();
+        let e = 1.3;
+        let (vmax, gmax) = f.check("/", "angle", e).unwrap();
+        let mut r = Rng::new(3);
+        let (mut v_seen, mut g_seen) = (0.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            let p = rnd(&mut r, -e, e);
+            let want = 0.3 + 0.5 * p.x - 0.2 * p.y + 0.1 * p.z + 0.8 * p.x * p.y - 0.4 * p.z * p.z
+                + 0.3 * p.x * p.x * p.y * p.z;
+            assert!((f.at(p) - want).abs() < 1e-12, "{} vs {want}", f.at(p));
+            let h = 1e-6;
+            let g = sdf3::gradient(&mut |q| f.at(q), p, h);
+            v_seen = v_seen.max(f.at(p).abs());
+            g_seen = g_seen.max(g.length());
+        }
+        assert!(
+            v_seen <= vmax && g_seen <= gmax * (1.0 + 1e-6),
+            "{v_seen} ≤ {vmax}, {g_seen} ≤ {gmax}"
+        );
+        // Not absurdly loose: the corners come within a factor of 3.
+        assert!(
+            v_seen > vmax / 3.0 && g_seen > gmax / 3.0,
+            "{v_seen} / {vmax}, {g_seen} / {gmax}"
+        );
+        // Without terms: the linear field's bounds.
+        let lin = Poly {
+            terms: vec![],
+            ..f.clone()
+        };
+        let g = DVec3::new(0.5, -0.2, 0.1).length();
+        assert_eq!(
+            lin.check("/", "angle", e).unwrap(),
+            (0.3 + g * e * 3f64.sqrt(), g)
+        );
+        // Too high a degree is refused, naming the term.
+        let steep = Poly {
+            terms: vec![Term {
+                c: 1.0,
+                x: 4,
+                y: 2,
+                z: 1,
+            }],
+            ..lin
+        };
+        let err = steep.check("/pile", "angle", e).unwrap_err().to_string();
+        assert!(err.contains("terms.0") && err.contains("degree 7"), "{err}");
     }
 
     #[test]

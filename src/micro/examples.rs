@@ -61,7 +61,7 @@ pub const EXAMPLES: &[Example] = &[
     },
     Example {
         name: "rock-pile",
-        about: "A rock pile whose grains deform from convex at the bottom to concave at the top",
+        about: "A rock pile: the lattice turned by a polynomial angle θ(p), its grains deformed from convex at the bottom to concave at the top",
         scene: include_str!("../../assets/micro/rock-pile.json"),
     },
     Example {

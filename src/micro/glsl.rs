@@ -30,7 +30,7 @@
 //! and the mean absolute difference over all channels is at most 4 levels
 //! of 255. The panel uses the CPU path when a pixel's footprint at the
 //! target falls below 1e-6 of the scene's size (`www/micro-gl.js`).
-use super::cells::{Combine, Field, Lattice, Particles, Pile, Select, Shape, Size};
+use super::cells::{Combine, Field, Lattice, Particles, Pile, Poly, Select, Shape, Size};
 use super::periodic::{Periodic, Surface, Tpms, Wave};
 use super::render::{Shade, Shading, StepMode, Trace, AMBIENT, LIGHT};
 use super::scene::{Op, Scene};
@@ -97,6 +97,30 @@ fn field(f: &Field, p: &str) -> Result<String> {
             v3(f.gradient)?
         ))
     }
+}
+
+/// A [`Poly`] of the vector `p`: the linear part, then each term as a
+/// product of its coordinates.
+fn poly(f: &Poly, p: &str) -> Result<String> {
+    let lin = Field {
+        value: f.value,
+        gradient: f.gradient,
+    };
+    let mut out = field(&lin, p)?;
+    if f.terms.is_empty() {
+        return Ok(out);
+    }
+    out = format!("({out}");
+    for t in &f.terms {
+        out.push_str(&format!(" + {}", lit(t.c)?));
+        for (axis, n) in [("x", t.x), ("y", t.y), ("z", t.z)] {
+            for _ in 0..n {
+                out.push_str(&format!(" * {p}.{axis}"));
+            }
+        }
+    }
+    out.push(')');
+    Ok(out)
 }
 
 /// The 64-bit constant `v` as `uvec2(high, low)`.
@@ -571,9 +595,9 @@ fn pile(c: &Pile) -> Result<String> {
   vec3 lo = pw - vec3(q0) + 1.0;
   return {cell} * min(d, min3(min(lo, 3.0 - lo)) + {margin} - {r}) * {inv};",
         axis = v3(c.axis_n.to_array())?,
-        angle = field(&c.angle, "p")?,
+        angle = poly(&c.angle, "p")?,
         f = lit(c.noise_frequency)?,
-        deform = field(&c.deform, "p")?,
+        deform = poly(&c.deform, "p")?,
         cell = lit(c.cell)?,
         r = lit(c.radius)?,
         margin = lit(c.c.margin)?,
@@ -683,8 +707,9 @@ fn main_part(s: &Settings) -> Result<String> {
                 "{check}
       if (check && dist >= 2.0 * eps) {{
         g_checks++;
-        vec3 gr = grad(o + d * t, max(prec * t, 1e-5 * (1.0 + length(o + d * t))));
-        relax = clamp(1.8 / (1.0 + clamp(-dot(gr, d), -1.0, 1.0)), 1.0, {mr});
+        float hc = max(prec * t, 1e-5 * (1.0 + length(o + d * t)));
+        float ahead = field(o + d * (t + hc));
+        relax = clamp(1.8 / (1.0 + clamp(-(ahead - dist) / hc, -1.0, 1.0)), 1.0, {mr});
       }}
       float w = cooldown ? 1.0 : relax;
       cooldown = false;

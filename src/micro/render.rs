@@ -28,15 +28,20 @@
 //!   the next step is plain too; if the retaken step's sphere reaches the
 //!   undone point's, the ray goes on from there (its distance is known),
 //!   so an undone step costs one evaluation. So it never passes a surface
-//!   (the field is 1-Lipschitz). Gradient checks (6 evaluations) every
-//!   `check_every` steps from step N on (every step for N = 1), or by
-//!   cell (`check_cell`, the paper's D(p)), skipped where the ray is within
-//!   twice the hit threshold, set the relaxation from the slope along the
-//!   ray ([`relax_for_slope`]). Measured on the multiscale scene (issue 12,
-//!   `docs/bench/micro-table2-2026-12-03.md`): the rays there are short
-//!   (10–17 steps) and run within a few hit thresholds of fine particles,
-//!   where neither the checks nor the secant slope predict a safe step
-//!   better than the constant factor, so checks are pure cost there.
+//!   (the field is 1-Lipschitz). Gradient checks every `check_every` steps
+//!   from step N on (every step for N = 1), or by cell (`check_cell`, our
+//!   form of the paper's D(p)), skipped where the ray is within twice the
+//!   hit threshold, set the relaxation from the slope along the ray
+//!   ([`relax_for_slope`]): the gradient's component along the ray, by a
+//!   forward difference from the distance already known (1 evaluation; a
+//!   full central-difference gradient, 6, until issue 12's session 18).
+//!   Measured (issue 12, `docs/bench/micro-table2-2026-12-03.md` and
+//!   `micro-dp-2026-12-03.md`): on the multiscale scene the rays are short
+//!   (10–17 steps) and run within a few hit thresholds of fine particles;
+//!   on it and on four other presets no selection of checks (every N,
+//!   D(p) cells of 0.04–0.25), no kind of check (6, 2 or 1 evaluations)
+//!   and no cap on the relaxation a check may set (1.5–3) took fewer
+//!   evaluations than no checks, so checks are pure cost there.
 use super::scene::Scene;
 use crate::geom::sdf3;
 use glam::DVec3;
@@ -217,17 +222,14 @@ pub fn trace(scene: &Scene, o: DVec3, d: DVec3, s: &Trace, st: &mut Stats) -> Op
                 // No check where the ray is about to hit (its next plain
                 // step would likely end within the threshold).
                 if check && dist >= 2.0 * eps {
+                    // The gradient's component along the ray is all the
+                    // relaxation uses: a forward difference from the known
+                    // distance, one evaluation (a full central-difference
+                    // gradient cost 6 for the same slope; issue 12).
                     st.gradient_checks += 1;
                     let h = (s.precision * t).max(1e-9);
-                    let g = sdf3::gradient(
-                        &mut |q| {
-                            st.sdf_evals += 1;
-                            field(scene, s.bounds, q)
-                        },
-                        o + d * t,
-                        h,
-                    );
-                    relax = relax_for_slope(-g.dot(d), s.max_relax);
+                    let ahead = f(t + h, st);
+                    relax = relax_for_slope(-(ahead - dist) / h, s.max_relax);
                 }
                 let step = if cooldown { 1.0 } else { relax };
                 cooldown = false;

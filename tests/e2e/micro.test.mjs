@@ -169,6 +169,81 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
   await page.context().close();
 });
 
+test('micro: pan moves the target, a particle size in the parameters changes the render, the scene JSON and a PNG export', async () => {
+  const page = await cpuPage('#tool=micro');
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=spheres]', { timeout: 30000 });
+  let n = await waitForRender(page, 0);
+  await page.click('[data-example=spheres]');
+  n = await waitForRender(page, n);
+
+  // Shift-drag pans: the target moves in the view plane, yaw and pitch stay.
+  const c0 = (await state(page)).camera;
+  const box = await page.locator('[data-testid=micro-canvas]').boundingBox();
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  await pixels(page);
+  await page.keyboard.down('Shift');
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  for (let i = 1; i <= 6; i++) { await page.mouse.move(cx + i * 6, cy); await page.waitForTimeout(30); }
+  await page.mouse.up();
+  await page.keyboard.up('Shift');
+  n = await waitForRender(page, n);
+  const c1 = (await state(page)).camera;
+  assert.equal(c1.yaw, c0.yaw, 'a pan does not orbit');
+  assert.equal(c1.pitch, c0.pitch);
+  assert.equal(c1.distance, c0.distance);
+  const moved = Math.hypot(...c1.target.map((v, i) => v - c0.target[i]));
+  assert.ok(moved > 0.05, `the target moved (${moved})`);
+  // Dragging right moves the target to the left of the view: against the camera's right vector.
+  const yaw = c0.yaw * Math.PI / 180;
+  const right = [-Math.sin(yaw), Math.cos(yaw)]; // forward × z, forward = −(cos yaw, sin yaw) in the plane
+  assert.ok((c1.target[0] - c0.target[0]) * right[0] + (c1.target[1] - c0.target[1]) * right[1] < 0, 'against the right vector');
+  assert.ok(await changed(page) > 0.05, 'the pan changed the picture');
+  // Undo brings the target back.
+  await page.click('button[data-act=undo]');
+  n = await waitForRender(page, n);
+  assert.deepEqual((await state(page)).camera, c0);
+
+  // The parameters: one fieldset per node, a field per number; the largest
+  // particle size changes the scene JSON and the picture.
+  await page.click('[data-testid=micro-params] summary');
+  const field = page.locator('[data-testid=micro-params] input[data-pointer="/size/max"]');
+  assert.equal(Number(await field.inputValue()), JSON.parse((await state(page)).scene).size.max);
+  assert.equal(await page.locator('[data-testid=micro-params] fieldset[data-node="/"] legend').textContent(), 'particles');
+  await pixels(page);
+  await field.fill('0.2');
+  await field.press('Enter');
+  n = await waitForRender(page, n);
+  const doc = await state(page);
+  assert.equal(JSON.parse(doc.scene).size.max, 0.2);
+  assert.equal(doc.example, null, 'an edited scene is no longer the example');
+  assert.ok(await changed(page) > 0.05, 'smaller particles, another picture');
+  // The editor shows the new JSON.
+  await page.waitForFunction(() => /"max": 0.2/.test(document.querySelector('.micro-editor').textContent), null, { timeout: 15000 });
+  // Nested nodes get their own fieldsets (a union of two clouds).
+  await page.click('[data-example=multiscale]');
+  n = await waitForRender(page, n);
+  const nodes = await page.$$eval('[data-testid=micro-params] fieldset', (fs) => fs.map((f) => f.dataset.node));
+  assert.deepEqual(nodes.slice(0, 3), ['/', '/children/0', '/children/1']);
+  assert.ok(await page.locator('[data-testid=micro-params] input[data-pointer="/children/2/size/radius"]').count() === 1);
+
+  // Export the scene JSON: the document's scene, as a file.
+  const [dl] = await Promise.all([page.waitForEvent('download'), page.click('[data-testid=micro-export-json]')]);
+  assert.equal(dl.suggestedFilename(), 'multiscale.json');
+  const text = fs.readFileSync(await dl.path(), 'utf8');
+  assert.equal(text, (await state(page)).scene);
+
+  // Export PNG of the slice view: a full-size PNG of the document's view.
+  await page.check('[data-testid=micro-slice-toggle]');
+  n = await waitForRender(page, n);
+  const [png] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-png]')]);
+  assert.equal(png.suggestedFilename(), 'multiscale-slice.png');
+  const bytes = fs.readFileSync(await png.path());
+  assert.equal(bytes.subarray(1, 4).toString('latin1'), 'PNG');
+  assert.deepEqual([bytes.readUInt32BE(16), bytes.readUInt32BE(20)], [768, 768], 'twice the panel\'s largest side');
+  await page.context().close();
+});
+
 test('micro: a share link carries the scene by name and the camera; undo steps back through zooms', async () => {
   const a = await cpuPage('#tool=micro');
   await a.waitForSelector('[data-testid=micro-examples] [data-example=piled]', { timeout: 30000 });
