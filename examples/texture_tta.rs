@@ -2,8 +2,9 @@
 //! decided on a validation split (never on the test set):
 //! `cargo run --release --example texture_tta -- TAG [test]`.
 //!
-//! Renders the shipped dataset (24 bases per model, 128², two lights × four
-//! quadrant crops of a 256² render), holds out `bench texture`'s bases
+//! Renders the shipped dataset (`BuildConfig::default()`: 48 bases per
+//! model, 128², two lights × four quadrant crops of a 256² render; the
+//! cache is per TAG, so a TAG names one dataset), holds out `bench texture`'s bases
 //! (seed 7), learns the filters from the rest and caches, per image, the
 //! PCN features of the image, its mirror image and its transpose, and a
 //! few global values (see `globals`); per base and light also the features
@@ -12,7 +13,15 @@
 //! 3), trained on the other two thirds; `test` trains on all training
 //! bases and scores the held-out ones. `VARIANTS` = `base:C`, `glob:C:W`
 //! (global values standardised, times W, beside the χ² map), `aug:C`
-//! (mirror and transpose also train).
+//! (mirror and transpose also train), `rbf:C:W:G` (an exact Gaussian
+//! kernel on the same rows, γ = G / the mean squared distance).
+//!
+//! Other settings (environment): `PER_MODEL=n` and `SIZE=n` (the dataset's
+//! bases per model and image side, the network's window following it),
+//! `TRAIN_BASES=k` (train on k of each model's training bases: a learning
+//! curve), `PAPER=1` (the paper's random 25% of every model's images as the
+//! evaluation set), `TRAINACC=1` (score the training images themselves),
+//! `FOLD=k`, `NOFLIP=1`, `SHIPPED_GLOBALS=1`, `CONF=1`, `MISSES=…`, `PER=1`.
 // An experiment tool: wall-clock time is what it reports, and index loops
 // over parallel columns read plainest.
 #![allow(
@@ -272,7 +281,17 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let tag = &args[1];
     let test = args.iter().any(|a| a == "test");
-    let cfg = BuildConfig::default();
+    let mut cfg = BuildConfig::default();
+    // PER_MODEL=n: a dataset grid of n bases per model instead of 24.
+    if let Ok(n) = std::env::var("PER_MODEL") {
+        cfg.dataset.per_model = n.parse().unwrap();
+    }
+    // SIZE=n: dataset images (and the network's window) n² instead of 128².
+    if let Ok(n) = std::env::var("SIZE") {
+        cfg.dataset.size = n.parse().unwrap();
+        cfg.index.pcn.side = cfg.dataset.size;
+        cfg = cfg.synced();
+    }
     std::fs::create_dir_all("target/texacc").unwrap();
     let path = format!("target/texacc/{tag}.bin");
     let (mut rows, mut centre) = match load(&path) {
@@ -314,22 +333,68 @@ fn main() {
             val_base.insert(b);
         }
     }
+    // PAPER=1: the paper's protocol, a random 25% of each model's images
+    // (every base's) evaluated, the rest trained; TRAINACC=1: the training
+    // images themselves evaluated.
+    let paper = std::env::var("PAPER").is_ok();
+    let train_acc = std::env::var("TRAINACC").is_ok();
+    let mut paper_eval = std::collections::HashSet::new();
+    if paper {
+        let mut rng = Rng::new(11);
+        for m in 0..MODELS.len() as u16 {
+            let mut ids: Vec<(u32, u8, u8)> = rows
+                .iter()
+                .filter(|r| r.model == m)
+                .map(|r| (r.base, r.light, r.crop))
+                .collect();
+            rng.shuffle(&mut ids);
+            let q = ids.len() / 4;
+            paper_eval.extend(ids.into_iter().take(q));
+        }
+    }
     let is_eval = |r: &Row| {
-        if test {
+        if paper {
+            r.crop != 255 && paper_eval.contains(&(r.base, r.light, r.crop))
+        } else if test {
             r.held
         } else {
             !r.held && val_base.contains(&r.base)
         }
     };
-    let is_train = |r: &Row| {
-        if test {
-            !r.held
-        } else {
-            !r.held && !val_base.contains(&r.base)
+    // TRAIN_BASES=k: train on only k of each model's training bases
+    // (shuffled with seed 5), for a learning curve.
+    let mut dropped = std::collections::HashSet::new();
+    if let Ok(k) = std::env::var("TRAIN_BASES") {
+        let k: usize = k.parse().unwrap();
+        let mut rng = Rng::new(5);
+        for m in 0..MODELS.len() as u16 {
+            let mut bases: Vec<u32> = rows
+                .iter()
+                .filter(|r| r.model == m && !r.held && (test || !val_base.contains(&r.base)))
+                .map(|r| r.base)
+                .collect();
+            bases.sort_unstable();
+            bases.dedup();
+            rng.shuffle(&mut bases);
+            dropped.extend(bases.into_iter().skip(k));
         }
+    }
+    let is_train = |r: &Row| {
+        !dropped.contains(&r.base)
+            && if paper {
+                !paper_eval.contains(&(r.base, r.light, r.crop))
+            } else if test {
+                !r.held
+            } else {
+                !r.held && !val_base.contains(&r.base)
+            }
     };
     let tr: Vec<&Row> = rows.iter().filter(|r| is_train(r)).collect();
-    let ev: Vec<&Row> = rows.iter().filter(|r| is_eval(r)).collect();
+    let ev: Vec<&Row> = if train_acc {
+        tr.clone()
+    } else {
+        rows.iter().filter(|r| is_eval(r)).collect()
+    };
     let evc: Vec<&Row> = centre.iter().filter(|r| is_eval(r)).collect();
     eprintln!(
         "{} train, {} eval, {} eval 256² renders ({})",
@@ -370,7 +435,7 @@ fn main() {
         };
         let map = |f: &[f32], g: &[f32]| -> Vec<f32> {
             let mut x = chi2_map(f);
-            if kind == "glob" {
+            if kind == "glob" || kind == "rbf" {
                 for k in 0..gd {
                     if gmask[k] {
                         let z = (g[k] as f64 - mu[k]) / (sd[k].sqrt() + 1e-9);
@@ -380,6 +445,92 @@ fn main() {
             }
             x
         };
+        if kind == "rbf" {
+            // Exact RBF kernel on the χ² map and the global values, one
+            // vs rest: an upper bound for what the features can carry.
+            let t = Instant::now();
+            let xs: Vec<Vec<f32>> = tr.iter().map(|r| map(&r.f, &r.g)).collect();
+            let nrm: Vec<f64> = xs
+                .iter()
+                .map(|x| x.iter().map(|v| (*v as f64).powi(2)).sum())
+                .collect();
+            let n = xs.len();
+            let ids: Vec<usize> = (0..n).collect();
+            let dots: Vec<Vec<f64>> = par_map(&ids, |&i| {
+                (0..n)
+                    .map(|j| {
+                        xs[i]
+                            .iter()
+                            .zip(&xs[j])
+                            .map(|(a, b)| *a as f64 * *b as f64)
+                            .sum()
+                    })
+                    .collect()
+            });
+            let mut mean_d = 0.0;
+            for i in 0..n {
+                for j in 0..n {
+                    mean_d += (nrm[i] + nrm[j] - 2.0 * dots[i][j]).max(0.0);
+                }
+            }
+            mean_d /= (n * n) as f64;
+            let gamma = parts.get(3).map_or(1.0, |g| g.parse::<f64>().unwrap()) / mean_d;
+            let mut k = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    k[i * n + j] = (-gamma * (nrm[i] + nrm[j] - 2.0 * dots[i][j]).max(0.0)).exp();
+                }
+            }
+            drop(dots);
+            let gram = filigree::texture::learn::svm::Gram { n, k };
+            let classes: Vec<u16> = (0..MODELS.len() as u16).collect();
+            let duals = par_map(&classes, |&m| {
+                let pos: Vec<bool> = tr.iter().map(|r| r.model == m).collect();
+                filigree::texture::learn::svm::train_svc(&gram, &pos, c)
+            });
+            let train_s = t.elapsed().as_secs_f64();
+            let sc = par_map(&ev, |r| {
+                let x = map(&r.f, &r.g);
+                let nx: f64 = x.iter().map(|v| (*v as f64).powi(2)).sum();
+                let kx: Vec<f64> = (0..n)
+                    .map(|j| {
+                        let d: f64 = x
+                            .iter()
+                            .zip(&xs[j])
+                            .map(|(a, b)| *a as f64 * *b as f64)
+                            .sum();
+                        (-gamma * (nx + nrm[j] - 2.0 * d).max(0.0)).exp()
+                    })
+                    .collect();
+                duals
+                    .iter()
+                    .map(|d| d.coef.iter().zip(&kx).map(|(a, b)| a * b).sum::<f64>() - d.rho)
+                    .collect::<Vec<f64>>()
+            });
+            let am =
+                |s: &[f64]| (0..s.len()).fold(0, |b, i| if s[i] > s[b] { i } else { b }) as u16;
+            let right = ev.iter().zip(&sc).filter(|(r, s)| am(s) == r.model).count();
+            let mut q2: std::collections::BTreeMap<(u32, u8), (u16, Vec<f64>)> = Default::default();
+            for (r, s) in ev.iter().zip(&sc) {
+                if r.crop == 0 || r.crop == 3 {
+                    let e = q2
+                        .entry((r.base, r.light))
+                        .or_insert((r.model, vec![0.0; s.len()]));
+                    e.1.iter_mut().zip(s).for_each(|(a, b)| *a += b);
+                }
+            }
+            let q2r = q2.values().filter(|(m, s)| am(s) == *m).count();
+            let nsv: usize = duals
+                .iter()
+                .map(|d| d.coef.iter().filter(|a| a.abs() > 0.0).count())
+                .sum();
+            println!(
+                "{tag} {v} [{train_s:.0} s train, {nsv} sv]: 128² images {:.1}% | 2 diagonal windows {:.1}%",
+                100.0 * right as f64 / ev.len() as f64,
+                100.0 * q2r as f64 / q2.len().max(1) as f64
+            );
+            continue;
+        }
         let t = Instant::now();
         let mut xs: Vec<Vec<f32>> = Vec::new();
         let mut labels: Vec<u16> = Vec::new();
@@ -459,7 +610,9 @@ fn main() {
             let e = q4c
                 .entry((r.base, r.light))
                 .or_insert((r.model, vec![0.0; s[0].len()]));
-            add(&mut e.1, &score(&r.f, &gc[&(r.base, r.light)].g));
+            if let Some(c) = gc.get(&(r.base, r.light)) {
+                add(&mut e.1, &score(&r.f, &c.g));
+            }
         }
         let acc = |m: &std::collections::BTreeMap<(u32, u8), (u16, Vec<f64>)>| {
             m.values().filter(|(k, s)| argmax(s) == *k).count()

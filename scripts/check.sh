@@ -35,8 +35,8 @@ step "clippy (wasm32, web feature)"
 cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --features web -- -D warnings
 
 step "the CLI (dev build), then the texture index rebuilt in the background"
-# The index rebuild is the longest single job (about 10 CPU-minutes, half
-# of it training the SVMs). It runs at the lowest priority under the test
+# The index rebuild is the longest single job (about 16 CPU-minutes with
+# 48 bases per model, more than half of it training the SVMs). It runs at the lowest priority under the test
 # and wasm builds, on what they leave idle (their single-threaded parts,
 # link-time optimisation). It reads a copy of the binary, so the builds
 # below may replace it.

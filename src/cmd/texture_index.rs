@@ -35,6 +35,10 @@ pub struct BuildArgs {
     ratings: Option<PathBuf>,
 }
 
+/// The build settings for `--per-model`, `--size` and the augmentation.
+/// The network's window is the dataset's image side, so `--size 256` reads
+/// 256² crops whole (the paper's crop size) as `--size 128` (the shipped
+/// index) reads 128² ones.
 fn config(per_model: usize, size: usize, augment: bool) -> BuildConfig {
     let mut c = BuildConfig::default();
     let d = DatasetConfig {
@@ -43,6 +47,7 @@ fn config(per_model: usize, size: usize, augment: bool) -> BuildConfig {
         ..DatasetConfig::default()
     };
     c.dataset = if augment { d.augmented() } else { d };
+    c.index.pcn.side = size;
     c.synced()
 }
 
@@ -223,17 +228,35 @@ const PAPER_TABLE2: [f64; 12] = [
 /// a crop of a training one) and the paper's own §5.2 split (a random
 /// quarter of every model's images). Every image's features are computed
 /// once, with filters learnt from the training bases' images.
+/// [`config`] with `--index-config`'s settings (missing fields default;
+/// the window follows `--size` unless the settings name `pcn.side`).
+fn bench_config(
+    per_model: usize,
+    size: usize,
+    augment: bool,
+    index: Option<&str>,
+) -> Result<BuildConfig, String> {
+    let mut cfg = config(per_model, size, augment);
+    if let Some(json) = index {
+        let v: serde_json::Value =
+            serde_json::from_str(json).map_err(|e| format!("--index-config: {e}"))?;
+        cfg.index =
+            serde_json::from_value(v.clone()).map_err(|e| format!("--index-config: {e}"))?;
+        if v["pcn"]["side"].is_null() {
+            cfg.index.pcn.side = size;
+        }
+        cfg = cfg.synced();
+    }
+    Ok(cfg)
+}
+
 pub fn bench(
     per_model: usize,
     size: usize,
     augment: bool,
     index: Option<&str>,
 ) -> Result<(), String> {
-    let mut cfg = config(per_model, size, augment);
-    if let Some(json) = index {
-        cfg.index = serde_json::from_str(json).map_err(|e| format!("--index-config: {e}"))?;
-        cfg = cfg.synced();
-    }
+    let cfg = bench_config(per_model, size, augment, index)?;
     let mut stats = BuildStats::default();
     let t0 = Instant::now();
     let samples = build::labelled(&cfg.dataset, &[], &mut stats).map_err(|e| e.to_string())?;
@@ -570,4 +593,31 @@ fn quadrants_joined(
         }
     }
     Some(big)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_options_give_the_shipped_settings() {
+        let d = BuildConfig::default();
+        assert_eq!(config(d.dataset.per_model, d.dataset.size, true), d);
+    }
+
+    #[test]
+    fn the_window_follows_the_image_size() {
+        let c = config(24, 256, true);
+        assert_eq!((c.dataset.size, c.index.pcn.side), (256, 256));
+        assert_eq!(c.index.pcn.texture_side, 512);
+        let c = config(24, 64, false);
+        assert_eq!((c.index.pcn.side, c.index.pcn.texture_side), (64, 0));
+        // With other index settings too, unless they name the window.
+        let c = bench_config(24, 256, true, Some(r#"{"c_model": 1}"#)).unwrap();
+        assert_eq!((c.index.c_model, c.index.pcn.side), (1.0, 256));
+        assert_eq!(c.index.pcn.texture_side, 512);
+        let c = bench_config(24, 256, true, Some(r#"{"pcn": {"side": 96}}"#)).unwrap();
+        assert_eq!((c.index.pcn.side, c.index.pcn.texture_side), (96, 192));
+        assert!(bench_config(24, 256, true, Some("{")).is_err());
+    }
 }
