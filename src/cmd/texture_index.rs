@@ -222,12 +222,6 @@ const PAPER_TABLE2: [f64; 12] = [
     0.998, 0.997, 0.992, 0.992, 0.998, 0.996, 0.998, 0.994, 0.994, 0.997, 0.998, 0.992,
 ];
 
-/// `bench texture`: the paper's Tables 1–3, plus timings. Accuracy is
-/// given under two protocols: held-out bases (a quarter of every model's
-/// parameter points, with all their crops and lights: no test texture is
-/// a crop of a training one) and the paper's own §5.2 split (a random
-/// quarter of every model's images). Every image's features are computed
-/// once, with filters learnt from the training bases' images.
 /// [`config`] with `--index-config`'s settings (missing fields default;
 /// the window follows `--size` unless the settings name `pcn.side`).
 fn bench_config(
@@ -250,6 +244,12 @@ fn bench_config(
     Ok(cfg)
 }
 
+/// `bench texture`: the paper's Tables 1–3, plus timings. Accuracy is
+/// given under two protocols: held-out bases (a quarter of every model's
+/// parameter points, with all their crops and lights: no test texture is
+/// a crop of a training one) and the paper's own §5.2 split (a random
+/// quarter of every model's images). Every image's features are computed
+/// once, with filters learnt from the training bases' images.
 pub fn bench(
     per_model: usize,
     size: usize,
