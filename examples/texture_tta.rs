@@ -2,7 +2,7 @@
 //! decided on a validation split (never on the test set):
 //! `cargo run --release --example texture_tta -- TAG [test]`.
 //!
-//! Renders the shipped dataset (`BuildConfig::default()`: 48 bases per
+//! Renders the shipped dataset (`BuildConfig::default()`: 24 bases per
 //! model, 128², two lights × four quadrant crops of a 256² render; the
 //! cache is per TAG, so a TAG names one dataset), holds out `bench texture`'s bases
 //! (seed 7), learns the filters from the rest and caches, per image, the

@@ -35,11 +35,11 @@ step "clippy (wasm32, web feature)"
 cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --features web -- -D warnings
 
 step "the CLI (dev build), then the texture index rebuilt in the background"
-# The index rebuild is the longest single job (about 16 CPU-minutes with
-# 48 bases per model, more than half of it training the SVMs). It runs at
-# the lowest priority under the test and wasm builds, on what they leave
-# idle (their single-threaded parts, link-time optimisation). It reads a
-# copy of the binary, so the builds below may replace it.
+# The index rebuild is the longest single job (about 10 CPU-minutes, half
+# of it training the SVMs). It runs at the lowest priority under the test
+# and wasm builds, on what they leave idle (their single-threaded parts,
+# link-time optimisation). It reads a copy of the binary, so the builds
+# below may replace it.
 cargo build --quiet --bin filigree
 cp target/debug/filigree target/filigree-index-check
 FILIGREE_BIN=target/filigree-index-check nice -n 19 bash scripts/check-texture-index.sh \

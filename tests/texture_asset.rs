@@ -63,8 +63,7 @@ fn the_shipped_index_loads_names_the_apps_models_and_is_small() {
 /// not rise for every example: on the index of 2026-12-03 (before the
 /// dataset-range changes) 26 of these 46 rose and 1 fell; on the one of
 /// 2026-12-03b 27 rose and 3 fell, among them the browser test's former
-/// example, ca-forest-fire seed 11 (6 → 3); on the one of 2026-12-03c (48
-/// bases per model) 38 rose and 1 fell.
+/// example, ca-forest-fire seed 11 (6 → 3).
 #[test]
 fn regularity_up_retrieves_more_regular_textures_for_most_examples() {
     const REGULARITY: usize = 9;

@@ -31,12 +31,12 @@ pub struct BuildConfig {
 }
 
 impl Default for BuildConfig {
-    /// The shipped index: 48 bases per model at 128², with the paper's
+    /// The shipped index: 24 bases per model at 128², with the paper's
     /// augmentation (two lights × four crops).
     fn default() -> Self {
         BuildConfig {
             dataset: DatasetConfig {
-                per_model: 48,
+                per_model: 24,
                 size: 128,
                 ..DatasetConfig::default()
             }
