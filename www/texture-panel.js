@@ -2,9 +2,9 @@
 // the paper's Fig. 2/6). Give an example — drop, paste or choose an image,
 // or render one of the procedural models — and the core predicts its model
 // and its twelve perceptual scales (`texture-analyse`). The scales are
-// sliders: moving one asks the core for the nearest texture in the
-// perceptual space (`texture-retrieve`, debounced, a stale request
-// cancelled), rendered live from its model and parameters. A bar chart
+// sliders: moving one asks the core for a texture near the request in the
+// perceptual space (`texture-retrieve`: of the nearest few, the one whose
+// scales are nearest; debounced, a stale request cancelled), rendered live from its model and parameters. A bar chart
 // compares the requested and retrieved scales (with their cosine
 // similarity); the retrieved parameters can be edited (re-rendered with
 // `texture-render`); the preview tiles 2×2; PNG and JSON export.

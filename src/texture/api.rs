@@ -8,8 +8,8 @@
 //!   id, the model names and the scale names.
 //! - `texture-analyse`: an example image → predicted model and scales.
 //! - `texture-retrieve`: requested scales (and optionally one model) → the
-//!   nearest sample, its parameters, the cosine similarity, and its texture
-//!   rendered live.
+//!   sample [`Index::retrieve`] picks, its parameters, the cosine
+//!   similarity, and its texture rendered live.
 //!
 //! Analysis and retrieval name the index they expect by id; a worker that
 //! holds another (or none) answers an error on field `index`, and the page
@@ -308,7 +308,8 @@ pub struct TextureRetrieval {
     pub image: Option<TextureImage>,
 }
 
-/// The nearest sample to the requested scales, rendered at `size`.
+/// The sample [`Index::retrieve`] picks for the requested scales, rendered
+/// at `size`.
 pub fn retrieve(index: &Index, req: &TextureRetrieveRequest) -> Result<TextureRetrieval> {
     let within = if req.model.is_empty() {
         None

@@ -8,8 +8,9 @@
 //! Grid: a model with k parameters gets `levels[i]` values of parameter i,
 //! raised one parameter at a time in spec order (round robin) while the
 //! product stays within [`DatasetConfig::per_model`]; a parameter left at
-//! one level keeps its default. The default `per_model` of 40 gives 23
-//! models × 32–40 = 808 base samples (see the test). Parameters are
+//! one level keeps its default. Each model's defaults, the picture the app
+//! shows first, are one more base unless they are a grid point (every
+//! default lies in its dataset range; a test checks). Parameters are
 //! listed most important first in every model, so they vary first.
 //!
 //! The levels span each parameter's *dataset range*
@@ -56,7 +57,8 @@ pub struct DatasetConfig {
 }
 
 impl Default for DatasetConfig {
-    /// 40 per model (808 bases), 256², the fixed light only, no crops.
+    /// 40 per model (831 bases with the defaults), 256², the fixed light
+    /// only, no crops.
     fn default() -> Self {
         DatasetConfig {
             per_model: 40,
@@ -195,24 +197,35 @@ fn level_value(model: &Model, i: usize, j: usize, levels: usize) -> f64 {
 }
 
 /// Every base sample of the dataset, in model order then grid order (the
-/// first parameter varies fastest).
+/// first parameter varies fastest), each model's grid followed by its
+/// defaults (unless they are a grid point): the app's first picture of
+/// every model is in the dataset, at another seed.
 pub fn plan(config: &DatasetConfig) -> Result<Vec<BaseSpec>> {
     config.check()?;
     let mut out = Vec::new();
     for (mi, m) in MODELS.iter().enumerate() {
         let lv = levels(m, config.per_model);
         let total: usize = lv.iter().product();
-        for g in 0..total {
-            let mut rest = g;
-            let params: Vec<f64> = lv
-                .iter()
-                .enumerate()
-                .map(|(i, &l)| {
-                    let j = rest % l;
-                    rest /= l;
-                    level_value(m, i, j, l)
-                })
-                .collect();
+        let mut grid: Vec<Vec<f64>> = (0..total)
+            .map(|g| {
+                let mut rest = g;
+                lv.iter()
+                    .enumerate()
+                    .map(|(i, &l)| {
+                        let j = rest % l;
+                        rest /= l;
+                        level_value(m, i, j, l)
+                    })
+                    .collect()
+            })
+            .collect();
+        let defaults: Vec<f64> = (0..m.params.len())
+            .map(|i| level_value(m, i, 0, 1))
+            .collect();
+        if !grid.contains(&defaults) {
+            grid.push(defaults);
+        }
+        for (g, params) in grid.into_iter().enumerate() {
             let mut rng =
                 Rng::new(config.seed ^ ((mi as u64) << 40) ^ (g as u64).wrapping_mul(0x9e37_79b9));
             out.push(BaseSpec {
@@ -366,7 +379,7 @@ mod tests {
     #[test]
     fn the_default_grid_has_a_few_dozen_samples_per_model() {
         let specs = plan(&DatasetConfig::default()).unwrap();
-        assert_eq!(specs.len(), 808);
+        assert_eq!(specs.len(), 831);
         for (mi, m) in MODELS.iter().enumerate() {
             let of_model: Vec<_> = specs.iter().filter(|s| s.model == mi).collect();
             assert!(of_model.len() >= 16, "{}: {}", m.id, of_model.len());
@@ -377,6 +390,11 @@ mod tests {
             for s in &of_model {
                 assert_eq!(m.check(&s.params).unwrap(), s.params, "{}", m.id);
             }
+            assert!(
+                of_model.iter().any(|s| s.params == m.defaults()),
+                "{}: no base at the defaults",
+                m.id
+            );
         }
         let bigger = plan(&DatasetConfig {
             per_model: 80,

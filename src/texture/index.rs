@@ -39,6 +39,10 @@ pub use super::scales::SCALE_NAMES as SCALES;
 
 /// Magic bytes at the start of every index file.
 pub const MAGIC: &[u8; 16] = b"FILIGREE-TEXIDX\0";
+/// How many base samples nearest the requested point in the perceptual
+/// space [`Index::retrieve`] re-ranks by their scales.
+pub const SHORTLIST: usize = 8;
+
 /// The index format's version: bump it whenever the layout changes.
 ///
 /// 3: the model classifier also reads 28 global values
@@ -102,14 +106,16 @@ pub struct IndexConfig {
     /// At most this many images (spread evenly) learn the PCA filters.
     pub filter_images: usize,
     /// A scale joins an axis's regression if |r| with the axis is at least
-    /// this (the best three always do). Lower thresholds fit the space
-    /// better (measured with 48 bases per model: at 0.1 the second axis of
-    /// the 1,104-base space explains R²
-    /// 0.98 of unseen bases' coordinates, against 0.80 at 0.3) but blend
-    /// every scale into every axis, so one slider moves the retrieval less:
-    /// the regularity slider then raised the retrieved regularity for 21
-    /// or 22 of 46 examples, against 38 at 0.3
-    /// (`docs/bench/texture-accuracy-2026-12-03c.md`).
+    /// this (the best three always do). 0.2, chosen on a validation split
+    /// of the bases (`examples/texture_space.rs`, 2026-12-03d): R² of the
+    /// three axes 0.988 / 0.940 / 0.793 at 0.3, 0.991 / 0.970 / 0.891 at
+    /// 0.2, 0.991 / 0.979 / 0.915 at 0.1. Lower thresholds blend more
+    /// scales into every axis, so one slider moves the requested point
+    /// less; [`Index::retrieve`]'s shortlist makes up for it, and the
+    /// sliders' response (`examples/texture_rerank.rs`) was the same at
+    /// 0.1 and 0.2 overall but the regularity slider's weaker at 0.1 (it
+    /// raised the retrieved regularity for 36 of 66 examples that could
+    /// rise, against 43 at 0.2).
     pub min_correlation: f64,
 }
 
@@ -122,7 +128,7 @@ impl Default for IndexConfig {
             global_weight: 1.0,
             isomap_k: 10,
             filter_images: 240,
-            min_correlation: 0.3,
+            min_correlation: 0.2,
         }
     }
 }
@@ -562,9 +568,23 @@ impl Index {
         p
     }
 
-    /// The base sample nearest the requested scales in the space,
-    /// optionally among one model's samples only.
+    /// The texture for requested scales: [`Index::retrieve_among`] with
+    /// the shipped shortlist, [`SHORTLIST`].
     pub fn retrieve(&self, scales: &[f32; 12], model: Option<u16>) -> Result<Retrieval> {
+        self.retrieve_among(scales, model, SHORTLIST)
+    }
+
+    /// The paper's retrieval, then a re-ranking: the `shortlist` base
+    /// samples nearest the requested point in the space (optionally of one
+    /// model only), and of those the one whose scales are nearest the
+    /// requested scales (Euclidean; ties to the nearer in the space).
+    /// `shortlist` 1 is the paper's nearest neighbour.
+    pub fn retrieve_among(
+        &self,
+        scales: &[f32; 12],
+        model: Option<u16>,
+        shortlist: usize,
+    ) -> Result<Retrieval> {
         if scales
             .iter()
             .any(|s| !s.is_finite() || !(1.0..=9.0).contains(s))
@@ -577,14 +597,32 @@ impl Index {
                 .map(|i| (c[i] as f64 - point[i] as f64).powi(2))
                 .sum::<f64>()
         };
-        let best = self
+        let mut near: Vec<(f64, usize)> = self
             .samples
             .iter()
             .enumerate()
             .filter(|(_, s)| model.is_none_or(|m| s.model == m))
-            .min_by(|(i, a), (j, b)| d2(&a.coords).total_cmp(&d2(&b.coords)).then(i.cmp(j)))
-            .map(|(i, _)| i)
-            .ok_or_else(|| Error::input("no sample of that model is in the index").at("model"))?;
+            .map(|(i, s)| (d2(&s.coords), i))
+            .collect();
+        if near.is_empty() {
+            return Err(Error::input("no sample of that model is in the index").at("model"));
+        }
+        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        near.truncate(shortlist.max(1));
+        let off = |i: usize| {
+            self.samples[i]
+                .scales
+                .iter()
+                .zip(scales)
+                .map(|(&s, &r)| (s as f64 - r as f64).powi(2))
+                .sum::<f64>()
+        };
+        // `near` is in space order, so `min_by` keeps the nearer of equals.
+        let best = near
+            .iter()
+            .map(|&(_, i)| i)
+            .min_by(|&i, &j| off(i).total_cmp(&off(j)))
+            .expect("the shortlist is not empty");
         let got: Vec<f32> = self.samples[best]
             .scales
             .iter()
@@ -597,8 +635,6 @@ impl Index {
         })
     }
 }
-
-// ---- The binary file -------------------------------------------------------
 
 fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
@@ -1036,5 +1072,42 @@ mod tests {
         let only = idx.retrieve(&[5.0; 12], Some(2)).unwrap();
         assert_eq!(idx.samples[only.sample].model, 2);
         assert!(idx.retrieve(&[0.0; 12], None).is_err());
+    }
+
+    /// A shortlist of 1 is the paper's nearest neighbour in the space; a
+    /// longer one returns, from the nearest few, a sample whose scales are
+    /// at least as near the request, and a shortlist of every sample is
+    /// the nearest in scales outright.
+    #[test]
+    fn the_shortlist_re_ranks_the_nearest_in_the_space_by_scales() {
+        let (names, data) = toy();
+        let idx = Index::build(names, &data, &config()).unwrap();
+        let off = |i: usize, want: &[f32; 12]| {
+            idx.samples[i]
+                .scales
+                .iter()
+                .zip(want)
+                .map(|(&s, &r)| (s as f32 - r).powi(2))
+                .sum::<f32>()
+        };
+        let mut r = Rng::new(5);
+        for _ in 0..40 {
+            let want: [f32; 12] = std::array::from_fn(|_| 1.0 + 8.0 * r.f64() as f32);
+            let p = idx.locate(&want);
+            let d = |i: usize| {
+                let c = idx.samples[i].coords;
+                (0..3).map(|a| (c[a] - p[a]).powi(2)).sum::<f32>()
+            };
+            let nn = idx.retrieve_among(&want, None, 1).unwrap().sample;
+            assert!((0..idx.samples.len()).all(|i| d(nn) <= d(i)));
+            let mut last = off(nn, &want);
+            for k in [2, 4, 8] {
+                let got = idx.retrieve_among(&want, None, k).unwrap().sample;
+                assert!(off(got, &want) <= last, "shortlist {k}");
+                last = off(got, &want);
+            }
+            let all = idx.retrieve_among(&want, None, usize::MAX).unwrap().sample;
+            assert!((0..idx.samples.len()).all(|i| off(all, &want) <= off(i, &want)));
+        }
     }
 }

@@ -60,11 +60,12 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   assert.match(await page.textContent('[data-testid=texture-estimates-note]'), /estimates.*not human ratings/);
 
   // A forest-fire automaton's texture (a seed outside the index's
-  // samples): irregular, so regularity has room to rise. Retrieval is the
-  // nearest sample in the perceptual space, so regularity does not rise
-  // for every example: seed 11, the example here until the index of
-  // 2026-12-03b, now falls 6 → 3; seed 12 rises 4 → 7. How often it rises
-  // over 46 examples is pinned natively (tests/texture_asset.rs).
+  // samples): irregular, so regularity has room to rise. Retrieval takes
+  // the few samples nearest the request in the perceptual space and, of
+  // those, the one whose scales are nearest, so a slider's scale does not
+  // rise for every example; how often each slider moves its scale its way
+  // (and almost never the other way) is pinned natively over 46 examples
+  // (tests/texture_asset.rs).
   const model = 'ca-forest-fire';
   const png = await renderedPng(page, model, 12);
   await dropFile(page, '[data-testid=texture-drop]', { name: 'forest.png', bytes: png, type: 'image/png' });

@@ -42,7 +42,7 @@ const FOLD_TEXTON_PARAMS: &[ParamSpec] = &[
     real("folds", 1.0, 5.0, 2.5).dataset(FOLDS_FLOOR, 5.0),
     int("grid", 3.0, 12.0, 6.0),
     // Dataset 0.3..0.45 (see `FOLD_TEXTON_SIZE_MAX`).
-    real("size", 0.3, 0.9, 0.7).dataset(0.3, FOLD_TEXTON_SIZE_MAX),
+    real("size", 0.3, 0.9, 0.4).dataset(0.3, FOLD_TEXTON_SIZE_MAX),
     // Dataset from 0.2, as `texton-random-grid`'s jitter: the paper's
     // folded textons are randomly placed, and without jitter they are a
     // lattice of targets, which the classifier took for folded cells
@@ -129,8 +129,7 @@ const WEIGHT_HI: f64 = 0.6;
 /// smooth ingredient (Perlin noise, cellular): with 2–4 features per side
 /// a training window (a quarter of the texture) holds one or two of them,
 /// a tilt rather than a texture beside the other ingredient's many small
-/// ones. (`fusion-perlin-texton`'s default frequency, 4, is below it: the
-/// sliders' default picture was left as it was.)
+/// ones.
 const BACKGROUND_FLOOR: f64 = 6.0;
 
 /// The mean slope of an `n`×`n` torus height map: the mean length of its
@@ -230,7 +229,7 @@ pub const FUSE_PERLIN_CELLULAR: Model = Model {
 const FUSE_PT_PARAMS: &[ParamSpec] = &[
     real("weight", 0.2, 0.8, 0.5).dataset(WEIGHT_LO, WEIGHT_HI),
     // Dataset from 6 (see `BACKGROUND_FLOOR`).
-    int("frequency", 2.0, 16.0, 4.0).dataset(BACKGROUND_FLOOR, 16.0),
+    int("frequency", 2.0, 16.0, 6.0).dataset(BACKGROUND_FLOOR, 16.0),
     int("grid", 4.0, 16.0, 8.0),
     int("shape", 0.0, 4.0, 3.0),
 ];

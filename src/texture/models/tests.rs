@@ -240,6 +240,17 @@ fn dataset_ranges_lie_inside_the_parameter_ranges() {
             if p.integer {
                 assert_eq!(p.dataset_lo.fract() + p.dataset_hi.fract(), 0.0);
             }
+            // The default is the picture the app shows first, and the
+            // dataset has a base there (`dataset::plan`).
+            assert!(
+                (p.dataset_lo..=p.dataset_hi).contains(&p.default),
+                "{}.{}: default {} outside the dataset's {}..{}",
+                m.id,
+                p.name,
+                p.default,
+                p.dataset_lo,
+                p.dataset_hi
+            );
         }
     }
     // Every grid value is in its dataset range.
