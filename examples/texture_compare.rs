@@ -52,7 +52,11 @@ fn main() {
         }
     }
     for (k, p) in paths.iter().enumerate() {
-        println!("{p}: {} of {n} ({:.1}%)", right[k], right[k] as f64 * 100.0 / n as f64);
+        println!(
+            "{p}: {} of {n} ({:.1}%)",
+            right[k],
+            right[k] as f64 * 100.0 / n as f64
+        );
         let per_model: Vec<String> = MODELS
             .iter()
             .zip(&by_model[k])

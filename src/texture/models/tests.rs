@@ -471,9 +471,10 @@ fn every_automaton_in_the_dataset_has_organised() {
         .unwrap();
     let o = organisation(fire, &p, 3);
     assert!(o < 0.15, "forest fire {p:?}: {o}");
-    // Every dataset point has structure over several cells (measured
-    // 2026-12-02: at least 0.23 for the waves, 0.35 for the fires).
-    for (m, floor) in [(waves, 0.2), (fire, 0.3)] {
+    // Every dataset point has structure over several cells, well above
+    // the coincidences' (measured on the Latin-hypercube design,
+    // 2026-12-03d: at least 0.35 for the waves, 0.29 for the fires).
+    for (m, floor) in [(waves, 0.2), (fire, 0.25)] {
         for (p, seed) in dataset_points(m.id) {
             let o = organisation(m, &p, seed);
             assert!(o > floor, "{} {p:?}: organisation {o}", m.id);
