@@ -9,6 +9,7 @@
 use filigree::core::rng::Rng;
 use filigree::texture::api;
 use filigree::texture::build::BuildConfig;
+use filigree::texture::dataset::random_point;
 use filigree::texture::models::{self, MODELS};
 
 fn main() {
@@ -30,18 +31,7 @@ fn main() {
     let mut n = 0;
     for (mi, m) in MODELS.iter().enumerate() {
         for _ in 0..per {
-            let params: Vec<f64> = m
-                .params
-                .iter()
-                .map(|p| {
-                    let v = p.dataset_lo + (p.dataset_hi - p.dataset_lo) * rng.f64();
-                    if p.integer {
-                        v.round()
-                    } else {
-                        v
-                    }
-                })
-                .collect();
+            let params = random_point(m, &mut rng);
             let img = models::render(m, &params, rng.next_u64() >> 11, side).unwrap();
             for (k, index) in indexes.iter().enumerate() {
                 let ok = index.analyse(&img).unwrap().model as usize == mi;

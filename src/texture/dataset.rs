@@ -172,6 +172,24 @@ pub fn design(model: &Model, n: usize, rng: &mut Rng) -> Vec<Vec<f64>> {
     points
 }
 
+/// A parameter point drawn uniformly inside `model`'s dataset ranges
+/// (integers rounded): a texture of the model the dataset never held, for
+/// measuring how the index reads what lies between its points.
+pub fn random_point(model: &Model, rng: &mut Rng) -> Vec<f64> {
+    model
+        .params
+        .iter()
+        .map(|p| {
+            let v = p.dataset_lo + (p.dataset_hi - p.dataset_lo) * rng.f64();
+            if p.integer {
+                v.round()
+            } else {
+                v
+            }
+        })
+        .collect()
+}
+
 /// The value of level `j` of `levels` for parameter `i` of `model`: the
 /// levels span the parameter's dataset range ([`ParamSpec::dataset`]); a
 /// single level is the default, moved into that range.
