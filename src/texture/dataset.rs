@@ -64,7 +64,7 @@ pub struct DatasetConfig {
 }
 
 impl Default for DatasetConfig {
-    /// 40 per model (831 bases with the defaults), 256², the fixed light
+    /// 40 per model (943 bases with the defaults), 256², the fixed light
     /// only, no crops.
     fn default() -> Self {
         DatasetConfig {

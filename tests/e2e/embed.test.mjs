@@ -248,9 +248,10 @@ test('an interactive embed on the app\'s own origin never writes the user\'s aut
     }
     return out;
   });
-  // Wait for the autosave to land (debounced), then record it.
+  // Wait for the autosave to land (debounced), then record it. Up to 30 s:
+  // on a loaded machine (a CI run on 2026-12-03) 10 s was not enough.
   let saved = {};
-  for (let i = 0; i < 50 && !/honeycomb/.test(Object.values(saved).join()); i++) {
+  for (let i = 0; i < 150 && !/honeycomb/.test(Object.values(saved).join()); i++) {
     await page.waitForTimeout(200);
     saved = await dump();
   }
