@@ -550,7 +550,9 @@ function mount(el, ctx) {
       const v = i < r.params.length ? r.params[i] : r.seed;
       // Parameters at six significant digits; the seed exactly (an integer ≤ 2⁵³).
       const shown = i < r.params.length ? String(+v.toPrecision(6)) : String(v);
-      if (document.activeElement !== input && Number(input.value) !== v) input.value = shown;
+      // A new input's value is '' (which Number reads as 0): a parameter at
+      // 0 must still be written.
+      if (document.activeElement !== input && (input.value === '' || Number(input.value) !== v)) input.value = shown;
     });
   }
 

@@ -94,9 +94,13 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   assert.ok(s.retrieved.scales[REGULARITY] > before, `retrieved regularity ${before} → ${s.retrieved.scales[REGULARITY]}`);
   assert.ok(s.retrieved.cosine > 0 && s.retrieved.cosine <= 1);
   assert.match(await page.textContent('[data-testid=texture-cosine]'), /cosine similarity \d\.\d{3}/);
-  // The parameters shown are the retrieved model's.
-  const shown = await page.$$eval('.texture-param-list input', (xs) => xs.map((x) => Number(x.value)));
+  // The parameters shown are the retrieved model's, every one of them
+  // written (a parameter at 0 once showed an empty field), then the seed.
+  const shown = await page.$$eval('.texture-param-list input', (xs) => xs.map((x) => x.value));
   assert.equal(shown.length, s.retrieved.params.length + 1);
+  assert.ok(shown.every((v) => v !== ''), `every field shows its value: ${JSON.stringify(shown)}`);
+  s.retrieved.params.forEach((p, i) => assert.equal(Number(shown[i]), +p.toPrecision(6), `parameter ${i}`));
+  assert.equal(shown.at(-1), String(s.retrieved.seed));
 
   // Undo puts the slider (and its texture) back in one step.
   await page.click('button[data-act=undo]');
