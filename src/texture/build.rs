@@ -75,6 +75,10 @@ pub struct BuildStats {
     pub bases: usize,
     /// Bases whose labels came from human ratings.
     pub rated: usize,
+    /// The cut points that made the labels, when no rating replaced any
+    /// (the index then measures an image's scales, [`Index::measured`]).
+    #[serde(skip)]
+    pub measured: Option<ScaleQuantiles>,
 }
 
 /// The rendered dataset with every image's labels (1–9), base images
@@ -133,6 +137,7 @@ pub fn labelled(
     }
     stats.images = samples.len();
     stats.bases = bases;
+    stats.measured = (stats.rated == 0).then_some(quantiles);
     Ok(samples
         .into_iter()
         .map(|s| {
@@ -187,17 +192,19 @@ pub fn training(samples: &[(DataSample, [u8; 12])], keep: impl Fn(usize) -> bool
 pub fn build_index(config: &BuildConfig, ratings: &[Rating]) -> Result<(Index, BuildStats)> {
     let mut stats = BuildStats::default();
     let samples = labelled(&config.dataset, ratings, &mut stats)?;
-    Ok((train_index(&samples, config, |_| true)?, stats))
+    let index = train_index(&samples, stats.measured.clone(), config, |_| true)?;
+    Ok((index, stats))
 }
 
 /// Trains an index on the labelled samples whose base `keep` accepts.
 pub fn train_index(
     samples: &[(DataSample, [u8; 12])],
+    measured: Option<ScaleQuantiles>,
     config: &BuildConfig,
     keep: impl Fn(usize) -> bool,
 ) -> Result<Index> {
     let names = MODELS.iter().map(|m| m.id.to_string()).collect();
-    Index::build(names, &training(samples, keep), &config.index)
+    Index::build(names, &training(samples, keep), measured, &config.index)
 }
 
 #[cfg(test)]

@@ -197,18 +197,37 @@ impl PcnConfig {
     /// about 0.15 s a texture in the browser, the budget
     /// (`docs/bench/texture-accuracy-2026-12-03.md`).
     pub fn views(&self, img: &Gray) -> Result<Vec<Gray>> {
+        self.corner_views(img, false)
+    }
+
+    /// The windows in all four corners of the image's centred square, in
+    /// the dataset's crop order (top-left, top-right, bottom-left,
+    /// bottom-right: a `texture_side` render's four crops), or the one
+    /// [`PcnConfig::view`] as [`PcnConfig::views`]. The scales of an image
+    /// are measured over these, as a base's label is over its crops.
+    pub fn quadrant_views(&self, img: &Gray) -> Result<Vec<Gray>> {
+        self.corner_views(img, true)
+    }
+
+    fn corner_views(&self, img: &Gray, four: bool) -> Result<Vec<Gray>> {
         let s = img.width.min(img.height);
         let w = self.window(s);
         if img.width == 0 || img.height == 0 || w >= s {
             return Ok(vec![self.view(img)?]);
         }
         let (x0, y0) = ((img.width - s) / 2, (img.height - s) / 2);
-        [0, s - w]
+        let d = s - w;
+        let corners: &[(usize, usize)] = if four {
+            &[(0, 0), (d, 0), (0, d), (d, d)]
+        } else {
+            &[(0, 0), (d, d)]
+        };
+        corners
             .iter()
-            .map(|&d| {
+            .map(|&(dx, dy)| {
                 let mut sub = Gray::new(w, w);
                 for y in 0..w {
-                    let from = (y0 + d + y) * img.width + x0 + d;
+                    let from = (y0 + dy + y) * img.width + x0 + dx;
                     sub.data[y * w..(y + 1) * w].copy_from_slice(&img.data[from..from + w]);
                 }
                 prepare(&sub, self.side)
@@ -431,15 +450,18 @@ fn convolve(m: &Map, filters: &[Vec<f32>], k1: usize, k2: usize) -> Vec<Map> {
                 // taps are summed (in tap order, so every output is the
                 // same sum as the plain loop's, bit for bit).
                 let mut x = 0;
+                // (Fixed-size arrays and one slice per filter row keep the
+                // bounds checks out of the lanes' loop, so it vectorises in
+                // the dev build too, which rebuilds the index in CI.)
                 while x + LANES <= w {
                     let mut acc = [0f32; LANES];
-                    for dy in 0..k1 {
-                        let base = (y + dy) * pw + x;
-                        for dx in 0..k2 {
-                            let c = f[dy * k2 + dx];
-                            let src = &pad[base + dx..base + dx + LANES];
-                            for l in 0..LANES {
-                                acc[l] += c * src[l];
+                    for (dy, taps) in f.chunks_exact(k2).take(k1).enumerate() {
+                        let line = &pad[(y + dy) * pw + x..][..k2 - 1 + LANES];
+                        for (dx, &c) in taps.iter().enumerate() {
+                            let src: &[f32; LANES] =
+                                line[dx..dx + LANES].try_into().expect("LANES values");
+                            for (a, s) in acc.iter_mut().zip(src) {
+                                *a += c * *s;
                             }
                         }
                     }
@@ -538,10 +560,13 @@ pub fn convolve_direct(
 fn max_pool(m: &Map, p: usize) -> Map {
     let (w, h) = ((m.w / p).max(1), (m.h / p).max(1));
     let mut v = vec![f32::NEG_INFINITY; w * h];
+    let cols = (w * p).min(m.w);
     for y in 0..(h * p).min(m.h) {
-        for x in 0..(w * p).min(m.w) {
-            let o = &mut v[(y / p) * w + x / p];
-            *o = o.max(m.v[y * m.w + x]);
+        let out = &mut v[(y / p) * w..][..w];
+        for (o, px) in out.iter_mut().zip(m.v[y * m.w..][..cols].chunks(p)) {
+            for &s in px {
+                *o = o.max(s);
+            }
         }
     }
     Map { w, h, v }
@@ -743,14 +768,22 @@ mod tests {
     }
 
     /// The direct convolution equals the textbook definition: the filter's
-    /// dot product with the zero-padded, mean-removed patch at each pixel.
+    /// dot product with the zero-padded, mean-removed patch at each pixel,
+    /// on a map narrower than the kernel's 16 lanes and on one wider (the
+    /// lanes and the leftover columns).
     #[test]
     fn convolution_matches_a_naive_patch_projection() {
-        let img = noise(11, 3);
+        for width in [11, 37] {
+            convolution_matches_naive(width);
+        }
+    }
+
+    fn convolution_matches_naive(width: usize) {
+        let img = noise(width, 3);
         let m = as_map(&Gray {
-            width: 11,
+            width,
             height: 9,
-            data: img.data[..99].to_vec(),
+            data: img.data[..width * 9].to_vec(),
         });
         let (k1, k2) = (3, 5);
         let mut r = Rng::new(9);
@@ -801,6 +834,30 @@ mod tests {
         for (fa, fb) in a.iter().zip(&b) {
             for (x, y) in fa.iter().zip(fb) {
                 assert!((x - y).abs() < 1e-4, "{x} vs {y}");
+            }
+        }
+    }
+
+    /// Windows that do not divide the map: the last row and column that
+    /// fit no whole window are dropped, as the pooled size says.
+    #[test]
+    fn max_pooling_of_a_ragged_map_takes_whole_windows_only() {
+        let m = Map {
+            w: 7,
+            h: 8,
+            v: (0..56).map(|i| ((i * 13) % 17) as f32).collect(),
+        };
+        let p = max_pool(&m, 3);
+        assert_eq!((p.w, p.h), (2, 2));
+        for y in 0..2 {
+            for x in 0..2 {
+                let mut want = f32::NEG_INFINITY;
+                for dy in 0..3 {
+                    for dx in 0..3 {
+                        want = want.max(m.v[(3 * y + dy) * 7 + 3 * x + dx]);
+                    }
+                }
+                assert_eq!(p.v[y * 2 + x], want);
             }
         }
     }

@@ -280,3 +280,34 @@ fn ratings_csv_errors_name_the_line_and_column() {
     let nan = format!("{}\n{}", header(), row("NaN"));
     assert!(parse_ratings(&nan).is_err());
 }
+
+/// The box filter gives, bit for bit, each pixel's wrapped (2r + 1)²
+/// neighbourhood summed row by row and then line by line, in the order
+/// `at` reads it.
+#[test]
+fn box_mean_is_the_wrapped_neighbourhood_mean() {
+    let mut r = Rng::new(5);
+    let w: Vec<f64> = (0..WORK * WORK).map(|_| r.f64()).collect();
+    for radius in [1, 3, 16] {
+        let got = box_mean(&w, radius);
+        let k = 1.0 / (2 * radius + 1) as f64;
+        let d = radius as isize;
+        let mut tmp = vec![0.0; WORK * WORK];
+        for y in 0..WORK as isize {
+            for x in 0..WORK as isize {
+                tmp[y as usize * WORK + x as usize] =
+                    (-d..=d).fold(0.0, |s, i| s + at(&w, x + i, y)) * k;
+            }
+        }
+        for y in 0..WORK as isize {
+            for x in 0..WORK as isize {
+                let want = (-d..=d).fold(0.0, |s, i| s + at(&tmp, x, y + i)) * k;
+                assert_eq!(
+                    got[y as usize * WORK + x as usize],
+                    want,
+                    "r {radius} at ({x}, {y})"
+                );
+            }
+        }
+    }
+}
