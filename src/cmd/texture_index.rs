@@ -585,7 +585,7 @@ pub fn bench(
             "paper_images": "the paper's §5.2: a random 25% of each model's images (crops and lights included) held out",
             "random_draws": format!("{RANDOM_DRAWS} parameter points per model drawn uniformly in its dataset ranges (not dataset points), rendered at {side}² and read by Index::analyse"),
             "paper_test_images": p_test.len(),
-            "table2_shipped_analysis": "the scales Index::analyse gives: the image's own estimator measures at the dataset's cut points (the labels are the estimators', Index::measured)",
+            "table2_shipped_analysis": "the scales Index::analyse gives: the image's own estimator measures at the dataset's cut points (the labels are the estimators', Index::measured); a 256² render is measured over its four 128² quadrants, which is how its base was labelled, so that figure is 1 by construction and checks that analyse follows the labelling",
             "table2_svm_classifiers": "the paper's method: linear one-vs-rest SVMs from PCN features and global values to each scale (what analyse gives for an index built on human ratings)",
         },
         "table1_model_accuracy": {"held_out_bases": model_right as f64 / n, "held_out_bases_256_renders_two_windows": render_right as f64 / n, "held_out_bases_all_images": held_all_right as f64 / held_ids.len().max(1) as f64, "random_draws": drawn_right as f64 / drawn.max(1) as f64, "paper_images": paper_model, "paper_pcn2": 0.9989},
