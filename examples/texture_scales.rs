@@ -193,7 +193,7 @@ fn main() {
                 8.0
             } else {
                 let j = (0..7).find(|&j| x <= e[j + 1]).unwrap();
-                j as f64 + 1.0 + (x - e[j]) / (e[j + 1] - e[j]).max(1e-12) - 1.0 + 0.0
+                j as f64 + (x - e[j]) / (e[j + 1] - e[j]).max(1e-12)
             };
             for j in 0..8 {
                 out.push(tw * (q - j as f64).clamp(0.0, 1.0) as f32);
@@ -205,10 +205,10 @@ fn main() {
         let (mut e1, mut n1, mut c1) = (0usize, 0usize, 0usize);
         for r in ev.iter().filter(|r| r.first) {
             let l = quantiles.to_likert(&raw(&r.f));
-            for k in 0..12 {
+            for (got, want) in l.iter().zip(&r.labels) {
                 c1 += 1;
-                e1 += (l[k] == r.labels[k]) as usize;
-                n1 += ((l[k] as i32 - r.labels[k] as i32).abs() <= 1) as usize;
+                e1 += (got == want) as usize;
+                n1 += (got.abs_diff(*want) <= 1) as usize;
             }
         }
         println!(

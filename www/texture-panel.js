@@ -10,7 +10,9 @@
 // `texture-render`); the preview tiles 2×2; PNG and JSON export.
 //
 // The scales are computational estimates, not human ratings (see
-// src/texture/scales.rs; `filigree build-index --ratings` replaces them).
+// src/texture/scales.rs; `filigree build-index --ratings` replaces them):
+// an example's scales are measured on it (its four corner windows), and
+// only an index built on ratings predicts them with its classifiers.
 //
 // The trained index (assets/texture-index.bin) is fetched once per page,
 // only when this tool opens, and parsed once per worker (`texture-index`):

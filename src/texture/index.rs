@@ -143,7 +143,7 @@ pub struct Index {
     pub pcn: Pcn,
     /// Reads [`GlobalScaler::model_row`]s ([`Index::model_scores`]).
     pub model_classifier: OneVsRest,
-    /// Standardises the global values for the model classifier.
+    /// Standardises the global values for the classifiers.
     pub globals: GlobalScaler,
     /// Read [`GlobalScaler::scale_row`]s.
     pub scale_classifiers: Vec<OneVsRest>,
@@ -310,8 +310,6 @@ fn to_unit_f(s: &[f32; 12], subset: &[u8]) -> Vec<f32> {
         .collect()
 }
 
-/// The first index of the largest value (0 when empty), as
-/// [`OneVsRest::predict`] breaks ties.
 /// Each scale's level at the cut points `q` of the estimators' raw
 /// measures of an image's windows ([`PcnConfig::quadrant_views`]) summed in
 /// order and averaged, as the dataset's bases were labelled; None for a
@@ -330,6 +328,8 @@ fn measure_scales(q: &ScaleQuantiles, windows: &[super::scales::Scales]) -> [Opt
     std::array::from_fn(|k| (!windows.is_empty() && raw[k].is_finite()).then_some(levels[k]))
 }
 
+/// The first index of the largest value (0 when empty), as
+/// [`OneVsRest::predict`] breaks ties.
 fn argmax(s: &[f64]) -> usize {
     (0..s.len()).fold(0, |b, i| if s[i] > s[b] { i } else { b })
 }
@@ -564,22 +564,26 @@ impl Index {
         for f in &views {
             add(&mut model, &self.model_scores(f));
         }
-        let mut scales = self.classify_scales(&views);
-        if let Some(q) = &self.measured {
-            let raw = self
-                .pcn
-                .config
-                .quadrant_views(img)?
-                .iter()
-                .map(super::scales::measure)
-                .collect::<Result<Vec<_>>>()?;
-            for (s, m) in scales.iter_mut().zip(measure_scales(q, &raw)) {
-                // A measure the image cannot give keeps the classifier's.
-                if let Some(m) = m {
-                    *s = m;
-                }
+        let scales = match &self.measured {
+            None => self.classify_scales(&views),
+            Some(q) => {
+                let raw = self
+                    .pcn
+                    .config
+                    .quadrant_views(img)?
+                    .iter()
+                    .map(super::scales::measure)
+                    .collect::<Result<Vec<_>>>()?;
+                let measured = measure_scales(q, &raw);
+                // A measure the image cannot give takes the classifier's.
+                let classified = if measured.contains(&None) {
+                    self.classify_scales(&views)
+                } else {
+                    [5; 12]
+                };
+                std::array::from_fn(|k| measured[k].unwrap_or(classified[k]))
             }
-        }
+        };
         Ok(Analysis {
             model: self
                 .model_classifier

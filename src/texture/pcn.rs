@@ -450,9 +450,8 @@ fn convolve(m: &Map, filters: &[Vec<f32>], k1: usize, k2: usize) -> Vec<Map> {
                 // taps are summed (in tap order, so every output is the
                 // same sum as the plain loop's, bit for bit).
                 let mut x = 0;
-                // (Fixed-size arrays and one slice per filter row keep the
-                // bounds checks out of the lanes' loop, so it vectorises in
-                // the dev build too, which rebuilds the index in CI.)
+                // (One slice per filter row and a fixed-size array per tap
+                // keep the bounds checks out of the lanes' loop.)
                 while x + LANES <= w {
                     let mut acc = [0f32; LANES];
                     for (dy, taps) in f.chunks_exact(k2).take(k1).enumerate() {
