@@ -523,20 +523,33 @@ pub fn bench(
             "mse_standardised": mse, "r2": r * r,
         }));
     }
-    // Retrieval speed and quality: slider requests from held-out labels.
+    // Retrieval speed and quality: slider requests. Each held-out base's
+    // scales with one slider moved to its far end (to 9, or to 1 from 9),
+    // one request per scale: requests that are not a sample's own scales
+    // (those would be retrieved exactly, cosine 1). Also how often the
+    // retrieved scale moved the slider's way, and the other way.
     let t3 = Instant::now();
-    let mut cos = 0.0;
+    let (mut cos, mut their_way, mut wrong, mut requests) = (0.0, 0usize, 0usize, 0usize);
     for (_, labels) in &tests {
-        let req = TextureRetrieveRequest {
-            scales: labels.map(|v| v as f32),
-            size: 0,
-            ..Default::default()
-        };
-        cos += api::retrieve(&full, &req)
-            .map_err(|e| e.to_string())?
-            .cosine;
+        for k in 0..12 {
+            let mut want = labels.map(|v| v as f32);
+            want[k] = if labels[k] < 9 { 9.0 } else { 1.0 };
+            let req = TextureRetrieveRequest {
+                scales: want,
+                size: 0,
+                ..Default::default()
+            };
+            let got = api::retrieve(&full, &req).map_err(|e| e.to_string())?;
+            let (from, to) = (labels[k] as f32, got.scales[k] as f32);
+            let up = want[k] > from;
+            their_way += ((to > from) == up && to != from) as usize;
+            wrong += ((to < from) == up && to != from) as usize;
+            cos += got.cosine;
+            requests += 1;
+        }
     }
-    let retrieve_ms = t3.elapsed().as_secs_f64() * 1e3 / n;
+    let requests = requests.max(1) as f64;
+    let retrieve_ms = t3.elapsed().as_secs_f64() * 1e3 / requests;
     let t4 = Instant::now();
     for (s, _) in tests.iter().take(8) {
         full.analyse(&s.image).map_err(|e| e.to_string())?;
@@ -611,7 +624,12 @@ pub fn bench(
             "paper_pcn2_exact": PAPER_TABLE2.iter().sum::<f64>() / 12.0,
         },
         "table3_space_regression": {"ours": table3, "paper_r2": [0.9988, 0.9987, 0.8769]},
-        "retrieval_mean_cosine": cos / n,
+        "retrieval_slider_requests": {
+            "requests": requests,
+            "mean_cosine": cos / requests,
+            "retrieved_scale_moved_the_sliders_way": their_way as f64 / requests,
+            "retrieved_scale_moved_the_other_way": wrong as f64 / requests,
+        },
         "seconds": {
             "label_dataset": label_s, "filters_and_all_features": features_all_s, "fit_held_out_index": fit_s,
             "features_and_prediction_per_texture": features_s / n,
