@@ -9,8 +9,9 @@
 // second build of the core (e.g. with wasm simd128) is measured in the same
 // run beside the first, taking turns texture by texture.
 // - analyse: a `texture-analyse` request (PNG decode, PCN-2 features, the
-//   model and the 12 scale classifiers) timed in the page around the worker
-//   pool's call, so the message passing a user waits for is inside it;
+//   model classifier, the 12 scales measured on four windows) timed in the
+//   page around the worker pool's call, so the message passing a user
+//   waits for is inside it;
 // - retrieve: a `texture-retrieve` request for the predicted scales with
 //   rendering off (`size: 0`): the nearest sample in the perceptual space;
 // - retrieve_render: the same with the 256² answer rendered, what a slider
