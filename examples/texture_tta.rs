@@ -29,9 +29,10 @@
     clippy::needless_range_loop,
     clippy::type_complexity
 )]
+use filigree::core::parallel::par_map;
 use filigree::core::rng::Rng;
 use filigree::texture::build::{self, BuildConfig, BuildStats};
-use filigree::texture::index::{par_map, Index};
+use filigree::texture::index::Index;
 use filigree::texture::learn::svm::{chi2_map, OneVsRest};
 use filigree::texture::models::MODELS;
 use filigree::texture::Gray;

@@ -27,30 +27,11 @@ use crate::micro::api as micro;
 use crate::micro::fit_api as micro_fit;
 use crate::pattern::api as pattern;
 use crate::pixel::api as pixel;
-use crate::raster::Rgba8Image;
 use crate::tangle::api as tangle;
 use crate::texture::api as texture;
 use serde::{Deserialize, Deserializer, Serialize};
 
-/// An image as it crosses the boundary undecoded: straight RGBA bytes
-/// (a `Uint8Array` in the browser).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RawImage {
-    pub width: u32,
-    pub height: u32,
-    #[serde(with = "serde_bytes")]
-    pub rgba: Vec<u8>,
-}
-
-impl From<Rgba8Image> for RawImage {
-    fn from(img: Rgba8Image) -> Self {
-        RawImage {
-            width: img.width,
-            height: img.height,
-            rgba: img.data,
-        }
-    }
-}
+pub use crate::raster::RawImage;
 
 /// Every request kind the registry serves.
 pub const KINDS: &[&str] = &[

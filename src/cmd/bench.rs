@@ -1,4 +1,5 @@
 //! `filigree bench <tool>`: benchmarks that print one JSON object.
+use super::measure::fixture;
 use clap::Subcommand;
 use filigree::core::job::{Job, Step};
 use filigree::inspect::{inspect, InspectOptions};
@@ -223,51 +224,6 @@ pub fn run(w: Which) -> Result<(), String> {
 /// A 1024² PNG with 65,536 colours (gradients), the same file the browser
 /// test `tests/e2e/perf.test.mjs` inspects in the worker, so the two timings compare.
 pub const TEST_PNG_1024: &[u8] = include_bytes!("../../tests/fixtures/gradient-1024.png");
-/// Fixture files of the pixel cases, embedded so the bench runs from any directory.
-const PIXEL_FIXTURES: [(&str, &[u8]); 9] = [
-    (
-        "cases.json",
-        include_bytes!("../../assets/pixel/cases.json"),
-    ),
-    ("fish.png", include_bytes!("../../assets/pixel/fish.png")),
-    (
-        "fish_body_boundary.png",
-        include_bytes!("../../assets/pixel/fish_body_boundary.png"),
-    ),
-    (
-        "fish_scale.png",
-        include_bytes!("../../assets/pixel/fish_scale.png"),
-    ),
-    (
-        "fish_strokes.json",
-        include_bytes!("../../assets/pixel/fish_strokes.json"),
-    ),
-    (
-        "trunk_unpatterned.png",
-        include_bytes!("../../assets/pixel/trunk_unpatterned.png"),
-    ),
-    (
-        "trunk_boundary.png",
-        include_bytes!("../../assets/pixel/trunk_boundary.png"),
-    ),
-    (
-        "bark_scale.png",
-        include_bytes!("../../assets/pixel/bark_scale.png"),
-    ),
-    (
-        "trunk_strokes.json",
-        include_bytes!("../../assets/pixel/trunk_strokes.json"),
-    ),
-];
-
-pub fn fixture(name: &str) -> Result<&'static [u8], String> {
-    PIXEL_FIXTURES
-        .iter()
-        .find(|f| f.0 == name)
-        .map(|f| f.1)
-        .ok_or_else(|| format!("no embedded fixture {name}"))
-}
-
 /// Inputs and parameters of one case of `assets/pixel/cases.json`.
 fn pixel_case(name: &str) -> Result<(PixelInputs, PixelParams), String> {
     let cases: serde_json::Value =

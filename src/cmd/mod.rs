@@ -2,6 +2,7 @@ pub mod bench;
 pub mod fit;
 pub mod fit_bench;
 pub mod inspect;
+pub mod measure;
 pub mod micro;
 pub mod micro_bench;
 pub mod pixel;

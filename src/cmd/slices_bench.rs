@@ -3,6 +3,7 @@
 //! have passed, so a step far over that delays cancellation and progress.
 //! Each request is built as the worker builds it (its `start_*` function),
 //! the start call is timed as a slice of its own, then every step is timed.
+use super::measure::thread_cpu_ms;
 use filigree::api::inspect::{start_decode, start_inspect, DecodeImageRequest, InspectRequest};
 use filigree::core::job::{Job, Step};
 use filigree::pattern::api::{
@@ -15,31 +16,6 @@ use filigree::raster::{decode, encode_png, Limits, Rgba8Image};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::time::Instant;
-
-/// This thread's CPU time in ms (user + system): unlike the wall clock it
-/// does not count the time other processes held the core, so step times
-/// stay meaningful on a busy machine. `None` where not available.
-#[cfg(target_os = "linux")]
-pub(super) fn thread_cpu_ms() -> Option<f64> {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    extern "C" {
-        fn clock_gettime(clock: i32, tp: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-    let mut t = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: `t` is a valid, writable timespec for the call's duration.
-    let r = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    (r == 0).then(|| t.sec as f64 * 1e3 + t.nsec as f64 / 1e6)
-}
-
-#[cfg(not(target_os = "linux"))]
-pub(super) fn thread_cpu_ms() -> Option<f64> {
-    None
-}
 
 /// Step timings of one request.
 struct Timing {
@@ -292,7 +268,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         ));
     }
     if want("pixel") {
-        let fish = decode(super::bench::fixture("fish.png")?, Limits::default())
+        let fish = decode(super::measure::fixture("fish.png")?, Limits::default())
             .map_err(|e| e.to_string())?;
         let k = 32;
         let source = upscale(&fish, k);
@@ -301,7 +277,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
         struct Strokes {
             strokes: Vec<filigree::pixel::Stroke>,
         }
-        let s: Strokes = serde_json::from_slice(super::bench::fixture("fish_strokes.json")?)
+        let s: Strokes = serde_json::from_slice(super::measure::fixture("fish_strokes.json")?)
             .map_err(|e| e.to_string())?;
         let strokes = s
             .strokes
@@ -319,7 +295,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
                 height: h,
                 bits: vec![1; (w * h) as usize],
             },
-            sheet: Some(super::bench::fixture("fish_scale.png")?.to_vec()),
+            sheet: Some(super::measure::fixture("fish_scale.png")?.to_vec()),
             sprite: None,
             strokes,
             params: filigree::pixel::PixelParams {
@@ -432,8 +408,8 @@ fn big_project() -> Result<String, String> {
         serde_json::to_value(filigree::pixel::PixelParams::default()).map_err(|e| e.to_string())?;
     let state = json!({
         "example": null,
-        "source": b(super::bench::fixture("fish.png")?),
-        "sheet": b(super::bench::fixture("fish_scale.png")?),
+        "source": b(super::measure::fixture("fish.png")?),
+        "sheet": b(super::measure::fixture("fish_scale.png")?),
         "sprite": null,
         "mask": {"width": side, "height": side, "bits": b(&bits)},
         "strokes": strokes,

@@ -67,14 +67,14 @@ struct Secs {
 }
 
 fn timed(req: TangleRequest) -> Result<(TangleResponse, Secs, bool), String> {
-    let c = super::slices_bench::thread_cpu_ms();
+    let c = super::measure::thread_cpu_ms();
     let t = Instant::now();
     let job = start_tangle(req).map_err(|e| e.to_string())?;
     let reused = job.reused();
     let r = run_to_end(job, &Cancel::new(), |_| {}).map_err(|e| e.to_string())?;
     let wall = t.elapsed().as_secs_f64();
     let cpu = c
-        .zip(super::slices_bench::thread_cpu_ms())
+        .zip(super::measure::thread_cpu_ms())
         .map(|(a, b)| (b - a) * 1e-3);
     Ok((r, Secs { wall, cpu }, reused))
 }

@@ -97,6 +97,37 @@ impl Cancel {
     }
 }
 
+/// Where a job stopped when advanced.
+pub(crate) enum Halt<T> {
+    /// It handed in its part of an exchange.
+    Exchange(Vec<f64>),
+    /// It finished.
+    Done(T),
+}
+
+/// Step `job` until it asks for an exchange or finishes (the loop of
+/// [`run_to_end`], and of each shard in [`crate::core::parallel`]).
+pub(crate) fn advance<J: Job>(
+    job: &mut J,
+    cancel: &Cancel,
+    on_progress: &mut dyn FnMut(&Progress),
+) -> Result<Halt<J::Output>> {
+    loop {
+        if cancel.is_cancelled() {
+            return Err(Error::Cancelled);
+        }
+        match job.step()? {
+            Step::Running(p) => {
+                on_progress(&p);
+                if let Some(part) = job.outbox() {
+                    return Ok(Halt::Exchange(part));
+                }
+            }
+            Step::Done(out) => return Ok(Halt::Done(out)),
+        }
+    }
+}
+
 /// Drive `job` to completion natively, reporting progress after each slice and
 /// checking `cancel` between slices. A job that asks for an exchange with
 /// sibling shards ([`Job::outbox`]) cannot be finished alone: that is an
@@ -106,9 +137,9 @@ pub fn run_to_end<J: Job>(
     cancel: &Cancel,
     mut on_progress: impl FnMut(&Progress),
 ) -> Result<J::Output> {
-    match crate::core::parallel::advance(&mut job, cancel, &mut on_progress)? {
-        crate::core::parallel::Halt::Done(out) => Ok(out),
-        crate::core::parallel::Halt::Exchange(_) => Err(Error::input(
+    match advance(&mut job, cancel, &mut on_progress)? {
+        Halt::Done(out) => Ok(out),
+        Halt::Exchange(_) => Err(Error::input(
             "this job is one shard of a parallel run and asks to exchange data with \
              its siblings; drive it with core::parallel::run_sharded",
         )),

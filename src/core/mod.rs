@@ -6,3 +6,4 @@ pub mod limits;
 pub mod parallel;
 pub mod request_limits;
 pub mod rng;
+pub mod value;

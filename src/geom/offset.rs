@@ -357,6 +357,22 @@ fn assemble(outers: Vec<Ring>, holes: Vec<Ring>) -> Vec<Polygon> {
     polys
 }
 
+// The method lives beside the engine it runs, so `polygon` does not import
+// this module back (tests/layers.rs).
+impl Polygon {
+    /// The polygon shrunk by `d` > 0: none when it vanishes, several when
+    /// it pinches off. By `cavalier_contours` ([`inset`]:
+    /// the points farther than `d` from the boundary, so sharp at convex
+    /// corners and round at reflex ones); a polygon that engine cannot take
+    /// (rings wound the wrong way) goes through [`Polygon::offset`].
+    pub fn inset(&self, d: f64) -> Vec<Polygon> {
+        if !(d.is_finite() && d > 0.0) {
+            return self.offset(-d);
+        }
+        inset(self, d).unwrap_or_else(|| self.offset(-d))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

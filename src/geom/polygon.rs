@@ -297,18 +297,6 @@ impl Polygon {
         from_shapes(self.rings.slice_by(&paths, FillRule::NonZero))
     }
 
-    /// The polygon shrunk by `d` > 0: none when it vanishes, several when
-    /// it pinches off. By `cavalier_contours` ([`super::offset::inset`]:
-    /// the points farther than `d` from the boundary, so sharp at convex
-    /// corners and round at reflex ones); a polygon that engine cannot take
-    /// (rings wound the wrong way) goes through [`Polygon::offset`].
-    pub fn inset(&self, d: f64) -> Vec<Polygon> {
-        if !(d.is_finite() && d > 0.0) {
-            return self.offset(-d);
-        }
-        super::offset::inset(self, d).unwrap_or_else(|| self.offset(-d))
-    }
-
     /// The polygon grown (`d` > 0) or shrunk (`d` < 0) by `|d|`, corners
     /// mitred (bevelled where sharper than 30°).
     pub fn offset(&self, d: f64) -> Vec<Polygon> {

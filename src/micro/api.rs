@@ -697,8 +697,6 @@ pub fn render_threads(
     tiles: u32,
     cancel: &crate::core::job::Cancel,
 ) -> Result<MicroRenderResponse> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::Mutex;
     // Check once (errors name the request's fields), then one job per band.
     let whole = start_render(req.clone())?.tile();
     let bands: Vec<Tile> = Tile::bands(whole.w, whole.h, tiles)
@@ -710,32 +708,17 @@ pub fn render_threads(
             h: b.h,
         })
         .collect();
-    let next = AtomicUsize::new(0);
-    type Part = Result<(Tile, Rgba8Image, Stats)>;
-    let parts: Mutex<Vec<Option<Part>>> = Mutex::new(vec![None; bands.len()]);
-    std::thread::scope(|s| {
-        for _ in 0..threads.clamp(1, bands.len().max(1)) {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(&t) = bands.get(i) else { break };
-                let r = start_render(MicroRenderRequest {
-                    tile: Some(Box::new(t)),
-                    ..req.clone()
-                })
-                .and_then(|job| job.run_rgba(cancel))
-                .map(|(img, st)| (t, img, st));
-                let failed = r.is_err();
-                parts.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(r);
-                if failed {
-                    break;
-                }
-            });
-        }
+    let parts = crate::core::parallel::par_map_threads(&bands, threads, |&t| {
+        start_render(MicroRenderRequest {
+            tile: Some(Box::new(t)),
+            ..req.clone()
+        })
+        .and_then(|job| job.run_rgba(cancel))
+        .map(|(img, st)| (t, img, st))
     });
-    let parts = parts.into_inner().unwrap_or_else(|e| e.into_inner());
     let mut done = Vec::with_capacity(parts.len());
     for p in parts {
-        done.push(p.unwrap_or(Err(Error::Cancelled))?);
+        done.push(p?);
     }
     // Shift the bands to the tile's own corner before assembling.
     let local: Vec<_> = done

@@ -12,7 +12,7 @@
 //! particle's bounding radius), so the field is `min(d_cells, C)`: exact
 //! wherever the true distance is below `C`, never above the true distance
 //! and 1-Lipschitz, so sphere tracing cannot overshoot.
-use super::scene::{bad, join, num, vec3, WORLD};
+use super::checks::{bad, join, num, vec3, WORLD};
 use crate::core::error::{Error, Result};
 use crate::core::limits::MAX_MICRO_TERMS;
 use crate::core::rng::Rng;

@@ -22,6 +22,7 @@
 //!   browser tool's document.
 pub mod api;
 pub mod cells;
+mod checks;
 pub mod examples;
 pub mod fit;
 pub mod fit_api;

@@ -3,7 +3,7 @@
 //! each divided by a bound of its gradient's magnitude so that it is
 //! 1-Lipschitz. No grid, no neighbour cells: one evaluation per point.
 //! Trigonometry is `libm`'s, so native and wasm agree bit for bit.
-use super::scene::{bad, join, num, WORLD};
+use super::checks::{bad, join, num, WORLD};
 use crate::core::error::Result;
 use crate::core::limits::MAX_MICRO_TERMS;
 use glam::DVec3;

@@ -14,6 +14,7 @@
 //! sphere tracing never overshoots. Errors are typed, name the field
 //! `scene` and, in the message, the node's path (`children.1.size.max`).
 use super::cells::{Lattice, Particles, Pile};
+pub(crate) use super::checks::{bad, join, num, vec3, WORLD};
 use super::periodic::{Periodic, Tpms};
 use crate::core::error::{Error, Result};
 use crate::core::limits::{
@@ -140,46 +141,6 @@ pub struct Scene {
     /// Node count.
     pub nodes: usize,
 }
-
-/// Build error about `scene` at node path `path`.
-pub(crate) fn bad(path: &str, msg: impl std::fmt::Display) -> Error {
-    let at = if path.is_empty() {
-        "the scene".to_string()
-    } else {
-        format!("scene node `{path}`")
-    };
-    Error::input(format!("{at}: {msg}")).at("scene")
-}
-
-pub(crate) fn join(path: &str, seg: impl std::fmt::Display) -> String {
-    if path.is_empty() {
-        seg.to_string()
-    } else {
-        format!("{path}.{seg}")
-    }
-}
-
-/// `v` finite and within `lo..=hi`, else an error naming `path.name`.
-pub(crate) fn num(path: &str, name: &str, v: f64, lo: f64, hi: f64) -> Result<f64> {
-    if v.is_finite() && v >= lo && v <= hi {
-        Ok(v)
-    } else {
-        Err(bad(
-            &join(path, name),
-            format!("must be a finite number in {lo}..={hi} (got {v})"),
-        ))
-    }
-}
-
-pub(crate) fn vec3(path: &str, name: &str, v: [f64; 3], lo: f64, hi: f64) -> Result<DVec3> {
-    for (i, x) in v.iter().enumerate() {
-        num(path, &format!("{name}.{i}"), *x, lo, hi)?;
-    }
-    Ok(DVec3::from_array(v))
-}
-
-/// Coordinates and lengths of a scene live in ±1e6 world units.
-pub(crate) const WORLD: f64 = 1e6;
 
 /// Deepest JSON nesting (objects and arrays) of scene text: a node nests
 /// at most two levels per scene level (`children` list + object), plus the

@@ -1,6 +1,6 @@
 //! The Micro tool's document (what the page keeps, autosaves, saves in a
 //! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::api::project`]). Field names are the page's:
+//! field (see [`crate::core::value`]). Field names are the page's:
 //!
 //! ```text
 //! { example: name | null, scene: text,
@@ -23,9 +23,9 @@
 use super::api::{MicroRenderRequest, MAX_MICRO_SPP};
 use super::examples::EXAMPLES;
 use super::render::{Shading, StepMode};
-use crate::api::project::{invalid, nullish, Value};
 use crate::core::error::Result;
 use crate::core::limits::MAX_MICRO_SCENE_BYTES;
+use crate::core::value::{invalid, nullish, Value};
 use serde::Serialize;
 
 /// Schema version of the Micro state (the page's `state.version`).

@@ -17,7 +17,7 @@
 //! reports both.
 use super::field::{Evaluator, Grid, Scene};
 use super::record::Canvas;
-use super::target::Target;
+use super::target::{coverage, Target};
 use serde::{Deserialize, Serialize};
 use wide::{f64x4, CmpGt, CmpNe};
 
@@ -134,17 +134,6 @@ pub(crate) fn normals_rows(
             });
         }
     }
-}
-
-/// The fraction of a pixel a colour covers, from the colour's signed
-/// distance at the pixel's centre in pixels of the grid: 1 − (d + ½)
-/// clamped to [0, 1], the box filter's coverage of a straight edge across
-/// the pixel along an axis. The image-space loss reads the pattern's and
-/// the target's coverage both through this, so at the truth they agree
-/// wherever the two fields do.
-#[inline]
-pub(crate) fn coverage(d_px: f64) -> f64 {
-    (0.5 - d_px).clamp(0.0, 1.0)
 }
 
 /// One 3×3 binomial blur + decimation by two of a `w × h` field, clamped

@@ -1,6 +1,6 @@
 //! The Fit tool's document (what the page keeps, autosaves, saves in a
 //! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::api::project`]). Field names are the page's:
+//! field (see [`crate::core::value`]). Field names are the page's:
 //!
 //! ```text
 //! { generator: name | null, program: text, values: [number],
@@ -17,9 +17,9 @@
 //! uploads kept their aspect hold 256 × 256 targets, which still check.
 use super::fit::Budget;
 use super::loss::LossKind;
-use crate::api::project::{invalid, js_len, js_text, Value, MAX_SAFE_INTEGER};
 use crate::core::error::Result;
 use crate::core::limits::MAX_PROGRAM_BYTES;
+use crate::core::value::{invalid, js_len, js_text, Value, MAX_SAFE_INTEGER};
 use serde::de::value::{Error as DeError, StrDeserializer};
 use serde::{Deserialize, Serialize};
 

@@ -23,7 +23,6 @@
 //! The distance transforms themselves are shared:
 //! [`crate::geom::distance_transform`], [`crate::geom::aa_distance`].
 use super::field::{edge_cap, Evaluator, Grid, Scene, CAP};
-use super::loss::coverage;
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
 use crate::geom::aa_distance::{AaDistance, HARD};
@@ -733,6 +732,17 @@ fn edge_clamp(v: f64, x: usize, y: usize, grid: &Grid, scale: f64) -> f64 {
 /// mean size (square pixels when the raster has the canvas's aspect).
 fn fine_pixel(grid: &Grid, fw: usize, fh: usize) -> f64 {
     (grid.canvas.w * grid.canvas.h).sqrt() / ((fw * fh) as f64).sqrt()
+}
+
+/// The fraction of a pixel a colour covers, from the colour's signed
+/// distance at the pixel's centre in pixels of the grid: 1 − (d + ½)
+/// clamped to [0, 1], the box filter's coverage of a straight edge across
+/// the pixel along an axis. The image-space loss reads the pattern's and
+/// the target's coverage both through this, so at the truth they agree
+/// wherever the two fields do.
+#[inline]
+pub(crate) fn coverage(d_px: f64) -> f64 {
+    (0.5 - d_px).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! The Pixel tool's document (what the page keeps, autosaves, saves in a
 //! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::api::project`]). Field names are the page's:
+//! field (see [`crate::core::value`]). Field names are the page's:
 //!
 //! ```text
 //! { example: "fish" | "trunk" | null, source: bytes, sheet: bytes | null,
@@ -13,12 +13,12 @@
 //! image side and stroke points the core's limits ([`crate::core::limits`]).
 use super::api::MaskBits;
 use super::{ColourStrategy, Direction8, ElementColour, PixelParams, PositionStrategy};
-use crate::api::project::{
-    first_chars, invalid, js_len, js_number, js_text, nullish, Value, MAX_SAFE_INTEGER,
-};
 use crate::core::error::{Error, Result};
 use crate::core::limits::{MAX_IMAGE_SIDE, MAX_STROKE_POINTS};
 use crate::core::request_limits as lim;
+use crate::core::value::{
+    first_chars, invalid, js_len, js_number, js_text, nullish, Value, MAX_SAFE_INTEGER,
+};
 use serde::de::value::{Error as DeError, StrDeserializer};
 use serde::{Deserialize, Serialize};
 

@@ -1,6 +1,6 @@
 //! The Tangle tool's document (what the page keeps, autosaves, saves in a
 //! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::api::project`]). Field names are the page's:
+//! field (see [`crate::core::value`]). Field names are the page's:
 //!
 //! ```text
 //! { example: name | null, grammar: text, seed,
@@ -15,8 +15,8 @@
 //! the document as the request, so the ranges here are the request's own.
 use super::api::{Edit, StartRequest, MAX_EDITS, MAX_START_POINTS, MAX_STEPS};
 use super::examples::EXAMPLES;
-use crate::api::project::{invalid, js_len, nullish, Value, MAX_SAFE_INTEGER};
 use crate::core::error::Result;
+use crate::core::value::{invalid, js_len, nullish, Value, MAX_SAFE_INTEGER};
 use serde::Serialize;
 use std::collections::BTreeMap;
 

@@ -16,10 +16,11 @@
 //!
 //! Everything is deterministic: the same settings give the same bytes.
 use super::dataset::{self, DatasetConfig, Sample as DataSample};
-use super::index::{par_map, Index, IndexConfig, Training};
+use super::index::{Index, IndexConfig, Training};
 use super::models::MODELS;
 use super::scales::{self, Rating, ScaleQuantiles};
 use crate::core::error::Result;
+use crate::core::parallel::par_map;
 use crate::core::rng::Rng;
 use serde::{Deserialize, Serialize};
 

@@ -304,36 +304,13 @@ pub fn build(config: &DatasetConfig) -> Result<Vec<Sample>> {
 #[cfg(not(target_arch = "wasm32"))]
 pub fn build_threads(config: &DatasetConfig, threads: usize) -> Result<Vec<Sample>> {
     let specs = plan(config)?;
-    let t = threads.clamp(1, 64);
-    type Part = Result<Vec<(usize, Vec<Sample>)>>;
-    let parts: Vec<Part> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..t)
-            .map(|k| {
-                let specs = &specs;
-                s.spawn(move || {
-                    specs
-                        .iter()
-                        .enumerate()
-                        .filter(|(i, _)| i % t == k)
-                        .map(|(i, spec)| Ok((i, render_base(config, spec)?)))
-                        .collect()
-                })
-            })
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join()
-                    .unwrap_or_else(|_| Err(Error::input("a dataset thread panicked")))
-            })
-            .collect()
-    });
-    let mut all: Vec<(usize, Vec<Sample>)> = Vec::with_capacity(specs.len());
+    let parts =
+        crate::core::parallel::par_map_threads(&specs, threads, |spec| render_base(config, spec));
+    let mut all = Vec::new();
     for p in parts {
         all.extend(p?);
     }
-    all.sort_by_key(|(i, _)| *i);
-    Ok(all.into_iter().flat_map(|(_, v)| v).collect())
+    Ok(all)
 }
 
 /// The dataset as a resumable job: one base sample per step.

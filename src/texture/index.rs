@@ -34,6 +34,7 @@ use super::pcn::{Pcn, PcnConfig};
 use super::scales::ScaleQuantiles;
 use super::Gray;
 use crate::core::error::{Error, Result};
+use crate::core::parallel::par_map;
 use serde::{Deserialize, Serialize};
 
 pub use super::scales::SCALE_NAMES as SCALES;
@@ -251,49 +252,6 @@ pub struct Retrieval {
     pub point: [f32; 3],
     /// Cosine similarity of the requested and the retrieved scales.
     pub cosine: f64,
-}
-
-/// Maps `f` over `items` on all cores natively (one thread in wasm),
-/// keeping the order. Each thread takes the next item when it is free, so
-/// items of very different cost (an SVM that converges in 50 epochs beside
-/// one that needs 1,000) keep every core busy; which thread computes an
-/// item never changes its result.
-pub fn par_map<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync) -> Vec<U> {
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        use std::sync::atomic::{AtomicUsize, Ordering};
-        let threads = std::thread::available_parallelism()
-            .map_or(1, |n| n.get())
-            .min(items.len().max(1));
-        if threads > 1 {
-            let next = AtomicUsize::new(0);
-            let work = || {
-                let mut mine = Vec::new();
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(item) = items.get(i) else { break };
-                    mine.push((i, f(item)));
-                }
-                mine
-            };
-            let done: Vec<(usize, U)> = std::thread::scope(|s| {
-                let handles: Vec<_> = (0..threads).map(|_| s.spawn(work)).collect();
-                handles
-                    .into_iter()
-                    .flat_map(|h| h.join().expect("a worker thread panicked"))
-                    .collect()
-            });
-            let mut out: Vec<Option<U>> = (0..items.len()).map(|_| None).collect();
-            for (i, u) in done {
-                out[i] = Some(u);
-            }
-            return out
-                .into_iter()
-                .map(|u| u.expect("every item mapped"))
-                .collect();
-        }
-    }
-    items.iter().map(f).collect()
 }
 
 fn to_unit(s: &[u8; 12], subset: &[u8]) -> Vec<f32> {

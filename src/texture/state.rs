@@ -1,6 +1,6 @@
 //! The Texture tool's document (what the page keeps, autosaves, saves in a
 //! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::api::project`]). Field names are the page's:
+//! field (see [`crate::core::value`]). Field names are the page's:
 //!
 //! ```text
 //! { source: null
@@ -36,8 +36,8 @@
 //! 2^53 − 1 (a page's number holds them exactly).
 use super::index::SCALES;
 use super::models::{self, Model};
-use crate::api::project::{invalid, Value, MAX_SAFE_INTEGER};
 use crate::core::error::Result;
+use crate::core::value::{invalid, Value, MAX_SAFE_INTEGER};
 use serde::Serialize;
 
 /// Schema version of the Texture state (the page's `state.version`).

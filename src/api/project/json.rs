@@ -16,9 +16,9 @@
 //! [`VALUE_COST`]; [`Reader::step`] stops when its fuel is spent, in the
 //! middle of a string, a number or the base64 of a `$bytes` field if need
 //! be, and goes on from there at the next call.
-use super::{too_deep, too_many, Value};
 use crate::core::error::{Error, Result};
 use crate::core::limits;
+use crate::core::value::{too_deep, too_many, Value};
 use std::collections::HashMap;
 
 /// Fuel one value costs besides its bytes (a number is parsed, a value
@@ -26,7 +26,7 @@ use std::collections::HashMap;
 pub const VALUE_COST: usize = 16;
 
 /// The message of a `$bytes` field that is not base64 (as [`Value::read`]).
-pub const NOT_BASE64: &str = "the project holds image data that is not valid base64";
+pub use crate::core::value::NOT_BASE64;
 
 /// Read `text` in one go with serde_json ([`Value::read`], `project =
 /// true`, then nothing but whitespace may follow): the reference the

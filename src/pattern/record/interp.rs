@@ -4,8 +4,6 @@
 //! [`Rec::enter`], so one depth budget bounds the stack.
 use super::super::lang::{BinOp, Call, Expr, FnDecl, Pos, Stmt, MAX_DEPTH};
 use super::super::tape::{apply, Op, StepFn, Tape};
-use super::path::PathB;
-use super::transform::Xf;
 use super::{Geom, Prim, RecordLimits, Rgb, Shape};
 use crate::core::error::{Error, Result};
 use crate::pattern::lang::Ast;
@@ -610,5 +608,42 @@ impl<'a> Rec<'a> {
             Flow::Return(Some(v), _) => v,
             _ => Val::Num(V::C(0.0)),
         })
+    }
+}
+
+// The path builder's and the transform's data live here with the rest of
+// the recorder's state; their methods are in `path.rs` and `transform.rs`.
+
+/// A path being built.
+pub(super) struct PathB {
+    pub(super) start: (V, V),
+    pub(super) cur: (V, V),
+    pub(super) first: u32,
+    pub(super) started: bool,
+    pub(super) closed: bool,
+}
+
+/// The current transform (rotation by `angle`, uniform `scale`, then translation).
+#[derive(Clone, Copy)]
+pub(super) struct Xf {
+    pub(super) cos: V,
+    pub(super) sin: V,
+    pub(super) angle: V,
+    pub(super) scale: V,
+    pub(super) tx: V,
+    pub(super) ty: V,
+}
+
+impl Xf {
+    /// No transform.
+    pub(super) fn identity() -> Xf {
+        Xf {
+            cos: V::C(1.0),
+            sin: V::C(0.0),
+            angle: V::C(0.0),
+            scale: V::C(1.0),
+            tx: V::C(0.0),
+            ty: V::C(0.0),
+        }
     }
 }

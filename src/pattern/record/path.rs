@@ -6,15 +6,6 @@ use super::interp::{Rec, V};
 use crate::core::error::Result;
 use crate::geom::bezier::cubic_piece_weights;
 
-/// A path being built.
-pub(super) struct PathB {
-    pub(super) start: (V, V),
-    pub(super) cur: (V, V),
-    pub(super) first: u32,
-    pub(super) started: bool,
-    pub(super) closed: bool,
-}
-
 impl Rec<'_> {
     pub(super) fn path_cmd(&mut self, c: &Call) -> Result<()> {
         self.at = c.pos;

@@ -2,8 +2,8 @@
 //! to an enclosing boolean block), primitives with their limits.
 use super::super::lang::{Arg, Call, Pos};
 use super::super::sdf::PrimKind;
+use super::interp::PathB;
 use super::interp::{Named, Rec, Val, V};
-use super::path::PathB;
 use super::{colour_error, parse_colour, BoolOp, Geom, Prim, Shape};
 use crate::core::error::{Error, Result};
 use std::collections::HashMap;

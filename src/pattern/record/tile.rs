@@ -36,8 +36,8 @@
 //! in canvas coordinates (transforms inside the block are fine).
 use super::super::lang::Call;
 use super::super::sdf::PrimKind;
+use super::interp::Xf;
 use super::interp::{Flow, Rec, Val, V};
-use super::transform::Xf;
 use crate::core::error::{Error, Result};
 use std::collections::HashMap;
 

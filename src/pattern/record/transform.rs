@@ -2,33 +2,8 @@
 //! applied to points and lengths as shapes are emitted.
 use super::super::lang::Call;
 use super::super::tape::Op;
-use super::interp::{Flow, Rec, V};
+use super::interp::{Flow, Rec, Xf, V};
 use crate::core::error::Result;
-
-/// The current transform (rotation by `angle`, uniform `scale`, then translation).
-#[derive(Clone, Copy)]
-pub(super) struct Xf {
-    pub(super) cos: V,
-    pub(super) sin: V,
-    pub(super) angle: V,
-    pub(super) scale: V,
-    pub(super) tx: V,
-    pub(super) ty: V,
-}
-
-impl Xf {
-    /// No transform.
-    pub(super) fn identity() -> Xf {
-        Xf {
-            cos: V::C(1.0),
-            sin: V::C(0.0),
-            angle: V::C(0.0),
-            scale: V::C(1.0),
-            tx: V::C(0.0),
-            ty: V::C(0.0),
-        }
-    }
-}
 
 impl Rec<'_> {
     pub(super) fn xf_point(&mut self, x: V, y: V) -> (V, V) {

@@ -517,7 +517,7 @@ impl OneVsRest {
         classes.dedup();
         let mean = column_mean(rows);
         let centred: Vec<Vec<f32>> = rows.iter().map(|r| minus(r, &mean)).collect();
-        let machines = crate::texture::index::par_map(&classes, |&k| {
+        let machines = crate::core::parallel::par_map(&classes, |&k| {
             let pos: Vec<bool> = labels.iter().map(|&l| l == k).collect();
             train_linear_svc(&centred, &pos, c, k as u64).uncentred(&mean)
         });
