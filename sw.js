@@ -13,9 +13,13 @@ const scopeUrl = (rel) => new URL(rel, self.registration.scope).href;
 self.addEventListener('install', (event) => {
   event.waitUntil((async () => {
     const cache = await caches.open(CACHE);
-    // cache: 'reload' bypasses the HTTP cache so the revision we list is the one we store.
+    // cache: 'no-cache' revalidates every file with the server, so what we
+    // store is the server's current file (the revision we list), never a
+    // stale copy; but a file the page has just downloaded (the core of the
+    // tool it shows) is not downloaded twice: the server answers 304 to its
+    // ETag and the HTTP cache's copy is stored.
     await Promise.all(files.map(async ({ url }) => {
-      const res = await fetch(scopeUrl(url), { cache: 'reload' });
+      const res = await fetch(scopeUrl(url), { cache: 'no-cache' });
       if (!res.ok) throw new Error(`precache: ${url} answered ${res.status}`);
       await cache.put(scopeUrl(url), res);
     }));

@@ -1,35 +1,47 @@
 #!/usr/bin/env bash
-# Release wasm build: cargo → wasm-opt → wasm-bindgen --target web → pkg/, then the
-# code editor bundle (scripts/bundle-editor.mjs) and the service worker's
-# precache manifest (content hashes of every shipped file).
+# Release wasm build: one module per tool (the `filigree-wasm` crate in
+# src/wasm/, one feature per tool) → wasm-opt → wasm-bindgen --target web →
+# pkg/filigree_<tool>.js + pkg/filigree_<tool>_bg.wasm; then the code editor
+# bundle (scripts/bundle-editor.mjs) and the service worker's precache
+# manifest (content hashes of every shipped file). The library is compiled
+# once; each tool's build links it, and link-time optimisation keeps only
+# what that tool's `start_job` reaches.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-cargo build --release --lib --target wasm32-unknown-unknown --no-default-features --features web
-wasm=target/wasm32-unknown-unknown/release/filigree.wasm
-# Smaller and faster: binaryen's optimiser, run on cargo's output BEFORE
-# wasm-bindgen. (After it, Debian's wasm-opt 108 rewrites the export of
-# wasm-bindgen's externref table to point at the function table, and every
-# call that passes a JS value fails.) wasm-opt 108 needs the features today's
-# Rust output uses named explicitly. FILIGREE_WASM_OPT=0 skips it.
-if [ "${FILIGREE_WASM_OPT:-1}" != 0 ]; then
-  mkdir -p target/wasm-opt
-  wasm-opt -O3 --enable-simd --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-    --enable-mutable-globals --enable-reference-types "$wasm" -o target/wasm-opt/filigree.wasm
-  echo "build: wasm-opt -O3 $(stat -c %s "$wasm") → $(stat -c %s target/wasm-opt/filigree.wasm) bytes"
-  wasm=target/wasm-opt/filigree.wasm
-fi
+MODULES="inspect pixel fit tangle micro texture"
+out=target/wasm32-unknown-unknown/release/filigree_wasm.wasm
+mkdir -p target/wasm-modules
 rm -rf pkg
-wasm-bindgen --target web --no-typescript --out-dir pkg "$wasm"
+for m in $MODULES; do
+  cargo build --release -p filigree-wasm --target wasm32-unknown-unknown --features "$m"
+  wasm="target/wasm-modules/filigree_$m.wasm"
+  cp "$out" "$wasm"
+  # Smaller and faster: binaryen's optimiser, run on cargo's output BEFORE
+  # wasm-bindgen. (After it, Debian's wasm-opt 108 rewrites the export of
+  # wasm-bindgen's externref table to point at the function table, and every
+  # call that passes a JS value fails.) wasm-opt 108 needs the features today's
+  # Rust output uses named explicitly. FILIGREE_WASM_OPT=0 skips it.
+  if [ "${FILIGREE_WASM_OPT:-1}" != 0 ]; then
+    wasm-opt -O3 --enable-simd --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
+      --enable-mutable-globals --enable-reference-types "$wasm" -o "$wasm.opt"
+    echo "build: $m: wasm-opt -O3 $(stat -c %s "$wasm") → $(stat -c %s "$wasm.opt") bytes"
+    mv "$wasm.opt" "$wasm"
+  fi
+  wasm-bindgen --target web --no-typescript --out-dir pkg --out-name "filigree_$m" "$wasm"
+done
 node scripts/bundle-editor.mjs
 node scripts/precache.mjs
-# FILIGREE_TEST_HOOKS=1: also a core with the test-only request kinds
-# (`debug-abort`, feature test-hooks) in pkg-test/, which the e2e tests that
-# need a deliberate crash serve in place of pkg/. pkg/ never has them.
+# FILIGREE_TEST_HOOKS=1: also an Inspect module with the test-only request
+# kind `debug-abort` (feature test-hooks) in pkg-test/, which the e2e tests
+# that need a deliberate crash serve in place of pkg/'s. pkg/ never has it.
 if [ "${FILIGREE_TEST_HOOKS:-}" = 1 ]; then
-  cargo build --release --lib --target wasm32-unknown-unknown --no-default-features --features web,test-hooks
+  cargo build --release -p filigree-wasm --target wasm32-unknown-unknown --features inspect,test-hooks
   rm -rf pkg-test
-  wasm-bindgen --target web --no-typescript --out-dir pkg-test target/wasm32-unknown-unknown/release/filigree.wasm
+  wasm-bindgen --target web --no-typescript --out-dir pkg-test --out-name filigree_inspect "$out"
   echo "build: pkg-test/ ready (test hooks)"
 fi
-echo "build: pkg/ ready ($(du -k pkg/filigree_bg.wasm | cut -f1) KiB wasm)"
+for m in $MODULES; do
+  printf 'build: pkg/filigree_%s_bg.wasm %d KiB (%d KiB gzipped)\n' "$m" \
+    $(( $(stat -c %s "pkg/filigree_${m}_bg.wasm") / 1024 )) $(( $(gzip -9c "pkg/filigree_${m}_bg.wasm" | wc -c) / 1024 ))
+done

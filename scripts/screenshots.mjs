@@ -15,7 +15,7 @@ const SIZES = {
 const VIEWS = ['', '#tool=pixel', '#tool=fit', '#tool=inspect', '#tool=tangle', '#tool=micro', '#tool=texture'];
 // What "ready" means per view: the example's result is on screen.
 const READY = {
-  '': () => document.querySelectorAll('.home-preview[data-ready]').length === 3,
+  '': () => document.querySelectorAll('.home-preview[data-ready]').length === 6,
   '#tool=pixel': () => document.querySelector('[data-testid=pixel-status]')?.dataset.runs,
   '#tool=fit': () => document.querySelector('[data-testid=fit-sliders] input'),
   '#tool=inspect': () => document.querySelector('[data-testid=drop-zone]'),

@@ -907,12 +907,12 @@ fn a_sharded_fit_equals_one_fit() {
 /// pixel) matches `tests/golden/fit/<name>.png` within a small tolerance
 /// (at most 0.1% of pixels may differ, by at most 8 per channel: float
 /// rounding on anti-aliased edges) and `tests/golden/fit/<name>.svg`
-/// exactly. `REPLACE=1 cargo test --test fit golden` rewrites them; look at
+/// exactly. ``bash scripts/bless.sh fit`` rewrites them; look at
 /// the new PNGs before committing them.
 #[test]
 fn generators_match_their_golden_renders() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden/fit");
-    let replace = std::env::var_os("REPLACE").is_some();
+    let replace = std::env::var("FILIGREE_BLESS").is_ok_and(|v| v == "1");
     let mut failures = vec![];
     for g in GENERATORS {
         let req = filigree::pattern::api::RenderPatternRequest {
@@ -945,7 +945,7 @@ fn generators_match_their_golden_renders() {
             continue;
         }
         let want = decode(
-            &std::fs::read(&png_path).expect("golden missing: run with REPLACE=1"),
+            &std::fs::read(&png_path).expect("golden missing: run with FILIGREE_BLESS=1"),
             Limits::default(),
         )
         .unwrap();
@@ -969,7 +969,7 @@ fn generators_match_their_golden_renders() {
             ));
         }
         let want_svg =
-            std::fs::read_to_string(&svg_path).expect("golden missing: run with REPLACE=1");
+            std::fs::read_to_string(&svg_path).expect("golden missing: run with FILIGREE_BLESS=1");
         if want_svg != r.svg {
             failures.push(format!(
                 "{}: the SVG differs from {}",
@@ -980,7 +980,7 @@ fn generators_match_their_golden_renders() {
     }
     assert!(
         failures.is_empty(),
-        "{}\n(REPLACE=1 rewrites the goldens if the change is intended)",
+        "{}\n(FILIGREE_BLESS=1 rewrites the goldens if the change is intended)",
         failures.join("\n")
     );
 }

@@ -1,7 +1,7 @@
 //! Integration tests of pixel-art texturing on the fixture cases
 //! (`assets/pixel/cases.json`) and hand-made inputs.
 //!
-//! `REPLACE=1 cargo test --test pixel` rewrites `tests/golden/pixel/fish.png`
+//! `bash scripts/bless.sh pixel` rewrites `tests/golden/pixel/fish.png`
 //! and `trunk.png` (the two shipped cases at their parameters, seed 7).
 // Index loops mirror the maths (rows, pixels) more plainly than iterator chains here.
 #![allow(clippy::needless_range_loop)]
@@ -314,22 +314,22 @@ fn same_seed_same_bytes_and_golden_fish() {
     check_golden("fish", &a.image);
 }
 
-/// Compare with `tests/golden/pixel/<name>.png` (REPLACE=1 rewrites it).
+/// Compare with `tests/golden/pixel/<name>.png` (FILIGREE_BLESS=1 rewrites it).
 fn check_golden(name: &str, img: &Rgba8Image) {
     let golden =
         Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/pixel/{name}.png"));
-    if std::env::var_os("REPLACE").is_some() {
+    if std::env::var("FILIGREE_BLESS").is_ok_and(|v| v == "1") {
         std::fs::create_dir_all(golden.parent().unwrap()).unwrap();
         std::fs::write(&golden, encode_png(img).unwrap()).unwrap();
     }
     let want = decode(
-        &std::fs::read(&golden).expect("golden missing: run with REPLACE=1"),
+        &std::fs::read(&golden).expect("golden missing: run with FILIGREE_BLESS=1"),
         Limits::default(),
     )
     .unwrap();
     assert!(
         want == *img,
-        "{name} differs from tests/golden/pixel/{name}.png (REPLACE=1 rewrites it if the change is intended)"
+        "{name} differs from tests/golden/pixel/{name}.png (FILIGREE_BLESS=1 rewrites it if the change is intended)"
     );
 }
 

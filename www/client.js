@@ -1,14 +1,36 @@
 // Main-thread side of the worker protocol: a pool of module workers, each
-// with its own single-threaded wasm instance (no SharedArrayBuffer, so the
+// with its own single-threaded wasm instances (no SharedArrayBuffer, so the
 // app embeds anywhere). Workers start lazily and are replaced when they crash.
+// The core is one wasm module per tool (protocol.js MODULE_KINDS): the pool
+// fetches and compiles a module the first time a job needs it, once per
+// page, and hands the compiled WebAssembly.Module to each worker with the
+// job, so a page downloads only the tools it uses, each once (several embeds
+// on a page share the download through the HTTP cache).
 //
-//   const result = await pool.run('inspect', {bytes}, {onProgress, signal});
-import { MSG, JobError, transferables } from './protocol.js';
+//   const result = await pool.run('inspect', {bytes}, {onProgress, signal, module});
+import { MSG, JobError, moduleFor, moduleUrl, transferables } from './protocol.js';
 
 const WORKER_URL = new URL('./worker.js', import.meta.url);
 // After a cancel, a job has this long to stop at a slice boundary before
 // its worker is terminated (the hard stop).
 const HARD_STOP_MS = 1000;
+
+// The core is built with WebAssembly SIMD; this smallest SIMD function
+// (i8x16.splat, i8x16.popcnt) validates only where SIMD is supported.
+const SIMD_PROBE = new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0, 1, 5, 1, 96, 0, 1, 123, 3, 2, 1, 0, 10, 10, 1, 8, 0, 65, 0, 253, 15, 253, 98, 11]);
+
+/** Fetch and compile a tool's wasm module (streaming where the server allows). */
+async function compileModule(name) {
+  if (!WebAssembly.validate(SIMD_PROBE)) {
+    throw new Error('this browser cannot run the core: it needs WebAssembly SIMD (Chrome 91+, Firefox 89+, Safari 16.4+)');
+  }
+  const res = await fetch(moduleUrl(name));
+  if (!res.ok) throw new Error(`${name} module: the server answered ${res.status}`);
+  if (WebAssembly.compileStreaming && res.headers.get('content-type')?.startsWith('application/wasm')) {
+    return WebAssembly.compileStreaming(res);
+  }
+  return WebAssembly.compile(await res.arrayBuffer());
+}
 
 /** A JobError from the worker's `{kind, message, line?, column?, field?}`. */
 function jobError(e) {
@@ -87,8 +109,8 @@ class Slot {
     this.ensureWorker();
     this.job = req;
     if (req.affinity) this.affinity = req.affinity;
-    const { id, kind, payload } = req;
-    this.worker.postMessage({ type: MSG.RUN, id, kind, payload }, req.transfer ?? transferables(payload));
+    const { id, kind, payload, module, wasm } = req;
+    this.worker.postMessage({ type: MSG.RUN, id, kind, payload, module, wasm }, req.transfer ?? transferables(payload));
   }
 
   cancel() {
@@ -113,11 +135,22 @@ export class WorkerPool {
     this.nextId = 1;
     this.onCrash = onCrash;
     this.onReady = onReady;
+    this.modules = new Map(); // name → Promise<WebAssembly.Module>
   }
 
-  /** Start the first worker now so the wasm downloads while the user looks around. */
+  /** Start the first worker now (no wasm: a module loads with its first job). */
   warm() {
     this.slots[0].ensureWorker();
+  }
+
+  /** The compiled module `name` (fetched and compiled once; a failure is retried next time). */
+  module(name) {
+    if (!this.modules.has(name)) {
+      const p = compileModule(name);
+      p.catch(() => this.modules.delete(name));
+      this.modules.set(name, p);
+    }
+    return this.modules.get(name);
   }
 
   /**
@@ -129,22 +162,35 @@ export class WorkerPool {
    * affinity, waiting for it if it is busy with one, so state the core keeps in
    * its instance (a `tangle` request's `keep`) is there for the next request.
    * Only a speed-up: any worker gives the same answer.
-   * @param {{onProgress?: Function, onNeed?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[], affinity?: string}} [opts]
+   * `module`: the tool module that runs a shared kind (protocol.js moduleFor;
+   * a tool's own kinds always run in its module).
+   * @param {{onProgress?: Function, onNeed?: Function, signal?: AbortSignal, transfer?: ArrayBuffer[], affinity?: string, module?: string}} [opts]
    */
-  run(kind, payload, { onProgress, onNeed, signal, transfer, affinity } = {}) {
+  run(kind, payload, { onProgress, onNeed, signal, transfer, affinity, module } = {}) {
     return new Promise((resolve, reject) => {
       if (signal?.aborted) {
         reject(new JobError('cancelled', 'cancelled'));
         return;
       }
-      const req = { id: this.nextId++, kind, payload, transfer, affinity, onProgress, onNeed, resolve, reject };
+      const name = moduleFor(kind, payload, module);
+      const req = { id: this.nextId++, kind, payload, module: name, transfer, affinity, onProgress, onNeed, resolve, reject };
       if (signal) {
         const onAbort = () => this.abort(req);
         signal.addEventListener('abort', onAbort, { once: true });
         req.cleanup = () => signal.removeEventListener('abort', onAbort);
       }
-      this.queue.push(req);
-      this.dispatch();
+      this.module(name).then((wasm) => {
+        if (req.aborted) return;
+        req.wasm = wasm;
+        this.queue.push(req);
+        this.dispatch();
+      }, (err) => {
+        if (req.aborted) return;
+        req.cleanup?.();
+        const message = `the core could not load: ${err?.message ?? err}`;
+        reject(new JobError(`${message}. Reload the page to try again.`, 'crash'));
+        this.onCrash?.(message);
+      });
     });
   }
 
@@ -190,6 +236,13 @@ export class WorkerPool {
   }
 
   abort(req) {
+    if (!req.wasm) {
+      // Still waiting for its module: it never reaches a worker.
+      req.aborted = true;
+      req.cleanup?.();
+      req.reject(new JobError('cancelled', 'cancelled'));
+      return;
+    }
     const queued = this.queue.indexOf(req);
     if (queued >= 0) {
       this.queue.splice(queued, 1);

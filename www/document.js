@@ -316,7 +316,7 @@ export class DocumentController {
         life.ctrl.signal.addEventListener('abort', abort, { once: true });
         opts.signal?.addEventListener('abort', abort, { once: true });
         if (opts.signal?.aborted) inner.abort();
-        return ctl.pool.run(kind, payload, { ...opts, signal: inner.signal }).then((r) => {
+        return ctl.pool.run(kind, payload, { module: tool.id, ...opts, signal: inner.signal }).then((r) => {
           if (life.dead) throw cancelled();
           return r;
         }).finally(() => {
@@ -454,7 +454,9 @@ export class DocumentController {
     let tool, state;
     try {
       const text = await file.text();
-      const opened = nulls(await this.pool.run('open-project', { text }));
+      // Read in the current tool's module (no other module loads for it); a
+      // project of another tool comes back unchecked and is checked in its own.
+      const opened = nulls(await this.pool.run('open-project', { text }, { module: this.current?.tool.id }));
       tool = this.tool(opened.tool);
       if (!tool?.state) throw new Error(`it is a project of a tool this Filigree does not have ('${opened.tool}')`);
       // An older state version comes back unchecked: migrate it, then check it.
@@ -493,7 +495,7 @@ export class DocumentController {
 
   /** A context for conversions outside a mounted panel (opening a link). */
   helperCtx(tool) {
-    return { pool: this.pool, run: (k, p, o) => this.pool.run(k, p, o), coreDefaults: () => coreDefaults(this.pool, tool.id) };
+    return { pool: this.pool, run: (k, p, o) => this.pool.run(k, p, { module: tool.id, ...o }), coreDefaults: () => coreDefaults(this.pool, tool.id) };
   }
 
   /** {tool, fragment} of the current document; throws ShareTooBig or an Error saying why it cannot be shared. */

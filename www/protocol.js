@@ -1,7 +1,12 @@
 // The worker protocol, documented once. Every message is a plain object.
 //
 // Page → worker
-//   {type: 'run', id, kind, payload}   start a job; `kind` is a request kind the
+//   {type: 'run', id, kind, payload, module, wasm}
+//                                      start a job in the wasm module `module`
+//                                      (a tool's: MODULE_KINDS below), whose
+//                                      compiled WebAssembly.Module the page
+//                                      sends as `wasm` (compiled once per page,
+//                                      shared by every worker); `kind` is a request kind the
 //                                      core knows ('inspect', 'pixel', 'fit', ...);
 //                                      byte inputs are Uint8Arrays whose buffers
 //                                      are transferred, not copied.
@@ -19,7 +24,7 @@
 //                                      the core merges, the page never does).
 //
 // Worker → page
-//   {type: 'ready', version}           the wasm core is loaded.
+//   {type: 'ready', version, module}   a tool's wasm module is loaded.
 //   {type: 'progress', id, progress: {fraction, stage, figure}}
 //                                      at most every ~15 ms while a job runs.
 //   {type: 'need', id, need}           the job must exchange data with sibling
@@ -52,6 +57,48 @@ export const MSG = Object.freeze({
   RUN: 'run', CANCEL: 'cancel', INPUT: 'input',
   READY: 'ready', PROGRESS: 'progress', NEED: 'need', RESULT: 'result', ERROR: 'error', PANIC: 'panic',
 });
+
+// The wasm modules, one per tool: the kinds only that module serves
+// (src/api/mod.rs `Module::kinds`; tests/modules.rs checks this table
+// against it). Every module also serves SHARED_KINDS.
+export const MODULE_KINDS = Object.freeze({
+  inspect: ['inspect', 'decode-image'],
+  pixel: ['pixel', 'pixel-mask'],
+  fit: ['fit', 'fit-eval', 'render-pattern', 'pattern-info', 'pattern-generators', 'pattern-snap'],
+  tangle: ['tangle', 'tangle-examples'],
+  micro: ['micro-render', 'micro-slice', 'micro-examples', 'micro-fit', 'micro-glsl'],
+  texture: ['texture-models', 'texture-render', 'texture-index', 'texture-analyse', 'texture-retrieve'],
+});
+export const SHARED_KINDS = Object.freeze(['defaults', 'check-state', 'open-project']);
+// The modules that also serve the Inspect module's kinds (they read images;
+// src/api/mod.rs `Module::images`).
+export const IMAGE_MODULES = Object.freeze(['inspect', 'pixel', 'fit', 'micro', 'texture']);
+
+/** The module of a request kind; null for a shared (or unknown) kind. */
+export function moduleOfKind(kind) {
+  for (const [m, kinds] of Object.entries(MODULE_KINDS)) if (kinds.includes(kind)) return m;
+  return null;
+}
+
+/**
+ * The module that runs `kind` with `payload`: the kind's own; for `defaults
+ * {tool}` the module of that kind; for `check-state {tool}` that tool's (a
+ * module checks only its own tool's documents); else `fallback` (the caller's
+ * tool, so a shared kind never loads another module), or 'inspect'. An image
+ * kind ('inspect', 'decode-image') runs in the caller's module when it reads
+ * images (IMAGE_MODULES).
+ */
+export function moduleFor(kind, payload, fallback) {
+  const own = moduleOfKind(kind);
+  if (own === 'inspect' && IMAGE_MODULES.includes(fallback)) return fallback;
+  if (own) return own;
+  if (kind === 'defaults') return moduleOfKind(payload?.tool) ?? fallback ?? 'inspect';
+  if (kind === 'check-state' && Object.hasOwn(MODULE_KINDS, payload?.tool)) return payload.tool;
+  return fallback ?? 'inspect';
+}
+
+/** The URL of a module's wasm (its JS glue is `filigree_<name>.js` beside it). */
+export const moduleUrl = (name, ext = '_bg.wasm') => new URL(`../pkg/filigree_${name}${ext}`, import.meta.url);
 
 // Wall-clock budget of one run of slices before the worker yields.
 export const SLICE_MS = 15;

@@ -1,7 +1,8 @@
-// The one module worker: loads the wasm core and serves the protocol in
-// protocol.js. One job at a time per worker; the pool runs several workers.
-import init, { start_job, version } from '../pkg/filigree.js';
-import { MSG, SLICE_MS, transferables } from './protocol.js';
+// The one module worker: serves the protocol in protocol.js, loading each
+// tool's wasm module the first time a job needs it (the page compiles it
+// once and sends the WebAssembly.Module with the job). One job at a time per
+// worker; the pool runs several workers.
+import { MSG, SLICE_MS, moduleUrl, transferables } from './protocol.js';
 
 // console_error_panic_hook writes the panic message with console.error just
 // before the trap; keep it so the 'panic' reply can say what happened.
@@ -12,19 +13,24 @@ console.error = (...args) => {
   consoleError(...args);
 };
 
-// The core is built with WebAssembly SIMD; this smallest SIMD function
-// (i8x16.splat, i8x16.popcnt) validates only where SIMD is supported.
-const SIMD_PROBE = new Uint8Array([0, 97, 115, 109, 1, 0, 0, 0, 1, 5, 1, 96, 0, 1, 123, 3, 2, 1, 0, 10, 10, 1, 8, 0, 65, 0, 253, 15, 253, 98, 11]);
-const ready = init({ module_or_path: new URL('../pkg/filigree_bg.wasm', import.meta.url) }).then(() => {
-  self.postMessage({ type: MSG.READY, version: version() });
-}, (err) => {
-  throw WebAssembly.validate(SIMD_PROBE) ? err
-    : new Error('this browser cannot run the core: it needs WebAssembly SIMD (Chrome 91+, Firefox 89+, Safari 16.4+)');
-});
+// name → Promise of the module's glue ({start_job, version}), instantiated once.
+const cores = new Map();
+const broken = new Set(); // modules whose instance threw something untyped
+
+function core(name, wasm) {
+  if (!cores.has(name)) {
+    cores.set(name, (async () => {
+      const glue = await import(moduleUrl(name, '.js'));
+      await glue.default({ module_or_path: wasm ?? moduleUrl(name) });
+      self.postMessage({ type: MSG.READY, version: glue.version(), module: name });
+      return glue;
+    })());
+  }
+  return cores.get(name);
+}
 
 const cancelled = new Set();
 const waiting = new Map(); // id → resolve of a job paused on its `need`
-let broken = false;
 
 // A macrotask yield that is not clamped like nested setTimeout(0).
 function yieldToEventLoop() {
@@ -45,20 +51,22 @@ function isCoreError(err) {
     && typeof err.kind === 'string' && typeof err.message === 'string';
 }
 
-async function run({ id, kind, payload }) {
+async function run({ id, kind, payload, module, wasm }) {
+  let glue;
   try {
-    await ready;
+    glue = await core(module, wasm);
   } catch (err) {
+    cores.delete(module);
     self.postMessage({ type: MSG.PANIC, id, message: `the core could not load: ${err?.message ?? err}` });
     return;
   }
-  if (broken) {
+  if (broken.has(module)) {
     self.postMessage({ type: MSG.PANIC, id, message: 'the core crashed earlier in this worker' });
     return;
   }
   let job = null;
   try {
-    job = start_job(kind, payload);
+    job = glue.start_job(kind, payload);
     let sliceStart = performance.now();
     for (;;) {
       if (cancelled.delete(id)) {
@@ -91,14 +99,14 @@ async function run({ id, kind, payload }) {
       self.postMessage({ type: MSG.ERROR, id, error: err });
       return;
     }
-    broken = true;
+    broken.add(module);
     // A panic writes its message to the console just before the trap.
     const why = (err instanceof WebAssembly.RuntimeError && lastConsoleError) || String(err);
     self.postMessage({ type: MSG.PANIC, id, message: `the core crashed: ${why}` });
   } finally {
     cancelled.delete(id);
     waiting.delete(id);
-    if (job && !broken) job.free();
+    if (job && !broken.has(module)) job.free();
   }
 }
 

@@ -13,7 +13,9 @@
 //    (composited over the background colour with their own opacity), so the
 //    targets have 2–3 flat colours; where shapes overlap, the later one now
 //    hides the earlier one (painter's order) instead of darkening it;
-//  * its hairline strokes (#000 at 2 % opacity) are dropped.
+//  * its hairline strokes (#000 at 2 % opacity) are dropped;
+//  * the tile is repeated at its exact size (geopattern floors the SVG's
+//    width and height to whole px, which would leave sub-px seams).
 //
 // Usage:
 //   mkdir -p /tmp/gp && cd /tmp/gp && npm init -y && npm install geopattern

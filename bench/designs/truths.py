@@ -146,13 +146,14 @@ T["gp-concentric-circles"] = dict(d=k * 1.2 * rs / S, R=k * rs / 2 / S, w=k * rs
                                   oy=reduce(y, k * 1.2 * rs / S))
 
 # gp-tessellation (3.4.6.4): side s = 40; tile TW = (3 + sqrt3) s, TH = (2 + 2 sqrt3) s;
-# hexagonal holes (circumradius s, flat top) at (TW/2, TH/2) on the lattice (TW, 0), (TW/2, TH/2).
+# hexagonal holes (circumradius s, flat top) at (TW/2, TH/2) on the triangular
+# lattice (0, TH/2), (TW/2, TH/4), i.e. rows TH/4 apart, TW along, shifted TW/2.
 k, off = 0.5, (-37, -18)
 s = gp_map(15, 5, 40)
 TW, TH = (3 + math.sqrt(3)) * s, (2 + 2 * math.sqrt(3)) * s
 x, y = cv(TW / 2, TH / 2, k, off)
-x, y = reduce2(x, y, (k * TW / S, 0), (k * TW / 2 / S, k * TH / 2 / S))
-T["gp-tessellation"] = dict(px=k * TW / S, py=k * TH / 2 / S, r=k * s / S, ox=x, oy=y)
+x, y = reduce2(x, y, (k * TW / S, 0), (k * TW / 2 / S, k * TH / 4 / S))
+T["gp-tessellation"] = dict(px=k * TW / S, py=k * TH / 4 / S, r=k * s / S, ox=x, oy=y)
 
 # gp-squares: s = map(8, 10, 60); light squares where x + y is even, (0, 0) light.
 k, off = 0.93, (-12, -25)

@@ -120,7 +120,8 @@ impl<J: Job, F: FnMut(J::Output) -> Response> Job for Mapped<J, F> {
     }
 }
 
-fn boxed<J, F>(job: J, into: F) -> Box<RequestJob>
+/// A job whose output becomes a [`Response`], boxed for the registry.
+pub fn boxed<J, F>(job: J, into: F) -> Box<RequestJob>
 where
     J: Job + 'static,
     F: FnMut(J::Output) -> Response + 'static,
@@ -218,22 +219,126 @@ fn unknown_kind(kind: &str) -> Error {
     ))
 }
 
+/// The wasm modules the app is split into: one per tool, each serving its
+/// tool's request kinds and the [`SHARED_KINDS`]. The page loads a tool's
+/// module when the tool is first used (`www/protocol.js` holds the same
+/// table, checked by `tests/modules.rs`); natively [`start`] serves every kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Module {
+    Inspect,
+    Pixel,
+    Fit,
+    Tangle,
+    Micro,
+    Texture,
+}
+
+impl Module {
+    pub const ALL: [Module; 6] = [
+        Module::Inspect,
+        Module::Pixel,
+        Module::Fit,
+        Module::Tangle,
+        Module::Micro,
+        Module::Texture,
+    ];
+
+    /// Its name: `pkg/filigree_<name>.js`, and the tool whose documents it checks.
+    pub fn name(self) -> &'static str {
+        match self {
+            Module::Inspect => "inspect",
+            Module::Pixel => "pixel",
+            Module::Fit => "fit",
+            Module::Tangle => "tangle",
+            Module::Micro => "micro",
+            Module::Texture => "texture",
+        }
+    }
+
+    /// The request kinds only this module serves.
+    pub fn kinds(self) -> &'static [&'static str] {
+        match self {
+            Module::Inspect => IMAGE_KINDS,
+            Module::Pixel => &["pixel", "pixel-mask"],
+            Module::Fit => &[
+                "fit",
+                "fit-eval",
+                "render-pattern",
+                "pattern-info",
+                "pattern-generators",
+                "pattern-snap",
+            ],
+            Module::Tangle => &["tangle", "tangle-examples"],
+            Module::Micro => &[
+                "micro-render",
+                "micro-slice",
+                "micro-examples",
+                "micro-fit",
+                "micro-glsl",
+            ],
+            Module::Texture => &[
+                "texture-models",
+                "texture-render",
+                "texture-index",
+                "texture-analyse",
+                "texture-retrieve",
+            ],
+        }
+    }
+
+    /// Whether it also serves [`IMAGE_KINDS`] (every tool that reads
+    /// images; Tangle does not, so its module has no image decoders).
+    pub fn images(self) -> bool {
+        self != Module::Tangle
+    }
+}
+
+/// Kinds every module serves (a document's defaults and checks).
+pub const SHARED_KINDS: &[&str] = &["defaults", "check-state", "open-project"];
+
+/// The Inspect module's kinds, also served by every module that reads
+/// images ([`Module::images`]), so its panel need not load another module.
+pub const IMAGE_KINDS: &[&str] = &["inspect", "decode-image"];
+
+/// The module that serves `kind`; `None` for a shared or unknown kind.
+pub fn module_of(kind: &str) -> Option<Module> {
+    Module::ALL.into_iter().find(|m| m.kinds().contains(&kind))
+}
+
 /// Start a request of `kind` whose payload `payload` deserialises into the
 /// kind's request struct. Errors are typed ([`Error::kind`]) and name the
-/// request field at fault ([`Error::field`]).
+/// request field at fault ([`Error::field`]). Serves every kind (the CLI,
+/// tests, fuzzers); a wasm module serves its own ([`start_pixel`], ...).
 pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    match module_of(kind) {
+        Some(Module::Pixel) => start_pixel(kind, payload),
+        Some(Module::Fit) => start_fit(kind, payload),
+        Some(Module::Tangle) => start_tangle(kind, payload),
+        Some(Module::Micro) => start_micro(kind, payload),
+        Some(Module::Texture) => start_texture(kind, payload),
+        Some(Module::Inspect) | None => start_shared(kind, payload, project::check_any, true),
+    }
+}
+
+/// The Inspect module's kinds: the shared ones, checking Inspect documents.
+pub fn start_inspect<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    start_shared(kind, payload, project::check_inspect, true)
+}
+
+/// The Pixel module's kinds.
+pub fn start_pixel<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
     Ok(match kind {
-        "inspect" => boxed(inspect::start_inspect(request(kind, payload)?)?, |r| {
-            Response::Inspect(Box::new(r))
-        }),
-        "decode-image" => boxed(
-            inspect::start_decode(request(kind, payload)?),
-            Response::Image,
-        ),
         "pixel" => boxed(pixel::start_pixel(request(kind, payload)?)?, |r| {
             Response::Pixel(Box::new(r.into()))
         }),
         "pixel-mask" => boxed(pixel::start_mask(request(kind, payload)?), Response::Mask),
+        _ => return start_shared(kind, payload, project::check_pixel, true),
+    })
+}
+
+/// The Fit module's kinds.
+pub fn start_fit<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    Ok(match kind {
         "fit" => boxed(pattern::start_fit(&request(kind, payload)?)?, |r| {
             Response::Fit(Box::new(r))
         }),
@@ -249,9 +354,38 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
             pattern::start_info(request(kind, payload)?)?,
             Response::Info,
         ),
+        "pattern-generators" => {
+            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+            boxed(pattern::start_generators(), Response::Generators)
+        }
+        "pattern-snap" => boxed(
+            pattern::start_snap(request(kind, payload)?)?,
+            Response::Snap,
+        ),
+        _ => return start_shared(kind, payload, project::check_fit, true),
+    })
+}
+
+/// The Tangle module's kinds.
+pub fn start_tangle<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    Ok(match kind {
         "tangle" => boxed(tangle::start_tangle(request(kind, payload)?)?, |r| {
             Response::Tangle(Box::new(r))
         }),
+        "tangle-examples" => {
+            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+            boxed(
+                crate::core::job::OneShot::new(|| Ok(crate::tangle::examples::EXAMPLES)),
+                Response::TangleExamples,
+            )
+        }
+        _ => return start_shared(kind, payload, project::check_tangle, false),
+    })
+}
+
+/// The Micro module's kinds.
+pub fn start_micro<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    Ok(match kind {
         "micro-render" => boxed(micro::start_render(request(kind, payload)?)?, |r| {
             Response::MicroRender(Box::new(r))
         }),
@@ -264,13 +398,6 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         "micro-fit" => boxed(micro_fit::start_fit(request(kind, payload)?)?, |r| {
             Response::MicroFit(Box::new(r))
         }),
-        "tangle-examples" => {
-            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
-            boxed(
-                crate::core::job::OneShot::new(|| Ok(crate::tangle::examples::EXAMPLES)),
-                Response::TangleExamples,
-            )
-        }
         "micro-examples" => {
             serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
             boxed(
@@ -278,6 +405,13 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
                 Response::MicroExamples,
             )
         }
+        _ => return start_shared(kind, payload, project::check_micro, true),
+    })
+}
+
+/// The Texture module's kinds.
+pub fn start_texture<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
+    Ok(match kind {
         "texture-models" => {
             serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
             boxed(
@@ -297,13 +431,25 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         "texture-retrieve" => boxed(texture::start_retrieve(request(kind, payload)?)?, |r| {
             Response::TextureRetrieval(Box::new(r))
         }),
-        "pattern-generators" => {
-            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
-            boxed(pattern::start_generators(), Response::Generators)
-        }
-        "pattern-snap" => boxed(
-            pattern::start_snap(request(kind, payload)?)?,
-            Response::Snap,
+        _ => return start_shared(kind, payload, project::check_texture, true),
+    })
+}
+
+/// The kinds every module serves; `checks`: the documents this module
+/// checks; `images`: whether it serves [`IMAGE_KINDS`] too.
+fn start_shared<'de, D: Deserializer<'de>>(
+    kind: &str,
+    payload: D,
+    checks: project::StateCheck,
+    images: bool,
+) -> Result<Box<RequestJob>> {
+    Ok(match kind {
+        "inspect" if images => boxed(inspect::start_inspect(request(kind, payload)?)?, |r| {
+            Response::Inspect(Box::new(r))
+        }),
+        "decode-image" if images => boxed(
+            inspect::start_decode(request(kind, payload)?),
+            Response::Image,
         ),
         "defaults" => {
             let req: DefaultsRequest = request(kind, payload)?;
@@ -315,21 +461,25 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         "check-state" => {
             let req: project::CheckStateRequest = request(kind, payload)?;
             boxed(
-                crate::core::job::OneShot::new(move || project::run_check_state(&req)),
+                crate::core::job::OneShot::new(move || project::run_check_state(&req, checks)),
                 |s| Response::State(Box::new(s)),
             )
         }
         "open-project" => {
             let req: project::OpenProjectRequest = request(kind, payload)?;
-            boxed(project::start_open_project(req), |p| {
+            boxed(project::start_open_project(req, checks), |p| {
                 Response::Project(Box::new(p))
             })
         }
-        #[cfg(feature = "test-hooks")]
-        "debug-abort" => boxed(DebugAbort::new(request(kind, payload)?), |()| {
-            Response::Nothing
-        }),
-        other => return Err(unknown_kind(other)),
+        other => match module_of(other) {
+            Some(m) => {
+                return Err(Error::input(format!(
+                    "'{other}' requests are served by the {} module, not this one",
+                    m.name()
+                )))
+            }
+            None => return Err(unknown_kind(other)),
+        },
     })
 }
 
@@ -483,67 +633,6 @@ impl<J: Job + ?Sized> Job for Box<J> {
     }
 }
 
-/// `debug-abort` (feature `test-hooks` only, never in the shipped wasm):
-/// runs a few busy slices and then panics, as a wasm trap would, so the
-/// e2e tests can check that the worker reports it and the pool replaces it.
-#[cfg(feature = "test-hooks")]
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(default)]
-pub struct DebugAbort {
-    /// Steps to run before aborting, so the page sees a job "mid-way".
-    steps: u32,
-    /// Abort by unbounded recursion instead of a panic: in wasm the engine
-    /// throws `RangeError: Maximum call stack size exceeded`.
-    overflow: bool,
-    #[serde(skip)]
-    left: u32,
-}
-
-#[cfg(feature = "test-hooks")]
-impl DebugAbort {
-    fn new(req: DebugAbort) -> Self {
-        DebugAbort {
-            steps: req.steps.max(1),
-            left: req.steps,
-            overflow: req.overflow,
-        }
-    }
-}
-
-#[cfg(feature = "test-hooks")]
-impl Job for DebugAbort {
-    type Output = ();
-    fn step(&mut self) -> Result<Step<()>> {
-        if self.left == 0 {
-            if self.overflow {
-                std::hint::black_box(recurse(std::hint::black_box(u64::MAX)));
-            }
-            panic!("debug-abort: deliberate crash requested by a test");
-        }
-        self.left -= 1;
-        // Stay busy for a moment so the job is observably "running".
-        let mut x = 0u64;
-        for i in 0..2_000_000u64 {
-            x = x.wrapping_mul(31).wrapping_add(i);
-        }
-        std::hint::black_box(x);
-        Ok(Step::Running(crate::core::job::Progress::new(
-            1.0 - self.left as f64 / self.steps as f64,
-            "about to crash",
-        )))
-    }
-}
-
-/// Recursion that never ends in practice (test hook only).
-#[cfg(feature = "test-hooks")]
-#[allow(unconditional_recursion)]
-fn recurse(n: u64) -> u64 {
-    if n == 0 {
-        return 0;
-    }
-    std::hint::black_box(recurse(std::hint::black_box(n - 1))).wrapping_add(1)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -600,7 +689,6 @@ mod tests {
                 .contains("unknown request kind 'no-such-kind'"),
             "{e}"
         );
-        #[cfg(not(feature = "test-hooks"))]
         assert!(err("debug-abort", r#"{"steps": 1}"#)
             .to_string()
             .contains("unknown request kind"));

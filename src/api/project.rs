@@ -33,8 +33,11 @@
 //! starts with that path, as the page's validators always did.
 use crate::core::error::{Error, Result};
 use crate::core::limits;
+#[cfg(feature = "json")]
 use serde::ser::{SerializeMap, SerializeSeq};
-use serde::{Deserialize, Serialize, Serializer};
+#[cfg(feature = "json")]
+use serde::Serializer;
+use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
 
 pub mod json;
@@ -111,8 +114,53 @@ pub enum ToolState {
     Inspect(inspect_state::InspectState),
 }
 
+/// Checks the states of some tools: `Some` for a tool it knows, `None`
+/// for one it leaves to another module (the wasm module of each tool checks
+/// only its own tool's states, so it carries no other tool's code;
+/// [`check_any`] knows them all).
+pub type StateCheck = fn(&str, &Value) -> Option<Result<ToolState>>;
+
+/// Every tool's state check (natively: the CLI, tests, fuzzers).
+pub fn check_any(tool_id: &str, state: &Value) -> Option<Result<ToolState>> {
+    let checks: [StateCheck; 6] = [
+        check_pixel,
+        check_fit,
+        check_tangle,
+        check_micro,
+        check_texture,
+        check_inspect,
+    ];
+    checks.iter().find_map(|c| c(tool_id, state))
+}
+
+/// One tool's state check, as a [`StateCheck`].
+macro_rules! state_check {
+    ($name:ident, $id:literal, $variant:ident, $check:path) => {
+        #[doc = concat!("The `", $id, "` tool's state check, as a [`StateCheck`].")]
+        pub fn $name(tool_id: &str, state: &Value) -> Option<Result<ToolState>> {
+            (tool_id == $id).then(|| $check(state).map(|s| ToolState::$variant(s.into())))
+        }
+    };
+}
+state_check!(check_pixel, "pixel", Pixel, crate::pixel::state::check);
+state_check!(check_fit, "fit", Fit, crate::pattern::state::check);
+state_check!(check_tangle, "tangle", Tangle, crate::tangle::state::check);
+state_check!(check_micro, "micro", Micro, crate::micro::state::check);
+state_check!(check_texture, "texture", Texture, crate::texture::state::check);
+state_check!(check_inspect, "inspect", Inspect, inspect_state::check);
+
 /// Check a state of `tool` whose schema version is `version`.
 pub fn check_state(tool_id: &str, version: u64, state: &Value) -> Result<ToolState> {
+    check_state_with(tool_id, version, state, check_any)
+}
+
+/// [`check_state`] with only the checks of `checks`.
+pub fn check_state_with(
+    tool_id: &str,
+    version: u64,
+    state: &Value,
+    checks: StateCheck,
+) -> Result<ToolState> {
     let t = tool(tool_id).ok_or_else(|| {
         Error::input(format!(
             "Filigree has no tool '{tool_id}' (it has {})",
@@ -121,13 +169,12 @@ pub fn check_state(tool_id: &str, version: u64, state: &Value) -> Result<ToolSta
         .at("tool")
     })?;
     check_version(t, version)?;
-    Ok(match t.id {
-        "pixel" => ToolState::Pixel(Box::new(crate::pixel::state::check(state)?)),
-        "fit" => ToolState::Fit(Box::new(crate::pattern::state::check(state)?)),
-        "tangle" => ToolState::Tangle(Box::new(crate::tangle::state::check(state)?)),
-        "micro" => ToolState::Micro(Box::new(crate::micro::state::check(state)?)),
-        "texture" => ToolState::Texture(Box::new(crate::texture::state::check(state)?)),
-        _ => ToolState::Inspect(inspect_state::check(state)?),
+    checks(t.id, state).unwrap_or_else(|| {
+        Err(Error::input(format!(
+            "this part of Filigree does not check {} documents (they are checked by the {} tool's module)",
+            t.title, t.id
+        ))
+        .at("tool"))
     })
 }
 
@@ -193,8 +240,8 @@ pub struct OpenedProject {
 }
 
 /// `check-state`.
-pub fn run_check_state(req: &CheckStateRequest) -> Result<ToolState> {
-    check_state(&req.tool, req.version, &req.state)
+pub fn run_check_state(req: &CheckStateRequest, checks: StateCheck) -> Result<ToolState> {
+    check_state_with(&req.tool, req.version, &req.state, checks)
 }
 
 /// `open-project`: parse, check the envelope, decode, check the state, to
@@ -206,8 +253,8 @@ pub fn open_project(text: &str) -> Result<OpenedProject> {
 /// `open-project` as the worker runs it: the text read in slices of
 /// [`READ_FUEL`] ([`json::Reader`]), then the envelope and the state
 /// checked in one more step.
-pub fn start_open_project(req: OpenProjectRequest) -> OpenProjectJob<'static> {
-    OpenProjectJob::new(Cow::Owned(req.text))
+pub fn start_open_project(req: OpenProjectRequest, checks: StateCheck) -> OpenProjectJob<'static> {
+    OpenProjectJob::new(Cow::Owned(req.text)).checking(checks)
 }
 
 /// Fuel of one reading step of `open-project` (see [`json::Reader::step`]):
@@ -218,6 +265,9 @@ pub const READ_FUEL: usize = 1 << 20;
 pub struct OpenProjectJob<'a> {
     text: Cow<'a, str>,
     stage: OpenStage,
+    /// The tools whose states it checks; another tool's state comes back
+    /// unchecked (`checked: false`), for the page to check in its module.
+    checks: StateCheck,
 }
 
 enum OpenStage {
@@ -266,7 +316,14 @@ impl<'a> OpenProjectJob<'a> {
         OpenProjectJob {
             text,
             stage: OpenStage::Start,
+            checks: check_any,
         }
+    }
+
+    /// Check only the states `checks` knows.
+    pub fn checking(mut self, checks: StateCheck) -> Self {
+        self.checks = checks;
+        self
     }
 }
 
@@ -322,7 +379,7 @@ impl crate::core::job::Job for OpenProjectJob<'_> {
                 }
             },
             OpenStage::Check(mut doc) => {
-                let out = check_project(&mut doc)?;
+                let out = check_project(&mut doc, self.checks)?;
                 self.stage =
                     OpenStage::Free(vec![Drain::List(vec![doc].into_iter())], Box::new(out));
                 Ok(Step::Running(Progress::new(
@@ -346,7 +403,7 @@ impl crate::core::job::Job for OpenProjectJob<'_> {
 }
 
 /// Check a project file's envelope and its state.
-fn check_project(doc: &mut Value) -> Result<OpenedProject> {
+fn check_project(doc: &mut Value, checks: StateCheck) -> Result<OpenedProject> {
     let nope = not_a_project;
     if doc.get("format").and_then(Value::as_text) != Some(PROJECT_FORMAT) {
         return Err(nope("\"format\" is missing or different"));
@@ -389,11 +446,13 @@ fn check_project(doc: &mut Value) -> Result<OpenedProject> {
         check_version(t, state_version as u64)?;
     }
     let state_version = state_version as u32;
-    let (checked, state) = if state_version == t.version {
-        (
-            true,
-            ProjectState::Checked(check_state(t.id, state_version as u64, state)?),
-        )
+    let checked = if state_version == t.version {
+        checks(t.id, state).transpose()?
+    } else {
+        None
+    };
+    let (checked, state) = if let Some(s) = checked {
+        (true, ProjectState::Checked(s))
     } else {
         // Moved out of the document, not copied.
         let state = match doc {

@@ -346,6 +346,7 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
             time_job(|| {
                 Ok(filigree::api::project::start_open_project(
                     filigree::api::project::OpenProjectRequest { text: text.clone() },
+                    filigree::api::project::check_any,
                 ))
             })?,
         ));

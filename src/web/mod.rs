@@ -1,7 +1,11 @@
 //! The wasm boundary (feature `web`): the only module that touches
 //! wasm-bindgen. JsValue → [`crate::api`] registry → JsValue; no logic.
+//! Each tool's wasm module (the `filigree-wasm` crate in `src/wasm/`, built
+//! once per tool) exports a `start_job` that calls [`start_job_with`] with
+//! its tool's registry ([`crate::api::start_pixel`], ...), so a module
+//! links only its own tool's code.
 //!
-//! The worker (`www/worker.js`) calls [`start_job`] with a request kind and
+//! The worker (`www/worker.js`) calls `start_job` with a request kind and
 //! its payload (a plain JS object; byte fields are `Uint8Array`s), then calls
 //! [`WebJob::step`] in a loop, yielding to its event loop every ~15 ms so a
 //! cancel message can be read. Errors are thrown as plain objects
@@ -15,7 +19,7 @@ use wasm_bindgen::prelude::*;
 
 /// Install the panic hook once; a panic then reaches the console with its
 /// message before the trap, and the worker reports it as a `panic` message.
-#[wasm_bindgen(start)]
+/// (Each module's start function calls it.)
 pub fn init() {
     console_error_panic_hook::set_once();
 }
@@ -46,12 +50,20 @@ fn error(e: Error) -> JsValue {
         .unwrap_or_else(|_| JsValue::from_str(&info.message))
 }
 
-/// Start a job of `kind` with `payload`; throws a typed error object.
-#[wasm_bindgen]
-pub fn start_job(kind: &str, payload: JsValue) -> Result<WebJob, JsValue> {
-    let inner =
-        crate::api::start(kind, serde_wasm_bindgen::Deserializer::from(payload)).map_err(error)?;
+/// A module's registry: one of [`crate::api::start_pixel`], ... for the
+/// browser's deserializer.
+pub type Start = fn(&str, serde_wasm_bindgen::Deserializer) -> crate::Result<Box<RequestJob>>;
+
+/// Start a job of `kind` with `payload` from the registry `start`; throws
+/// a typed error object.
+pub fn start_job_with(start: Start, kind: &str, payload: JsValue) -> Result<WebJob, JsValue> {
+    let inner = start(kind, serde_wasm_bindgen::Deserializer::from(payload)).map_err(error)?;
     Ok(WebJob { inner })
+}
+
+/// A job made outside the registry (a test hook), as a [`WebJob`].
+pub fn web_job(inner: Box<RequestJob>) -> WebJob {
+    WebJob { inner }
 }
 
 #[derive(Serialize)]
@@ -96,4 +108,9 @@ impl WebJob {
                 .map_err(error)?;
         self.inner.inbox(parts).map_err(error)
     }
+}
+
+/// The browser's deserializer over a JS value (for a test hook's request).
+pub fn deserializer(payload: JsValue) -> serde_wasm_bindgen::Deserializer {
+    serde_wasm_bindgen::Deserializer::from(payload)
 }

@@ -17,8 +17,25 @@ const ARGS = [
   '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
 ];
 
+/** Whether `path` (what follows the server's URL) opens a tool rather than the home view. */
+export const opensTool = (path) => /[#&]tool=|[?&]embed/.test(path);
+
+/**
+ * Wait until the view `path` opened is usable: a tool's core module has
+ * loaded (`coreReady`); the home view loads no core, so there its cards.
+ */
+export async function ready(page, path) {
+  if (opensTool(path)) {
+    await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+  } else {
+    await page.waitForSelector('.home-cards', { timeout: 30000 });
+  }
+}
+
 /** Start server (serving `root`, the repository by default) + browser (extra Chromium `args`).
- * Returns {url, browser, server, newPage(), close()}. */
+ * Returns {url, browser, server, newPage({path, ...context options}), close()};
+ * newPage goes to `path` (the home view by default; null: nowhere) and waits
+ * until it is ready (see `ready`). */
 export async function launch({ root = ROOT, args = [] } = {}) {
   const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
@@ -33,7 +50,7 @@ export async function launch({ root = ROOT, args = [] } = {}) {
       page.on('pageerror', (e) => console.error('[page error]', e.message));
       if (p !== null) {
         await page.goto(url + p);
-        await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+        await ready(page, p);
       }
       return page;
     },

@@ -18,31 +18,47 @@ const VIEWS = {
   texture: { path: '#tool=texture', ready: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending() },
 };
 
-// Whether the card's canvas shows more than one colour (a real picture, not a blank).
-const varied = (card) => {
-  const c = card.querySelector('canvas');
-  if (!c || !c.width) return false;
-  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
-  for (let i = 4; i < d.length; i += 4) {
-    if (d[i] !== d[0] || d[i + 1] !== d[1] || d[i + 2] !== d[2] || d[i + 3] !== d[3]) return true;
-  }
-  return false;
+const TOOL_IDS = ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture'];
+// The wasm files a page asks for (paths), recorded from before it loads.
+const recordWasm = (page) => {
+  const wasm = [];
+  page.on('request', (r) => {
+    const p = new URL(r.url()).pathname;
+    if (p.endsWith('.wasm')) wasm.push(p);
+  });
+  return wasm;
 };
 
-test('home: no hash shows what Filigree is and a card per tool with a live example; one click opens the tool', async () => {
-  const page = await env.newPage({ path: '' });
+test('home: no hash shows what Filigree is and a card per tool with its picture, loading no wasm; one click opens the tool and loads its module only', async () => {
+  const page = await env.newPage({ path: null });
+  const wasm = recordWasm(page);
+  await page.goto(env.url);
+  await page.waitForSelector('.home-cards');
   assert.equal(await page.textContent('h1'), 'Filigree');
   assert.match(await page.textContent('.home-intro'), /browser/);
   const cards = await page.$$eval('.home-card', (as) => as.map((a) => [a.dataset.tool, a.getAttribute('href')]));
-  assert.deepEqual(cards, [['pixel', '#tool=pixel'], ['fit', '#tool=fit'], ['inspect', '#tool=inspect'], ['tangle', '#tool=tangle'], ['micro', '#tool=micro'], ['texture', '#tool=texture']]);
+  assert.deepEqual(cards, TOOL_IDS.map((t) => [t, `#tool=${t}`]));
   await page.waitForFunction(VIEWS.home.ready, null, { timeout: 30000 });
-  // Each preview was computed by the core: a picture, not a blank.
-  for (const tool of ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture']) {
-    assert.ok(await page.$eval(`.home-card[data-tool=${tool}]`, varied), `${tool} preview`);
-  }
+  // Each card shows its picture (assets/home/<tool>.png, made ahead of time
+  // by the core natively: scripts/home-cards.sh), decoded, with its text.
+  const pictures = await page.$$eval('.home-card', (as) => as.map((a) => {
+    const img = a.querySelector('.home-preview img');
+    return [a.dataset.tool, img && new URL(img.src).pathname, img?.complete && img.naturalWidth > 0, !!img?.alt];
+  }));
+  assert.deepEqual(pictures, TOOL_IDS.map((t) => [t, `/assets/home/${t}.png`, true, true]));
+  assert.match(await page.textContent('.home-card[data-tool=inspect] .home-facts'), /^128×128 px · \d+ colours$/);
+  // Nothing was computed: no core module fetched, none started.
+  await page.waitForTimeout(500);
+  assert.deepEqual(wasm, [], 'the home view fetches no wasm');
+  assert.equal(await page.evaluate(() => document.documentElement.dataset.coreReady), undefined);
+
+  // Opening a tool from its card loads that tool's module, and only it.
   await page.click('.home-card[data-tool=pixel]');
   await page.waitForSelector('[data-testid=pixel-canvas]');
   assert.match(page.url(), /#tool=pixel$/);
+  await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
+  await page.waitForFunction(VIEWS.pixel.ready, null, { timeout: 30000 });
+  assert.deepEqual([...new Set(wasm)], ['/pkg/filigree_pixel_bg.wasm'], 'the Pixel panel fetches its own module only');
   // Back returns to the home view; the brand link does too.
   await page.goBack();
   await page.waitForSelector('.home-cards');
@@ -51,6 +67,18 @@ test('home: no hash shows what Filigree is and a card per tool with a live examp
   await page.click('a.brand');
   await page.waitForSelector('.home-cards');
   assert.equal(new URL(page.url()).searchParams.get('tool'), null);
+});
+
+test('home: a card whose picture fails to load still opens its tool', async () => {
+  const page = await env.newPage({ path: null, serviceWorkers: 'block' });
+  await page.route('**/assets/home/tangle.png', (r) => r.abort());
+  await page.goto(env.url);
+  await page.waitForFunction(() => document.querySelectorAll('.home-preview[data-ready]').length === 5, null, { timeout: 30000 });
+  await page.waitForFunction(() => !document.querySelector('.home-card[data-tool=tangle] img'));
+  assert.match(await page.textContent('.home-card[data-tool=tangle]'), /no preview.*Open Tangle/s);
+  await page.click('.home-card[data-tool=tangle]');
+  await page.waitForFunction(() => document.documentElement.dataset.view === 'tangle');
+  assert.match(page.url(), /#tool=tangle$/);
 });
 
 test('desktop 1280×800: each panel shows its whole main canvas and its actions without scrolling', async () => {

@@ -4,20 +4,22 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { launch, dropFile, fixture, ROOT } from './harness.mjs';
 
-// The deliberate-crash request ('debug-abort', cargo feature test-hooks) is
-// not in the shipped core (pkg/). `FILIGREE_TEST_HOOKS=1 bash scripts/build.sh`
-// also builds a core with it into pkg-test/; these tests serve that core in
-// place of pkg/ (service worker blocked, so the page fetches it).
+// The deliberate-crash request ('debug-abort', feature test-hooks of
+// src/wasm) is in no shipped module (pkg/). `FILIGREE_TEST_HOOKS=1 bash
+// scripts/build.sh` also builds an Inspect module with it into pkg-test/;
+// these tests serve it in place of pkg/'s (service worker blocked, so the
+// page fetches it). 'debug-abort' is no tool's kind, so it runs in the
+// Inspect module.
 const TEST_PKG = path.join(ROOT, 'pkg-test');
 
 async function testCorePage(env) {
-  for (const f of ['filigree_bg.wasm', 'filigree.js']) {
+  for (const f of ['filigree_inspect_bg.wasm', 'filigree_inspect.js']) {
     if (!fs.existsSync(path.join(TEST_PKG, f))) {
       throw new Error(`pkg-test/${f} is missing: run FILIGREE_TEST_HOOKS=1 bash scripts/build.sh`);
     }
   }
   const page = await env.newPage({ path: null, serviceWorkers: 'block' });
-  await page.context().route(/\/pkg\/filigree(_bg\.wasm|\.js)$/, (route) => {
+  await page.context().route(/\/pkg\/filigree_inspect(_bg\.wasm|\.js)$/, (route) => {
     const name = new URL(route.request().url()).pathname.split('/').pop();
     route.fulfill({ path: path.join(TEST_PKG, name) });
   });
@@ -108,8 +110,10 @@ test('the shipped core has no test hooks', async () => {
     .then(() => null, (e) => ({ kind: e.kind, message: e.message })));
   assert.equal(e?.kind, 'invalid-input');
   assert.match(e.message, /unknown request kind 'debug-abort'/);
-  const wasm = fs.readFileSync(path.join(ROOT, 'pkg/filigree_bg.wasm'));
-  assert.equal(wasm.includes('deliberate crash'), false, 'pkg/ carries the debug-abort job');
+  for (const m of ['inspect', 'pixel', 'fit', 'tangle', 'micro', 'texture']) {
+    const wasm = fs.readFileSync(path.join(ROOT, `pkg/filigree_${m}_bg.wasm`));
+    assert.equal(wasm.includes('deliberate crash'), false, `pkg/filigree_${m}_bg.wasm carries the debug-abort job`);
+  }
 });
 
 test('errors arrive typed: a syntax error has kind, line, column and field; a bad field is named', async () => {
@@ -190,7 +194,7 @@ test('jobs with an affinity run on the worker that ran the last one (waiting for
 // waiting for ever.
 test('a core that fails to load fails each job with a plain message instead of hanging', { timeout: 60000 }, async () => {
   const page = await env.newPage({ path: null });
-  await page.route('**/pkg/filigree_bg.wasm', (route) => route.fulfill({ status: 200, contentType: 'application/wasm', body: Buffer.from('not a wasm module') }));
+  await page.route('**/pkg/filigree_*_bg.wasm', (route) => route.fulfill({ status: 200, contentType: 'application/wasm', body: Buffer.from('not a wasm module') }));
   await page.goto(`${env.url}#tool=inspect`);
   const outcome = await page.evaluate(async () => {
     try {
