@@ -2,8 +2,8 @@
 //! checks can pay on the multiscale scene. Evaluation counts only (they do
 //! not depend on the machine's load); one pass per variant.
 //! `cargo run --release --example micro_dp_probe -- [size] [scene.json]`
-use filigree::geom::sdf3;
 use filigree::micro::render::{self, relax_for_slope, Camera, Rays};
+use filigree::micro::sdf3;
 use filigree::micro::Scene;
 use glam::DVec3;
 

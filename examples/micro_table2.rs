@@ -5,8 +5,8 @@
 //! difference normal (6 evaluations), as `micro-render` does.
 //! `cargo run --release --example micro_table2 -- [size] [repeats] [scene.json]`
 #![allow(clippy::disallowed_methods)] // timing: native only
-use filigree::geom::sdf3;
 use filigree::micro::render::{self, Camera, Rays, Stats, StepMode, Trace};
+use filigree::micro::sdf3;
 use filigree::micro::Scene;
 use glam::DVec3;
 use std::time::Instant;

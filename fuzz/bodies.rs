@@ -476,8 +476,8 @@ pub fn tangle_grammar(data: &[u8]) {
 /// finite rings within the point limit, and a
 /// tangle grown from it (small budgets) must keep its area.
 pub fn tangle_start(data: &[u8]) {
-    use filigree::geom::polygon::Polygon;
-    use filigree::geom::svg::{document_polygons, path_rings, MAX_POINTS};
+    use filigree::tangle::geom::polygon::Polygon;
+    use filigree::tangle::geom::svg::{document_polygons, path_rings, MAX_POINTS};
     let text = String::from_utf8_lossy(data);
     let mut sources = vec![];
     // A document's shapes, fitted into a frame: inside it, finite.
@@ -541,7 +541,7 @@ pub fn tangle_start(data: &[u8]) {
 /// polygon's box, no larger than it, outline counter-clockwise, holes
 /// clockwise.
 pub fn inset(data: &[u8]) {
-    use filigree::geom::polygon::{ring_area2, Polygon};
+    use filigree::tangle::geom::polygon::{ring_area2, Polygon};
     use glam::DVec2;
     let Some((&first, rest)) = data.split_first() else {
         return;

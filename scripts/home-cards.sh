@@ -66,11 +66,12 @@ EOF
 cp assets/pixel/fish.png "$tmp/inspect.png"
 "$bin" inspect --json assets/pixel/fish.png > "$tmp/inspect.json"
 
-# Tangle: the leaf grammar, at most 400 steps and 4000 shapes, its pen 2
-# drawing units (0.8 px at this size), fitted into 312×232 and set on white
+# Tangle: the leaf grammar, at most 400 steps and 4000 shapes, its pen 1.5
+# drawing units (0.6 px here, the overall tone of the live canvas preview
+# the card used to draw), fitted into 312×232 and set on white
 # paper 320×240 (a 4 px margin), as the card drew it. A first render tells
 # the drawing's aspect; the second is made at the width that fits.
-tangle=(--grammar assets/tangle/leaf.tangle --steps 400 --max-shapes 4000 --stroke-width 2)
+tangle=(--grammar assets/tangle/leaf.tangle --steps 400 --max-shapes 4000 --stroke-width 1.5)
 "$bin" tangle "${tangle[@]}" --png-width 320 --out "$tmp/tangle-aspect.png" > /dev/null
 width=$(python3 -c "
 from PIL import Image

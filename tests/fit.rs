@@ -1161,7 +1161,7 @@ fn tiled_antialiased_fit_mse() -> Vec<f64> {
 /// the default settings recovers ALL its parameters, stripe width and dot
 /// radius included, with a normalised parameter MSE ≤ 1e-5 on both truths.
 /// The target's fields come from the image's coverage
-/// ([`filigree::geom::aa_distance`]), and the image polish compares the
+/// ([`filigree::pattern::geom::aa_distance`]), and the image polish compares the
 /// pattern's coverage with the target's, read from that field the same way
 /// (`filigree::pattern::loss::coverage`). Measured: 5.4e-7 and 1.4e-6, the
 /// dot radius the largest share (0.003–0.005 grid pixel too big). Before:

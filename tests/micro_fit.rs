@@ -524,7 +524,8 @@ fn bad_requests_get_typed_errors_naming_the_field() {
         assert_eq!((e.kind(), e.field()), (kind, Some(field)), "case {i}: {e}");
         assert!(!e.to_string().is_empty());
     }
-    // Through the registry, as the browser sends it: serde's errors too.
+    // Through the registry, as the browser sends it: serde's errors too,
+    // as a request that could not be read (the sender's fault, `bad-request`).
     for (payload, field) in [
         (json!({"optimizer": "simulated-annealing"}), "optimizer"),
         (json!({"target": {"kind": "photo"}}), "target.kind"),
@@ -535,7 +536,7 @@ fn bad_requests_get_typed_errors_naming_the_field() {
         (json!({"grid": -1}), "grid"),
     ] {
         let e = filigree::api::run_json("micro-fit", &payload.to_string()).unwrap_err();
-        assert_eq!(e.kind(), "invalid-input", "{payload}: {e}");
+        assert_eq!(e.kind(), "bad-request", "{payload}: {e}");
         assert_eq!(e.field(), Some(field), "{payload}: {e}");
     }
 }

@@ -81,21 +81,31 @@ fn every_kind_has_one_module_or_is_shared() {
 fn a_module_refuses_another_modules_kinds_and_documents() {
     use filigree::api::{start_pixel, start_texture};
     let de = |s: &'static str| serde_json::Deserializer::from_str(s);
-    let e = start_pixel("render-pattern", &mut de("{}")).err().expect("refused");
-    assert!(
-        e.to_string().contains("served by the fit module"),
-        "{e}"
-    );
-    // Tangle reads no images: its module has no decoders.
-    let e = filigree::api::start_tangle("decode-image", &mut de("{}")).err().expect("refused");
-    assert!(e.to_string().contains("served by the inspect module"), "{e}");
-    assert!(start_pixel("decode-image", &mut de(r#"{"bytes": []}"#)).is_ok());
-    // The Texture module checks Texture documents, not Fit ones.
-    let e = start_texture("check-state", &mut de(r#"{"tool": "fit", "version": 1, "state": {}}"#))
-        .and_then(filigree::core::job::run_quietly)
+    let e = start_pixel("render-pattern", &mut de("{}"))
         .err()
         .expect("refused");
-    assert!(e.to_string().contains("checked by the fit tool's module"), "{e}");
+    assert!(e.to_string().contains("served by the fit module"), "{e}");
+    // Tangle reads no images: its module has no decoders.
+    let e = filigree::api::start_tangle("decode-image", &mut de("{}"))
+        .err()
+        .expect("refused");
+    assert!(
+        e.to_string().contains("served by the inspect module"),
+        "{e}"
+    );
+    assert!(start_pixel("decode-image", &mut de(r#"{"bytes": []}"#)).is_ok());
+    // The Texture module checks Texture documents, not Fit ones.
+    let e = start_texture(
+        "check-state",
+        &mut de(r#"{"tool": "fit", "version": 1, "state": {}}"#),
+    )
+    .and_then(filigree::core::job::run_quietly)
+    .err()
+    .expect("refused");
+    assert!(
+        e.to_string().contains("checked by the fit tool's module"),
+        "{e}"
+    );
     // A project of another tool opens unchecked, for its own module to check.
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -103,11 +113,19 @@ fn a_module_refuses_another_modules_kinds_and_documents() {
     ))
     .unwrap();
     let payload = serde_json::json!({ "text": text }).to_string();
-    let job = start_texture("open-project", &mut serde_json::Deserializer::from_str(&payload)).unwrap();
+    let job = start_texture(
+        "open-project",
+        &mut serde_json::Deserializer::from_str(&payload),
+    )
+    .unwrap();
     let opened = serde_json::to_value(filigree::core::job::run_quietly(job).unwrap()).unwrap();
     assert_eq!(opened["tool"], "pixel");
     assert_eq!(opened["checked"], false);
-    let job = start_pixel("open-project", &mut serde_json::Deserializer::from_str(&payload)).unwrap();
+    let job = start_pixel(
+        "open-project",
+        &mut serde_json::Deserializer::from_str(&payload),
+    )
+    .unwrap();
     let opened = serde_json::to_value(filigree::core::job::run_quietly(job).unwrap()).unwrap();
     assert_eq!(opened["checked"], true);
 }

@@ -4,11 +4,11 @@
 //! edits regrow only their subtree; the CLI writes what the request says.
 use filigree::api::run_json;
 use filigree::core::job::run_quietly;
-use filigree::geom::polygon::Polygon;
 use filigree::tangle::api::{
     start_tangle, Edit, ExportFormat, StartRequest, TangleRequest, TangleResponse,
 };
 use filigree::tangle::examples::{example, EXAMPLES};
+use filigree::tangle::geom::polygon::Polygon;
 use std::collections::BTreeMap;
 
 fn run(req: TangleRequest) -> TangleResponse {

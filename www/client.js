@@ -143,6 +143,15 @@ export class WorkerPool {
     this.slots[0].ensureWorker();
   }
 
+  /**
+   * Load module `name` into a worker now (a trivial job in it), so the tool
+   * the user opened is ready before its first real job. Errors are left to
+   * that job to report.
+   */
+  preload(name) {
+    this.run('defaults', { tool: 'defaults' }, { module: name }).catch(() => {});
+  }
+
   /** The compiled module `name` (fetched and compiled once; a failure is retried next time). */
   module(name) {
     if (!this.modules.has(name)) {

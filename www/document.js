@@ -59,7 +59,7 @@ export function plainError(err) {
     }
     const m = String(err.message || '');
     // A request the core could not even read is the page's fault, not the user's.
-    if (/^bad [\w-]+ request\b/.test(m) || /invalid type: |missing field `/.test(m)) {
+    if (err.kind === 'bad-request') {
       console.warn('request refused by the core:', m);
       return 'Filigree sent its computation a request it could not read (an internal error); your work is kept. Reload the page.';
     }
@@ -207,7 +207,7 @@ export class DocumentController {
         return await this.check(tool, legacy ? saved : saved.state, legacy ? 1 : saved.version);
       } catch (err) {
         // A crashed or cancelled check says nothing about the autosave: keep it.
-        if (err?.name === 'JobError' && !['invalid-input', 'limit'].includes(err.kind)) throw err;
+        if (err?.name === 'JobError' && !['invalid-input', 'bad-request', 'limit'].includes(err.kind)) throw err;
         ctx.error(new Error(`Your autosaved ${tool.title} work could not be restored (${err.message}); a fresh document was started.`));
       }
     }
@@ -238,6 +238,8 @@ export class DocumentController {
   async show(id, incoming = null, { readOnly = false } = {}) {
     const tool = this.tool(id) || this.tools[0];
     if (this.current?.tool === tool && !incoming) return this.current;
+    // The tool's wasm module downloads and starts while its panel builds.
+    this.pool.preload?.(tool.id);
     if (this.current?.tool !== tool) this.mount(tool, readOnly);
     const cur = this.current;
     const d = this.docOf(tool);

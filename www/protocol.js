@@ -35,7 +35,7 @@
 //   {type: 'error', id, error: {kind, message, line?, column?, field?}}
 //                                      the job failed. The core's typed error,
 //                                      passed on untouched:
-//                                        kind    'invalid-input' | 'limit' |
+//                                        kind    'invalid-input' | 'bad-request' | 'limit' |
 //                                                'syntax' | 'cancelled'
 //                                        message the whole text, for people
 //                                        line, column  1-based place of a
@@ -103,7 +103,7 @@ export const moduleUrl = (name, ext = '_bg.wasm') => new URL(`../pkg/filigree_${
 // Wall-clock budget of one run of slices before the worker yields.
 export const SLICE_MS = 15;
 
-/** An error reported by a job; `kind` is 'invalid-input', 'limit', 'syntax', 'cancelled', 'crash' or 'protocol'.
+/** An error reported by a job; `kind` is 'invalid-input', 'bad-request' (the request could not be read: the page's fault), 'limit', 'syntax', 'cancelled', 'crash' or 'protocol'.
  * `line`/`column` place a syntax error, `field` names the request field at fault (undefined when unknown). */
 export class JobError extends Error {
   constructor(message, kind = 'invalid-input', { line, column, field } = {}) {

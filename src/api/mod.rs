@@ -15,7 +15,7 @@
 //! variant in [`Response`] and in [`DefaultRequest`].
 //!
 //! Errors: a payload that does not deserialise becomes an
-//! [`Error::InvalidInput`] naming the kind and the field, e.g.
+//! [`Error::BadRequest`] (kind `bad-request`) naming the kind and the field, e.g.
 //! "pattern-info: `program` must be text (got null)", with
 //! [`Error::field`] = `program`.
 pub mod inspect;
@@ -604,7 +604,7 @@ fn humanise(kind: &str, field: &str, msg: &str) -> Error {
     } else {
         format!("{name}: {msg}")
     };
-    Error::input(format!("{kind}: {text}"))
+    Error::BadRequest(format!("{kind}: {text}"))
 }
 
 /// Run a request natively from its JSON payload, as the worker would
@@ -655,7 +655,7 @@ mod tests {
     #[test]
     fn serde_errors_become_typed_errors_naming_the_field() {
         let e = err("pattern-info", r#"{"program": null}"#);
-        assert_eq!(e.kind(), "invalid-input");
+        assert_eq!(e.kind(), "bad-request");
         assert_eq!(e.field(), Some("program"));
         assert_eq!(
             e.to_string(),

@@ -146,7 +146,12 @@ state_check!(check_pixel, "pixel", Pixel, crate::pixel::state::check);
 state_check!(check_fit, "fit", Fit, crate::pattern::state::check);
 state_check!(check_tangle, "tangle", Tangle, crate::tangle::state::check);
 state_check!(check_micro, "micro", Micro, crate::micro::state::check);
-state_check!(check_texture, "texture", Texture, crate::texture::state::check);
+state_check!(
+    check_texture,
+    "texture",
+    Texture,
+    crate::texture::state::check
+);
 state_check!(check_inspect, "inspect", Inspect, inspect_state::check);
 
 /// Check a state of `tool` whose schema version is `version`.

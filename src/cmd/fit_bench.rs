@@ -56,7 +56,7 @@ fn target(c: &Case, loss: &LossOptions) -> Result<Target, String> {
 /// pixel) at twice the grid's side, as a user's image of the design would
 /// be, snapped to the palette with the default tolerance. Its fields come
 /// from the image's coverage, with the outline placed to a fraction of a
-/// pixel ([`filigree::geom::aa_distance`]).
+/// pixel ([`filigree::pattern::geom::aa_distance`]).
 fn image_target(c: &Case, loss: &LossOptions) -> Result<Target, String> {
     let img = render(&c.scene, &c.truth, 2 * loss.grid, 4).map_err(|e| e.to_string())?;
     Target::from_image(&c.scene, &img, loss.grid, loss.scale(), 60.0).map_err(|e| e.to_string())

@@ -15,6 +15,10 @@ pub type Result<T> = std::result::Result<T, Error>;
 pub enum Error {
     /// The input bytes or values are not acceptable; the message says why.
     InvalidInput(String),
+    /// The request itself could not be read into its type (a missing or
+    /// mistyped field, an unknown option): the caller's fault, not the
+    /// user's input. Built by `api::request`.
+    BadRequest(String),
     /// An explicit limit was exceeded (image size, shape count, operations ...).
     Limit(String),
     /// A text input (script, grammar, JSON) failed to parse at a place.
@@ -77,6 +81,7 @@ impl Error {
     pub fn kind(&self) -> &'static str {
         match self.inner() {
             Error::InvalidInput(_) => "invalid-input",
+            Error::BadRequest(_) => "bad-request",
             Error::Limit(_) => "limit",
             Error::Syntax { .. } => "syntax",
             Error::Cancelled => "cancelled",
@@ -113,7 +118,7 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::InvalidInput(m) | Error::Limit(m) => f.write_str(m),
+            Error::InvalidInput(m) | Error::BadRequest(m) | Error::Limit(m) => f.write_str(m),
             Error::Syntax {
                 line,
                 column,

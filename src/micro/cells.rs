@@ -16,7 +16,7 @@ use super::checks::{bad, join, num, vec3, WORLD};
 use crate::core::error::{Error, Result};
 use crate::core::limits::MAX_MICRO_TERMS;
 use crate::core::rng::Rng;
-use crate::geom::sdf3;
+use crate::micro::sdf3;
 use glam::{DVec3, IVec3};
 use serde::{Deserialize, Serialize};
 

@@ -30,6 +30,7 @@ pub mod glsl;
 pub mod periodic;
 pub mod render;
 pub mod scene;
+pub mod sdf3;
 pub mod state;
 
 pub use scene::{parse, Node, Scene};

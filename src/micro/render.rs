@@ -43,7 +43,7 @@
 //!   and no cap on the relaxation a check may set (1.5–3) took fewer
 //!   evaluations than no checks, so checks are pure cost there.
 use super::scene::Scene;
-use crate::geom::sdf3;
+use crate::micro::sdf3;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 

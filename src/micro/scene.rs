@@ -20,7 +20,7 @@ use crate::core::error::{Error, Result};
 use crate::core::limits::{
     MAX_MICRO_CHILDREN, MAX_MICRO_DEPTH, MAX_MICRO_NODES, MAX_MICRO_SCENE_BYTES,
 };
-use crate::geom::sdf3;
+use crate::micro::sdf3;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 

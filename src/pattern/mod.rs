@@ -11,7 +11,7 @@
 //!   fields; their geometry is the shared [`crate::geom`]), [`field`]
 //!   (per-colour fields, the "on top" operator, booleans, tile culling).
 //! - §4 "Target Image SDF": [`target`] (palette masks; the exact EDT is
-//!   [`crate::geom::distance_transform`]).
+//!   [`crate::pattern::geom::distance_transform`]).
 //! - §4 "Optimization Procedure", "Parameter Set Initialization/Optimization":
 //!   the shared [`crate::optim`] (GA, random sampling, Nelder–Mead, Adam with
 //!   patience and refinement), [`fit`] (the whole fit as a stepped
@@ -63,6 +63,7 @@ pub mod api;
 pub mod field;
 pub mod fit;
 pub mod generators;
+pub mod geom;
 pub(crate) mod lang;
 pub mod loss;
 pub mod optim;

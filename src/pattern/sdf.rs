@@ -9,10 +9,10 @@
 //! inside); points, segments and Bézier pieces are unsigned distances to a
 //! zero-area set (paths get their sign from the winding number, see
 //! [`winding`]).
-use crate::geom::bezier::{quad_closest, quad_distance_grad, Quad};
-use crate::geom::primitives;
-use crate::geom::primitives::{point_distance_grad, segment_distance_grad, RoundedRect};
-use crate::geom::winding::{quad_winding, segment_winding};
+use crate::pattern::geom::bezier::{quad_closest, quad_distance_grad, Quad};
+use crate::pattern::geom::primitives;
+use crate::pattern::geom::primitives::{point_distance_grad, segment_distance_grad, RoundedRect};
+use crate::pattern::geom::winding::{quad_winding, segment_winding};
 
 /// Largest number of fields a primitive has.
 pub const MAX_FIELDS: usize = 6;
@@ -127,7 +127,7 @@ pub fn grad(kind: PrimKind, f: &Fields, p: V2, out: &mut Fields) -> f64 {
 }
 
 /// Winding-number contribution of a path piece (segment or quadratic) for
-/// a horizontal ray from `p` towards +x (see [`crate::geom::winding`]).
+/// a horizontal ray from `p` towards +x (see [`crate::pattern::geom::winding`]).
 pub fn winding(kind: PrimKind, f: &Fields, p: V2) -> i32 {
     match kind {
         PrimKind::Segment => {
@@ -143,8 +143,8 @@ pub fn winding(kind: PrimKind, f: &Fields, p: V2) -> i32 {
 mod tests {
     use super::*;
     use crate::core::rng::Rng;
-    use crate::geom::bezier::cubic_piece_weights;
-    use crate::geom::len;
+    use crate::pattern::geom::bezier::cubic_piece_weights;
+    use crate::pattern::geom::len;
 
     fn brute(kind: PrimKind, f: &Fields, p: V2) -> f64 {
         // Dense sampling of the curve/segment.
@@ -154,7 +154,7 @@ mod tests {
             let t = i as f64 / n as f64;
             let q = match kind {
                 PrimKind::Segment => [f[0] + t * (f[2] - f[0]), f[1] + t * (f[3] - f[1])],
-                PrimKind::Quad => crate::geom::bezier::quad_point(&quad(f), t),
+                PrimKind::Quad => crate::pattern::geom::bezier::quad_point(&quad(f), t),
                 _ => unreachable!(),
             };
             best = best.min(len(p[0] - q[0], p[1] - q[1]));

@@ -7,7 +7,7 @@
 //! palette colours tells how much of it each covers. Snapping keeps that
 //! fraction (the pixel's colour projected onto the segment between its two
 //! colours), and a channel whose coverage has fractions gets the
-//! anti-aliased transform ([`crate::geom::aa_distance`]), which puts the
+//! anti-aliased transform ([`crate::pattern::geom::aa_distance`]), which puts the
 //! outline where the image says it is to a fraction of a pixel. A
 //! hard-edged channel keeps the transform between pixel centres. Only a
 //! pixel that lies along the segment between two palette colours counts
@@ -21,12 +21,12 @@
 //! from the sampled field as the pattern's is ([`coverage`]).
 //!
 //! The distance transforms themselves are shared:
-//! [`crate::geom::distance_transform`], [`crate::geom::aa_distance`].
+//! [`crate::pattern::geom::distance_transform`], [`crate::pattern::geom::aa_distance`].
 use super::field::{edge_cap, Evaluator, Grid, Scene, CAP};
 use super::record::Rgb;
 use crate::core::error::{Error, Result};
-use crate::geom::aa_distance::{AaDistance, HARD};
-use crate::geom::distance_transform::SignedDistance;
+use crate::pattern::geom::aa_distance::{AaDistance, HARD};
+use crate::pattern::geom::distance_transform::SignedDistance;
 use crate::raster::Rgba8Image;
 
 /// A target: per-channel masks and signed fields on the loss grid.
@@ -830,7 +830,7 @@ mod tests {
     /// The fields as they were computed before the build was stepped: one
     /// signed distance per channel, then taken as they are or sampled.
     fn reference(scene: &Scene, idx: &[u16], fw: usize, fh: usize, n: usize, scale: f64) -> Target {
-        use crate::geom::distance_transform::signed_distance;
+        use crate::pattern::geom::distance_transform::signed_distance;
         let (mut sdf, mut mask) = (vec![], vec![]);
         for ch in &scene.channels {
             let m: Vec<bool> = idx.iter().map(|&i| i == ch.colour).collect();

@@ -13,7 +13,7 @@ use super::{export, grammar, Shape};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::request_limits as lim;
-use crate::geom::polygon::Polygon;
+use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
@@ -293,14 +293,18 @@ mod opt_bytes {
     }
 }
 
+/// Ranges of the request's settings, checked here and in a document (`state.rs`).
+pub const WOBBLE: (f64, f64) = (0.0, 50.0);
+pub const STROKE_WIDTH: (f64, f64) = (0.0, 100.0);
+
 /// Check the request's settings and parse its grammar.
 fn check(req: &TangleRequest) -> Result<(Grammar, Settings)> {
     lim::int_in("max_steps", req.max_steps, (1, MAX_STEPS))?;
     lim::int_in("max_shapes", req.max_shapes, (1, MAX_SHAPES))?;
     lim::finite_in("resolution", req.resolution, (0.25, 100.0))?;
-    lim::finite_in("wobble", req.wobble, (0.0, 50.0))?;
+    lim::finite_in("wobble", req.wobble, WOBBLE)?;
     lim::finite_in("wavelength", req.wavelength, (1.0, 10_000.0))?;
-    lim::finite_in("stroke_width", req.stroke_width, (0.0, 100.0))?;
+    lim::finite_in("stroke_width", req.stroke_width, STROKE_WIDTH)?;
     lim::int_in("png_width", req.png_width, (1, export::MAX_PNG_SIDE))?;
     if req.edits.len() > MAX_EDITS {
         return Err(Error::limit(format!(
@@ -340,7 +344,7 @@ fn start_polys(rings: Vec<Vec<DVec2>>, field: &str) -> Result<Vec<Polygon>> {
     let v = Polygon::new(rings).ok_or_else(|| {
         Error::input(format!(
             "start shape points must be finite numbers within ±{}",
-            crate::geom::polygon::MAX_COORD
+            crate::tangle::geom::polygon::MAX_COORD
         ))
         .at(field.to_string())
     })?;
@@ -394,7 +398,7 @@ fn start_shapes(req: &TangleRequest, g: &Grammar) -> Result<Vec<(Polygon, String
                     Polygon::bbox_all(starts.iter().map(|(p, _)| p))
                 }
             };
-            let n = crate::geom::svg::document_polygons(svg, CURVE_TOLERANCE, Some(frame))
+            let n = crate::tangle::geom::svg::document_polygons(svg, CURVE_TOLERANCE, Some(frame))
                 .map_err(|e| e.at("start.svg"))?;
             start_point_limit(n.iter().map(Polygon::vertices).sum(), "start.svg")?;
             Ok(one(n))
@@ -422,7 +426,8 @@ fn grammar_starts(g: &Grammar) -> Result<Vec<(Polygon, String)>> {
             }
             StartShape::Polygon(pts) => start_polys(vec![pts.clone()], field)?,
             StartShape::Svg(d) => start_polys(
-                crate::geom::svg::path_rings(d, CURVE_TOLERANCE).map_err(|e| at_line(e, s.line))?,
+                crate::tangle::geom::svg::path_rings(d, CURVE_TOLERANCE)
+                    .map_err(|e| at_line(e, s.line))?,
                 field,
             )?,
             StartShape::Text(t) => start_polys(
@@ -439,7 +444,7 @@ fn grammar_starts(g: &Grammar) -> Result<Vec<(Polygon, String)>> {
 fn flatten_svg_defs(g: &mut Grammar) -> Result<()> {
     for d in &mut g.defs {
         if let CurveDef::Svg(path) = &d.curve {
-            let rings = crate::geom::svg::path_rings(path, CURVE_TOLERANCE)
+            let rings = crate::tangle::geom::svg::path_rings(path, CURVE_TOLERANCE)
                 .map_err(|e| at_line(e, d.line))?;
             let Some(first) = rings.into_iter().next() else {
                 return Err(at_line(Error::input("the SVG path has no points"), d.line));

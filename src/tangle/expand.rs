@@ -24,7 +24,7 @@ use super::ops::{self, Wobble};
 use super::{Ink, Shape};
 use crate::core::error::{Error, Result};
 use crate::core::rng::Rng;
-use crate::geom::polygon::Polygon;
+use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;

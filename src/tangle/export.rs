@@ -3,8 +3,8 @@
 //! strokes on paper white, stroke width a setting).
 use super::Shape;
 use crate::core::error::{Error, Result};
-use crate::geom::polygon::Polygon;
 use crate::raster::{encode_png, Rgba8Image};
+use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 use std::fmt::Write;
 

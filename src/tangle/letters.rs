@@ -1,10 +1,10 @@
 //! Letter outlines for start shapes (`start text("WORD")`, the CLI's
 //! `--text`, the browser's typed word): glyphs of DejaVu Sans Bold (a
 //! subset shipped in `assets/fonts/`, licence beside it), flattened by
-//! [`crate::geom::svg::RingBuilder`], laid out left to right on a baseline
+//! [`crate::tangle::geom::svg::RingBuilder`], laid out left to right on a baseline
 //! with the font's advances, y down like the rest of a drawing.
 use crate::core::error::{Error, Result};
-use crate::geom::svg::RingBuilder;
+use crate::tangle::geom::svg::RingBuilder;
 use glam::DVec2;
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans-Bold-subset.ttf");
@@ -105,7 +105,7 @@ pub fn text_rings(text: &str, height: f64) -> Result<Vec<Vec<DVec2>>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::polygon::Polygon;
+    use crate::tangle::geom::polygon::Polygon;
 
     #[test]
     fn letters_have_holes_and_the_asked_height() {

@@ -3,7 +3,7 @@
 //!
 //! A tangle is a set of [`Shape`]s ⟨t, g, s; Θ, d⟩: a tag `t`, a group id
 //! `g`, a shape id `s` within the group, the geometry Θ (a polygon with
-//! holes, [`crate::geom::polygon::Polygon`]) and an orientation `d`.
+//! holes, [`crate::tangle::geom::polygon::Polygon`]) and an orientation `d`.
 //! Rules of a [`ast::Grammar`] rewrite the non-terminal shapes of the
 //! lowest group id, one group per expansion step.
 pub mod api;
@@ -11,6 +11,7 @@ pub mod ast;
 pub mod examples;
 pub mod expand;
 pub mod export;
+pub mod geom;
 pub mod grammar;
 pub mod letters;
 pub mod ops;
@@ -18,7 +19,7 @@ pub mod place;
 pub mod state;
 pub mod streamline;
 
-use crate::geom::polygon::Polygon;
+use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 use std::sync::Arc;
 

@@ -10,8 +10,8 @@
 //! shared by the shapes on both sides, so no gap or overlap can appear.
 use super::ast::{CurveDef, StippleKind};
 use crate::core::rng::Rng;
-use crate::geom::noise;
-use crate::geom::polygon::{resample_polyline, Polygon};
+use crate::tangle::geom::noise;
+use crate::tangle::geom::polygon::{resample_polyline, Polygon};
 use glam::DVec2;
 
 /// Hand-drawn wobble: displacement amplitude and feature size in drawing
@@ -471,7 +471,7 @@ mod tests {
             assert!(m.len() > 20, "{kind:?}");
             // Kept as they were made (not clipped) or clipped: normalised alike,
             // outer rings counter-clockwise.
-            let ccw = |q: &Polygon| crate::geom::polygon::ring_area2(&q.rings[0]) > 0.0;
+            let ccw = |q: &Polygon| crate::tangle::geom::polygon::ring_area2(&q.rings[0]) > 0.0;
             assert!(m.iter().all(ccw), "{kind:?}");
             let outside: f64 = m
                 .iter()

@@ -50,7 +50,7 @@
 //! non-positive size, a negative or non-finite distance, an empty motif)
 //! places nothing and gives the whole region back as the remainder.
 use crate::core::rng::Rng;
-use crate::geom::polygon::{Polygon, SLIVER_AREA};
+use crate::tangle::geom::polygon::{Polygon, SLIVER_AREA};
 use glam::DVec2;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;

@@ -13,7 +13,9 @@
 //! `start`, `edits`, `seed`, `wobble` and `stroke_width` are exactly the
 //! `tangle` request's fields ([`super::api::TangleRequest`]): the page sends
 //! the document as the request, so the ranges here are the request's own.
-use super::api::{Edit, StartRequest, MAX_EDITS, MAX_START_POINTS, MAX_STEPS};
+use super::api::{
+    Edit, StartRequest, MAX_EDITS, MAX_START_POINTS, MAX_STEPS, STROKE_WIDTH, WOBBLE,
+};
 use super::examples::EXAMPLES;
 use crate::core::error::Result;
 use crate::core::value::{invalid, js_len, nullish, Value, MAX_SAFE_INTEGER};
@@ -35,9 +37,6 @@ pub const MAX_EDIT_PARAMS: usize = 16;
 pub const MAX_PARAM_NAME: usize = 32;
 /// Largest start rectangle side or letter height (the request's).
 pub const MAX_START_SIDE: f64 = 1e6;
-/// Ranges of the request's settings (`tangle` checks the same).
-pub const WOBBLE: (f64, f64) = (0.0, 50.0);
-pub const STROKE_WIDTH: (f64, f64) = (0.0, 100.0);
 
 /// A checked Tangle document.
 #[derive(Debug, Clone, PartialEq, Serialize)]

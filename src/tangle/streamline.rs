@@ -19,7 +19,7 @@
 //!    - circular from a point `P′` (default the centroid):
 //!      `v_i = ((P′ − P_i)/|P′ − P_i|)^⊥`.
 //! 2. **Field.** `v(p) = Σ w_i(p) v_i`, normalised, with mean value
-//!    coordinates `w_i` ([`crate::geom::mvc`]; the paper's Meyer et al.
+//!    coordinates `w_i` ([`crate::tangle::geom::mvc`]; the paper's Meyer et al.
 //!    coordinates need convex shapes). Strip vectors point inwards from
 //!    every side, so opposite sides cancel in that sum: for the strip kind
 //!    the vectors are interpolated as orientations (doubled angles,
@@ -45,8 +45,8 @@
 //! [`MAX_ACROSS`]), sequential and uses only `+ − × ÷ sqrt`, so the cuts
 //! are the same bytes natively and in wasm.
 use super::ast::StreamKind;
-use crate::geom::mvc::mean_value_weights;
-use crate::geom::polygon::{ring_area2, ring_length, Polygon, Ring, SLIVER_AREA};
+use crate::tangle::geom::mvc::mean_value_weights;
+use crate::tangle::geom::polygon::{ring_area2, ring_length, Polygon, Ring, SLIVER_AREA};
 use glam::DVec2;
 
 /// Boundary samples carrying vectors, per polygon (all rings together).
@@ -244,7 +244,7 @@ impl Field {
             )
         };
         for ring in &poly.rings {
-            let r = crate::geom::polygon::resample_ring(ring, cell);
+            let r = crate::tangle::geom::polygon::resample_ring(ring, cell);
             for (k, &a) in r.iter().enumerate() {
                 let b = r[(k + 1) % r.len()];
                 let ((i0, j0), (i1, j1)) = (at(a.min(b)), at(a.max(b)));
@@ -393,7 +393,7 @@ impl<'a> Boundary<'a> {
         let mut edges = Vec::new();
         for ring in &poly.rings {
             // Pieces no longer than a cell: each touches at most 2×2 cells.
-            let r = crate::geom::polygon::resample_ring(ring, cell);
+            let r = crate::tangle::geom::polygon::resample_ring(ring, cell);
             let n = r.len();
             for i in 0..n {
                 let (a, b) = (r[i], r[(i + 1) % n]);

@@ -75,11 +75,9 @@ mod hooks {
     }
 
     pub fn start(payload: JsValue) -> Result<WebJob, JsValue> {
-        let req: DebugAbort = filigree::api::request(
-            "debug-abort",
-            filigree::web::deserializer(payload),
-        )
-        .map_err(|e| JsValue::from_str(&e.to_string()))?;
+        let req: DebugAbort =
+            filigree::api::request("debug-abort", filigree::web::deserializer(payload))
+                .map_err(|e| JsValue::from_str(&e.to_string()))?;
         let job = DebugAbort {
             steps: req.steps.max(1),
             left: req.steps,

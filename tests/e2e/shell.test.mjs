@@ -47,7 +47,9 @@ test('home: no hash shows what Filigree is and a card per tool with its picture,
   }));
   assert.deepEqual(pictures, TOOL_IDS.map((t) => [t, `/assets/home/${t}.png`, true, true]));
   assert.match(await page.textContent('.home-card[data-tool=inspect] .home-facts'), /^128×128 px · \d+ colours$/);
-  // Nothing was computed: no core module fetched, none started.
+  // Nothing was computed: the page fetched no core module and started none.
+  // (The service worker's install precaches every module for offline use in
+  // the background; those requests are its own, not the page's.)
   await page.waitForTimeout(500);
   assert.deepEqual(wasm, [], 'the home view fetches no wasm');
   assert.equal(await page.evaluate(() => document.documentElement.dataset.coreReady), undefined);

@@ -51,7 +51,6 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   const page = await env.newPage({ path: null });
   page.on('request', (r) => requests.push(r.url()));
   await page.goto(`${env.url}`);
-  await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
   await page.waitForFunction(() => document.querySelectorAll('.home-preview[data-ready]').length >= 6, null, { timeout: 30000 });
   assert.ok(!requests.some((u) => u.includes('texture-index.bin')), 'the home page does not fetch the index');
   await page.click('.home-card[data-tool=texture]');

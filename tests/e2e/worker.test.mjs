@@ -135,7 +135,7 @@ test('errors arrive typed: a syntax error has kind, line, column and field; a ba
     name: 'JobError', kind: 'syntax', message: r.syntax.message, line: 2, column: 13, field: 'program',
   });
   assert.match(r.syntax.message, /line 2, column 13/);
-  assert.equal(r.nullProgram.kind, 'invalid-input');
+  assert.equal(r.nullProgram.kind, 'bad-request');
   assert.equal(r.nullProgram.field, 'program');
   assert.equal(r.nullProgram.message, 'pattern-info: `program` must be text (got null)');
   assert.equal(r.nullProgram.line, undefined);

@@ -4,7 +4,7 @@ use super::super::lang::Call;
 use super::super::sdf::PrimKind;
 use super::interp::{Rec, V};
 use crate::core::error::Result;
-use crate::geom::bezier::cubic_piece_weights;
+use crate::pattern::geom::bezier::cubic_piece_weights;
 
 impl Rec<'_> {
     pub(super) fn path_cmd(&mut self, c: &Call) -> Result<()> {

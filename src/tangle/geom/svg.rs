@@ -8,7 +8,7 @@
 //! allows (it refuses deep nesting itself) and transforms are accumulated
 //! on an explicit stack, never by recursion.
 use crate::core::error::{Error, Result};
-use crate::geom::polygon::Polygon;
+use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 
 /// Most points over all rings of one source.
@@ -565,7 +565,7 @@ fn compose(o: [f64; 6], i: [f64; 6]) -> [f64; 6] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::polygon::Polygon;
+    use crate::tangle::geom::polygon::Polygon;
 
     fn area(rings: Vec<Vec<DVec2>>) -> f64 {
         Polygon::new(rings).unwrap().iter().map(Polygon::area).sum()

@@ -23,7 +23,7 @@
 //! Rings are closed implicitly (the edge from the last point back to the
 //! first) and should be oriented with the region on their left (outer ring
 //! counter-clockwise, holes clockwise, y up — as
-//! [`crate::geom::polygon::Polygon`] normalises them): then the weight sum
+//! [`crate::tangle::geom::polygon::Polygon`] normalises them): then the weight sum
 //! is positive for every point not on the boundary.
 use glam::DVec2;
 use std::ops::{Add, Mul};
