@@ -518,3 +518,131 @@ fn fit_help_documents_the_defaults_and_the_flags_reach_the_request() {
     assert_eq!(v["max_seconds"], 30.0);
     assert!(v["polish"].is_null() && v["grid"].is_null(), "{v}");
 }
+
+/// Issue 34 (hostile and careless inputs through the CLI): each is refused
+/// with a message naming what to change, before any work, and never by a
+/// crash (each of these aborted, ran for minutes or wrote nothing before).
+#[test]
+fn outputs_and_sizes_are_checked_before_the_work_starts() {
+    let dir = std::env::temp_dir().join(format!("filigree-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let target = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/fish.png");
+    let refused = |args: &[&str], why: &str| {
+        let t = std::time::Instant::now();
+        let out = filigree(args);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(why), "{args:?}: {err}");
+        // Refused up front: not after a fit or a 40 GB allocation.
+        assert!(
+            t.elapsed().as_secs_f64() < 5.0,
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
+    };
+    // A sheet of 20,000 px cells allocated 40 GB before its range check.
+    refused(
+        &["texture", "sheet", "--size", "20000", "--out", "/tmp/s.png"],
+        "--size: a sheet cell is 8..=512 pixels (got 20000)",
+    );
+    // A fit whose output folder does not exist failed only after the fit.
+    refused(
+        &[
+            "fit",
+            "--program",
+            "stripes",
+            "--target",
+            target,
+            "--out",
+            "/nonexistent/x.png",
+            "--json",
+        ],
+        "the folder /nonexistent does not exist",
+    );
+    refused(
+        &[
+            "fit",
+            "--program",
+            "stripes",
+            "--target",
+            target,
+            "--svg",
+            "/nonexistent/x.svg",
+        ],
+        "the folder /nonexistent does not exist",
+    );
+    // PNG bytes were written to a .jpg.
+    let jpg = dir.join("x.jpg");
+    refused(
+        &[
+            "micro",
+            "render",
+            "--scene",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/assets/micro/gyroid.json"),
+            "--out",
+            jpg.to_str().unwrap(),
+        ],
+        "name the file with .png",
+    );
+    refused(
+        &[
+            "texture",
+            "render",
+            "--model",
+            "perlin",
+            "--out",
+            jpg.to_str().unwrap(),
+        ],
+        "name the file with .png",
+    );
+    // `--size 0` with `--out` exited 0 and wrote nothing.
+    let png = dir.join("retrieved.png");
+    refused(
+        &[
+            "texture",
+            "--index",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/assets/texture-index.bin"),
+            "--image",
+            target,
+            "--out",
+            png.to_str().unwrap(),
+            "--size",
+            "0",
+        ],
+        "--size: the retrieved texture",
+    );
+    assert!(!png.exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Issue 34 item 1: 12,000 nested groups overflowed the CLI's stack in the
+/// SVG reader (exit 134); now a clear refusal.
+#[test]
+fn a_deeply_nested_svg_start_is_refused_not_a_crash() {
+    let dir = std::env::temp_dir().join(format!("filigree-deep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let svg = dir.join("deep.svg");
+    std::fs::write(
+        &svg,
+        format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\">{}<rect width=\"10\" height=\"10\"/>{}</svg>",
+            "<g transform=\"scale(1)\">".repeat(12_000),
+            "</g>".repeat(12_000)
+        ),
+    )
+    .unwrap();
+    let out = filigree(&[
+        "tangle",
+        "--grammar",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/tangle/leaf.tangle"),
+        "--start",
+        svg.to_str().unwrap(),
+        "--out",
+        dir.join("x.svg").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("nests elements more than 256 deep"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

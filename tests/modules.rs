@@ -1,4 +1,4 @@
-//! The page's table of wasm modules (`www/protocol.js` MODULE_KINDS and
+//! The page's table of wasm modules (`www/app/protocol.js` MODULE_KINDS and
 //! SHARED_KINDS) is the core's (`api::Module`): a kind the page sends to
 //! the wrong module would fail as "served by the X module".
 use filigree::api::{module_of, Module, IMAGE_KINDS, KINDS, SHARED_KINDS};
@@ -6,8 +6,8 @@ use std::collections::BTreeMap;
 
 /// `name: ['a', 'b'],` lines of MODULE_KINDS, and the SHARED_KINDS list.
 fn page_tables() -> (BTreeMap<String, Vec<String>>, Vec<String>, Vec<String>) {
-    let js = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/www/protocol.js"))
-        .expect("www/protocol.js");
+    let js = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/www/app/protocol.js"))
+        .expect("www/app/protocol.js");
     let strings = |s: &str| -> Vec<String> {
         s.split('\'')
             .skip(1)

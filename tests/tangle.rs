@@ -501,7 +501,7 @@ fn the_cli_writes_the_svg_the_request_makes() {
 /// The answer's shapes, points and steps' shape indices cross to the
 /// browser as little-endian bytes: decoding them gives back every field of
 /// every shape, every point and every step's inputs and outputs (what
-/// `www/tangle-draw.js` reads).
+/// `www/tangle/draw.js` reads).
 #[test]
 fn shapes_and_points_serialise_as_byte_columns_that_decode_exactly() {
     let r = run(req(example("checkerboard").unwrap().grammar));

@@ -183,18 +183,7 @@ impl FitArgs {
 
 /// The lower-case extension of an output path, which must be .png or .svg.
 fn output_kind(path: &Path) -> Result<String, String> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    if ext != "png" && ext != "svg" {
-        return Err(format!(
-            "{}: the output must end in .png or .svg",
-            path.display()
-        ));
-    }
-    Ok(ext)
+    super::out_path(path, &["png", "svg"])
 }
 
 /// The fitted pattern as a PNG of `width × height`: the same
@@ -227,6 +216,9 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
         return print_request(&req);
     }
     let out_kind = a.out.as_deref().map(output_kind).transpose()?;
+    if let Some(path) = &a.svg {
+        super::out_path(path, &["svg"])?;
+    }
     let threads = super::threads(a.threads)?;
     let t0 = Instant::now();
     // One shard per thread, exchanged by the same driver contract as the
@@ -253,18 +245,8 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
     .map_err(|e| explain(e, &origins))?;
     let secs = t0.elapsed().as_secs_f64();
     let r = &out.result;
-    if let Some(path) = &a.svg {
-        std::fs::write(path, &out.svg).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
-    if let (Some(path), Some(kind)) = (&a.out, &out_kind) {
-        let bytes = if kind == "svg" {
-            out.svg.clone().into_bytes()
-        } else {
-            req.shards = None;
-            fitted_png(&req, &out, &origins)?
-        };
-        std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-    }
+    // The result is printed before the files are written: a failed write
+    // never loses it.
     if a.json {
         let params: Map<String, Value> = r
             .names
@@ -290,6 +272,20 @@ pub fn run_fit(a: FitArgs) -> Result<(), String> {
         if let Some(p) = r.polish_loss {
             println!("image loss after the polish {p:.6}");
         }
+    }
+    if let Some(path) = &a.svg {
+        std::fs::write(path, &out.svg)
+            .map_err(|e| format!("{}: {e} (the fit's result is above)", path.display()))?;
+    }
+    if let (Some(path), Some(kind)) = (&a.out, &out_kind) {
+        let bytes = if kind == "svg" {
+            out.svg.clone().into_bytes()
+        } else {
+            req.shards = None;
+            fitted_png(&req, &out, &origins)?
+        };
+        std::fs::write(path, bytes)
+            .map_err(|e| format!("{}: {e} (the fit's result is above)", path.display()))?;
     }
     Ok(())
 }

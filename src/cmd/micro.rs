@@ -306,6 +306,7 @@ fn fit_target(a: &FitArgs) -> Result<FitTarget, String> {
 }
 
 fn fit(a: FitArgs) -> Result<(), String> {
+    super::out_path(&a.out, &["json"])?;
     let origins: Origins = vec![
         ("scene", a.scene.display().to_string()),
         ("target", "--target".into()),
@@ -383,7 +384,6 @@ fn fit(a: FitArgs) -> Result<(), String> {
     })
     .map_err(|e| super::explain(e, &origins))?;
     let secs = t0.elapsed().as_secs_f64();
-    write(&a.out, out.scene.as_bytes())?;
     let params: Vec<Value> = req
         .params
         .iter()
@@ -405,10 +405,12 @@ fn fit(a: FitArgs) -> Result<(), String> {
             "out": a.out.display().to_string(),
         })
     );
-    Ok(())
+    // After the result is printed: a failed write never loses it.
+    write(&a.out, out.scene.as_bytes()).map_err(|e| format!("{e} (the fit's result is above)"))
 }
 
 fn render(a: RenderArgs) -> Result<(), String> {
+    super::out_path(&a.out, &["png"])?;
     let origins: Origins = vec![
         ("scene", a.scene.display().to_string()),
         ("width", "--size".into()),
@@ -494,6 +496,7 @@ fn render(a: RenderArgs) -> Result<(), String> {
 }
 
 fn slice(a: SliceArgs) -> Result<(), String> {
+    super::out_path(&a.out, &["png"])?;
     let origins: Origins = vec![
         ("scene", a.scene.display().to_string()),
         ("width", "--size".into()),

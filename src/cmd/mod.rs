@@ -23,6 +23,42 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// Check an output path before any work starts: its extension is one of
+/// `kinds` (lower case, without the dot; the first is what the error
+/// suggests) and its folder exists, so a long run never ends in a write that
+/// fails. Returns the extension.
+pub fn out_path(path: &Path, kinds: &[&str]) -> Result<String, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    if !kinds.contains(&ext.as_str()) {
+        let names: Vec<String> = kinds.iter().map(|k| format!(".{k}")).collect();
+        return Err(format!(
+            "{}: this output is written as {}; name the file with {}",
+            path.display(),
+            kinds.join(" or ").to_ascii_uppercase(),
+            names.join(" or ")
+        ));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(format!(
+            "{}: the folder {} does not exist",
+            path.display(),
+            dir.display()
+        ));
+    }
+    if path.is_dir() {
+        return Err(format!("{}: is a folder, not a file", path.display()));
+    }
+    Ok(ext)
+}
+
 /// Read and decode an image file with the default limits, naming the file in errors.
 #[allow(dead_code)] // used by the tool subcommands
 pub fn read_image(path: &Path) -> Result<filigree::raster::Rgba8Image, String> {

@@ -230,6 +230,7 @@ fn params(a: &Args, origins: &Origins) -> Result<PixelParams, String> {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    super::out_path(&a.out, &["png"])?;
     let origins = origins(&a);
     let params = params(&a, &origins)?;
     let mask_origin: Origins = vec![("bytes", a.mask.display().to_string())];

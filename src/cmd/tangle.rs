@@ -54,6 +54,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    super::out_path(&a.out, &["svg", "png"])?;
     let origins: Origins = vec![
         ("grammar", a.grammar.display().to_string()),
         ("max_steps", "--steps".into()),

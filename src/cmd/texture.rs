@@ -63,6 +63,10 @@ pub struct RenderArgs {
     out: PathBuf,
 }
 
+/// Largest cell of `texture sheet` (23 models in a 5-column sheet: about
+/// 2,600² pixels at this size).
+const SHEET_MAX_CELL: usize = 512;
+
 pub fn run(w: Which) -> Result<(), String> {
     match w {
         Which::Render(a) => render(a),
@@ -117,6 +121,14 @@ pub fn run(w: Which) -> Result<(), String> {
             Ok(())
         }
         Which::Sheet { size, seed, out } => {
+            super::out_path(&out, &["png"])?;
+            // Checked before the sheet is allocated (20,000 px cells asked for 40 GB).
+            if !(models::MIN_SIZE..=SHEET_MAX_CELL).contains(&size) {
+                return Err(format!(
+                    "--size: a sheet cell is {}..={SHEET_MAX_CELL} pixels (got {size})",
+                    models::MIN_SIZE
+                ));
+            }
             let cols = 5;
             let rows = MODELS.len().div_ceil(cols);
             let gap = 4;
@@ -168,6 +180,7 @@ fn parse_params(m: &models::Model, params: &[String]) -> Result<Vec<f64>, String
 }
 
 fn render(a: RenderArgs) -> Result<(), String> {
+    super::out_path(&a.out, &["png"])?;
     let m = models::lookup(&a.model).map_err(|e| format!("--model: {e}"))?;
     let params = parse_params(m, &a.params)?;
     let light = a

@@ -58,6 +58,7 @@ fn read_ratings(path: Option<&Path>) -> Result<Vec<filigree::texture::scales::Ra
 }
 
 pub fn run_build(a: BuildArgs) -> Result<(), String> {
+    super::out_path(&a.out, &["bin"])?;
     let cfg = config(a.per_model, a.size, !a.no_augment);
     let ratings = read_ratings(a.ratings.as_deref())?;
     let t = Instant::now();
@@ -119,6 +120,20 @@ pub fn run_query(a: QueryArgs) -> Result<(), String> {
     let (Some(index_path), Some(image_path)) = (a.index.as_ref(), a.image.as_ref()) else {
         return Err("texture: give --index I and --image IMG, or a subcommand (render, models, sheet); see --help".into());
     };
+    if let Some(out) = &a.out {
+        super::out_path(out, &["png"])?;
+        let (lo, hi) = (
+            filigree::texture::models::MIN_SIZE,
+            filigree::texture::models::MAX_SIZE,
+        );
+        if !(lo..=hi).contains(&(a.size as usize)) {
+            return Err(format!(
+                "--size: the retrieved texture written to {} must be {lo}..={hi} pixels (got {})",
+                out.display(),
+                a.size
+            ));
+        }
+    }
     let bytes = std::fs::read(index_path).map_err(|e| format!("{}: {e}", index_path.display()))?;
     let index = api::parse_index(&bytes).map_err(|e| format!("{}: {e}", index_path.display()))?;
     let img_bytes =

@@ -115,6 +115,13 @@ fn start(raw: Option<&Value>) -> Result<Option<StartRequest>> {
                         "start.svg",
                         format!("must be the text of an SVG file (at most {MAX_SVG_BYTES} bytes)"),
                     )
+                })
+                .and_then(|t| {
+                    // A document too deep to parse is refused with the state,
+                    // not when the tangle grows from it.
+                    crate::tangle::geom::svg::check_depth(t)
+                        .map_err(|e| invalid("start.svg", e))?;
+                    Ok(t)
                 })?
                 .to_string(),
         },
@@ -356,6 +363,11 @@ mod tests {
         );
         assert_eq!(
             field_of("start", json!({"kind": "svg", "svg": ""})),
+            "start.svg"
+        );
+        let deep = format!("<svg>{}</svg>", "<g>".repeat(3000));
+        assert_eq!(
+            field_of("start", json!({"kind": "svg", "svg": deep})),
             "start.svg"
         );
         assert_eq!(

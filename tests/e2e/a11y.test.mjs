@@ -16,7 +16,7 @@ const READY = {
   inspect: () => !!document.querySelector('[data-testid=drop-zone] button'),
   tangle: () => Number(document.querySelector('[data-testid=tangle-status]')?.dataset.runs) > 0,
   micro: () => Number(document.querySelector('[data-testid=micro-status]')?.dataset.runs) > 0,
-  texture: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending(),
+  texture: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigree?.testHooks?.texture?.pending(),
 };
 
 async function open(tool) {
@@ -119,7 +119,7 @@ test('keyboard alone: Tab reaches every control of each panel, and key actions w
   await fit.waitForFunction(() => /snapped/.test(document.querySelector('[data-testid=fit-status]').textContent) || !document.querySelector('[data-testid=doc-error]').hidden);
   await fit.focus('button[data-act=make-target]');
   await fit.keyboard.press('Enter');
-  await fit.waitForFunction(() => window.filigreeFit.state().truth);
+  await fit.waitForFunction(() => window.filigree.testHooks.fit.state().truth);
   await fit.selectOption('[name=budget]', 'quick');
   await fit.focus('button[data-act=fit]');
   await fit.keyboard.press('Enter');
@@ -171,7 +171,7 @@ test('paste: Ctrl+V of an image from the clipboard is inspected', async () => {
 test('pointer input: pen and touch draw on the Fit target like a mouse', async () => {
   const page = await env.newPage({ path: '#tool=fit', hasTouch: true });
   await page.waitForFunction(READY.fit);
-  const sum = () => page.evaluate(() => window.filigreeFit.state().target.rgba.reduce((a, b) => a + b, 0));
+  const sum = () => page.evaluate(() => window.filigree.testHooks.fit.state().target.rgba.reduce((a, b) => a + b, 0));
   const box = await page.locator('.fit-target .stack').boundingBox();
   const at = (fx, fy) => ({ x: box.x + fx * box.width, y: box.y + fy * box.height });
   const cdp = await page.context().newCDPSession(page);
@@ -181,14 +181,14 @@ test('pointer input: pen and touch draw on the Fit target like a mouse', async (
   await pen('mousePressed', at(0.2, 0.2), 1);
   for (let i = 1; i <= 10; i++) await pen('mouseMoved', at(0.2 + i * 0.05, 0.2), 1);
   await pen('mouseReleased', at(0.7, 0.2), 0);
-  await page.waitForFunction((b) => window.filigreeFit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
+  await page.waitForFunction((b) => window.filigree.testHooks.fit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
   // A touch stroke with one finger.
   before = await sum();
   const touch = (type, p) => cdp.send('Input.dispatchTouchEvent', { type, touchPoints: p ? [{ ...p, id: 1 }] : [] });
   await touch('touchStart', at(0.2, 0.5));
   for (let i = 1; i <= 10; i++) await touch('touchMove', at(0.2 + i * 0.05, 0.5 + i * 0.03));
   await touch('touchEnd');
-  await page.waitForFunction((b) => window.filigreeFit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
+  await page.waitForFunction((b) => window.filigree.testHooks.fit.state().target.rgba.reduce((a, c) => a + c, 0) !== b, before, { timeout: 5000 });
   assert.equal(await page.$eval('.fit-target .stack', (e) => getComputedStyle(e).touchAction), 'none', 'no scrolling while drawing with touch');
 });
 
@@ -199,16 +199,16 @@ test('tangle by keyboard: Enter picks a grammar, Home/End/arrows walk the step s
   await page.focus('[data-example=checkerboard]');
   await page.keyboard.press('Enter');
   await page.waitForFunction((p) => Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > p
-    && !window.filigreeTangle.pending(), n, { timeout: 60000 });
-  assert.equal(await page.evaluate(() => window.filigreeTangle.state().example), 'checkerboard');
+    && !window.filigree.testHooks.tangle.pending(), n, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.tangle.state().example), 'checkerboard');
   const count = () => page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.count));
   const final = await count();
   await page.focus('[data-testid=tangle-step]');
   await page.keyboard.press('Home');
-  assert.equal(await page.evaluate(() => window.filigreeTangle.step()), 0);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.tangle.step()), 0);
   const start = await count();
   await page.keyboard.press('ArrowRight');
-  assert.equal(await page.evaluate(() => window.filigreeTangle.step()), 1);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.tangle.step()), 1);
   await page.keyboard.press('End');
   assert.equal(await count(), final);
   assert.ok(start >= 1 && start < final, `${start} start shapes, ${final} at the end`);

@@ -56,10 +56,10 @@ try {
     page.on('crash', () => console.log('page crashed', side));
     page.on('close', () => console.log('page closed', side));
     page.on('console', (m) => m.type() === 'error' && console.log('[console]', m.text()));
-    await page.waitForFunction(() => window.filigreePixel?.state()?.example === 'fish', null, { timeout: 30000 });
+    await page.waitForFunction(() => window.filigree?.testHooks?.pixel?.state()?.example === 'fish', null, { timeout: 30000 });
     await page.setInputFiles('input[data-input=source]', file);
     // The source is decoded and laid out (the view may scale it down to fit the window).
-    await page.waitForFunction((n) => window.filigreePixel.state()?.mask.width === n
+    await page.waitForFunction((n) => window.filigree.testHooks.pixel.state()?.mask.width === n
       && document.querySelector('.tool-pixel canvas.base').width === n, side, { timeout: 60000 });
     await page.waitForTimeout(500);
     for (const mode of ['stroke', 'paint']) {
@@ -76,7 +76,7 @@ try {
         // Our own work per frame: the view's repaint of what the brush touched.
         if (!window.paintHooked) {
           window.paintHooked = true;
-          const { CanvasView } = await import(new URL('www/canvas-view.js', document.baseURI).href);
+          const { CanvasView } = await import(new URL('www/pixel/canvas-view.js', document.baseURI).href);
           const paint = CanvasView.prototype.paint;
           CanvasView.prototype.paint = function timed() {
             const t = performance.now();

@@ -1,4 +1,4 @@
-// www/canvas-view.js: a brush drag on a big image repaints one small
+// www/pixel/canvas-view.js: a brush drag on a big image repaints one small
 // rectangle per frame (one putImageData), does no layout work on pointermove,
 // maps pointers to image pixels at any zoom, and paints within a frame.
 // Prints the input-to-paint latency medians for 1024² and 4096² images.
@@ -12,7 +12,7 @@ after(async () => { await env?.close(); });
 
 async function brushDrag(page, size) {
   await page.evaluate(async (size) => {
-    const { CanvasView } = await import('./www/canvas-view.js');
+    const { CanvasView } = await import('./www/pixel/canvas-view.js');
     document.getElementById('cv-test')?.remove();
     const box = document.createElement('div');
     box.id = 'cv-test';
@@ -118,7 +118,7 @@ test('canvas view: a brush drag repaints one small rectangle per frame, no layou
 test('canvas view: pointer mapping and integer zoom', async () => {
   const page = await env.newPage({ path: '#tool=inspect' });
   const r = await page.evaluate(async () => {
-    const { CanvasView } = await import('./www/canvas-view.js');
+    const { CanvasView } = await import('./www/pixel/canvas-view.js');
     const box = document.createElement('div');
     box.style.cssText = 'position:fixed;left:10px;top:20px;width:700px;height:500px;z-index:99';
     document.body.append(box);

@@ -1,16 +1,16 @@
-// The document controller (www/document.js) and share links (www/share.js):
+// The document controller (www/app/document.js) and share links (www/app/share.js):
 // links round-trip a Pixel and a Fit state into a fresh browser with the
 // same result pixels; bad project files and links are refused without
 // touching the user's work; leaving a tool or changing the generator during
 // a fit stops it cleanly; examples are undoable; blocked storage is said
-// plainly and the app still works.
+// plainly and the app still works; test hooks exist only in a test page.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { launch, pickGenerator } from './harness.mjs';
+import { launch, pickGenerator, ready } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -31,7 +31,7 @@ async function waitForPixel(page, previous = null) {
     const el = document.querySelector('[data-testid=pixel-status]');
     const runs = Number(el?.dataset.runs || 0);
     return el.textContent.startsWith('done') && runs > 0 && (prev === null || runs > prev)
-      && !window.filigreePixel.pending();
+      && !window.filigree.testHooks.pixel.pending();
   }, previous, { timeout: 30000 });
   return page.$eval('[data-testid=pixel-status]', (el) => Number(el.dataset.runs));
 }
@@ -48,10 +48,10 @@ async function dragStroke(page, points, size = 128) {
 
 // FNV-1a of a result's pixels, computed in the page.
 const PIXEL_HASH = `(rgba) => { let h = 2166136261; for (let i = 0; i < rgba.length; i++) { h ^= rgba[i]; h = Math.imul(h, 16777619) >>> 0; } return h; }`;
-const pixelResultHash = (page) => page.evaluate(`(${PIXEL_HASH})(window.filigreePixel.result().rgba)`);
+const pixelResultHash = (page) => page.evaluate(`(${PIXEL_HASH})(window.filigree.testHooks.pixel.result().rgba)`);
 
 async function pixelReady(page) {
-  await page.waitForFunction(() => window.filigreePixel?.state()?.example === 'fish');
+  await page.waitForFunction(() => window.filigree?.testHooks?.pixel?.state()?.example === 'fish');
   return waitForPixel(page);
 }
 
@@ -68,8 +68,8 @@ async function runFit(page) {
 /** Hash of the program rendered at 256² with the document's values. */
 const fitRenderHash = (page) => page.evaluate(async (hashSrc) => {
   const hash = eval(hashSrc); // eslint-disable-line no-eval
-  const d = window.filigreeFit.state();
-  const info = window.filigreeFit.info();
+  const d = window.filigree.testHooks.fit.state();
+  const info = window.filigree.testHooks.fit.info();
   const params = Object.fromEntries(info.params.map((p, i) => [p.name, d.values[i]]));
   const r = await window.filigree.pool.run('render-pattern', { program: d.program, params, size: 256 });
   return { render: hash(r.rgba), target: hash(d.target.rgba) };
@@ -78,9 +78,9 @@ const fitRenderHash = (page) => page.evaluate(async (hashSrc) => {
 async function startPaperFit(page) {
   await pickGenerator(page, 'stripes');
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
   await page.selectOption('select[name=budget]', 'paper');
-  await page.waitForFunction(() => window.filigreeFit.state().settings.budget === 'paper');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().settings.budget === 'paper');
   await page.click('button[data-act=fit]');
   await page.waitForFunction(() => /loss/.test(document.querySelector('[data-testid=fit-status]').textContent)
     && !document.querySelector('button[data-act=cancel]').disabled);
@@ -96,7 +96,7 @@ test('a Pixel share link opens the same state and the same result pixels in a fr
   await a.$eval('[data-key=density] input', (el) => { el.value = '0.6'; el.dispatchEvent(new Event('input', { bubbles: true })); el.dispatchEvent(new Event('change', { bubbles: true })); });
   runs = await waitForPixel(a, runs);
   const want = await a.evaluate(() => {
-    const s = window.filigreePixel.state();
+    const s = window.filigree.testHooks.pixel.state();
     return { strokes: s.strokes, params: s.params, maskOn: s.mask.bits.reduce((x, y) => x + y, 0) };
   });
   const wantHash = await pixelResultHash(a);
@@ -109,10 +109,10 @@ test('a Pixel share link opens the same state and the same result pixels in a fr
   assert.ok(link.length < 8192 + 200, `the link is ${link.length} characters`);
 
   const b = await env.newPage({ path: link.slice(link.indexOf('#')) });
-  await b.waitForFunction((n) => window.filigreePixel?.state()?.strokes.length === n, want.strokes.length);
+  await b.waitForFunction((n) => window.filigree?.testHooks?.pixel?.state()?.strokes.length === n, want.strokes.length);
   await waitForPixel(b);
   const got = await b.evaluate(() => {
-    const s = window.filigreePixel.state();
+    const s = window.filigree.testHooks.pixel.state();
     return { strokes: s.strokes, params: s.params, maskOn: s.mask.bits.reduce((x, y) => x + y, 0) };
   });
   assert.deepEqual(got, want);
@@ -126,27 +126,27 @@ test('a Fit share link restores program, target and values; the same seed fits t
   const a = await env.newPage({ path: '#tool=fit' });
   await pickGenerator(a, 'stripes');
   await a.click('button[data-act=make-target]');
-  await a.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await a.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
   await runFit(a);
   const want = await a.evaluate(() => {
-    const s = window.filigreeFit.state();
+    const s = window.filigree.testHooks.fit.state();
     return { generator: s.generator, values: s.values, truth: s.truth, settings: s.settings, loss: s.result.loss };
   });
   const wantHash = await fitRenderHash(a);
   const { fragment } = await a.evaluate(() => window.filigree.currentShare());
 
   const b = await env.newPage({ path: `#${fragment}` });
-  await b.waitForFunction(() => window.filigreeFit?.state()?.generator === 'stripes'
-    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length);
+  await b.waitForFunction(() => window.filigree?.testHooks?.fit?.state()?.generator === 'stripes'
+    && window.filigree.testHooks.fit.info()?.params.length === window.filigree.testHooks.fit.state().values.length);
   const got = await b.evaluate(() => {
-    const s = window.filigreeFit.state();
+    const s = window.filigree.testHooks.fit.state();
     return { generator: s.generator, values: s.values, truth: s.truth, settings: s.settings, loss: s.result.loss };
   });
   assert.deepEqual(got, want);
   assert.deepEqual(await fitRenderHash(b), wantHash, 'same target pixels and same pattern pixels');
   // Fitting again with the same seed gives exactly the same values.
   await runFit(b);
-  assert.deepEqual(await b.evaluate(() => window.filigreeFit.state().values), want.values);
+  assert.deepEqual(await b.evaluate(() => window.filigree.testHooks.fit.state().values), want.values);
   assert.deepEqual(await fitRenderHash(b), wantHash);
 });
 
@@ -154,9 +154,9 @@ test('a corrupt or hostile link says so plainly and leaves the autosaved work al
   const page = await env.newPage({ path: '#tool=pixel' });
   await pixelReady(page);
   await dragStroke(page, [[20, 70], [60, 64], [95, 80]]);
-  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 4);
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state().strokes.length === 4);
   await page.waitForTimeout(700); // the autosave is debounced
-  const strokes = () => page.evaluate(() => window.filigreePixel.state().strokes.length);
+  const strokes = () => page.evaluate(() => window.filigree.testHooks.pixel.state().strokes.length);
 
   const cases = [
     ['tool=pixel&share=%%%not-base64', /This link is damaged or not a Filigree link/],
@@ -166,7 +166,7 @@ test('a corrupt or hostile link says so plainly and leaves the autosaved work al
   ];
   // A well-formed link whose state is wrong: the mask does not match its size.
   const bad = await page.evaluate(async () => {
-    const { encodeShare } = await import('./www/share.js');
+    const { encodeShare } = await import('./www/app/share.js');
     return encodeShare('pixel', { example: 'fish', sheet: null, sprite: null, mask: { width: 128, height: 128, packed: new Uint8Array(3) }, strokes: [], params: {}, names: {} });
   });
   cases.push([bad, /could not be opened: mask is cut short/]);
@@ -179,7 +179,7 @@ test('a corrupt or hostile link says so plainly and leaves the autosaved work al
     assert.equal(await strokes(), 4, 'the document is untouched');
   }
   await page.reload();
-  await page.waitForFunction(() => window.filigreePixel?.state()?.strokes.length === 4);
+  await page.waitForFunction(() => window.filigree?.testHooks?.pixel?.state()?.strokes.length === 4);
   await waitForPixel(page);
   assert.equal(await strokes(), 4, 'the autosave is untouched');
 });
@@ -190,7 +190,7 @@ test('a corrupt project file is refused before anything is autosaved; the work s
   const page = await env.newPage({ path: '#tool=pixel' });
   await pixelReady(page);
   await dragStroke(page, [[20, 70], [60, 64], [95, 80]]);
-  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 4);
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state().strokes.length === 4);
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
   const good = JSON.parse(fs.readFileSync(await download.path(), 'utf8'));
   assert.equal(good.tool, 'pixel');
@@ -213,7 +213,7 @@ test('a corrupt project file is refused before anything is autosaved; the work s
     await page.setInputFiles('input[data-input=project]', file);
     await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=doc-error]').textContent), message.source);
     assert.match(await page.textContent(ERROR), /Your work is unchanged\.$/);
-    assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 4);
+    assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().strokes.length), 4);
   }
   // A texturing run that finishes after the refusal does not wipe it: the
   // message stays until the user acts (it once vanished with the next result).
@@ -222,19 +222,19 @@ test('a corrupt project file is refused before anything is autosaved; the work s
   runs = await waitForPixel(page, runs);
   assert.equal(await page.isHidden(ERROR), false);
   assert.equal(await page.textContent(ERROR), shown);
-  assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 5);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().strokes.length), 5);
   await page.click('button[data-act=undo]');
   // A format-1 project (before stateVersion) still opens: older files migrate.
   const v1 = { format: 'filigree-project', version: 1, tool: 'pixel', state: { ...good.state, strokes: [] } };
   await page.setInputFiles('input[data-input=project]', write('old.filigree.json', JSON.stringify(v1)));
-  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 0);
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state().strokes.length === 0);
   assert.equal(await page.isHidden(ERROR), true);
   // Undo brings the whole previous document back.
   await page.click('button[data-act=undo]');
-  assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 4);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().strokes.length), 4);
   await page.waitForTimeout(700);
   await page.reload();
-  await page.waitForFunction(() => window.filigreePixel?.state()?.strokes.length === 4);
+  await page.waitForFunction(() => window.filigree?.testHooks?.pixel?.state()?.strokes.length === 4);
   fs.rmSync(dir, { recursive: true, force: true });
 });
 
@@ -242,8 +242,8 @@ test('a Fit project saved by the app opens again through the core; a bad setting
   const page = await env.newPage({ path: '#tool=fit' });
   await pickGenerator(page, 'stripes');
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
-  const want = await page.evaluate(() => window.filigreeFit.state());
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
+  const want = await page.evaluate(() => window.filigree.testHooks.fit.state());
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
   const saved = JSON.parse(fs.readFileSync(await download.path(), 'utf8'));
   const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'filigree-fit-'));
@@ -256,8 +256,8 @@ test('a Fit project saved by the app opens again through the core; a bad setting
   const good = path.join(dir, 'stripes.filigree.json');
   fs.copyFileSync(await download.path(), good);
   await page.setInputFiles('input[data-input=project]', good);
-  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'stripes');
-  const got = await page.evaluate(() => window.filigreeFit.state());
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state()?.generator === 'stripes');
+  const got = await page.evaluate(() => window.filigree.testHooks.fit.state());
   assert.deepEqual({ ...got, target: null }, { ...want, target: null });
   assert.deepEqual(got.target.rgba, want.target.rgba);
   assert.equal(got.result, null, 'a missing result is null, as the panel keeps it');
@@ -270,27 +270,27 @@ test('undo after opening a project restores size, sheet and strokes together', a
   await pixelReady(page);
   // Save the trunk as a project, go back to the fish, open the trunk project, undo.
   await page.click('button[data-example=trunk]');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'trunk');
   let runs = await waitForPixel(page);
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
   const file = path.join(os.tmpdir(), `trunk-${process.pid}.filigree.json`);
   fs.copyFileSync(await download.path(), file);
   await page.click('button[data-example=fish]');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'fish');
   runs = await waitForPixel(page, runs);
   const fish = await page.evaluate(() => {
-    const s = window.filigreePixel.state();
+    const s = window.filigree.testHooks.pixel.state();
     return { w: s.mask.width, strokes: s.strokes.length, sheet: s.sheet.length };
   });
   await page.setInputFiles('input[data-input=project]', file);
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'trunk');
   runs = await waitForPixel(page, runs);
   await page.keyboard.press('Control+z');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'fish');
   await waitForPixel(page, runs);
   const after = await page.evaluate(() => {
-    const s = window.filigreePixel.state();
-    const r = window.filigreePixel.result();
+    const s = window.filigree.testHooks.pixel.state();
+    const r = window.filigree.testHooks.pixel.result();
     const layers = document.querySelector('.viewport .layers');
     const zoom = Number(document.querySelector('[data-testid=zoom]').textContent.slice(1));
     return {
@@ -311,17 +311,17 @@ test('an example click after edits is one undoable step', async () => {
   await pixelReady(page);
   await page.click('button[data-act=clear-strokes]');
   await dragStroke(page, [[20, 70], [60, 64], [95, 80]]);
-  await page.waitForFunction(() => window.filigreePixel.state().strokes.length === 1);
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state().strokes.length === 1);
   await page.click('button[data-example=trunk]');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'trunk');
   await page.locator('body').focus();
   await page.keyboard.press('Control+z');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
-  assert.equal(await page.evaluate(() => window.filigreePixel.state().strokes.length), 1, 'the drawing is back');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'fish');
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().strokes.length), 1, 'the drawing is back');
   await page.keyboard.press('Control+y');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'trunk');
   await page.keyboard.press('Control+Shift+z'); // nothing left to redo
-  assert.equal(await page.evaluate(() => window.filigreePixel.state().example), 'trunk');
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().example), 'trunk');
 });
 
 // ---- lifecycle during a fit -----------------------------------------------------------------
@@ -330,7 +330,7 @@ test('switching tools during a fit stops it: workers idle within 1 s, no error, 
   const page = await env.newPage({ path: '#tool=fit' });
   const errors = watchErrors(page);
   await startPaperFit(page);
-  const before = await page.evaluate(() => window.filigreeFit.state());
+  const before = await page.evaluate(() => window.filigree.testHooks.fit.state());
   await page.click('#tools button[data-tool=inspect]');
   const t0 = Date.now();
   await page.waitForFunction(() => window.filigree.pool.pending === 0, null, { timeout: 1000, polling: 20 });
@@ -340,11 +340,11 @@ test('switching tools during a fit stops it: workers idle within 1 s, no error, 
   assert.equal(await page.$$eval('.toast-error', (t) => t.length), 0, 'no error toast');
 
   await page.click('#tools button[data-tool=fit]');
-  await page.waitForFunction(() => window.filigreeFit?.info()?.params.length === window.filigreeFit.state().values.length
+  await page.waitForFunction(() => window.filigree?.testHooks?.fit?.info()?.params.length === window.filigree.testHooks.fit.state().values.length
     && document.querySelectorAll('[data-testid=fit-sliders] .row').length > 0);
   assert.equal(await page.isEnabled('button[data-act=fit]'), true, 'Fit enabled');
   assert.equal(await page.isDisabled('button[data-act=cancel]'), true, 'Cancel disabled');
-  const back = await page.evaluate(() => window.filigreeFit.state());
+  const back = await page.evaluate(() => window.filigree.testHooks.fit.state());
   assert.deepEqual({ ...back, target: null }, { ...before, target: null });
   assert.equal(await page.isHidden(ERROR), true);
   assert.deepEqual(errors, []);
@@ -355,14 +355,14 @@ test('changing the generator during a fit stops the old fit; the new sliders sta
   const errors = watchErrors(page);
   await startPaperFit(page);
   await page.selectOption('[data-testid=fit-generator]', 'circles-grid');
-  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'circles-grid'
-    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state()?.generator === 'circles-grid'
+    && window.filigree.testHooks.fit.info()?.params.length === window.filigree.testHooks.fit.state().values.length);
   await page.waitForFunction(() => window.filigree.pool.pending === 0, null, { timeout: 2000 });
   await page.waitForTimeout(500);
   const s = await page.evaluate(() => ({
-    running: window.filigreeFit.running(), result: window.filigreeFit.state().result,
+    running: window.filigree.testHooks.fit.running(), result: window.filigree.testHooks.fit.state().result,
     sliders: document.querySelectorAll('[data-testid=fit-sliders] .row').length,
-    params: window.filigreeFit.info().params.length,
+    params: window.filigree.testHooks.fit.info().params.length,
   }));
   assert.equal(s.running, false);
   assert.equal(s.result, null, 'the old fit did not finish into the new generator');
@@ -372,7 +372,7 @@ test('changing the generator during a fit stops the old fit; the new sliders sta
   assert.deepEqual(errors, []);
   // One undo brings the stripes back, with their values.
   await page.click('button[data-act=undo]');
-  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'stripes');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state()?.generator === 'stripes');
 });
 
 // ---- storage ------------------------------------------------------------------------------------
@@ -392,9 +392,37 @@ test('when storage hangs the panels still work and say plainly that they cannot 
   assert.ok(Date.now() - t0 < 15000);
   // Still usable: a target from values, and Save project offers the file.
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
   assert.equal(JSON.parse(fs.readFileSync(await download.path(), 'utf8')).tool, 'fit');
+});
+
+test('test hooks are published only in a page a test opened, and leave with their panel', async () => {
+  // A page without the harness's init script: nothing for tests, not even an empty registry.
+  const context = await env.browser.newContext({ viewport: { width: 1280, height: 800 } });
+  try {
+    const plain = await context.newPage();
+    await plain.goto(`${env.url}#tool=micro`);
+    await ready(plain, '#tool=micro');
+    await plain.waitForSelector('[data-testid=micro-fit]');
+    assert.deepEqual(await plain.evaluate(() => ({
+      registry: 'testHooks' in window.filigree,
+      globals: Object.keys(window).filter((k) => /^filigree./i.test(k)),
+    })), { registry: false, globals: [] });
+  } finally {
+    await context.close();
+  }
+  // A test page: the shown panel's hooks (Micro's and its reconstruction's), gone once it is left.
+  const page = await env.newPage({ path: '#tool=micro' });
+  await page.waitForFunction(() => window.filigree.testHooks.micro?.state());
+  const names = () => page.evaluate(() => Object.keys(window.filigree.testHooks).sort());
+  assert.deepEqual(await names(), ['micro', 'micro-fit']);
+  await page.click('#tools button[data-tool=inspect]');
+  await page.waitForFunction(() => document.documentElement.dataset.view === 'inspect');
+  assert.deepEqual(await names(), [], 'Inspect exposes nothing and Micro\'s hooks left with it');
+  await page.click('#tools button[data-tool=fit]');
+  await page.waitForFunction(() => window.filigree.testHooks.fit);
+  assert.deepEqual(await names(), ['fit']);
 });
 
 test('the app in an about:blank host loads and works', async () => {
@@ -408,7 +436,7 @@ test('the app in an about:blank host loads and works', async () => {
     const frame = await (await page.waitForSelector('iframe')).contentFrame();
     await frame.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 20000 });
     await frame.click('button[data-act=make-target]');
-    await frame.waitForFunction(() => window.filigreeFit.state().truth !== null);
+    await frame.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
     // Whether this host lets the frame store or not, the page says the truth.
     const canStore = await frame.evaluate(async () => {
       try {

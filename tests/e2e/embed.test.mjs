@@ -58,7 +58,7 @@ async function embedFrame(page) {
 function currentState(target) {
   return target.evaluate(async () => {
     const { fragment } = await window.filigree.currentShare();
-    const { decodeShare } = await import(new URL('www/share.js', document.baseURI).href);
+    const { decodeShare } = await import(new URL('www/app/share.js', document.baseURI).href);
     const shared = await decodeShare(fragment);
     return JSON.stringify(shared, (k, v) => (v instanceof Uint8Array ? [...v] : v));
   });

@@ -31,22 +31,22 @@ for (const [g, name] of names.entries()) {
   const truth = await page.evaluate((seed) => {
     let s = (seed * 2654435761) >>> 0 || 1;
     const rand = () => { s ^= s << 13; s >>>= 0; s ^= s >>> 17; s ^= s << 5; s >>>= 0; return s / 4294967296; };
-    const st = window.filigreeFit.state();
-    const values = window.filigreeFit.info().params.map((p, i) => (p.integer ? st.values[i]
+    const st = window.filigree.testHooks.fit.state();
+    const values = window.filigree.testHooks.fit.info().params.map((p, i) => (p.integer ? st.values[i]
       : Math.min(p.hi, Math.max(p.lo, st.values[i] + (rand() - 0.5) * 0.3 * (p.hi - p.lo)))));
     window.filigree.doc.current.ctx.commit({ ...st, values });
     return values;
   }, g + 1);
-  await page.waitForFunction((v) => JSON.stringify(window.filigreeFit.state().values) === JSON.stringify(v), truth);
+  await page.waitForFunction((v) => JSON.stringify(window.filigree.testHooks.fit.state().values) === JSON.stringify(v), truth);
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
   const t0 = Date.now();
   await page.click('button[data-act=fit]');
   await page.waitForFunction(() => /^fitted/.test(document.querySelector('[data-testid=fit-status]').textContent)
     || !document.querySelector('[data-testid=doc-error]').hidden, null, { timeout: 600000 });
   const wall = (Date.now() - t0) / 1000;
   const out = await page.evaluate(async () => {
-    const f = window.filigreeFit;
+    const f = window.filigree.testHooks.fit;
     const st = f.state(), info = f.info();
     const ctx = window.filigree.doc.current.ctx;
     const status = document.querySelector('[data-testid=fit-status]').textContent;

@@ -22,11 +22,11 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
   await pickGenerator(page, 'stripes');
   // The truth: the program's defaults, drawn as the target.
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
-  const truth = await page.evaluate(() => window.filigreeFit.state().truth);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
+  const truth = await page.evaluate(() => window.filigree.testHooks.fit.state().truth);
 
   await runFit(page);
-  const points = await page.evaluate(() => window.filigreeFit.plot.points.map((p) => p[1]));
+  const points = await page.evaluate(() => window.filigree.testHooks.fit.plot.points.map((p) => p[1]));
   assert.ok(points.length >= 5, `the loss plot has ${points.length} points`);
   assert.ok(points.at(-1) < points[0] * 0.8, `the loss fell from ${points[0]} to ${points.at(-1)}`);
 
@@ -35,8 +35,8 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
   // 64² grid, where the 0.008-wide crossing lines are half a pixel, so their
   // width is the loosest.)
   const { values, params } = await page.evaluate(() => ({
-    values: window.filigreeFit.state().values,
-    params: window.filigreeFit.info().params,
+    values: window.filigree.testHooks.fit.state().values,
+    params: window.filigree.testHooks.fit.info().params,
   }));
   let mse = 0;
   params.forEach((p, i) => {
@@ -62,7 +62,7 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
     && !document.querySelector('button[data-act=cancel]').disabled);
   await page.click('button[data-act=cancel]');
   await page.waitForFunction(() => /^cancelled/.test(document.querySelector('[data-testid=fit-status]').textContent));
-  assert.deepEqual(await page.evaluate(() => window.filigreeFit.state().values), values);
+  assert.deepEqual(await page.evaluate(() => window.filigree.testHooks.fit.state().values), values);
 
   // Export SVG of the fitted pattern.
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-svg]')]);
@@ -73,7 +73,7 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
   // Export JSON: the program travels with the fitted values (the file alone re-renders the pattern).
   const [json] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-json]')]);
   const exported = JSON.parse(fs.readFileSync(await json.path(), 'utf8'));
-  const doc = await page.evaluate(() => window.filigreeFit.state());
+  const doc = await page.evaluate(() => window.filigree.testHooks.fit.state());
   assert.equal(exported.program, doc.program);
   assert.equal(exported.generator, 'stripes');
   assert.deepEqual(Object.values(exported.params), doc.values);
@@ -94,7 +94,7 @@ test('draw a target by hand and fit it; a broken program is reported with its li
     await page.mouse.up();
   }
   const painted = await page.evaluate(() => {
-    const t = window.filigreeFit.state().target.rgba;
+    const t = window.filigree.testHooks.fit.state().target.rgba;
     let n = 0;
     for (let i = 0; i < t.length; i += 4) if (t[i] !== 255) n++;
     return n;
@@ -121,10 +121,10 @@ test('the generator picker offers the designer examples, written with tile()', a
     assert.ok(names.includes(n), `the picker offers ${n} (it has ${names.join(', ')})`);
   }
   await pickGenerator(page, 'scales');
-  assert.match(await page.evaluate(() => window.filigreeFit.state().program), /tile\(dx, dy, 0\.5 \* dx\)/);
+  assert.match(await page.evaluate(() => window.filigree.testHooks.fit.state().program), /tile\(dx, dy, 0\.5 \* dx\)/);
   // Its target is drawn in the browser as natively: the tile's copies cover the canvas.
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
   assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
 });
 
@@ -176,7 +176,7 @@ test('a non-square upload keeps its aspect: the target, the fitted overlay and t
   assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
   // The target keeps the upload's aspect, 256 px along its longer side, and
   // is shown with it (the page used to squash it into a 256² square).
-  const t = await page.evaluate(() => ({ width: window.filigreeFit.state().target.width, height: window.filigreeFit.state().target.height }));
+  const t = await page.evaluate(() => ({ width: window.filigree.testHooks.fit.state().target.width, height: window.filigree.testHooks.fit.state().target.height }));
   assert.deepEqual(t, { width: 256, height: 205 });
   const shown = await page.locator('[data-testid=fit-target]').boundingBox();
   assert.ok(Math.abs(shown.width / shown.height - 256 / 205) < 0.02, `the target is shown ${shown.width} × ${shown.height}`);
@@ -196,7 +196,7 @@ test('a non-square upload keeps its aspect: the target, the fitted overlay and t
     const [w, h] = blobExtent(overlay.width, overlay.height, ink, cx, cy);
     assert.ok(w >= 8 && Math.abs(w - h) <= 1, `a fitted dot near (${cx}, ${cy}) is ${w} × ${h} px`);
   }
-  const { values, params } = await page.evaluate(() => ({ values: window.filigreeFit.state().values, params: window.filigreeFit.info().params }));
+  const { values, params } = await page.evaluate(() => ({ values: window.filigree.testHooks.fit.state().values, params: window.filigree.testHooks.fit.info().params }));
   const truth = { d, ox: o, oy: o, r };
   for (const [i, p] of params.entries()) {
     const err = Math.abs(values[i] - truth[p.name]) / (p.hi - p.lo);
@@ -210,11 +210,11 @@ test('a non-square upload keeps its aspect: the target, the fitted overlay and t
   assert.doesNotMatch(svg, /preserveAspectRatio/);
 
   // A share link carries the target with its aspect, pixel for pixel.
-  const want = await page.evaluate(() => Array.from(window.filigreeFit.state().target.rgba));
+  const want = await page.evaluate(() => Array.from(window.filigree.testHooks.fit.state().target.rgba));
   const { fragment } = await page.evaluate(() => window.filigree.currentShare());
   const b = await env.newPage({ path: `#${fragment}` });
-  await b.waitForFunction(() => window.filigreeFit?.state()?.target?.height === 205);
-  const got = await b.evaluate(() => ({ width: window.filigreeFit.state().target.width, rgba: Array.from(window.filigreeFit.state().target.rgba) }));
+  await b.waitForFunction(() => window.filigree?.testHooks?.fit?.state()?.target?.height === 205);
+  const got = await b.evaluate(() => ({ width: window.filigree.testHooks.fit.state().target.width, rgba: Array.from(window.filigree.testHooks.fit.state().target.rgba) }));
   assert.equal(got.width, 256);
   assert.ok(got.rgba.length === want.length && got.rgba.every((v, i) => v === want[i]), 'the same target pixels');
 });

@@ -116,13 +116,13 @@ test('the app in an about:blank host works, says it cannot save there, and stays
     assert.match(await frame.textContent('[data-testid=doc-note]'), NOTE);
     assert.ok(Date.now() - t0 < 20000, 'the panel did not wait on storage');
     // Editing still works there.
-    const before = await frame.evaluate(() => window.filigreeFit.state().values.join());
+    const before = await frame.evaluate(() => window.filigree.testHooks.fit.state().values.join());
     await frame.$eval('[data-testid=fit-sliders] input[type=range]', (el) => {
       el.value = el.max;
       el.dispatchEvent(new Event('input', { bubbles: true }));
       el.dispatchEvent(new Event('change', { bubbles: true }));
     });
-    await frame.waitForFunction((b) => window.filigreeFit.state().values.join() !== b, before);
+    await frame.waitForFunction((b) => window.filigree.testHooks.fit.state().values.join() !== b, before);
     await page.waitForTimeout(1000);
     assert.deepEqual(errors.filter((e) => !/autosave/i.test(e)), [], 'no console errors in an about:blank host');
     assert.deepEqual(await frameErrors(frame), [], 'no uncaught errors in the frame');

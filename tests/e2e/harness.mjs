@@ -35,7 +35,9 @@ export async function ready(page, path) {
 /** Start server (serving `root`, the repository by default) + browser (extra Chromium `args`).
  * Returns {url, browser, server, newPage({path, ...context options}), close()};
  * newPage goes to `path` (the home view by default; null: nowhere) and waits
- * until it is ready (see `ready`). */
+ * until it is ready (see `ready`). Its pages (and their frames) are test pages:
+ * the panels' test hooks are in `window.filigree.testHooks[<tool id or name>]`
+ * (`ctx.expose`, www/app/document.js). */
 export async function launch({ root = ROOT, args = [] } = {}) {
   const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
@@ -46,6 +48,7 @@ export async function launch({ root = ROOT, args = [] } = {}) {
     async newPage({ path: p = '', ...opts } = {}) {
       const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true, ...opts });
       contexts.push(context);
+      await context.addInitScript(() => { globalThis.__filigreeTestHooks = true; });
       const page = await context.newPage();
       page.on('pageerror', (e) => console.error('[page error]', e.message));
       if (p !== null) {
@@ -72,9 +75,9 @@ export async function launch({ root = ROOT, args = [] } = {}) {
 export async function pickGenerator(page, name) {
   await page.waitForSelector('[data-testid=fit-sliders] .row');
   await page.selectOption('[data-testid=fit-generator]', name);
-  await page.waitForFunction((n) => window.filigreeFit.state()?.generator === n
-    && window.filigreeFit.info()?.params.length === window.filigreeFit.state().values.length
-    && document.querySelector(`[data-testid=fit-sliders] .row[data-param="${window.filigreeFit.info().params[0].name}"]`), name);
+  await page.waitForFunction((n) => window.filigree.testHooks.fit.state()?.generator === n
+    && window.filigree.testHooks.fit.info()?.params.length === window.filigree.testHooks.fit.state().values.length
+    && document.querySelector(`[data-testid=fit-sliders] .row[data-param="${window.filigree.testHooks.fit.info().params[0].name}"]`), name);
 }
 
 /** The Tangle panel's count of shown answers. */
@@ -87,7 +90,7 @@ export const tangleRuns = (page) => page.$eval('[data-testid=tangle-status]', (e
 export async function waitForTangle(page, previous, timeout = 60000) {
   await page.waitForFunction((prev) => {
     const el = document.querySelector('[data-testid=tangle-status]');
-    return Number(el.dataset.runs || 0) > prev && !window.filigreeTangle.pending();
+    return Number(el.dataset.runs || 0) > prev && !window.filigree.testHooks.tangle.pending();
   }, previous, { timeout });
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   return tangleRuns(page);

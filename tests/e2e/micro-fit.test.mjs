@@ -15,20 +15,20 @@ let env;
 before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
-const state = (page) => page.evaluate(() => window.filigreeMicro.state());
+const state = (page) => page.evaluate(() => window.filigree.testHooks.micro.state());
 
 test('micro reconstruct: the loss falls, the fitted value is applied and undone', async () => {
   const page = await env.newPage({ path: '#tool=micro' });
   await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
   await page.click('[data-example=gyroid]');
-  await page.waitForFunction(() => window.filigreeMicro.state()?.example === 'gyroid');
+  await page.waitForFunction(() => window.filigree.testHooks.micro.state()?.example === 'gyroid');
   const scene0 = (await state(page)).scene;
   const thickness0 = JSON.parse(scene0).thickness;
 
   await page.click('[data-testid=micro-fit] > summary');
   // The rows list the scene's numbers by JSON pointer.
   await page.waitForSelector('[data-testid=micro-fit-params] [data-pointer="/period"]');
-  const rows = await page.evaluate(() => window.filigreeMicroFit.rows());
+  const rows = await page.evaluate(() => window.filigree.testHooks['micro-fit'].rows());
   assert.deepEqual(rows.map((r) => r.pointer), ['/period', '/thickness']);
   // Fit the sheet's thickness to a target scene whose thickness is 0.2.
   const row = '[data-testid=micro-fit-params] [data-pointer="/thickness"]';
@@ -44,20 +44,20 @@ test('micro reconstruct: the loss falls, the fitted value is applied and undone'
   const st = await page.$eval('[data-testid=micro-fit-status]', (el) => ({ ...el.dataset, text: el.textContent }));
   assert.ok(Number(st.loss) < Number(st.initial) - 1, `the loss fell: ${st.initial} → ${st.loss} (${st.text})`);
   assert.match(st.text, /fitted in .* \/thickness = 0\.2/);
-  assert.ok(await page.evaluate(() => window.filigreeMicroFit.plotted()) >= 2, 'the loss curve is drawn');
-  const fitted = await page.evaluate(() => window.filigreeMicroFit.result());
+  assert.ok(await page.evaluate(() => window.filigree.testHooks['micro-fit'].plotted()) >= 2, 'the loss curve is drawn');
+  const fitted = await page.evaluate(() => window.filigree.testHooks['micro-fit'].result());
   assert.ok(Math.abs(fitted.values[0] - 0.2) < 0.01, `thickness ${fitted.values[0]}`);
   assert.equal((await state(page)).scene, scene0, 'nothing changes before Apply');
 
   // Apply: one undoable change of the document.
   await page.click('[data-testid=micro-fit-apply]');
-  await page.waitForFunction((s0) => window.filigreeMicro.state().scene !== s0, scene0);
+  await page.waitForFunction((s0) => window.filigree.testHooks.micro.state().scene !== s0, scene0);
   const applied = await state(page);
   assert.ok(Math.abs(JSON.parse(applied.scene).thickness - fitted.values[0]) < 1e-12);
   assert.equal(JSON.parse(applied.scene).period, JSON.parse(scene0).period);
   assert.equal(applied.example, null);
   await page.click('button[data-act=undo]');
-  await page.waitForFunction((s0) => window.filigreeMicro.state().scene === s0, scene0);
+  await page.waitForFunction((s0) => window.filigree.testHooks.micro.state().scene === s0, scene0);
   assert.equal(JSON.parse((await state(page)).scene).thickness, thickness0);
 
   // A bad range is the core's typed error, shown in the panel's error area.
@@ -74,7 +74,7 @@ test('micro reconstruct: coarse to fine goes into the request and its fit lowers
   const page = await env.newPage({ path: '#tool=micro' });
   await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
   await page.click('[data-example=gyroid]');
-  await page.waitForFunction(() => window.filigreeMicro.state()?.example === 'gyroid');
+  await page.waitForFunction(() => window.filigree.testHooks.micro.state()?.example === 'gyroid');
   await page.click('[data-testid=micro-fit] > summary');
   await page.waitForSelector('[data-testid=micro-fit-params] [data-pointer="/period"]');
   // Off by default (the core's default), on when ticked.
@@ -87,7 +87,7 @@ test('micro reconstruct: coarse to fine goes into the request and its fit lowers
   await page.fill(`${row} [name=fit-hi]`, String(period0 * 2));
   await page.check('[data-testid=micro-fit-c2f]');
   await page.fill('[data-testid=micro-fit-budget]', '90');
-  const req = await page.evaluate(() => window.filigreeMicroFit.request());
+  const req = await page.evaluate(() => window.filigree.testHooks['micro-fit'].request());
   assert.equal(req.coarse_to_fine, true);
   await page.click('[data-testid=micro-fit-run]');
   await page.waitForFunction(() => Number(document.querySelector('[data-testid=micro-fit-status]').dataset.fits || 0) >= 1,

@@ -1,6 +1,6 @@
 // Micro's WebGL2 sphere tracer (issue 12 item 7, MISSION M7) against the
 // CPU reference: every shipped scene is rendered both ways in Chromium's
-// SwiftShader — `micro-glsl` compiled by www/micro-gl.js and `micro-render`
+// SwiftShader — `micro-glsl` compiled by www/micro/gl.js and `micro-render`
 // in a worker — from the same request, and the pictures must agree: at most
 // MAX_HIT_MISS of the pixels may disagree on hit or miss, the mean absolute
 // difference over all channels is at most MAX_MEAN levels of 255, and the
@@ -25,7 +25,7 @@ after(async () => { await env?.close(); });
 /** In the page: render every shipped scene both ways, return the comparison per scene. */
 async function compareAll(page, { side, steps, cameras, extra = {}, only = null, bigSide = 0 }) {
   return page.evaluate(async ({ side, steps, cameras, extra, only, bigSide }) => {
-    const { MicroGl } = await import('/www/micro-gl.js');
+    const { MicroGl } = await import('/www/micro/gl.js');
     const pool = window.filigree.pool;
     const examples = await pool.run('micro-examples', {});
     const gl = new MicroGl();
@@ -145,7 +145,7 @@ test('micro-gl: adaptive and bisection steps, GGX shading and absorption agree w
 const runs = (page) => page.$eval('[data-testid=micro-status]', (el) => Number(el.dataset.runs || 0));
 async function waitForRender(page, previous, timeout = 120000) {
   await page.waitForFunction((prev) => Number(document.querySelector('[data-testid=micro-status]').dataset.runs || 0) > prev
-    && !window.filigreeMicro.pending(), previous, { timeout });
+    && !window.filigree.testHooks.micro.pending(), previous, { timeout });
   return runs(page);
 }
 
@@ -154,9 +154,9 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
   const page = await env.newPage({ path: '#tool=micro', deviceScaleFactor: 0.5 });
   await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
   let n = await waitForRender(page, 0);
-  assert.ok(await page.evaluate(() => window.filigreeMicro.gpu()), 'WebGL2 is used');
+  assert.ok(await page.evaluate(() => window.filigree.testHooks.micro.gpu()), 'WebGL2 is used');
   assert.equal(await page.isHidden('[data-testid=micro-gpu-note]'), true);
-  let last = await page.evaluate(() => window.filigreeMicro.last());
+  let last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.gpu, true);
   assert.equal(last.preview, false);
   assert.match(await page.textContent('[data-testid=micro-status]'), /on the GPU.*rays hit.*per ray.*field evaluations/);
@@ -174,7 +174,7 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
   n = await waitForRender(page, n);
   const previews = Number(await page.$eval('[data-testid=micro-status]', (el) => el.dataset.previews || 0));
   assert.ok(previews > previews0, 'coarse frames while dragging');
-  last = await page.evaluate(() => window.filigreeMicro.last());
+  last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.gpu, true);
   assert.equal(last.preview, false, 'refined to full size once the camera rests');
   const fg = await page.evaluate(() => {
@@ -190,11 +190,11 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
   // picture and must carry its counters (it once had none and threw).
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
-  await page.evaluate(() => window.filigreeMicro.gpuPreviewDiv(1));
+  await page.evaluate(() => window.filigree.testHooks.micro.gpuPreviewDiv(1));
   await page.mouse.move(cx, cy);
   await page.mouse.wheel(0, -120);
   n = await waitForRender(page, n);
-  last = await page.evaluate(() => window.filigreeMicro.last());
+  last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.deepEqual(errors, []);
   assert.equal(last.gpu, true);
   assert.equal(last.preview, false);
@@ -203,17 +203,17 @@ test('micro-gl: the panel orbits on the GPU, coarse first then refined; the slic
   // Path tracing is the CPU's: the panel says so; back to direct shading, the GPU again.
   await page.selectOption('[data-testid=micro-spp]', '4');
   n = await waitForRender(page, n);
-  last = await page.evaluate(() => window.filigreeMicro.last());
+  last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.gpu, false);
   assert.equal(last.passes, 3);
   assert.match(await page.textContent('[data-testid=micro-cpu-note]'), /Drawn on the CPU.*path tracing runs on the CPU only/);
   await page.selectOption('[data-testid=micro-spp]', '0');
   n = await waitForRender(page, n);
-  assert.equal((await page.evaluate(() => window.filigreeMicro.last())).gpu, true);
+  assert.equal((await page.evaluate(() => window.filigree.testHooks.micro.last())).gpu, true);
   // The slice view is the CPU's.
   await page.check('[data-testid=micro-slice-toggle]');
   n = await waitForRender(page, n);
-  last = await page.evaluate(() => window.filigreeMicro.last());
+  last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.kind, 'micro-slice');
   assert.equal(last.gpu, false);
   await page.context().close();
@@ -231,11 +231,11 @@ test('micro-gl: without WebGL2 the panel says so and draws on the CPU', async ()
   await page.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
   await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
   await waitForRender(page, 0);
-  assert.equal(await page.evaluate(() => window.filigreeMicro.gpu()), null);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.micro.gpu()), null);
   const note = await page.textContent('[data-testid=micro-gpu-note]');
   assert.match(note, /GPU view off: this browser has no WebGL2.*CPU/);
   assert.equal(await page.isVisible('[data-testid=micro-gpu-note]'), true);
-  const last = await page.evaluate(() => window.filigreeMicro.last());
+  const last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.gpu, false);
   assert.equal(last.kind, 'micro-render');
   assert.match(await page.textContent('[data-testid=micro-status]'), /rays hit.*field evaluations/);

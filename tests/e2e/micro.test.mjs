@@ -22,7 +22,7 @@ const runs = (page) => page.$eval('[data-testid=micro-status]', (el) => Number(e
 async function waitForRender(page, previous, timeout = 90000) {
   await page.waitForFunction((prev) => {
     const el = document.querySelector('[data-testid=micro-status]');
-    return Number(el.dataset.runs || 0) > prev && !window.filigreeMicro.pending();
+    return Number(el.dataset.runs || 0) > prev && !window.filigree.testHooks.micro.pending();
   }, previous, { timeout });
   return runs(page);
 }
@@ -56,7 +56,7 @@ const changed = (page) => page.evaluate(() => {
   return n / (a.length / 4);
 });
 
-const state = (page) => page.evaluate(() => window.filigreeMicro.state());
+const state = (page) => page.evaluate(() => window.filigree.testHooks.micro.state());
 
 /** The panel with WebGL2 hidden: the worker (CPU) path this file is about.
  * The GPU view has its own tests (micro-gl.test.mjs). */
@@ -108,7 +108,7 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
   assert.notEqual(camera1.yaw, camera0.yaw, 'the drag turned the camera');
   assert.notEqual(camera1.pitch, camera0.pitch);
   assert.ok(Number(await page.$eval('[data-testid=micro-status]', (el) => el.dataset.previews || 0)) >= 1, 'small previews while dragging');
-  assert.equal((await page.evaluate(() => window.filigreeMicro.last())).preview, false, 'the full image after the drag');
+  assert.equal((await page.evaluate(() => window.filigree.testHooks.micro.last())).preview, false, 'the full image after the drag');
   assert.ok(await changed(page) > 0.05, 'the orbit changed the picture');
 
   // Zoom in three times: the distance multiplies and the picture is rendered again.
@@ -146,7 +146,7 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
   await page.check('[data-testid=micro-slice-toggle]');
   n = await waitForRender(page, n);
   assert.equal((await state(page)).view, 'slice');
-  assert.equal((await page.evaluate(() => window.filigreeMicro.last())).kind, 'micro-slice');
+  assert.equal((await page.evaluate(() => window.filigree.testHooks.micro.last())).kind, 'micro-slice');
   assert.ok(await changed(page) > 0.2, 'the slice is a different picture');
   assert.match(await page.textContent('[data-testid=micro-status]'), /slice z = 0.*inside/);
   // Moving the slice plane changes the slice.
@@ -159,7 +159,7 @@ test('micro: gyroid renders, orbit and zoom re-render, JSON errors are marked, s
   const saved = await state(page);
   await page.waitForTimeout(1500);
   await page.reload();
-  await page.waitForFunction(() => window.filigreeMicro?.state(), null, { timeout: 30000 });
+  await page.waitForFunction(() => window.filigree?.testHooks?.micro?.state(), null, { timeout: 30000 });
   await waitForRender(page, 0);
   const back = await state(page);
   assert.equal(back.example, 'gyroid');
@@ -274,7 +274,7 @@ test('micro: a share link carries the scene by name and the camera; undo steps b
   assert.match(link, /#tool=micro&share=[A-Za-z0-9_-]+$/);
   assert.ok(link.length < 400, `a shipped scene travels by name (${link.length} characters)`);
   const b = await cpuPage(link.slice(link.indexOf('#')));
-  await b.waitForFunction(() => window.filigreeMicro?.state()?.example === 'piled', null, { timeout: 30000 });
+  await b.waitForFunction(() => window.filigree?.testHooks?.micro?.state()?.example === 'piled', null, { timeout: 30000 });
   await waitForRender(b, 0);
   assert.deepEqual(await state(b), want);
   await a.context().close();
@@ -340,7 +340,7 @@ const workerPng = (page, kind, req) => page.evaluate(async ({ kind, req }) => {
 }, { kind, req }).then((b) => Buffer.from(b, 'base64'));
 
 /** The panel's last tiled picture (RGBA). */
-const frame = async (page) => Buffer.from(await page.evaluate(() => window.filigreeMicro.frame()), 'base64');
+const frame = async (page) => Buffer.from(await page.evaluate(() => window.filigree.testHooks.micro.frame()), 'base64');
 
 test('micro: the picture in tiles over the pool equals one job; shading controls; progressive path tracing; wasm = native bytes', async () => {
   const page = await cpuPage('#tool=micro');
@@ -349,10 +349,10 @@ test('micro: the picture in tiles over the pool equals one job; shading controls
   await page.click('[data-example=piled]');
   n = await waitForRender(page, n);
   // Tiles: every tile drawn as it came; together, pixel for pixel, the one-job PNG.
-  let last = await page.evaluate(() => window.filigreeMicro.last());
+  let last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.tiles, 16);
   assert.match(await page.textContent('[data-testid=micro-status]'), /on the CPU in 16 tiles/);
-  let req = await page.evaluate(() => window.filigreeMicro.request());
+  let req = await page.evaluate(() => window.filigree.testHooks.micro.request());
   assert.equal(req.tile, undefined);
   let one = decodePng(await workerPng(page, 'micro-render', req));
   assert.equal(one.width, last.width);
@@ -392,13 +392,13 @@ test('micro: the picture in tiles over the pool equals one job; shading controls
   n = await waitForRender(page, n);
   const doc = await state(page);
   assert.equal(doc.spp, 4);
-  last = await page.evaluate(() => window.filigreeMicro.last());
+  last = await page.evaluate(() => window.filigree.testHooks.micro.last());
   assert.equal(last.passes, 3);
   assert.deepEqual((await page.evaluate(() => window.microPasses)).filter((p) => p > 0), [1, 2, 3], 'one pass after another');
   assert.match(await page.textContent('[data-testid=micro-status]'), /path traced on the CPU, 4 samples per pixel in 3 passes/);
   assert.equal(await page.isEnabled('[data-testid=micro-max-depth]'), true);
   // The passes average to the one-job render with all the samples (float sums: within one level).
-  req = await page.evaluate(() => window.filigreeMicro.request());
+  req = await page.evaluate(() => window.filigree.testHooks.micro.request());
   one = decodePng(await workerPng(page, 'micro-render', req));
   tiled = await frame(page);
   let off = 0;
@@ -413,7 +413,7 @@ test('micro: the picture in tiles over the pool equals one job; shading controls
   await page.waitForSelector('.toast[data-link]');
   const link = await page.$eval('.toast[data-link]', (t) => t.dataset.link);
   const b = await cpuPage(link.slice(link.indexOf('#')));
-  await b.waitForFunction(() => window.filigreeMicro?.state()?.spp === 4, null, { timeout: 30000 });
+  await b.waitForFunction(() => window.filigree?.testHooks?.micro?.state()?.spp === 4, null, { timeout: 30000 });
   const bs = await state(b);
   assert.deepEqual(bs, doc);
   await b.context().close();

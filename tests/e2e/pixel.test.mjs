@@ -15,7 +15,7 @@ async function waitForResult(page, previous = null) {
     const el = document.querySelector('[data-testid=pixel-status]');
     const runs = Number(el.dataset.runs || 0);
     return el.textContent.startsWith('done') && runs > 0 && (prev === null || runs > prev)
-      && !window.filigreePixel.pending();
+      && !window.filigree.testHooks.pixel.pending();
   }, previous, { timeout: 30000 });
   return page.$eval('[data-testid=pixel-status]', (el) => Number(el.dataset.runs));
 }
@@ -46,7 +46,7 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
     const bin = atob(b64);
     const bytes = Uint8Array.from(bin, (c) => c.charCodeAt(0));
     const want = await window.filigree.pool.run('decode-image', { bytes });
-    const got = window.filigreePixel.result();
+    const got = window.filigree.testHooks.pixel.result();
     if (got.width !== want.width || got.height !== want.height) return `size ${got.width}×${got.height}`;
     let diff = 0;
     for (let i = 0; i < want.rgba.length; i++) if (want.rgba[i] !== got.rgba[i]) diff++;
@@ -62,12 +62,12 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
   status = await waitForResult(page, status);
   await dragStroke(page, [[25, 90], [50, 92], [75, 95], [100, 100]]);
   status = await waitForResult(page, status);
-  const strokes = await page.evaluate(() => window.filigreePixel.state().strokes.length);
+  const strokes = await page.evaluate(() => window.filigree.testHooks.pixel.state().strokes.length);
   assert.equal(strokes, 2);
 
   // The result differs from the source only inside the mask and adds no colour.
   const check = await page.evaluate(async () => {
-    const { state, result } = window.filigreePixel;
+    const { state, result } = window.filigree.testHooks.pixel;
     const doc = state();
     const r = result();
     const src = await window.filigree.pool.run('decode-image', { bytes: doc.source.slice() });
@@ -106,7 +106,7 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
   await page.reload();
   await waitForResult(page);
   const restored = await page.evaluate(() => {
-    const d = window.filigreePixel.state();
+    const d = window.filigree.testHooks.pixel.state();
     return { strokes: d.strokes.length, density: d.params.density };
   });
   assert.deepEqual(restored, { strokes: 2, density: 0.4 });
@@ -115,18 +115,18 @@ test('texture the fish: strokes, mask-only changes, palette, density, export', a
 test('a wrong-size mask is refused with a clear error; a saved project reopens', async () => {
   const page = await env.newPage({ path: '#tool=pixel' });
   // The panel starts with the fish; wait until the trunk is really loaded.
-  await page.waitForFunction(() => window.filigreePixel?.state()?.example === 'fish');
+  await page.waitForFunction(() => window.filigree?.testHooks?.pixel?.state()?.example === 'fish');
   await page.click('button[data-example=trunk]');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'trunk');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'trunk');
   await waitForResult(page);
-  const before = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
+  const before = await page.evaluate(() => window.filigree.testHooks.pixel.state().mask.bits.reduce((a, b) => a + b, 0));
 
   // The fish mask (128×128) does not fit the trunk (64×64).
   await page.setInputFiles('input[data-input=mask]', new URL('../../assets/pixel/fish_body_boundary.png', import.meta.url).pathname);
   await page.waitForSelector('[data-testid=doc-error]:not([hidden])');
   assert.match(await page.textContent('[data-testid=doc-error]'),
     /fish_body_boundary\.png: the mask is 128×128 pixels but the source image is 64×64/);
-  const after = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
+  const after = await page.evaluate(() => window.filigree.testHooks.pixel.state().mask.bits.reduce((a, b) => a + b, 0));
   assert.equal(after, before, 'the mask the user had is untouched');
 
   // Paint a little more mask, save the project, start over, reopen it.
@@ -136,21 +136,21 @@ test('a wrong-size mask is refused with a clear error; a saved project reopens',
   await page.mouse.down();
   await page.mouse.move(box.x + 20, box.y + 6, { steps: 5 });
   await page.mouse.up();
-  const painted = await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0));
+  const painted = await page.evaluate(() => window.filigree.testHooks.pixel.state().mask.bits.reduce((a, b) => a + b, 0));
   assert.ok(painted > before, 'painting added mask pixels');
   await page.click('button[data-act=undo]');
-  assert.equal(await page.evaluate(() => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0)), before, 'one undo removes the whole brush drag');
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().mask.bits.reduce((a, b) => a + b, 0)), before, 'one undo removes the whole brush drag');
   await page.click('button[data-act=redo]');
 
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
   const project = fs.readFileSync(await download.path(), 'utf8');
   assert.equal(JSON.parse(project).tool, 'pixel');
   await page.click('button[data-example=fish]');
-  await page.waitForFunction(() => window.filigreePixel.state()?.example === 'fish');
+  await page.waitForFunction(() => window.filigree.testHooks.pixel.state()?.example === 'fish');
   await waitForResult(page);
   const file = path.join(os.tmpdir(), `trunk-${process.pid}.filigree.json`);
   fs.writeFileSync(file, project);
   await page.setInputFiles('input[data-input=project]', file);
-  await page.waitForFunction((n) => window.filigreePixel.state().mask.bits.reduce((a, b) => a + b, 0) === n, painted);
-  assert.equal(await page.evaluate(() => window.filigreePixel.state().example), 'trunk');
+  await page.waitForFunction((n) => window.filigree.testHooks.pixel.state().mask.bits.reduce((a, b) => a + b, 0) === n, painted);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.pixel.state().example), 'trunk');
 });

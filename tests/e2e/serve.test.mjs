@@ -35,7 +35,7 @@ function get(rel, headers = {}, method = 'GET', url = base) {
   });
 }
 
-const JS = '/www/protocol.js';
+const JS = '/www/app/protocol.js';
 const jsBytes = () => fs.readFileSync(path.join(ROOT, JS));
 
 test('a .js file is gzipped for a client that accepts it, and gunzips to the file', async () => {

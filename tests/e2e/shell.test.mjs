@@ -15,7 +15,7 @@ const VIEWS = {
   pixel: { path: '#tool=pixel', ready: () => Number(document.querySelector('[data-testid=pixel-status]')?.dataset.runs) > 0 },
   fit: { path: '#tool=fit', ready: () => !!document.querySelector('[data-testid=fit-sliders] input') },
   inspect: { path: '#tool=inspect', ready: () => !!document.querySelector('[data-testid=drop-zone] button') },
-  texture: { path: '#tool=texture', ready: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending() },
+  texture: { path: '#tool=texture', ready: () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigree?.testHooks?.texture?.pending() },
 };
 
 const TOOL_IDS = ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture'];

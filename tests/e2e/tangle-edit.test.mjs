@@ -1,6 +1,6 @@
 // Tangle edits on the fast path (issue 10 item 9): while an edit's answer is
 // due the canvas is left as it is; an answer keeps the last answer's
-// unchanged shapes (their Path2Ds, tangle-draw.js `prepareTangle(r, prev)`)
+// unchanged shapes (their Path2Ds, www/tangle/draw.js `prepareTangle(r, prev)`)
 // and the panel repaints only the tiles where the picture changed.
 // Both must give exactly what a fresh answer painted in full gives:
 // - the shapes the panel holds equal a fresh, full expansion's (not kept
@@ -28,7 +28,7 @@ after(async () => { await env?.close(); });
 /** Select a step with a `distance` (outline, place) whose subtree has `lo`–`hi` shapes; set its distance to `v`. */
 async function editDistance(page, lo, hi, v) {
   const target = await page.evaluate(([lo, hi]) => {
-    const r = window.filigreeTangle.result();
+    const r = window.filigree.testHooks.tangle.result();
     const subtree = (k) => {
       const made = new Set(r.steps[k].outputs);
       for (let j = k + 1; j < r.steps.length; j++) if (r.steps[j].inputs.some((i) => made.has(i))) for (const o of r.steps[j].outputs) made.add(o);
@@ -39,7 +39,7 @@ async function editDistance(page, lo, hi, v) {
     return c.length ? c[0] : null;
   }, [lo, hi]);
   assert.ok(target, `a step with a distance and a subtree of ${lo}–${hi} shapes`);
-  await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigreeTangle.state(), selected: sel }), target[0]);
+  await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigree.testHooks.tangle.state(), selected: sel }), target[0]);
   await page.waitForSelector(`[data-testid=tangle-params][data-step="${target[0]}"] [data-testid=tangle-param-distance]`);
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
   if (v === null) return target;
@@ -59,9 +59,9 @@ async function editDistance(page, lo, hi, v) {
  * (any channel off by more than 2) between them, and whether the shapes equal the fresh ones.
  */
 const compare = (page) => page.evaluate(async () => {
-  const t = window.filigreeTangle;
-  const { prepareTangle, paintBatches } = await import('/www/tangle-draw.js');
-  const { requestOf } = await import('/www/tangle-panel.js');
+  const t = window.filigree.testHooks.tangle;
+  const { prepareTangle, paintBatches } = await import('/www/tangle/draw.js');
+  const { requestOf } = await import('/www/tangle/panel.js');
   const c = document.querySelector('[data-testid=tangle-canvas]');
   const g = c.getContext('2d');
   const timing = t.timing();
@@ -82,7 +82,7 @@ const compare = (page) => page.evaluate(async () => {
   const cols = ['tag', 'group', 'id', 'first', 'born', 'died', 'fill', 'flags', 'ringFirst', 'rings'];
   const sameShapes = mine.shapes.count === F.r.shapes.count
     && cols.every((k) => mine.shapes[k].length === F.r.shapes[k].length && mine.shapes[k].every((x, i) => Object.is(x, F.r.shapes[k][i])))
-    && F.pts.length === window.filigreeTangle.points().length && F.pts.every((x, i) => Object.is(x, window.filigreeTangle.points()[i]))
+    && F.pts.length === window.filigree.testHooks.tangle.points().length && F.pts.every((x, i) => Object.is(x, window.filigree.testHooks.tangle.points()[i]))
     && JSON.stringify(mine.steps) === JSON.stringify(F.r.steps);
   const o = document.createElement('canvas');
   o.width = c.width;
@@ -112,7 +112,7 @@ const compare = (page) => page.evaluate(async () => {
 
 test('tangle: an edit keeps the unchanged shapes and repaints only where it changed, exactly as a fresh answer painted in full', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
-  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
   await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
 
   // A drag: the same edit with another value replaces it (the worker replays the edits
@@ -120,13 +120,13 @@ test('tangle: an edit keeps the unchanged shapes and repaints only where it chan
   // shown ones, with other points: none of them may keep its Path2D).
   await editDistance(page, 4, 120, null);
   let n = await runs(page);
-  const before = await page.evaluate(() => window.filigreeTangle.state().edits.length);
+  const before = await page.evaluate(() => window.filigree.testHooks.tangle.state().edits.length);
   // Until its answer arrives, an edit leaves the canvas as it is (the last picture and its
   // highlight): no repaint competes with the worker for the CPU. Every frame until the
   // answer is looked at, and the panel's paints are timed: none may fall between the input
   // and the answer (however fast the worker answers on this machine).
   const held = await page.$eval('[data-testid=tangle-param-distance]', async (i) => {
-    const t = window.filigreeTangle;
+    const t = window.filigree.testHooks.tangle;
     const status = document.querySelector('[data-testid=tangle-status]');
     const runs = () => Number(status.dataset.runs);
     const n0 = runs();
@@ -144,14 +144,14 @@ test('tangle: an edit keeps the unchanged shapes and repaints only where it chan
   assert.ok(held.answered, 'the edit was answered');
   assert.equal(held.whileDue, 0, `nothing was repainted while the answer was due (${held.frames} frames)`);
   n = await waitForResult(page, n);
-  const first = await page.evaluate(() => window.filigreeTangle.state().edits.at(-1).params.distance);
+  const first = await page.evaluate(() => window.filigree.testHooks.tangle.state().edits.at(-1).params.distance);
   await page.$eval('[data-testid=tangle-param-distance]', (i) => {
     i.value = String(Number(i.value) * 1.5);
     i.dispatchEvent(new Event('input', { bubbles: true }));
     i.dispatchEvent(new Event('change', { bubbles: true }));
   });
   await waitForResult(page, n);
-  const st = await page.evaluate(() => window.filigreeTangle.state());
+  const st = await page.evaluate(() => window.filigree.testHooks.tangle.state());
   assert.equal(st.edits.length, before + 1, 'a drag is one edit');
   assert.notEqual(st.edits.at(-1).params.distance, first, 'the drag changed the value');
   let c = await compare(page);

@@ -20,7 +20,7 @@
 //   bench tangle` runs beside shapely/GEOS) grown in the worker, min/median.
 // The floor line is an empty animation frame measured in the same run.
 // Every figure has a `before` twin measured in the same run with the panel's
-// old path switched on (`filigreeTangle.options.incremental = false`: every
+// old path switched on (`testHooks.tangle.options.incremental = false`: every
 // repaint redraws the whole canvas, every heavy part gets a bitmap, an edit
 // repaints at once and shows "growing" at once, and an answer keeps nothing
 // of the last one); the worker's side
@@ -71,9 +71,9 @@ async function cpuOf(fn) {
 const runs = () => page.$eval('[data-testid=tangle-status]', (el) => Number(el.dataset.runs || 0));
 async function waitForResult(prev) {
   await page.waitForFunction((p) => Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > p
-    && !window.filigreeTangle.pending(), prev, { timeout: 300000 });
+    && !window.filigree.testHooks.tangle.pending(), prev, { timeout: 300000 });
 }
-await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
 
 const frameFloor = await page.evaluate(async () => {
   const out = [];
@@ -98,7 +98,7 @@ await waitForResult(n);
 const growMs = Date.now() - t0;
 async function sliderAndPan(incremental) {
   return page.evaluate(async (incremental) => {
-  const t = window.filigreeTangle;
+  const t = window.filigree.testHooks.tangle;
   t.options.incremental = incremental;
   t.clearLayers(); // each pass starts with no bitmap kept
   const r = t.result();
@@ -192,7 +192,7 @@ const village = await sliderAndPan(true);
 async function jumpCpu(incremental) {
   const n = 24;
   const { cpu } = await cpuOf(() => page.evaluate(async ({ incremental, n }) => {
-    const t = window.filigreeTangle;
+    const t = window.filigree.testHooks.tangle;
     t.options.incremental = incremental;
     const slider = document.querySelector('[data-testid=tangle-step]');
     const steps = t.result().steps.length;
@@ -213,7 +213,7 @@ const jumpCpuAfter = await jumpCpu(true);
 // The same drags and jumps with the two paths taking turns move by move (the load of
 // the machine then weighs on both alike; the bitmaps kept are shared).
 const interleaved = await page.evaluate(async () => {
-  const t = window.filigreeTangle;
+  const t = window.filigree.testHooks.tangle;
   const slider = document.querySelector('[data-testid=tangle-step]');
   const steps = t.result().steps.length;
   const c = document.querySelector('[data-testid=tangle-canvas]');
@@ -272,7 +272,7 @@ const subtreeSizes = [];
 for (let i = 0; i < 12; i++) {
   const incremental = i % 2 === 1;
   const target = await page.evaluate((op) => {
-    const r = window.filigreeTangle.result();
+    const r = window.filigree.testHooks.tangle.result();
     const subtree = (k) => {
       const made = new Set(r.steps[k].outputs);
       for (let j = k + 1; j < r.steps.length; j++) {
@@ -285,25 +285,25 @@ for (let i = 0; i < 12; i++) {
     return c[0][0];
   }, op);
   subtreeSizes.push(await page.evaluate((k) => {
-    const r = window.filigreeTangle.result();
+    const r = window.filigree.testHooks.tangle.result();
     const made = new Set(r.steps[k].outputs);
     for (let j = k + 1; j < r.steps.length; j++) if (r.steps[j].inputs.some((i) => made.has(i))) for (const o of r.steps[j].outputs) made.add(o);
     return made.size;
   }, target));
-  await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigreeTangle.state(), selected: sel }), target);
-  const param = op === 'outline' ? 'distance' : await page.evaluate((k) => window.filigreeTangle.result().steps[k].params[0].name, target);
+  await page.evaluate((sel) => window.filigree.doc.current.ctx.commit({ ...window.filigree.testHooks.tangle.state(), selected: sel }), target);
+  const param = op === 'outline' ? 'distance' : await page.evaluate((k) => window.filigree.testHooks.tangle.result().steps[k].params[0].name, target);
   await page.waitForSelector(`[data-testid=tangle-param-${param}]`);
   // The value moved to: outline distances 3, 3, 4, 4, ... as before; otherwise a few per
   // cent up from the step's own value, within its range.
   const v = op === 'outline' ? 3 + (i >> 1) : await page.evaluate(({ k, i }) => {
-    const p = window.filigreeTangle.result().steps[k].params[0];
+    const p = window.filigree.testHooks.tangle.result().steps[k].params[0];
     const x = Math.min(p.max, p.value * (1 + 0.03 * (1 + (i >> 1))));
     return p.integer ? Math.max(p.min, Math.round(x) === p.value ? p.value + 1 : Math.round(x)) : x;
   }, { k: target, i });
   // Settle: the selection painted, nothing running.
-  await page.waitForFunction(() => !window.filigreeTangle.pending());
+  await page.waitForFunction(() => !window.filigree.testHooks.tangle.pending());
   const { out: r, cpu } = await cpuOf(() => page.evaluate(async ({ v, incremental, param }) => {
-    const t = window.filigreeTangle;
+    const t = window.filigree.testHooks.tangle;
     t.options.incremental = incremental;
     await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));
     const status = document.querySelector('[data-testid=tangle-status]');
@@ -338,11 +338,11 @@ for (let i = 0; i < 12; i++) {
   }, { v, incremental, param }));
   r.cpuProcess = cpu.process;
   r.cpuMain = cpu.main;
-  await page.waitForFunction(() => !window.filigreeTangle.pending());
+  await page.waitForFunction(() => !window.filigree.testHooks.tangle.pending());
   edits[incremental ? 'after' : 'before'].push(r);
 }
-const leafShapes = await page.evaluate(() => window.filigreeTangle.result().stats.shapes);
-const editedStep = await page.evaluate(() => { const s = window.filigreeTangle.state(); const st = window.filigreeTangle.result().steps[s.selected]; return st ? `${st.operator}, line ${st.line}` : null; });
+const leafShapes = await page.evaluate(() => window.filigree.testHooks.tangle.result().stats.shapes);
+const editedStep = await page.evaluate(() => { const s = window.filigree.testHooks.tangle.state(); const st = window.filigree.testHooks.tangle.result().steps[s.selected]; return st ? `${st.operator}, line ${st.line}` : null; });
 
 const editFigure = (key) => both(edits.after.map((e) => e[key]), edits.before.map((e) => e[key]));
 return {
@@ -373,13 +373,13 @@ async function baselineBench() {
     const prev = await runs();
     const t0 = Date.now();
     await page.evaluate(({ grammar, seed }) => window.filigree.doc.current.ctx.commit({
-      ...window.filigreeTangle.state(), grammar, seed, wobble: 0, edits: [], selected: null,
+      ...window.filigree.testHooks.tangle.state(), grammar, seed, wobble: 0, edits: [], selected: null,
     }), { grammar, seed });
     await waitForResult(prev);
     await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => r())));
     growMs.push(Date.now() - t0);
-    runsMs.push(await page.evaluate(() => window.filigreeTangle.timing().run));
-    stats = await page.evaluate(() => window.filigreeTangle.result().stats);
+    runsMs.push(await page.evaluate(() => window.filigree.testHooks.tangle.timing().run));
+    stats = await page.evaluate(() => window.filigree.testHooks.tangle.result().stats);
   }
   const min = (xs) => round(Math.min(...xs));
   return {

@@ -18,15 +18,15 @@ const count = (page) => page.$eval('[data-testid=tangle-count]', (el) => Number(
 
 /**
  * In the page: the shown answer at the shown step and view, drawn as a full repaint draws
- * it (tangle-draw.js batches) on a canvas of its own, every part directly: no highlight
+ * it (www/tangle/draw.js batches) on a canvas of its own, every part directly: no highlight
  * (an overlay, not the drawing) and no bitmaps. (On the GPU canvas a heavy part copied
  * from a bitmap differs from one drawn directly by a few levels at its edges, and an edit
  * that moves steps moves shapes between parts, so the panel's own repaint may differ by
  * that much where nothing changed.)
  */
 const PAINTED = `window.tanglePainted = async () => {
-  const { prepareTangle, paintBatches } = await import('/www/tangle-draw.js');
-  const t = window.filigreeTangle;
+  const { prepareTangle, paintBatches } = await import('/www/tangle/draw.js');
+  const t = window.filigree.testHooks.tangle;
   const T = prepareTangle(t.result());
   const c = document.querySelector('[data-testid=tangle-canvas]');
   const o = document.createElement('canvas');
@@ -47,7 +47,7 @@ const PAINTED = `window.tanglePainted = async () => {
  * millions of numbers), to compare with the picture after the next change.
  */
 const snapshot = (page) => page.evaluate(async () => {
-  const t = window.filigreeTangle;
+  const t = window.filigree.testHooks.tangle;
   const c = document.querySelector('[data-testid=tangle-canvas]');
   window.tangleBefore = { data: await window.tanglePainted(), mask: t.selectedMask() };
   return { width: c.width, height: c.height, covered: window.tangleBefore.mask.reduce((a, b) => a + b, 0) };
@@ -68,14 +68,14 @@ const changes = (page) => page.evaluate(async () => {
 });
 
 const frames = (page) => page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-const selected = (page) => page.evaluate(() => window.filigreeTangle.state().selected);
+const selected = (page) => page.evaluate(() => window.filigree.testHooks.tangle.state().selected);
 const operator = (page) => page.$eval('[data-testid=tangle-selected]', (e) => e.dataset.operator);
 
 /** A final shape (not a mark) for which `which(shape, step, answer)` holds, with a point where a click picks it. */
 async function shapeOf(page, which) {
   return page.evaluate((src) => {
     const pred = eval(`(${src})`);
-    const t = window.filigreeTangle;
+    const t = window.filigree.testHooks.tangle;
     const r = t.result();
     const cands = Array.from({ length: r.shapes.count }, (_, i) => [r.shapes.at(i), i])
       .filter(([s]) => s.died === -1 && s.born >= 0 && !s.mark && pred(s, r.steps[s.born], r))
@@ -105,7 +105,7 @@ const cardThumbs = (page) => page.$$eval('[data-testid=tangle-examples] [data-ex
 test('tangle: grow the leaf, walk its history, select, re-expand and edit a step, export the same SVG as the CLI', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
   await page.addScriptTag({ content: PAINTED });
-  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
   // The picker lists the shipped grammars, the paper's leaf first.
   const names = await page.$$eval('[data-testid=tangle-examples] [data-example]', (bs) => bs.map((b) => b.dataset.example));
   assert.equal(names[0], 'leaf');
@@ -118,10 +118,10 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   n = await waitForResult(page, n);
   await page.click('[data-act=generate]');
   n = await waitForResult(page, n);
-  const doc = await page.evaluate(() => window.filigreeTangle.state());
+  const doc = await page.evaluate(() => window.filigree.testHooks.tangle.state());
   assert.equal(doc.example, 'leaf');
   assert.deepEqual(doc.edits, []);
-  const r = await page.evaluate(() => ({ steps: window.filigreeTangle.result().steps.length, stats: window.filigreeTangle.result().stats }));
+  const r = await page.evaluate(() => ({ steps: window.filigree.testHooks.tangle.result().steps.length, stats: window.filigree.testHooks.tangle.result().stats }));
   assert.ok(r.steps > 10, `${r.steps} steps`);
   const final = await count(page);
   assert.equal(final, r.stats.shapes, 'the count shown at the last step is the final shape count');
@@ -148,16 +148,16 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   const stippled = await shapeOf(page, (s, st) => st.operator === 'stippling');
   assert.ok(stippled, 'a stippled shape can be clicked');
   await clickCanvas(page, stippled.point);
-  await page.waitForFunction((b) => window.filigreeTangle.state().selected === b, stippled.born);
+  await page.waitForFunction((b) => window.filigree.testHooks.tangle.state().selected === b, stippled.born);
   assert.equal(await operator(page), 'stippling');
   assert.ok(await page.$('[data-testid=tangle-param-spacing]'), 'the step\'s parameters have sliders');
   await clickCanvas(page, stippled.point);
   const parent = await page.evaluate((s) => {
-    const r = window.filigreeTangle.result();
+    const r = window.filigree.testHooks.tangle.result();
     return r.shapes.born[r.steps[s].inputs[0]];
   }, stippled.born);
   assert.ok(parent >= 0 && parent < stippled.born);
-  await page.waitForFunction((p) => window.filigreeTangle.state().selected === p, parent);
+  await page.waitForFunction((p) => window.filigree.testHooks.tangle.state().selected === p, parent);
   assert.equal(await operator(page), 'outline');
   await frames(page);
 
@@ -171,11 +171,11 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
     i.dispatchEvent(new Event('change', { bubbles: true }));
   }, next);
   n = await waitForResult(page, n);
-  const ed2 = await page.evaluate(() => window.filigreeTangle.state());
+  const ed2 = await page.evaluate(() => window.filigree.testHooks.tangle.state());
   assert.equal(ed2.edits.length, 1);
   assert.equal(ed2.edits[0].step, parent);
   assert.ok(Math.abs(ed2.edits[0].params.distance - next) < 0.5, JSON.stringify(ed2.edits[0]));
-  const newStep = await page.evaluate((sel) => window.filigreeTangle.result().steps[sel], ed2.selected);
+  const newStep = await page.evaluate((sel) => window.filigree.testHooks.tangle.result().steps[sel], ed2.selected);
   assert.equal(newStep.operator, 'outline', 'the regrown step stays selected');
   assert.ok(Math.abs(newStep.params[0].value - ed2.edits[0].params.distance) < 1e-9, 'the regrown step has the new distance');
   const d2 = await changes(page);
@@ -190,14 +190,14 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   const ring = await shapeOf(page, (s, st, r) => r.tags[s.tag] === 'out_2');
   assert.ok(ring, 'a ring can be clicked');
   await clickCanvas(page, ring.point);
-  await page.waitForFunction((b) => window.filigreeTangle.state().selected === b, ring.born);
+  await page.waitForFunction((b) => window.filigree.testHooks.tangle.state().selected === b, ring.born);
   let changed = 0;
   for (let tries = 1; tries <= 6 && !changed; tries++) {
     await frames(page);
     await snapshot(page);
     await page.click('[data-act=reexpand]');
     n = await waitForResult(page, n);
-    const st = await page.evaluate(() => window.filigreeTangle.state());
+    const st = await page.evaluate(() => window.filigree.testHooks.tangle.state());
     assert.equal(st.edits.length, 1 + tries);
     assert.deepEqual(st.edits.at(-1).params, {});
     const d = await changes(page);
@@ -207,14 +207,14 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   assert.ok(changed, 'a re-expansion drew a different picture there');
 
   // Undo goes back one edit.
-  const edits = (await page.evaluate(() => window.filigreeTangle.state())).edits.length;
+  const edits = (await page.evaluate(() => window.filigree.testHooks.tangle.state())).edits.length;
   await page.click('[data-act=undo]');
   n = await waitForResult(page, n);
-  assert.equal((await page.evaluate(() => window.filigreeTangle.state())).edits.length, edits - 1);
+  assert.equal((await page.evaluate(() => window.filigree.testHooks.tangle.state())).edits.length, edits - 1);
 
   // Export: the SVG parses, one <path> per final shape the page shows.
   const shown = await count(page);
-  const svg = await page.evaluate(() => window.filigreeTangle.exportSvg());
+  const svg = await page.evaluate(() => window.filigree.testHooks.tangle.exportSvg());
   const parsed = await page.evaluate((text) => {
     const d = new DOMParser().parseFromString(text, 'image/svg+xml');
     return { error: !!d.querySelector('parsererror'), paths: d.querySelectorAll('path').length, root: d.documentElement.nodeName };
@@ -229,7 +229,7 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
   await page.click('[data-example=leaf]');
   n = await waitForResult(page, n);
   const fresh = await page.evaluate(async () => {
-    const svg = await window.filigreeTangle.exportSvg();
+    const svg = await window.filigree.testHooks.tangle.exportSvg();
     const bytes = new TextEncoder().encode(svg);
     const hash = [...new Uint8Array(await crypto.subtle.digest('SHA-256', bytes))].map((b) => b.toString(16).padStart(2, '0')).join('');
     return { hash, length: bytes.length };
@@ -249,9 +249,9 @@ test('tangle: grow the leaf, walk its history, select, re-expand and edit a step
 
 test('tangle: a grammar error is marked in the editor at its line; a typed word is a start', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
-  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
   let n = await runs(page);
-  const text = await page.evaluate(() => window.filigreeTangle.state().grammar);
+  const text = await page.evaluate(() => window.filigree.testHooks.tangle.state().grammar);
   const bad = text.replace('outline(25) : big_poly -> [in, out]', 'outline(25 : big_poly -> [in, out]');
   assert.notEqual(bad, text);
   await page.fill('[data-testid=tangle-grammar]', bad);
@@ -264,14 +264,14 @@ test('tangle: a grammar error is marked in the editor at its line; a typed word 
   n = await waitForResult(page, n);
   await page.selectOption('[name=start-kind]', 'text');
   n = await waitForResult(page, n);
-  const st = await page.evaluate(() => window.filigreeTangle.state().start);
+  const st = await page.evaluate(() => window.filigree.testHooks.tangle.state().start);
   assert.deepEqual(st, { kind: 'text', text: 'Tangle', height: 300 });
   assert.ok(await count(page) > 50);
 });
 
 test('tangle: an uploaded SVG icon starts the tangle as it looks, fitted to the grammar\'s frame', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
-  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
   let n = await runs(page);
   await page.click('[data-example=leaf]'); // start rect(800, 600)
   n = await waitForResult(page, n);
@@ -280,7 +280,7 @@ test('tangle: an uploaded SVG icon starts the tangle as it looks, fitted to the 
   await chooser.setFiles(new URL('../fixtures/badge.svg', import.meta.url).pathname);
   n = await waitForResult(page, n);
   const start = await page.evaluate(() => {
-    const t = window.filigreeTangle;
+    const t = window.filigree.testHooks.tangle;
     const r = t.result(), pts = t.points();
     const out = [];
     for (let i = 0; i < r.shapes.count; i++) {
@@ -311,13 +311,13 @@ test('tangle: an uploaded SVG icon starts the tangle as it looks, fitted to the 
 
 test('tangle: a curve drawn on the canvas joins the grammar and a split cuts along it; a drawn shape joins too', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
-  await page.waitForFunction(() => window.filigreeTangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
   let n = await runs(page);
   const straight = 'start rect(600, 400) : a\nregularSplit(line, 100, 0) : a -> [b]\n';
   await page.fill('[data-testid=tangle-grammar]', straight);
   await page.click('[data-act=generate]');
   n = await waitForResult(page, n);
-  const before = await page.evaluate(() => window.filigreeTangle.result().stats);
+  const before = await page.evaluate(() => window.filigree.testHooks.tangle.result().stats);
   // A zigzag drawn with five clicks, finished with the bar's button.
   await page.click('[data-act=draw-curve]');
   assert.equal(await page.textContent('[data-act=draw-finish]'), 'Add this curve');
@@ -328,7 +328,7 @@ test('tangle: a curve drawn on the canvas joins the grammar and a split cuts alo
   assert.equal(await page.textContent('[data-testid=tangle-draw-count]'), '5');
   await page.click('[data-act=draw-finish]');
   n = await waitForResult(page, n);
-  const grammar = await page.evaluate(() => window.filigreeTangle.state().grammar);
+  const grammar = await page.evaluate(() => window.filigree.testHooks.tangle.state().grammar);
   const m = /^curve drawn1 = polyline\(([^)]*)\)\n/.exec(grammar);
   assert.ok(m, grammar);
   assert.equal(m[1].split(',').length, 5);
@@ -337,7 +337,7 @@ test('tangle: a curve drawn on the canvas joins the grammar and a split cuts alo
   await page.fill('[data-testid=tangle-grammar]', grammar.replace('regularSplit(line', 'regularSplit(drawn1'));
   await page.click('[data-act=generate]');
   n = await waitForResult(page, n);
-  const after = await page.evaluate(() => window.filigreeTangle.result().stats);
+  const after = await page.evaluate(() => window.filigree.testHooks.tangle.result().stats);
   assert.ok(after.shapes >= 2, JSON.stringify(after));
   assert.ok(after.vertices / after.shapes > before.vertices / before.shapes + 4, `${JSON.stringify(after)} vs ${JSON.stringify(before)}`);
   // A shape: three clicks and a double-click close it; it is added as `shape drawn2`.
@@ -347,10 +347,10 @@ test('tangle: a curve drawn on the canvas joins the grammar and a split cuts alo
   }
   await page.mouse.dblclick(box.x + 0.3 * box.width, box.y + 0.6 * box.height);
   n = await waitForResult(page, n);
-  const g2 = await page.evaluate(() => window.filigreeTangle.state().grammar);
+  const g2 = await page.evaluate(() => window.filigree.testHooks.tangle.state().grammar);
   assert.match(g2, /^shape drawn2 = polyline\(([^,)]*,){3}[^,)]*\)\ncurve drawn1 = /);
   // Undo takes the definition out again.
   await page.keyboard.press('Control+z');
   n = await waitForResult(page, n);
-  assert.ok((await page.evaluate(() => window.filigreeTangle.state().grammar)).startsWith('curve drawn1 ='));
+  assert.ok((await page.evaluate(() => window.filigree.testHooks.tangle.state().grammar)).startsWith('curve drawn1 ='));
 });

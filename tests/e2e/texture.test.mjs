@@ -15,8 +15,8 @@ before(async () => { env = await launch(); });
 after(async () => { await env?.close(); });
 
 const REGULARITY = 9; // index of "regularity" in the scales (src/texture/scales.rs)
-const state = (page) => page.evaluate(() => window.filigreeTexture.state());
-const settled = () => !!window.filigreeTexture && !window.filigreeTexture.pending()
+const state = (page) => page.evaluate(() => window.filigree.testHooks.texture.state());
+const settled = () => !!window.filigree?.testHooks?.texture && !window.filigree.testHooks.texture.pending()
   && !!document.querySelector('[data-testid=texture-retrieved][data-model]');
 
 /** A model's texture rendered by the page's own worker, as PNG bytes. */
@@ -68,7 +68,7 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   const model = 'ca-forest-fire';
   const png = await renderedPng(page, model, 12);
   await dropFile(page, '[data-testid=texture-drop]', { name: 'forest.png', bytes: png, type: 'image/png' });
-  await page.waitForFunction(() => window.filigreeTexture.state()?.source?.kind === 'image', null, { timeout: 30000 });
+  await page.waitForFunction(() => window.filigree.testHooks.texture.state()?.source?.kind === 'image', null, { timeout: 30000 });
   await page.waitForFunction(settled, null, { timeout: 30000 });
   let s = await state(page);
   assert.equal(s.source.name, 'forest.png');
@@ -86,7 +86,7 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
   const retrievals = Number(await page.getAttribute('[data-testid=texture-status]', 'data-retrievals'));
   await page.keyboard.press('End');
   await page.waitForFunction((n) => Number(document.querySelector('[data-testid=texture-status]').dataset.retrievals) > n
-    && window.filigreeTexture.state().scales[9] === 9, retrievals, { timeout: 30000 });
+    && window.filigree.testHooks.texture.state().scales[9] === 9, retrievals, { timeout: 30000 });
   await page.waitForFunction(settled, null, { timeout: 30000 });
   s = await state(page);
   assert.equal(s.scales[REGULARITY], 9);
@@ -103,7 +103,7 @@ test('drop a rendered texture: its model is predicted; regularity up retrieves a
 
   // Undo puts the slider (and its texture) back in one step.
   await page.click('button[data-act=undo]');
-  await page.waitForFunction((b) => window.filigreeTexture.state().retrieved.scales[9] === b, before, { timeout: 10000 });
+  await page.waitForFunction((b) => window.filigree.testHooks.texture.state().retrieved.scales[9] === b, before, { timeout: 10000 });
 
   // Export PNG: a 256×256 PNG that is not blank.
   const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=export-png]')]);

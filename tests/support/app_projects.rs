@@ -1,8 +1,8 @@
-//! Project files as today's app writes them (`www/project.js`
+//! Project files as today's app writes them (`www/app/project.js`
 //! `projectText`: `{format, version: 2, tool, stateVersion, state}` with
 //! byte fields as `{"$bytes": base64}`), built from the shipped examples the
 //! way the panels build their documents (`exampleDoc` in
-//! `www/pixel-panel.js`, `generatorDoc` in `www/fit-panel.js`). Shared by
+//! `www/pixel/panel.js`, `generatorDoc` in `www/fit/panel.js`). Shared by
 //! `tests/project.rs` and the fuzz seeds (`tests/fuzz_corpus.rs`).
 #![allow(dead_code)]
 

@@ -4,9 +4,10 @@
 //!
 //! Bounded: at most [`MAX_POINTS`] points over all rings, [`MAX_ELEMENTS`]
 //! elements read from a document, and curves flattened into at most
-//! [`MAX_PIECES`] segments each; a document nests as deep as roxmltree
-//! allows (it refuses deep nesting itself) and transforms are accumulated
-//! on an explicit stack, never by recursion.
+//! [`MAX_PIECES`] segments each; a document nests at most [`MAX_DEPTH`]
+//! elements deep, checked by a scan of the text before roxmltree (whose
+//! parser recurses once per element) reads it, and transforms are
+//! accumulated on an explicit stack, never by recursion.
 use crate::core::error::{Error, Result};
 use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
@@ -17,6 +18,81 @@ pub const MAX_POINTS: usize = 200_000;
 pub const MAX_ELEMENTS: usize = 100_000;
 /// Most segments one curve is flattened into.
 pub const MAX_PIECES: usize = 256;
+/// Deepest element nesting of an SVG document (real drawings nest a few
+/// dozen groups; 3,000 nested `<g>` overflowed the worker's stack).
+pub const MAX_DEPTH: usize = 256;
+
+/// Refuse a document that nests elements deeper than [`MAX_DEPTH`], by a
+/// linear scan of its markup (comments, CDATA, processing instructions, the
+/// doctype and quoted attribute values skipped), before any recursive parser
+/// sees it. Malformed markup is left to the parser to describe.
+pub fn check_depth(text: &str) -> Result<()> {
+    let b = text.as_bytes();
+    let skip_to = |from: usize, end: &[u8]| -> usize {
+        b[from..]
+            .windows(end.len())
+            .position(|w| w == end)
+            .map_or(b.len(), |k| from + k + end.len())
+    };
+    let (mut i, mut depth) = (0usize, 0usize);
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        if rest.starts_with(b"<!--") {
+            i = skip_to(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = skip_to(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = skip_to(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            // A doctype, perhaps with an internal subset in [ ].
+            let mut j = i + 2;
+            let mut square = 0i32;
+            while j < b.len() && !(b[j] == b'>' && square <= 0) {
+                match b[j] {
+                    b'[' => square += 1,
+                    b']' => square -= 1,
+                    _ => {}
+                }
+                j += 1;
+            }
+            i = j + 1;
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = skip_to(i + 2, b">");
+        } else {
+            // A start tag: to its `>`, outside quoted values.
+            let mut j = i + 1;
+            let mut quote = 0u8;
+            while j < b.len() {
+                let c = b[j];
+                if quote != 0 {
+                    if c == quote {
+                        quote = 0;
+                    }
+                } else if c == b'"' || c == b'\'' {
+                    quote = c;
+                } else if c == b'>' {
+                    break;
+                }
+                j += 1;
+            }
+            if j >= b.len() || b[j - 1] != b'/' {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    return Err(Error::limit(format!(
+                        "the SVG file nests elements more than {MAX_DEPTH} deep (the SVG nesting limit)"
+                    )));
+                }
+            }
+            i = j + 1;
+        }
+    }
+    Ok(())
+}
 
 /// Accumulates rings from move/line/curve/close commands, flattening
 /// curves so no piece deviates more than `tolerance` from the curve.
@@ -224,6 +300,7 @@ fn paper_fill(v: &str) -> Option<bool> {
 /// definitions, masks, text and `display: none` parts skipped. Curves are
 /// flattened to within `tolerance` after the transforms.
 pub fn document_elements(text: &str, tolerance: f64, root: [f64; 6]) -> Result<Vec<Element>> {
+    check_depth(text)?;
     let doc = roxmltree::Document::parse(text)
         .map_err(|e| Error::input(format!("the SVG file is not valid XML: {e}")))?;
     let ids: std::collections::HashMap<&str, roxmltree::Node> = doc
@@ -769,6 +846,30 @@ mod tests {
         let err = document_polygons(&svg(&format!(r#"<path d="{ring}Z"/>{dots}"#)), 0.05, None)
             .unwrap_err();
         assert!(err.to_string().contains("nesting limit"), "{err}");
+    }
+
+    #[test]
+    fn deep_nesting_is_refused_before_parsing_natively_without_overflow() {
+        // 12,000 levels overflowed the CLI's stack in roxmltree's parser.
+        for (open, close) in [("<g>", "</g>"), ("<g transform=\"scale(1)\">", "</g>")] {
+            let doc = format!(
+                "<svg xmlns=\"http://www.w3.org/2000/svg\">{}<rect width=\"1\" height=\"1\"/>{}</svg>",
+                open.repeat(12_000),
+                close.repeat(12_000)
+            );
+            let e = document_elements(&doc, 0.1, [1.0, 0.0, 0.0, 1.0, 0.0, 0.0]).unwrap_err();
+            assert_eq!(e.kind(), "limit");
+            assert!(e.to_string().contains("more than 256 deep"), "{e}");
+        }
+        // At the limit it parses; comments, CDATA, quotes and self-closing
+        // tags do not count as levels.
+        let ok = format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\"><!-- <g><g> --><![CDATA[<g>]]>{}<rect title=\"a>b\" width=\"1\" height=\"1\"/><path d=\"M0 0L1 0L1 1Z\"/>{}</svg>",
+            "<g>".repeat(MAX_DEPTH - 1),
+            "</g>".repeat(MAX_DEPTH - 1)
+        );
+        check_depth(&ok).unwrap();
+        assert!(check_depth(&format!("<svg>{}", "<g>".repeat(MAX_DEPTH))).is_err());
     }
 
     #[test]
