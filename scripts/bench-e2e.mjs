@@ -83,18 +83,18 @@ async function paperFit(env) {
   const page = await env.newPage({ path: '#tool=fit' });
   await page.waitForSelector('[data-testid=fit-sliders] .row');
   await page.selectOption('[data-testid=fit-generator]', 'circles-mix');
-  await page.waitForFunction(() => window.filigreeFit.state()?.generator === 'circles-mix');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state()?.generator === 'circles-mix');
   await page.selectOption('select[name=budget]', 'paper');
   await page.click('button[data-act=make-target]');
-  await page.waitForFunction(() => window.filigreeFit.state().truth !== null);
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
   const t0 = Date.now();
   await page.click('button[data-act=fit]');
   await page.waitForFunction(() => /^fitted/.test(document.querySelector('[data-testid=fit-status]').textContent)
     || !document.querySelector('.fit-error').hidden, null, { timeout: 180000 });
   const seconds = (Date.now() - t0) / 1000;
   const r = await page.evaluate(() => {
-    const { values, truth } = window.filigreeFit.state();
-    const params = window.filigreeFit.info().params;
+    const { values, truth } = window.filigree.testHooks.fit.state();
+    const params = window.filigree.testHooks.fit.info().params;
     let mse = 0;
     params.forEach((p, i) => { mse += ((values[i] - truth[i]) / (p.hi - p.lo)) ** 2 / params.length; });
     return { mse, status: document.querySelector('[data-testid=fit-status]').textContent };

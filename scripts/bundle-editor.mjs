@@ -2,7 +2,7 @@
 // from our own origin: www/vendor/code-editor.bundle.js. Generated, not
 // committed (.gitignore); scripts/build.sh runs this before the precache
 // manifest so the service worker ships it for offline use. Without node_modules
-// (npm not run) it says so and exits 0: www/code-editor.js then falls back to
+// (npm not run) it says so and exits 0: www/ui/code-editor.js then falls back to
 // a plain textarea.
 import fs from 'node:fs';
 import path from 'node:path';

@@ -1,6 +1,6 @@
 // Source of www/vendor/code-editor.bundle.js (built by scripts/bundle-editor.mjs
 // with esbuild; the bundle is generated, not committed). It turns CodeMirror 6
-// into the small API www/code-editor.js documents; nothing else imports it.
+// into the small API www/ui/code-editor.js documents; nothing else imports it.
 import { EditorState, Compartment } from '@codemirror/state';
 import {
   EditorView, keymap, lineNumbers, highlightActiveLine, highlightActiveLineGutter, drawSelection,
@@ -104,7 +104,7 @@ const theme = EditorView.theme({
 
 // ---- the API ------------------------------------------------------------------
 
-/** See www/code-editor.js for the contract. */
+/** See www/ui/code-editor.js for the contract. */
 export function createEditor(parent, { value = '', language = 'filigree', onChange, label = 'code', attributes = {} } = {}) {
   const lang = (LANGUAGES[language] || LANGUAGES.filigree)();
   const ariaLabel = new Compartment();

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # The home view's card pictures, assets/home/<tool>.png: each tool's example
 # made ahead of time by the native CLI (the same core and the same requests
-# the panels send), so that the home view loads no wasm at all (www/home.js
+# the panels send), so that the home view loads no wasm at all (www/app/home.js
 # shows them as plain images). Run it when a change alters what one of these
 # examples looks like, look at the pictures, and commit them:
 #   bash scripts/home-cards.sh        (FILIGREE_BIN=path overrides target/debug/filigree)
 # Every picture is stored losslessly in its smallest PNG form (palette, grey
 # or RGB, whichever is smallest), except Tangle's, whose anti-aliased greys
 # are rounded to 16 levels (invisible at card size, half the bytes).
-# It also prints the Inspect card's facts and checks that www/home.js shows
+# It also prints the Inspect card's facts and checks that www/app/home.js shows
 # the same ones (they are static text there).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -165,8 +165,8 @@ r = json.load(open(f'{tmp}/inspect.json'))
 facts = f"{r['width']}×{r['height']} px · {r['colour_count']} colours"
 swatches = ['#%02x%02x%02x' % tuple(c['rgba'][:3]) for c in r['clusters'][:8]]
 print(f'inspect card: {facts}; swatches {" ".join(swatches)}')
-home = open('www/home.js', encoding='utf-8').read()
+home = open('www/app/home.js', encoding='utf-8').read()
 missing = [s for s in [facts, *swatches] if f"'{s}'" not in home]
 if missing:
-    sys.exit(f'home-cards: www/home.js does not show {", ".join(missing)}: update its Inspect card')
+    sys.exit(f'home-cards: www/app/home.js does not show {", ".join(missing)}: update its Inspect card')
 EOF

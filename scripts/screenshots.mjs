@@ -21,7 +21,7 @@ const READY = {
   '#tool=inspect': () => document.querySelector('[data-testid=drop-zone]'),
   '#tool=tangle': () => Number(document.querySelector('[data-testid=tangle-status]')?.dataset.runs) > 0,
   '#tool=micro': () => Number(document.querySelector('[data-testid=micro-status]')?.dataset.runs) > 0,
-  '#tool=texture': () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigreeTexture?.pending(),
+  '#tool=texture': () => !!document.querySelector('[data-testid=texture-retrieved][data-model]') && !window.filigree?.testHooks?.texture?.pending(),
 };
 
 const env = await launch();

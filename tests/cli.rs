@@ -483,7 +483,7 @@ fn fit_writes_the_fitted_render_sized_like_the_target() {
         &p("fitted.jpg"),
     ]);
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("must end in .png or .svg"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("name the file with .png or .svg"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

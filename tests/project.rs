@@ -186,3 +186,19 @@ fn a_broken_project_file_says_where() {
         )
     );
 }
+
+/// Issue 34 item 7: a project or scene file saved with a UTF-8 byte order
+/// mark (as Windows editors write) said "expected value at line 1 column 1".
+#[test]
+fn a_byte_order_mark_is_not_part_of_the_json() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/fish.filigree.json");
+    let text = std::fs::read_to_string(path).unwrap();
+    let with_bom = format!("\u{feff}{text}");
+    let p = project::open_project(&with_bom).unwrap();
+    assert_eq!(p.tool, "pixel");
+    let scene = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/micro/gyroid.json"),
+    )
+    .unwrap();
+    filigree::micro::scene::parse(&format!("\u{feff}{scene}")).unwrap();
+}

@@ -221,7 +221,7 @@ fn unknown_kind(kind: &str) -> Error {
 
 /// The wasm modules the app is split into: one per tool, each serving its
 /// tool's request kinds and the [`SHARED_KINDS`]. The page loads a tool's
-/// module when the tool is first used (`www/protocol.js` holds the same
+/// module when the tool is first used (`www/app/protocol.js` holds the same
 /// table, checked by `tests/modules.rs`); natively [`start`] serves every kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Module {

@@ -352,6 +352,10 @@ impl crate::core::job::Job for OpenProjectJob<'_> {
         use crate::core::job::{Progress, Step};
         match std::mem::replace(&mut self.stage, OpenStage::Over) {
             OpenStage::Start => {
+                // A byte order mark (Windows editors write one) is not part of the JSON.
+                if let Some(rest) = self.text.strip_prefix('\u{feff}') {
+                    self.text = Cow::Owned(rest.to_string());
+                }
                 let text = &self.text;
                 if text.len() > limits::MAX_PROJECT_BYTES {
                     return Err(Error::limit(format!(

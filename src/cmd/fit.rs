@@ -135,14 +135,42 @@ pub fn load_program(spec: &str) -> Result<(String, String), String> {
 
 /// Parameter values from a JSON object given inline or as a file.
 pub fn param_map(spec: &str, flag: &str) -> Result<BTreeMap<String, f64>, String> {
-    let text = if spec.trim_start().starts_with('{') {
+    // JSON text when it looks like JSON or no such file exists; else a file.
+    let t = spec.trim_start();
+    let looks_like_json = t.starts_with(['{', '[', '"']) || t == "null" || t.parse::<f64>().is_ok();
+    let text = if looks_like_json || !Path::new(spec).is_file() {
         spec.to_string()
     } else {
         String::from_utf8(super::read_file(Path::new(spec))?)
-            .map_err(|_| format!("{spec}: not UTF-8"))?
+            .map_err(|_| format!("{flag}: {spec}: not UTF-8 text"))?
     };
-    serde_json::from_str(&text)
-        .map_err(|e| format!("{flag}: {e} (expected a JSON object {{\"name\": number}})"))
+    let text = super::strip_bom(&text);
+    let value: Value = serde_json::from_str(text).map_err(|e| {
+        if looks_like_json || Path::new(spec).is_file() {
+            format!("{flag}: not valid JSON ({e}); expected an object {{\"name\": number}}")
+        } else {
+            format!(
+                "{flag}: '{}' is neither a JSON object {{\"name\": number}} nor a file",
+                super::short(spec)
+            )
+        }
+    })?;
+    let Value::Object(map) = value else {
+        return Err(format!(
+            "{flag}: expected a JSON object {{\"name\": number}} (got {})",
+            super::short(&value.to_string())
+        ));
+    };
+    map.into_iter()
+        .map(|(k, v)| match v.as_f64() {
+            Some(x) if x.is_finite() => Ok((k, x)),
+            _ => Err(format!(
+                "{flag}: parameter '{}' must be a finite number (got {})",
+                super::short(&k),
+                super::short(&v.to_string())
+            )),
+        })
+        .collect()
 }
 
 impl FitArgs {

@@ -23,6 +23,23 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// `text` without a leading UTF-8 byte order mark (editors on Windows
+/// write one; JSON readers refuse it).
+pub fn strip_bom(text: &str) -> &str {
+    text.strip_prefix('\u{feff}').unwrap_or(text)
+}
+
+/// `text` cut to 40 characters for a message (a 309-digit number is not
+/// worth echoing in full).
+pub fn short(text: &str) -> String {
+    const MAX: usize = 40;
+    if text.chars().count() <= MAX {
+        text.to_string()
+    } else {
+        format!("{}…", text.chars().take(MAX).collect::<String>())
+    }
+}
+
 /// Check an output path before any work starts: its extension is one of
 /// `kinds` (lower case, without the dot; the first is what the error
 /// suggests) and its folder exists, so a long run never ends in a write that

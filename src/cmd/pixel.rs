@@ -82,8 +82,9 @@ struct StrokesFile {
 
 /// Read a strokes JSON file, naming it (and the line/column) on error.
 pub fn read_strokes(path: &Path) -> Result<Vec<Stroke>, String> {
-    let text = super::read_file(path)?;
-    let f: StrokesFile = serde_json::from_slice(&text).map_err(|e| {
+    let bytes = super::read_file(path)?;
+    let text = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&bytes);
+    let f: StrokesFile = serde_json::from_slice(text).map_err(|e| {
         format!(
             "{}: {e} (expected {{\"strokes\": [[[x, y], [x, y], ...], ...]}})",
             path.display()

@@ -3,7 +3,7 @@
 //! (file, pixel size, line and column, limit, request field).
 //!
 //! Errors cross the wasm boundary as [`ErrorInfo`], a plain object
-//! `{kind, message, line?, column?, field?}` (see `www/protocol.js`).
+//! `{kind, message, line?, column?, field?}` (see `www/app/protocol.js`).
 use serde::Serialize;
 use std::fmt;
 

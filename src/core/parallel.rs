@@ -1,6 +1,6 @@
 //! One way to run a job in parallel: the same job split into `n` shards that
 //! exchange data mid-way, driven natively here exactly as the browser's worker
-//! pool drives them (`www/client.js`, `runSharded`).
+//! pool drives them (`www/app/client.js`, `runSharded`).
 //!
 //! A sharded job is built once per shard (`k` of `n`). It steps on its own
 //! until it needs its siblings: then [`Job::outbox`] gives its part, and the

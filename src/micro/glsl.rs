@@ -29,7 +29,7 @@
 //! every shipped scene to: at most 2% of pixels disagree on hit or miss,
 //! and the mean absolute difference over all channels is at most 4 levels
 //! of 255. The panel uses the CPU path when a pixel's footprint at the
-//! target falls below 1e-6 of the scene's size (`www/micro-gl.js`).
+//! target falls below 1e-6 of the scene's size (`www/micro/gl.js`).
 use super::cells::{Combine, Field, Lattice, Particles, Pile, Poly, Select, Shape, Size};
 use super::periodic::{Periodic, Surface, Tpms, Wave};
 use super::render::{Shade, Shading, StepMode, Trace, AMBIENT, LIGHT};

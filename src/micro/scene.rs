@@ -149,6 +149,8 @@ const MAX_JSON_DEPTH: usize = 2 * MAX_MICRO_DEPTH + 8;
 
 /// Parse and compile scene JSON text.
 pub fn parse(text: &str) -> Result<Scene> {
+    // A byte order mark (Windows editors write one) is not part of the JSON.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     if text.len() > MAX_MICRO_SCENE_BYTES {
         return Err(Error::limit(format!(
             "the scene is {} bytes; at most {MAX_MICRO_SCENE_BYTES} bytes are allowed",

@@ -204,7 +204,7 @@ pub struct TangleResponse {
 /// (i32); `fill` (f32); `flags` (u8: 1 white lines, 2 mark);
 /// `ring_first` (u32, count + 1 entries: shape i's ring lengths are
 /// `rings[ring_first[i]..ring_first[i + 1]]`) and `rings` (u32).
-/// `www/tangle-draw.js` (`shapeColumns`) reads them back.
+/// `www/tangle/draw.js` (`shapeColumns`) reads them back.
 fn shape_columns<S: serde::Serializer>(
     v: &[ShapeOut],
     s: S,

@@ -5,7 +5,7 @@
 //! its tool's registry ([`crate::api::start_pixel`], ...), so a module
 //! links only its own tool's code.
 //!
-//! The worker (`www/worker.js`) calls `start_job` with a request kind and
+//! The worker (`www/app/worker.js`) calls `start_job` with a request kind and
 //! its payload (a plain JS object; byte fields are `Uint8Array`s), then calls
 //! [`WebJob::step`] in a loop, yielding to its event loop every ~15 ms so a
 //! cancel message can be read. Errors are thrown as plain objects
@@ -57,6 +57,22 @@ pub type Start = fn(&str, serde_wasm_bindgen::Deserializer) -> crate::Result<Box
 /// Start a job of `kind` with `payload` from the registry `start`; throws
 /// a typed error object.
 pub fn start_job_with(start: Start, kind: &str, payload: JsValue) -> Result<WebJob, JsValue> {
+    // A request is always an object; anything else would reach serde as a
+    // JS TypeError ("Reflect.get called on non-object").
+    if !payload.is_object() || js_sys::Array::is_array(&payload) {
+        let got = if payload.is_null() {
+            "null".to_string()
+        } else if payload.is_undefined() {
+            "nothing".to_string()
+        } else if js_sys::Array::is_array(&payload) {
+            "a list".to_string()
+        } else {
+            payload.js_typeof().as_string().unwrap_or_default()
+        };
+        return Err(error(Error::BadRequest(format!(
+            "{kind}: the request must be an object (got {got})"
+        ))));
+    }
     let inner = start(kind, serde_wasm_bindgen::Deserializer::from(payload)).map_err(error)?;
     Ok(WebJob { inner })
 }

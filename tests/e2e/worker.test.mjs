@@ -129,6 +129,8 @@ test('errors arrive typed: a syntax error has kind, line, column and field; a ba
       tolerance: await grab(pool.run('inspect', { bytes: new Uint8Array(8), tolerance: -5 })),
       supersample: await grab(pool.run('render-pattern', { program: 'circle(0.5, 0.5, 0.2);', supersample: 1e12 })),
       unknownParam: await grab(pool.run('render-pattern', { program: 'param r in [0, 1] = 0.2;\ncircle(0.5, 0.5, r);', params: { radius: 1 } })),
+      // Issue 34: a null payload said "Reflect.get called on non-object".
+      nullPayload: await grab(pool.run('inspect', null)),
     };
   });
   assert.deepEqual(r.syntax, {
@@ -144,6 +146,8 @@ test('errors arrive typed: a syntax error has kind, line, column and field; a ba
   assert.equal(r.supersample.field, 'supersample');
   assert.equal(r.unknownParam.field, 'params.radius');
   assert.match(r.unknownParam.message, /no parameter 'radius'/);
+  assert.equal(r.nullPayload.kind, 'bad-request');
+  assert.equal(r.nullPayload.message, 'inspect: the request must be an object (got null)');
 });
 
 test('jobs with an affinity run on the worker that ran the last one (waiting for it), others flow around it', async () => {

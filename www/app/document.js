@@ -38,6 +38,9 @@
 //   ctx.error(err, {prefix, source})  the panel's ONE error area (replaced, not appended), plain words
 //   ctx.clearError(source?)      hide it; with `source`, only an error raised with that source
 //   ctx.coreDefaults()           the tool's default request(s) from the core
+//   ctx.expose(hooks, name = id) test hooks, only in a page opened by a test
+//                                (globalThis.__filigreeTestHooks === true): set as
+//                                controller.testHooks[name], removed when the panel is left
 //   ctx.readOnly, ctx.alive()
 import { Autosave, History, projectText, download, withTimeout } from './project.js';
 import { encodeShare, decodeShare, ShareTooBig } from './share.js';
@@ -143,6 +146,8 @@ export class DocumentController {
     this.docs = new Map(); // tool id → {history, version, autosave}
     this.current = null; // {tool, el, ctx, view, rendered, life}
     this.storageBlocked = false;
+    // Panels' test hooks (ctx.expose), by tool id or name; null unless a test opened the page.
+    this.testHooks = globalThis.__filigreeTestHooks === true ? {} : null;
     this.keydown = (e) => this.onKey(e);
     document.addEventListener('keydown', this.keydown);
     addEventListener('pagehide', () => { for (const d of this.docs.values()) d.autosave?.flush(); });
@@ -227,6 +232,8 @@ export class DocumentController {
     cur.life.timers.clear();
     for (const b of cur.life.bitmaps) b.close?.();
     cur.life.bitmaps.clear();
+    for (const [name, hooks] of cur.life.hooks) if (this.testHooks?.[name] === hooks) delete this.testHooks[name];
+    cur.life.hooks.clear();
     try { cur.view?.unmount?.(); } catch (err) { console.error(err); }
     this.docs.get(cur.tool.id)?.autosave?.flush();
   }
@@ -281,7 +288,7 @@ export class DocumentController {
     if (!tool.state) el.querySelector('.doc-bar').hidden = true;
     if (readOnly) el.dataset.readonly = '1';
     this.host.replaceChildren(el);
-    const life = { ctrl: new AbortController(), timers: new Set(), bitmaps: new Set(), dead: false };
+    const life = { ctrl: new AbortController(), timers: new Set(), bitmaps: new Set(), hooks: new Map(), dead: false };
     const cur = { tool, el, life, view: null, rendered: null, readOnly };
     this.current = cur;
     cur.ctx = this.context(cur);
@@ -370,6 +377,11 @@ export class DocumentController {
         }
       },
       coreDefaults: () => coreDefaults(ctl.pool, tool.id),
+      expose(hooks, name = tool.id) {
+        if (!ctl.testHooks || life.dead) return;
+        ctl.testHooks[name] = hooks;
+        life.hooks.set(name, hooks);
+      },
       undo: () => ctl.undo(),
       redo: () => ctl.redo(),
     };

@@ -6,7 +6,7 @@
 //   const home = mountHome(el, app, tools);  …  home.unmount();
 // A picture that fails to load leaves its card usable (a short note instead).
 
-const PICTURES = new URL('../assets/home/', import.meta.url);
+const PICTURES = new URL('../../assets/home/', import.meta.url);
 
 // width × height: each picture's own size (scripts/home-cards.sh).
 const CARDS = {

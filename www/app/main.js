@@ -4,12 +4,12 @@
 import { WorkerPool } from './client.js';
 import { DocumentController } from './document.js';
 import { hasShare } from './share.js';
-import inspectTool from './inspect-panel.js';
-import pixelTool from './pixel-panel.js';
-import fitTool from './fit-panel.js';
-import tangleTool from './tangle-panel.js';
-import microTool from './micro-panel.js';
-import textureTool from './texture-panel.js';
+import inspectTool from '../inspect/panel.js';
+import pixelTool from '../pixel/panel.js';
+import fitTool from '../fit/panel.js';
+import tangleTool from '../tangle/panel.js';
+import microTool from '../micro/panel.js';
+import textureTool from '../texture/panel.js';
 import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 import { mountHome } from './home.js';
 
@@ -80,7 +80,10 @@ const app = {
   currentShare: () => doc.currentShare(),
   selectTool: (id) => doc.show(id),
 };
-// Tests, embedding and the console reach the app through this handle.
+// Tests, embedding and the console reach the app through this handle. A page
+// opened by a test (globalThis.__filigreeTestHooks === true) also has the
+// panels' test hooks (ctx.expose, document.js) in app.testHooks[<tool id or name>].
+if (doc.testHooks) app.testHooks = doc.testHooks;
 window.filigree = app;
 
 const toolParam = () => new URLSearchParams(location.hash.slice(1)).get('tool');
@@ -143,7 +146,7 @@ if (serviceWorkerAllowed(embed)) {
       },
     });
   };
-  navigator.serviceWorker.register(new URL('../sw.js', import.meta.url)).then((reg) => {
+  navigator.serviceWorker.register(new URL('../../sw.js', import.meta.url)).then((reg) => {
     offerUpdate(reg);
     reg.addEventListener('updatefound', () => {
       reg.installing?.addEventListener('statechange', () => offerUpdate(reg));

@@ -98,7 +98,7 @@ export function moduleFor(kind, payload, fallback) {
 }
 
 /** The URL of a module's wasm (its JS glue is `filigree_<name>.js` beside it). */
-export const moduleUrl = (name, ext = '_bg.wasm') => new URL(`../pkg/filigree_${name}${ext}`, import.meta.url);
+export const moduleUrl = (name, ext = '_bg.wasm') => new URL(`../../pkg/filigree_${name}${ext}`, import.meta.url);
 
 // Wall-clock budget of one run of slices before the worker yields.
 export const SLICE_MS = 15;

@@ -3,12 +3,12 @@
 // program's colours, upload (or drop, or paste) an image, or make a target
 // from chosen values; the fit runs in workers with a live loss plot and the
 // best pattern so far drawn over the target. History, autosave, project
-// files and links come from the document controller (document.js).
-import { acceptFiles, putRgba, hex } from './file-input.js';
-import { download } from './project.js';
-import { LossPlot } from './loss-plot.js';
-import { createCodeEditor } from './code-editor.js';
-import { radioGroup } from './radio-group.js';
+// files and links come from the document controller (app/document.js).
+import { acceptFiles, putRgba, hex } from '../ui/file-input.js';
+import { download } from '../app/project.js';
+import { LossPlot } from '../ui/loss-plot.js';
+import { createCodeEditor } from '../ui/code-editor.js';
+import { radioGroup } from '../ui/radio-group.js';
 
 // The target's longer side (a drawn target is square; an upload keeps its
 // aspect, and the fit's canvas follows it: src/pattern/state.rs).
@@ -646,7 +646,8 @@ function mount(el, ctx) {
     if (d) q('[name=generator]').value = generators.some((g) => g.name === d.generator) ? d.generator : '';
   }).catch((err) => ctx.error(err));
 
-  window.filigreeFit = { state: doc, info: () => info, plot, running: () => running !== null };
+  // For the e2e tests (ctx.expose): the document, the program's parameters, the loss plot.
+  ctx.expose({ state: doc, info: () => info, plot, running: () => running !== null });
 
   return {
     render(d, prev) {
@@ -674,7 +675,6 @@ function mount(el, ctx) {
       detachFiles();
       detachRadios();
       running?.abort();
-      if (window.filigreeFit?.state === doc) delete window.filigreeFit;
     },
   };
 }

@@ -1,8 +1,8 @@
 // "Inspect image": size, palette and thumbnail of a dropped, pasted or picked
 // image, computed by the core in a worker (the same `inspect` the CLI runs).
 // The document is the image itself, so it is autosaved, undoable and
-// shareable (when small) like every tool's (document.js).
-import { acceptFiles, putRgba, hex } from './file-input.js';
+// shareable (when small) like every tool's (app/document.js).
+import { acceptFiles, putRgba, hex } from '../ui/file-input.js';
 
 const html = `
   <div class="inspect-layout">

@@ -9,8 +9,8 @@
 // mountReconstruct(el, ctx) → {render(doc), unmount()}; el is an empty
 // element inside the Micro panel. The request's defaults come from the
 // core (`defaults` for `micro-fit`), never from here.
-import { LossPlot } from './loss-plot.js';
-import { coreDefaults } from './document.js';
+import { LossPlot } from '../ui/loss-plot.js';
+import { coreDefaults } from '../app/document.js';
 
 const MAX_ROWS = 24; // numbers of the scene offered for fitting
 const OPTIMIZERS = [['cmaes', 'CMA-ES'], ['nelder-mead', 'Nelder–Mead'], ['powell', 'Powell']];
@@ -251,7 +251,7 @@ export function mountReconstruct(el, ctx) {
     status(`applied: ${result.pointers.length} value(s) written into the scene (undo restores them)`);
   };
 
-  // For tests and the console.
+  // For the e2e tests (ctx.expose, beside the Micro panel's own).
   const hooks = {
     rows: () => rows.map((r) => ({ pointer: r.pointer, value: r.value })),
     result: () => result && { scene: result.scene, values: result.values },
@@ -259,7 +259,7 @@ export function mountReconstruct(el, ctx) {
     plotted: () => plot.points.length,
     request: () => request(),
   };
-  window.filigreeMicroFit = hooks;
+  ctx.expose(hooks, 'micro-fit');
 
   return {
     render(doc) {
@@ -269,7 +269,6 @@ export function mountReconstruct(el, ctx) {
     },
     unmount() {
       running?.abort();
-      if (window.filigreeMicroFit === hooks) delete window.filigreeMicroFit;
     },
   };
 }

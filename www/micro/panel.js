@@ -9,7 +9,7 @@
 // rendered at a quarter of its size; it is rendered at full size once the
 // gesture pauses. A new render cancels the one before.
 //
-// With WebGL2 the interactive view runs on the GPU instead (www/micro-gl.js,
+// With WebGL2 the interactive view runs on the GPU instead (gl.js,
 // a shader the core generates from the same scene, `micro-glsl`): every
 // camera change draws a coarse frame at once (its size adapted to keep
 // frames short), then, once the camera rests, finer frames and the full size
@@ -27,12 +27,12 @@
 // roughness, specular, absorption, spp, max_depth} (version 2; version 1
 // documents get the request's defaults); its schema is
 // src/micro/state.rs. History, autosave, project files and links come from
-// the document controller (document.js).
-import { shippedExamples, shareByExample } from './examples.js';
-import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
-import { download } from './project.js';
-import { mountReconstruct } from './micro-fit.js';
-import { MicroGl, unavailable, usable } from './micro-gl.js';
+// the document controller (app/document.js).
+import { shippedExamples, shareByExample } from '../ui/examples.js';
+import { createCodeEditor, preloadCodeEditor } from '../ui/code-editor.js';
+import { download } from '../app/project.js';
+import { mountReconstruct } from './fit.js';
+import { MicroGl, unavailable, usable } from './gl.js';
 
 const RUN_DELAY_MS = 60;
 const TYPING_DELAY_MS = 600;
@@ -885,7 +885,7 @@ function mount(el, ctx) {
     }));
   }
 
-  // For tests and the console.
+  // For the e2e tests (ctx.expose).
   const hooks = {
     state,
     last: () => (last ? { kind: last.kind, width: last.width, height: last.height, preview: last.preview, stats: last.stats, gpu: last.gpu, tiles: last.tiles ?? 1, passes: last.passes ?? 1 } : null),
@@ -904,7 +904,7 @@ function mount(el, ctx) {
     /** Coarse GPU frames at 1/n of the full side (1: what a fast GPU reaches). */
     gpuPreviewDiv: (n) => { gpuDiv = n; },
   };
-  window.filigreeMicro = hooks;
+  ctx.expose(hooks);
 
   return {
     render(s, prev) {
@@ -948,7 +948,6 @@ function mount(el, ctx) {
       running?.abort();
       stopGpu();
       bitmap?.close?.();
-      if (window.filigreeMicro === hooks) delete window.filigreeMicro;
     },
   };
 }

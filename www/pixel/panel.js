@@ -3,7 +3,7 @@
 // example), paints the mask, draws orientation strokes on a zoomable pixel
 // grid, and moves parameters; the core re-runs in a worker after each change
 // (debounced, the previous run cancelled). History, autosave, project files
-// and links come from the document controller (document.js).
+// and links come from the document controller (app/document.js).
 //
 // The picture is a CanvasView (canvas-view.js), so a brush drag never re-lays
 // out or redraws it all: the base layer holds the source or the result at
@@ -11,12 +11,12 @@
 // cover only the visible part at screen resolution, and each animation frame
 // repaints just the rectangle the brush or the new stroke segment touched.
 // The pixel grid is a CSS background.
-import { acceptFiles, putRgba, hex } from './file-input.js';
-import { radioGroup } from './radio-group.js';
+import { acceptFiles, putRgba, hex } from '../ui/file-input.js';
+import { radioGroup } from '../ui/radio-group.js';
 import { CanvasView } from './canvas-view.js';
-import { download } from './project.js';
+import { download } from '../app/project.js';
 
-const ASSETS = new URL('../assets/pixel/', import.meta.url);
+const ASSETS = new URL('../../assets/pixel/', import.meta.url);
 const EXAMPLES = ['fish', 'trunk'];
 const DIRECTIONS = ['up', 'up-right', 'right', 'down-right', 'down', 'down-left', 'left', 'up-left'];
 const RUN_DELAY_MS = 120;
@@ -692,10 +692,10 @@ function mount(el, ctx) {
     download(`${base}-textured${s > 1 ? `@${s}x` : ''}.png`, blob);
   };
 
-  // For tests and the console: the document, the last result, and whether a run is due or going.
-  window.filigreePixel = {
+  // For the e2e tests (ctx.expose): the document, the last result, and whether a run is due or going.
+  ctx.expose({
     state, result: () => result, pending: () => runTimer !== null || running !== null || sourceLoading !== null,
-  };
+  });
 
   const inputsOf = (s) => [s.source, s.sheet, s.sprite, s.mask, s.strokes, s.params];
   return {
@@ -716,7 +716,6 @@ function mount(el, ctx) {
       detachFiles();
       detachRadios();
       running?.abort();
-      if (window.filigreePixel?.state === state) delete window.filigreePixel;
     },
   };
 }

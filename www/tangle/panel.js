@@ -11,13 +11,13 @@
 // user's edits in order ({step, params}); the core replays the edits, so the
 // page keeps no tangle state of its own and undo is just the previous
 // document. History, autosave, project files and links come from the
-// document controller (document.js); the schema is src/tangle/state.rs.
+// document controller (app/document.js); the schema is src/tangle/state.rs.
 // Its requests carry `keep` and go to one worker (affinity), which keeps the
 // expansion: an edit then regrows only its step's subtree there.
 // A curve or shape drawn on the canvas is added to the grammar text as a
 // `curve`/`shape` polyline definition for split and place rules.
 //
-// Drawing (tangle-draw.js): a step's picture is a few Path2D parts from a
+// Drawing (draw.js): a step's picture is a few Path2D parts from a
 // segment tree over the steps, built lazily; heavy parts shown by many steps
 // are kept as bitmaps of the current view, so a slider drag redraws only the
 // small parts that changed, and idle time draws the heaviest parts' bitmaps
@@ -28,12 +28,12 @@
 // An answer after an edit keeps the last answer's unchanged shapes (same
 // group, id and points: their Path2Ds), and a repaint after an edit or a
 // selection redraws only the canvas tiles the changed shapes touch
-// (`changedRegion`); `filigreeTangle.options.incremental = false` turns all
+// (`changedRegion`); `testHooks.tangle.options.incremental = false` turns all
 // of that off (the latency bench's "before").
-import { shippedExamples, shareByExample } from './examples.js';
-import { createCodeEditor, preloadCodeEditor } from './code-editor.js';
-import { download } from './project.js';
-import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer, LAYER_VERTICES } from './tangle-draw.js';
+import { shippedExamples, shareByExample } from '../ui/examples.js';
+import { createCodeEditor, preloadCodeEditor } from '../ui/code-editor.js';
+import { download } from '../app/project.js';
+import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer, LAYER_VERTICES } from './draw.js';
 
 const RUN_DELAY_MS = 120;
 const BUSY_DELAY_MS = 150; // a run shows it is busy after this long
@@ -148,7 +148,7 @@ const html = `
 
 // The panel's own requests ask the worker to keep the expansion (`keep`) and
 // go to the worker that kept it, so an edit regrows only its step's subtree
-// there instead of the whole tangle (src/tangle/api.rs, www/client.js).
+// there instead of the whole tangle (src/tangle/api.rs, app/client.js).
 const KEEP_AFFINITY = 'tangle';
 
 // What a polyline drawn on the canvas becomes.
@@ -206,7 +206,7 @@ function mount(el, ctx) {
   let frame = 0;
   let sharpTimer = null;
   const snap = document.createElement('canvas');
-  const layers = createLayers(); // bitmaps of the heavy parts of recent steps (tangle-draw.js)
+  const layers = createLayers(); // bitmaps of the heavy parts of recent steps (draw.js)
   let snapView = null;
   // The view of the last sharp paint; the canvas is copied to `snap` only when a pan starts
   // (a copy at every paint would make the browser rasterise the canvas there and then).
@@ -618,7 +618,7 @@ function mount(el, ctx) {
 
   // In idle time after a sharp paint, the heaviest parts of the step tree are drawn as
   // bitmaps of the current view (heaviest first, while the layer budget has room), so a
-  // slider jump to a far step copies them instead of rasterising them (tangle-draw.js).
+  // slider jump to a far step copies them instead of rasterising them (draw.js).
   let prebuildHandle = 0;
   let prebuildTimer = null;
   const PREBUILD_DELAY_MS = 250; // after the last paint: not while a slider or a pan is moving
@@ -1213,7 +1213,7 @@ function mount(el, ctx) {
     if (r) download(`${base()}-seed${state().seed}.png`, new Blob([r.png], { type: 'image/png' }));
   };
 
-  // For tests and the console.
+  // For the e2e tests and benches (ctx.expose).
   const hooks = {
     state,
     result: () => T?.r ?? null,
@@ -1229,7 +1229,7 @@ function mount(el, ctx) {
     clearLayers: () => layers.clear(),
     /** Whether idle-time layer building is done (or off) for the current view. */
     prebuilt: () => prebuildHandle === 0 && prebuildTimer === null,
-    /** Vertices per part of what step `at` shows (tangle-draw.js batches). */
+    /** Vertices per part of what step `at` shows (draw.js batches). */
     parts: (at) => (T ? T.batches(at).parts.map((b) => b.vertices) : []),
     step: () => k,
     view: () => ({ ...view, dpr }),
@@ -1284,7 +1284,7 @@ function mount(el, ctx) {
     exportSvg: async () => (await exportAs('svg'))?.svg ?? null,
     paintNow,
   };
-  window.filigreeTangle = hooks;
+  ctx.expose(hooks);
 
   return {
     render(s, prev) {
@@ -1335,7 +1335,6 @@ function mount(el, ctx) {
       if (prebuildHandle) cancelIdle(prebuildHandle);
       cancelAnimationFrame(frame);
       running?.abort();
-      if (window.filigreeTangle === hooks) delete window.filigreeTangle;
     },
   };
 }

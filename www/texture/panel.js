@@ -24,11 +24,11 @@
 //
 // The document is {source, predicted, scales, sameModel, retrieved}; its
 // schema is src/texture/state.rs. History, autosave, project files and
-// links come from the document controller (document.js).
-import { acceptFiles } from './file-input.js';
-import { download } from './project.js';
+// links come from the document controller (app/document.js).
+import { acceptFiles } from '../ui/file-input.js';
+import { download } from '../app/project.js';
 
-const INDEX_URL = new URL('../assets/texture-index.bin', import.meta.url);
+const INDEX_URL = new URL('../../assets/texture-index.bin', import.meta.url);
 const AFFINITY = 'texture-index';
 const SIDE = 256; // rendered textures, pixels a side (the index's size)
 const EXAMPLE_SIDE = 256; // a dropped example is shrunk to at most this
@@ -707,13 +707,13 @@ function mount(el, ctx) {
     drawChart(s);
   }
 
-  // For tests and the console.
+  // For the e2e tests (ctx.expose).
   const hooks = {
     state,
     pending: () => retrieveTimer !== null || retrieving !== null || rendering !== null || working !== null,
     indexOk: () => indexOk,
   };
-  window.filigreeTexture = hooks;
+  ctx.expose(hooks);
 
   return {
     render(s, prev) {
@@ -729,7 +729,6 @@ function mount(el, ctx) {
       retrieving?.abort();
       rendering?.abort();
       working?.abort();
-      if (window.filigreeTexture === hooks) delete window.filigreeTexture;
     },
   };
 }

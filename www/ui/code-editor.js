@@ -18,7 +18,7 @@
 
 let bundle = null;
 function loadBundle() {
-  bundle ??= import('./vendor/code-editor.bundle.js').catch((err) => {
+  bundle ??= import('../vendor/code-editor.bundle.js').catch((err) => {
     console.warn('code editor bundle missing, using a plain textarea:', err?.message || err);
     return null;
   });
