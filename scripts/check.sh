@@ -3,9 +3,9 @@
 # Debian machine with Rust: installs what is missing (Chromium via apt, npm dev
 # dependencies, the wasm target and the matching wasm-bindgen-cli), then
 # fmt, clippy (native and wasm32, -D warnings), cargo tests, the release
-# wasm build, the texture index rebuilt (in the background from the test
-# build on) and compared with the committed one, and the browser
-# end-to-end tests in headless Chromium.
+# wasm build (one module per tool), the texture index checked (rebuilt in
+# the background, and compared with the committed one, only when its
+# inputs changed), and the browser end-to-end tests in headless Chromium.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each step says when it starts (seconds since the start), so a slow CI
@@ -31,15 +31,16 @@ cargo fmt --all -- --check
 
 step "clippy (native, all targets)"
 cargo clippy --all-targets -- -D warnings
-step "clippy (wasm32, web feature)"
-cargo clippy --lib --target wasm32-unknown-unknown --no-default-features --features web -- -D warnings
+step "clippy (wasm32: the web boundary and a tool module with the test hooks)"
+cargo clippy -p filigree-wasm --target wasm32-unknown-unknown --features inspect,test-hooks -- -D warnings
 
-step "the CLI (dev build), then the texture index rebuilt in the background"
-# The index rebuild is the longest single job (about 10 CPU-minutes, half
-# of it training the SVMs). It runs at the lowest priority under the test
-# and wasm builds, on what they leave idle (their single-threaded parts,
-# link-time optimisation). It reads a copy of the binary, so the builds
-# below may replace it.
+step "the CLI (dev build), then the texture index checked in the background"
+# The index is rebuilt only when the hash of its inputs differs from the
+# one recorded beside it (scripts/check-texture-index.sh); then the rebuild
+# is the longest single job (about 10 CPU-minutes, half of it training the
+# SVMs). It runs at the lowest priority under the test and wasm builds, on
+# what they leave idle. It reads a copy of the binary, so the builds below
+# may replace it.
 cargo build --quiet --bin filigree
 cp target/debug/filigree target/filigree-index-check
 FILIGREE_BIN=target/filigree-index-check nice -n 19 bash scripts/check-texture-index.sh \
@@ -51,13 +52,13 @@ trap 'pkill -f filigree-index-check 2>/dev/null || true' EXIT
 step "cargo test"
 cargo test
 
-step "release wasm build (and the test-hooks core)"
+step "release wasm build: one module per tool (and the test-hooks Inspect module)"
 FILIGREE_TEST_HOOKS=1 bash scripts/build.sh   # pkg/ and the test-only pkg-test/
 
 # The rebuild gets both cores for what is left of it before the browser
 # tests start: left running beside them, it doubled their time (nice 19 did
 # not keep it out of Chromium's way).
-step "the committed texture index rebuilds to the same bytes"
+step "the committed texture index is what the code builds"
 if ! wait "$index_check"; then
   cat target/texture-index-check.log
   exit 1

@@ -77,31 +77,35 @@ fn every_kind_has_one_module_or_is_shared() {
     }
 }
 
+/// The error of a refused request (its job is not `Debug`).
+fn refused<T>(r: filigree::Result<T>) -> filigree::Error {
+    match r {
+        Err(e) => e,
+        Ok(_) => panic!("the request was accepted"),
+    }
+}
+
 #[test]
 fn a_module_refuses_another_modules_kinds_and_documents() {
     use filigree::api::{start_pixel, start_texture};
     let de = |s: &'static str| serde_json::Deserializer::from_str(s);
-    let e = start_pixel("render-pattern", &mut de("{}"))
-        .err()
-        .expect("refused");
+    let e = refused(start_pixel("render-pattern", &mut de("{}")));
     assert!(e.to_string().contains("served by the fit module"), "{e}");
     // Tangle reads no images: its module has no decoders.
-    let e = filigree::api::start_tangle("decode-image", &mut de("{}"))
-        .err()
-        .expect("refused");
+    let e = refused(filigree::api::start_tangle("decode-image", &mut de("{}")));
     assert!(
         e.to_string().contains("served by the inspect module"),
         "{e}"
     );
     assert!(start_pixel("decode-image", &mut de(r#"{"bytes": []}"#)).is_ok());
     // The Texture module checks Texture documents, not Fit ones.
-    let e = start_texture(
-        "check-state",
-        &mut de(r#"{"tool": "fit", "version": 1, "state": {}}"#),
-    )
-    .and_then(filigree::core::job::run_quietly)
-    .err()
-    .expect("refused");
+    let e = refused(
+        start_texture(
+            "check-state",
+            &mut de(r#"{"tool": "fit", "version": 1, "state": {}}"#),
+        )
+        .and_then(filigree::core::job::run_quietly),
+    );
     assert!(
         e.to_string().contains("checked by the fit tool's module"),
         "{e}"
