@@ -136,6 +136,64 @@ fn a_runaway_grammar_is_stopped_with_a_clear_message() {
     assert!(r.stopped.unwrap().contains("step budget"));
 }
 
+/// Issue 34 items 2–3: grammars that recurse through fine work ran for
+/// minutes and gigabytes under the default budgets (5,000 steps, 50,000
+/// shapes). The work and point budgets (counted, not timed, so the same
+/// natively and in wasm) stop them at a step named by its rule and line,
+/// and the tangle so far is kept.
+#[test]
+fn runaway_work_is_stopped_by_the_work_and_point_budgets() {
+    for (grammar, why) in [
+        // 10.7 s and 1.66 GB natively before.
+        ("regularSplit(line, 100, 0) : a -> [a]\n", "work budget"),
+        // 87.6 s and 569 MB natively before.
+        ("outline(10) : a -> [a]\n", "budget of"),
+        // A mutual cycle: 39.6 s before.
+        (
+            "outline(10) : a -> [b, b]\noutline(10) : b -> [a, a]\n",
+            "budget of",
+        ),
+    ] {
+        let r = run(req(grammar));
+        let m = r
+            .stopped
+            .unwrap_or_else(|| panic!("{grammar}: not stopped"));
+        assert!(m.contains(why) && m.contains("(line "), "{grammar}: {m}");
+        assert!(r.stats.steps > 0, "{grammar}: the steps so far are kept");
+    }
+    // One step of a million-unit rectangle asked for four million pieces;
+    // such a start is now refused, and a split too fine for the points it
+    // would make stops before it runs.
+    let e = start_tangle(req(
+        "start rect(1000000, 1000000) : a\nregularSplit(line, 1, 0) : a -> [b]\n",
+    ))
+    .err()
+    .map(|e| e.to_string());
+    assert!(
+        e.as_deref()
+            .is_some_and(|m| m.contains("between 0 and 20000 units a side")),
+        "{e:?}"
+    );
+    let r = run(req(
+        "start rect(20000, 20000) : a\nregularSplit(line, 1, 0) : a -> [b]\n",
+    ));
+    let m = r.stopped.expect("stopped");
+    assert!(
+        m.contains("stopped at step 1") && m.contains("budget of"),
+        "{m}"
+    );
+    let e = start_tangle(TangleRequest {
+        start: Some(filigree::tangle::api::StartRequest::Text {
+            text: "Hi".into(),
+            height: 100_000.0,
+        }),
+        ..req("outline(4) : a -> [b, c]\n")
+    })
+    .err()
+    .map(|e| e.to_string());
+    assert!(e.is_some_and(|m| m.contains("letter height")));
+}
+
 #[test]
 fn grammar_errors_name_the_field_line_and_column() {
     let e = start_tangle(req("outline(25) : a -> [b]\nplace(20, 25 : b -> [c]\n"))

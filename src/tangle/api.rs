@@ -9,7 +9,7 @@
 //! its own and the same request gives the same bytes anywhere.
 use super::ast::{CurveDef, Def, DefKind, Grammar, Param, StartShape};
 use super::expand::{Ending, Expansion, Progress as Advance, Settings};
-use super::{export, grammar, Shape};
+use super::{export, grammar, Shape, MAX_START_SIDE};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::request_limits as lim;
@@ -351,18 +351,40 @@ fn start_polys(rings: Vec<Vec<DVec2>>, field: &str) -> Result<Vec<Polygon>> {
     if v.is_empty() {
         return Err(Error::input("the start shape has no area").at(field.to_string()));
     }
+    let (lo, hi) = Polygon::bbox_all(&v);
+    let side = (hi - lo).max_element();
+    if side > MAX_START_SIDE {
+        return Err(Error::input(format!(
+            "the start shape is {} units across; start shapes are at most {MAX_START_SIDE} \
+             units across (scale it down: operators work at the page's scale)",
+            short_number(side)
+        ))
+        .at(field.to_string()));
+    }
     Ok(v)
 }
 
-/// A start rectangle at the origin, of a sane size.
+/// A start rectangle at the origin, of a drawable size.
 fn start_rect(w: f64, h: f64, field: &str) -> Result<Polygon> {
-    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= 1e6) {
+    if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= MAX_START_SIDE) {
         return Err(Error::input(format!(
-            "a start rectangle is between 0 and 1000000 units a side (got {w}×{h})"
+            "a start rectangle is between 0 and {MAX_START_SIDE} units a side (got {}×{})",
+            short_number(w),
+            short_number(h)
         ))
         .at(field.to_string()));
     }
     Ok(Polygon::rect(DVec2::ZERO, DVec2::new(w, h)))
+}
+
+/// A number for a message: at most 12 significant characters.
+fn short_number(v: f64) -> String {
+    let t = format!("{v}");
+    if t.len() <= 12 {
+        t
+    } else {
+        format!("{v:.4e}")
+    }
 }
 
 /// The start shapes (polygon, tag).
@@ -421,6 +443,13 @@ fn grammar_starts(g: &Grammar) -> Result<Vec<(Polygon, String)>> {
         let made = match &s.shape {
             StartShape::Rect { width, height } => vec![start_rect(*width, *height, field)?],
             StartShape::Circle { radius } => {
+                if !(*radius > 0.0 && 2.0 * radius <= MAX_START_SIDE) {
+                    return Err(Error::input(format!(
+                        "a start circle's diameter is at most {MAX_START_SIDE} units (got radius {})",
+                        short_number(*radius)
+                    ))
+                    .at(field.to_string()));
+                }
                 let n = (std::f64::consts::TAU * radius / 2.0).clamp(16.0, 4096.0);
                 vec![Polygon::circle(DVec2::splat(*radius), *radius, n as usize)]
             }

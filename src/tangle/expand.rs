@@ -68,6 +68,8 @@ pub struct StepRecord {
     /// Indices into [`Expansion::records`].
     pub inputs: Vec<u32>,
     pub outputs: Vec<u32>,
+    /// The work it took (see [`MAX_WORK`]).
+    pub work: u64,
 }
 
 /// Why an expansion ended.
@@ -107,6 +109,8 @@ struct Pending {
     next: usize,
     /// Output slots: shapes made so far, each with the input it came from.
     slots: Vec<Vec<(Polygon, u32)>>,
+    /// Work done on it so far.
+    work: u64,
     /// First group id of the slots.
     first_group: u32,
 }
@@ -114,6 +118,151 @@ struct Pending {
 /// Input shapes processed per [`Expansion::work`] call (a split or an
 /// outline of one shape is well under a millisecond for typical sizes).
 const SHAPES_PER_WORK: usize = 8;
+
+/// The work budget of a tangle: the operators' cost (points read and
+/// written, booleans weighted n·log n, a fixed cost per application) of
+/// the steps it holds, counted, not timed, so native and wasm stop at the
+/// same place. The shipped examples use at most 71 million (the village);
+/// a grammar that recurses through an outline, a placement or a fine split
+/// forever reaches it in seconds (natively) instead of minutes.
+pub const MAX_WORK: u64 = 150_000_000;
+
+/// The work budget of everything a document's edits redo, undone steps
+/// included (a document of 1,000 edits took 98 s to replay in wasm).
+pub const MAX_REPLAY_WORK: u64 = 8 * MAX_WORK;
+
+/// The most points all shapes ever made may hold together (the live ones
+/// and the history the step slider shows): about 64 MB of points.
+pub const MAX_POINTS: usize = 4_000_000;
+
+/// The most shapes ever made (live and history).
+pub const MAX_HISTORY: usize = 250_000;
+
+/// How much a point costs an operator relative to a boolean sweep: an
+/// outline's inset (offset curves, then a boolean) about three sweeps.
+fn weight(op: &Op) -> u64 {
+    match op {
+        Op::Outline { .. } => 3,
+        _ => 1,
+    }
+}
+
+/// Work of a boolean or offset over `n` points: sweeps cost n·log n.
+fn sweep_work(n: usize) -> u64 {
+    let n = n as u64;
+    n * (64 - n.leading_zeros() as u64).max(1)
+}
+
+/// Work an operator costs whatever the points: the overhead of one
+/// application (booleans, offsets), and a placement's raster passes
+/// (about `CELLS_PER_SPACING` cells per sample spacing along the longer
+/// side, at most `MAX_RASTER`, swept by each Lloyd round).
+fn fixed_work(op: &Op, poly: &Polygon) -> u64 {
+    const PER_APPLICATION: u64 = 2_000;
+    match op {
+        Op::Place { size, distance, .. } => {
+            let (lo, hi) = poly.bbox();
+            let extent = (hi - lo).max_element().max(1.0);
+            let spacing = (size + distance).max(super::ast::MIN_LENGTH);
+            let side = (8.0 * extent / spacing).clamp(1.0, super::place::MAX_RASTER as f64) as u64;
+            // Darts: thrown until MAX_MISSES fail in a row, each tested
+            // against the copies placed so far.
+            const DARTS: u64 = 60_000;
+            PER_APPLICATION + DARTS + side * side * (super::place::LLOYD_ITERATIONS as u64 + 2)
+        }
+        _ => PER_APPLICATION,
+    }
+}
+
+/// What applying `op` to `poly` may cost, before it runs: (shapes made,
+/// points made, work), upper estimates from the shape's size and the
+/// operator's parameters (a split's cut count, a stippling's grid).
+fn estimate(op: &Op, poly: &Polygon, settings: &Settings) -> (usize, usize, u64) {
+    let v = poly.vertices();
+    let (lo, hi) = poly.bbox();
+    let diag = (hi - lo).length().max(1.0);
+    let step = settings.resolution.max(0.25);
+    let perimeter: f64 = poly
+        .rings
+        .iter()
+        .map(|r| {
+            r.iter()
+                .zip(r.iter().cycle().skip(1))
+                .map(|(a, b)| a.distance(*b))
+                .sum::<f64>()
+        })
+        .sum();
+    let resampled = if settings.wobble > 0.0 {
+        (perimeter / step) as usize + v
+    } else {
+        v
+    };
+    match op {
+        Op::Ungroup | Op::Regroup { .. } | Op::Fill { .. } | Op::Invert => {
+            (1, 0, v as u64 + fixed_work(op, poly))
+        }
+        Op::Split { offsets, dual, .. } => {
+            let o = offsets
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min)
+                .max(super::ast::MIN_LENGTH);
+            let cuts = ((diag / o) as usize + 1).min(super::ops::MAX_CUTS);
+            let per_cut = (diag / step) as usize + 8;
+            let lines = if *dual { 2 * cuts } else { cuts };
+            let pieces = if *dual {
+                (cuts + 1) * (cuts + 1)
+            } else {
+                cuts + 1
+            };
+            // Every cut line's points end up on the pieces on both sides.
+            let points = resampled + 2 * lines * per_cut + 4 * pieces;
+            (
+                pieces,
+                points,
+                sweep_work(resampled + points) + fixed_work(op, poly),
+            )
+        }
+        Op::Outline { .. } => {
+            let points = 3 * resampled;
+            (
+                2,
+                points,
+                weight(op) * sweep_work(resampled + points) + fixed_work(op, poly),
+            )
+        }
+        Op::Streamline { offset, .. } => {
+            let lines = ((diag / offset.max(super::ast::MIN_LENGTH)) as usize + 1)
+                .min(super::ops::MAX_CUTS);
+            let points = resampled + 2 * lines * ((diag / step) as usize + 8);
+            (
+                lines + 1,
+                points,
+                sweep_work(resampled + points) + fixed_work(op, poly),
+            )
+        }
+        Op::Place { .. } => {
+            let n = super::place::MAX_PLACEMENTS;
+            let points = resampled + n * 64;
+            (
+                n + 1,
+                points,
+                sweep_work(resampled + points) + fixed_work(op, poly),
+            )
+        }
+        Op::Stipple { spacing, .. } => {
+            let s = spacing.max(super::ast::MIN_LENGTH);
+            let cells = ((hi - lo).x / s + 1.0) * ((hi - lo).y / s + 1.0);
+            let marks = (cells as usize).min(super::ops::MAX_MARKS);
+            let points = v + marks * 32;
+            (
+                marks + 1,
+                points,
+                (v as f64 + cells.min(1e15)) as u64 + points as u64 + fixed_work(op, poly),
+            )
+        }
+    }
+}
 
 /// The state of one tangle's expansion.
 #[derive(Debug, Clone)]
@@ -140,6 +289,11 @@ pub struct Expansion {
     salt: HashMap<u32, u64>,
     /// Records removed by undone steps (never shown again).
     removed: Vec<bool>,
+    /// Work of the steps held (see [`MAX_WORK`]), work ever done (see
+    /// [`MAX_REPLAY_WORK`]), and points held by all records.
+    work_live: u64,
+    work_total: u64,
+    points: usize,
 }
 
 fn hash(parts: &[u64]) -> u64 {
@@ -181,6 +335,9 @@ impl Expansion {
             forced: HashMap::new(),
             salt: HashMap::new(),
             removed: vec![],
+            work_live: 0,
+            work_total: 0,
+            points: 0,
             grammar,
         };
         for i in 0..x.grammar.rules.len() {
@@ -249,6 +406,7 @@ impl Expansion {
 
     fn add(&mut self, shape: Shape, born: Option<u32>) -> u32 {
         let i = self.records.len() as u32;
+        self.points += shape.poly.vertices();
         if !self.terminal(shape.tag) {
             self.queue.entry(shape.group).or_default().push(i);
         }
@@ -278,6 +436,11 @@ impl Expansion {
         Ok(())
     }
 
+    /// Work of the steps held, in the units of [`MAX_WORK`].
+    pub fn work_held(&self) -> u64 {
+        self.work_live
+    }
+
     /// Do a bounded part of the expansion.
     pub fn work(&mut self) -> Result<Progress> {
         if self.ending.is_some() {
@@ -294,7 +457,33 @@ impl Expansion {
         let end = (p.next + SHAPES_PER_WORK).min(p.inputs.len());
         for k in p.next..end {
             let i = p.inputs[k];
+            let input = &self.records[i as usize].shape.poly;
+            let (shapes, points, work) = estimate(&p.op, input, &self.settings);
+            let made_so_far: usize = p.slots.iter().map(Vec::len).sum();
+            let points_so_far: usize = p.slots.iter().flatten().map(|(q, _)| q.vertices()).sum();
+            let over = if self.work_live + p.work + work > MAX_WORK {
+                Some(format!("the work budget of {MAX_WORK} point operations"))
+            } else if self.work_total.saturating_add(work) > MAX_REPLAY_WORK {
+                Some(format!(
+                    "the replay budget of {MAX_REPLAY_WORK} point operations (this \
+                     document's edits redo too much work)"
+                ))
+            } else if self.points + points_so_far + points > MAX_POINTS {
+                Some(format!("the point budget of {MAX_POINTS} points"))
+            } else if self.records.len() + made_so_far + shapes > MAX_HISTORY {
+                Some(format!("the history budget of {MAX_HISTORY} shapes"))
+            } else {
+                None
+            };
+            if let Some(budget) = over {
+                return Ok(self.stop_before(p, &budget));
+            }
+            let (in_points, fixed) = (input.vertices(), fixed_work(&p.op, input));
             let made = self.apply(&p, i)?;
+            let out_points: usize = made.iter().flatten().map(Polygon::vertices).sum();
+            let done = weight(&p.op) * sweep_work(in_points + out_points) + fixed;
+            p.work += done;
+            self.work_total = self.work_total.saturating_add(done);
             for (slot, polys) in made.into_iter().enumerate() {
                 p.slots[slot].extend(polys.into_iter().map(|q| (q, i)));
             }
@@ -356,6 +545,7 @@ impl Expansion {
             inputs,
             next: 0,
             slots: vec![vec![]; slots],
+            work: 0,
             first_group,
         });
         Ok(())
@@ -430,6 +620,27 @@ impl Expansion {
                 ops::stipple(poly, *kind, *spacing, *size, &mut rng),
             ],
         })
+    }
+
+    /// Stop before step `p` would pass `budget`: its inputs stay as they
+    /// were (the step is not applied) and the ending names the rule, its
+    /// line and the budget.
+    fn stop_before(&mut self, p: Pending, budget: &str) -> Progress {
+        let rule = &self.grammar.rules[p.rule];
+        self.ending = Some(Ending::Stopped(format!(
+            "stopped at step {}: rule {} (line {}, '{}') would pass {}; the tangle keeps \
+             its {} steps so far. Use a coarser rule (larger distances or offsets, a \
+             smaller start shape), or check for a rule that recurses without end",
+            self.steps.len() + 1,
+            p.rule + 1,
+            rule.line,
+            rule.tag,
+            budget,
+            self.steps.len()
+        )));
+        self.queue.insert(p.group, p.inputs);
+        self.pending = None;
+        Progress::Ended
     }
 
     /// Label the step's shapes, replace its inputs, record it.
@@ -510,6 +721,7 @@ impl Expansion {
             }
         }
         // Regroup's counters are per new group; its group count is k.
+        self.work_live += p.work;
         self.steps.push(StepRecord {
             id,
             rule: p.rule,
@@ -517,6 +729,7 @@ impl Expansion {
             group: p.group,
             inputs: p.inputs,
             outputs,
+            work: p.work,
         });
         Ok(Progress::Stepped(self.steps.len() - 1))
     }
@@ -570,6 +783,7 @@ impl Expansion {
         let deps = self.dependents(step);
         for &k in deps.iter().rev() {
             let s = self.steps[k].clone();
+            self.work_live -= s.work;
             for &o in &s.outputs {
                 let o = o as usize;
                 self.removed[o] = true;
@@ -773,6 +987,29 @@ mod tests {
         let area: f64 = finals(&x).iter().map(|r| r.shape.poly.area()).sum();
         assert!((area - 8100.0).abs() < 1.0, "{area}");
         assert!(finals(&x).len() > 10);
+    }
+
+    /// The work a tangle holds is its steps' (undone steps give theirs
+    /// back), so editing a step again and again never uses the work budget
+    /// up; what the edits redo counts against the replay budget.
+    #[test]
+    fn held_work_is_the_steps_and_redone_work_is_counted_apart() {
+        let rules = vec![
+            rule(grid(18.0), "a", &["b"]),
+            rule(Op::Outline { distance: 2.0 }, "b", &["c", "d"]),
+        ];
+        let mut x = run(rules, settings());
+        let held = x.work_held();
+        assert!(held > 0);
+        assert_eq!(held, x.steps.iter().map(|s| s.work).sum::<u64>());
+        let before = x.work_total;
+        for _ in 0..3 {
+            let op = x.steps[0].op.clone();
+            x.reexpand(0, Some(op)).unwrap();
+            x.run().unwrap();
+            assert_eq!(x.work_held(), held, "the same steps hold the same work");
+        }
+        assert!(x.work_total >= before + 3 * held, "redone work is counted");
     }
 
     /// A rule that keeps making its own tag is stopped by the budgets

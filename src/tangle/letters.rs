@@ -60,9 +60,10 @@ pub fn text_rings(text: &str, height: f64) -> Result<Vec<Vec<DVec2>>> {
             "{n} characters; a word has at most {MAX_LETTERS} (the letter limit)"
         )));
     }
-    if !(height.is_finite() && height > 0.0 && height <= 1e6) {
+    let max = super::MAX_START_SIDE;
+    if !(height.is_finite() && height > 0.0 && height <= max) {
         return Err(Error::input(format!(
-            "the letter height must be between 0 and 1000000 (got {height})"
+            "the letter height must be between 0 and {max} (got {height:.6e})"
         )));
     }
     let face = ttf_parser::Face::parse(FONT, 0)

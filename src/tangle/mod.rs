@@ -19,6 +19,12 @@ pub mod place;
 pub mod state;
 pub mod streamline;
 
+/// The largest side of a start shape (rectangle, circle, letters, drawn
+/// polygon or path), in drawing units: 25 times the default 800-unit page.
+/// Operators cost with the shape's size over their spacings, and a
+/// million-unit rectangle asked one split for four million pieces.
+pub const MAX_START_SIDE: f64 = 20_000.0;
+
 use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 use std::sync::Arc;

@@ -17,6 +17,7 @@ use super::api::{
     Edit, StartRequest, MAX_EDITS, MAX_START_POINTS, MAX_STEPS, STROKE_WIDTH, WOBBLE,
 };
 use super::examples::EXAMPLES;
+use super::MAX_START_SIDE;
 use crate::core::error::Result;
 use crate::core::value::{invalid, js_len, nullish, Value, MAX_SAFE_INTEGER};
 use serde::Serialize;
@@ -35,8 +36,6 @@ pub const MAX_POLYGON_POINTS: usize = 10_000;
 /// Most parameters one edit sets, and the longest parameter name.
 pub const MAX_EDIT_PARAMS: usize = 16;
 pub const MAX_PARAM_NAME: usize = 32;
-/// Largest start rectangle side or letter height (the request's).
-pub const MAX_START_SIDE: f64 = 1e6;
 
 /// A checked Tangle document.
 #[derive(Debug, Clone, PartialEq, Serialize)]
