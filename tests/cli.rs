@@ -641,3 +641,70 @@ fn a_deeply_nested_svg_start_is_refused_not_a_crash() {
     assert!(err.contains("nests elements more than 256 deep"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 34 item 4: values outside their range were clamped without a
+/// word (`angle` 100 drew angle 0.5; `frequency=1e308` drew 24); now each
+/// is an error naming the field, the range and the value (short).
+#[test]
+fn out_of_range_values_are_errors_naming_the_range() {
+    let err = |args: &[&str]| {
+        let out = filigree(args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let e = err(&[
+        "render",
+        "--program",
+        "stripes",
+        "--params",
+        r#"{"angle":100}"#,
+        "--out",
+        "/tmp/x.png",
+    ]);
+    assert!(
+        e.contains("`params.angle` is 100; the program declares 'angle' in [-0.5, 0.5]"),
+        "{e}"
+    );
+    let e = err(&[
+        "fit",
+        "--program",
+        "stripes",
+        "--target-params",
+        r#"{"angle":99}"#,
+    ]);
+    assert!(e.contains("`target_params.angle` is 99"), "{e}");
+    let e = err(&[
+        "texture",
+        "render",
+        "--model",
+        "perlin",
+        "--param",
+        "frequency=1e308",
+        "--out",
+        "/tmp/x.png",
+    ]);
+    assert!(
+        e.contains("--param frequency: ") && e.contains("outside the model's range"),
+        "{e}"
+    );
+    assert!(
+        e.len() < 200,
+        "a 309-digit number is not echoed in full: {e}"
+    );
+    // Not JSON and not a file: said so, not "No such file or directory".
+    for bad in ["[1,2]", "garbage{", "null"] {
+        let e = err(&[
+            "render",
+            "--program",
+            "stripes",
+            "--params",
+            bad,
+            "--out",
+            "/tmp/x.png",
+        ]);
+        assert!(
+            e.contains("--params:") && !e.contains("No such file"),
+            "{bad}: {e}"
+        );
+    }
+}

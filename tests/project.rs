@@ -202,3 +202,16 @@ fn a_byte_order_mark_is_not_part_of_the_json() {
     .unwrap();
     filigree::micro::scene::parse(&format!("\u{feff}{scene}")).unwrap();
 }
+
+/// Issue 34 item 6: a Pixel project whose `source` was 3 bytes that are
+/// not an image opened (and failed only when the tool ran).
+#[test]
+fn a_pixel_project_whose_source_is_not_an_image_is_refused() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/fish.filigree.json");
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    doc["state"]["source"] = serde_json::json!({"$bytes": "AQID"});
+    let e = project::open_project(&doc.to_string()).unwrap_err();
+    assert_eq!(e.field(), Some("source"), "{e}");
+    assert!(e.to_string().contains("is not an image file"), "{e}");
+}

@@ -173,7 +173,19 @@ fn parse_params(m: &models::Model, params: &[String]) -> Result<Vec<f64>, String
         let v: f64 = v
             .trim()
             .parse()
-            .map_err(|_| format!("--param {k}: '{v}' is not a number"))?;
+            .map_err(|_| format!("--param {k}: '{}' is not a number", super::short(v)))?;
+        // Out of range was clamped without a word (frequency=1e308 drew 24).
+        if let Some(spec) = m.params.iter().find(|s| s.name == k.trim()) {
+            if !(v.is_finite() && (spec.lo..=spec.hi).contains(&v)) {
+                return Err(format!(
+                    "--param {}: {} is outside the model's range {}..={}",
+                    k.trim(),
+                    super::short(&format!("{v}")),
+                    spec.lo,
+                    spec.hi
+                ));
+            }
+        }
         pairs.push((k.trim(), v));
     }
     m.with(&pairs).map_err(|e| format!("--param: {e}"))

@@ -59,9 +59,31 @@ fn named_values_at(
                 ))
                 .at(&at)
             })?;
-        vals[i] = lim::finite_in(&at, *v, (-lim::PARAM_MAGNITUDE, lim::PARAM_MAGNITUDE))?;
+        // A value outside the declared range was clamped without a word
+        // (`angle` 100 drew angle 0.5): it is an error naming the range.
+        let d = &program.params()[i];
+        if !(v.is_finite() && (d.lo..=d.hi).contains(v)) {
+            return Err(Error::input(format!(
+                "`{at}` is {}; the program declares '{k}' in [{}, {}]",
+                short_number(*v),
+                d.lo,
+                d.hi
+            ))
+            .at(&at));
+        }
+        vals[i] = *v;
     }
     Ok(vals)
+}
+
+/// A number for a message: a 309-digit value is not echoed in full.
+fn short_number(v: f64) -> String {
+    let t = format!("{v}");
+    if t.len() <= 12 {
+        t
+    } else {
+        format!("{v:.4e}")
+    }
 }
 
 /// Float values (declaration order) out of all values.

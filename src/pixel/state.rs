@@ -262,9 +262,33 @@ fn check_param(name: &str, rule: &Rule, v: &Value, out: &mut PixelParams) -> Res
 fn bytes_of(v: Option<&Value>, field: &str, optional: bool) -> Result<Option<Vec<u8>>> {
     match v {
         None | Some(Value::Null) if optional => Ok(None),
-        Some(Value::Bytes(b)) if !b.is_empty() => Ok(Some(b.clone())),
+        Some(Value::Bytes(b)) if !b.is_empty() => {
+            image_header(b).map_err(|why| invalid(field, why))?;
+            Ok(Some(b.clone()))
+        }
         _ => Err(invalid(field, "must be the bytes of an image file")),
     }
+}
+
+/// The bytes start like an image file the core reads, with a size within
+/// the image limit: read from the header alone, nothing decoded (a project
+/// whose `source` was 3 bytes that are not a PNG used to open).
+fn image_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("cannot be read ({e})"))?;
+    if reader.format().is_none() {
+        return Err("is not an image file (PNG, JPEG, WebP, GIF or BMP)".into());
+    }
+    let (w, h) = reader.into_dimensions().map_err(|_| {
+        "is not a readable image file (its header is damaged or cut short)".to_string()
+    })?;
+    if w == 0 || h == 0 || w.max(h) > MAX_IMAGE_SIDE {
+        return Err(format!(
+            "is an image of {w}×{h} pixels; images are 1 to {MAX_IMAGE_SIDE} pixels a side"
+        ));
+    }
+    Ok(())
 }
 
 /// Check a Pixel document field by field; the error names the field at fault.
