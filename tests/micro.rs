@@ -435,7 +435,7 @@ fn request_errors_name_their_field() {
     assert_eq!(e.field(), Some("width"));
     let e = run_json("micro-render", r#"{"scene": "{\"type\": \"sphere\"}"}"#).unwrap_err();
     assert_eq!(e.field(), Some("scene"));
-    assert_eq!(e.kind(), "syntax");
+    assert_eq!(e.kind(), "invalid-input");
     assert!(e.to_string().contains("radius"), "{e}");
     let e = run_json(
         "micro-render",
@@ -863,4 +863,19 @@ fn the_cli_slices_and_renders_the_fixture_bytes() {
         );
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Issue 34 item 7: an unknown field in a nested node said "line 0,
+/// column 0: unknown field `rad`"; the error names the node.
+#[test]
+fn a_nested_nodes_bad_field_names_the_node() {
+    let text = r#"{"type": "union", "children": [{"type": "sphere", "radius": 0.3}, {"type": "sphere", "rad": 0.2}]}"#;
+    let e = filigree::micro::scene::parse(text).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("scene node `children.1`") && m.contains("unknown field `rad`"),
+        "{m}"
+    );
+    assert!(!m.contains("line 0"), "{m}");
+    assert_eq!(e.field(), Some("scene"));
 }

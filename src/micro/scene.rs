@@ -169,6 +169,15 @@ pub fn parse(text: &str) -> Result<Scene> {
         let (line, column) = (inner.line(), inner.column());
         let msg = inner.to_string();
         let msg = msg.split(" at line ").next().unwrap_or(&msg).to_string();
+        if line == 0 {
+            // A node's fields are read after its `type` (serde buffers
+            // them), so neither place nor path survive: find the node that
+            // has the field the message names.
+            let at = misplaced_key(&msg)
+                .and_then(|key| node_with_key(text, key))
+                .unwrap_or_default();
+            return bad(&at, msg);
+        }
         let message = if path == "." || path.is_empty() {
             msg
         } else {
@@ -190,6 +199,40 @@ pub fn parse(text: &str) -> Result<Scene> {
         .at("scene")
     })?;
     compile(node)
+}
+
+/// The field an "unknown field `rad`, expected ..." message names.
+fn misplaced_key(msg: &str) -> Option<&str> {
+    let rest = msg.strip_prefix("unknown field `")?;
+    rest.split('`').next()
+}
+
+/// The node path (`children.1.children.0`, as [`bad`] names nodes) of the
+/// first object in `text` (depth first, keys in order) that has `key`;
+/// `None` when it is the root or none has it. Iterative: the text's depth
+/// was checked, but no recursion is needed.
+fn node_with_key(text: &str, key: &str) -> Option<String> {
+    let root: serde_json::Value = serde_json::from_str(text).ok()?;
+    let mut stack: Vec<(&serde_json::Value, String)> = vec![(&root, String::new())];
+    while let Some((v, path)) = stack.pop() {
+        match v {
+            serde_json::Value::Object(map) => {
+                if map.contains_key(key) {
+                    return (!path.is_empty()).then_some(path);
+                }
+                for (k, child) in map.iter().rev() {
+                    stack.push((child, join(&path, k)));
+                }
+            }
+            serde_json::Value::Array(items) => {
+                for (i, child) in items.iter().enumerate().rev() {
+                    stack.push((child, join(&path, i)));
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// Refuse text nested deeper than [`MAX_JSON_DEPTH`] before serde sees it.
@@ -458,9 +501,16 @@ mod tests {
         assert!(e.to_string().contains("`radius`"), "{e}");
         let e = parse(r#"{"type": "union", "children": [{"type": "sphere", "radius": 1}, {"type": "box", "half": [1, 2, -3]}]}"#).unwrap_err();
         assert!(e.to_string().contains("children.1.half.2"), "{e}");
+        // A node's unknown field has no place in the text (serde buffers the
+        // node to read its `type` first): it names the node instead of
+        // "line 0, column 0".
         let e = parse(r#"{"type": "sphere", "radius": 1, "colour": 3}"#).unwrap_err();
-        assert_eq!(e.kind(), "syntax");
-        assert!(e.to_string().contains("colour"), "{e}");
+        assert_eq!(e.kind(), "invalid-input");
+        assert!(
+            e.to_string()
+                .starts_with("the scene: unknown field `colour`"),
+            "{e}"
+        );
         let e = parse("{\"type\": \"spere\"}").unwrap_err();
         assert_eq!(e.position(), Some((1, 16)));
         assert_eq!(parse("").unwrap_err().kind(), "invalid-input");
