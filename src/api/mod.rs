@@ -372,13 +372,9 @@ pub fn start_tangle<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result
         "tangle" => boxed(tangle::start_tangle(request(kind, payload)?)?, |r| {
             Response::Tangle(Box::new(r))
         }),
-        "tangle-examples" => {
-            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
-            boxed(
-                crate::core::job::OneShot::new(|| Ok(crate::tangle::examples::EXAMPLES)),
-                Response::TangleExamples,
-            )
-        }
+        "tangle-examples" => listing(kind, payload, || {
+            Response::TangleExamples(crate::tangle::examples::EXAMPLES)
+        })?,
         _ => return start_shared(kind, payload, project::check_tangle, false),
     })
 }
@@ -398,13 +394,9 @@ pub fn start_micro<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<
         "micro-fit" => boxed(micro_fit::start_fit(request(kind, payload)?)?, |r| {
             Response::MicroFit(Box::new(r))
         }),
-        "micro-examples" => {
-            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
-            boxed(
-                crate::core::job::OneShot::new(|| Ok(crate::micro::examples::EXAMPLES)),
-                Response::MicroExamples,
-            )
-        }
+        "micro-examples" => listing(kind, payload, || {
+            Response::MicroExamples(crate::micro::examples::EXAMPLES)
+        })?,
         _ => return start_shared(kind, payload, project::check_micro, true),
     })
 }
@@ -412,13 +404,9 @@ pub fn start_micro<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<
 /// The Texture module's kinds.
 pub fn start_texture<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
     Ok(match kind {
-        "texture-models" => {
-            serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
-            boxed(
-                crate::core::job::OneShot::new(|| Ok(texture::model_infos())),
-                Response::TextureModels,
-            )
-        }
+        "texture-models" => listing(kind, payload, || {
+            Response::TextureModels(texture::model_infos())
+        })?,
         "texture-render" => boxed(texture::start_render(request(kind, payload)?)?, |r| {
             Response::TextureImage(Box::new(r))
         }),
@@ -433,6 +421,20 @@ pub fn start_texture<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Resul
         }),
         _ => return start_shared(kind, payload, project::check_texture, true),
     })
+}
+
+/// A kind that takes no request and lists what the tool ships (examples,
+/// models): its payload is read and ignored, the answer made by `answer`.
+fn listing<'de, D: Deserializer<'de>>(
+    kind: &str,
+    payload: D,
+    answer: impl FnOnce() -> Response + 'static,
+) -> Result<Box<RequestJob>> {
+    serde::de::IgnoredAny::deserialize(payload).map_err(|e| serde_error(kind, e))?;
+    Ok(boxed(
+        crate::core::job::OneShot::new(move || Ok(answer())),
+        |r| r,
+    ))
 }
 
 /// The kinds every module serves; `checks`: the documents this module

@@ -12,11 +12,24 @@ fn val(j: &Json) -> Value {
     Value::read(j, true).unwrap()
 }
 
+/// The smallest real PNGs (1×1 and 2×1): a Pixel document's images are
+/// checked from their headers.
+const PNG_A: &[u8] = &[
+    137, 80, 78, 71, 13, 10, 26, 10, 0, 0, 0, 13, 73, 72, 68, 82, 0, 0, 0, 1, 0, 0, 0, 1, 8, 6, 0,
+    0, 0, 31, 21, 196, 137, 0, 0, 0, 13, 73, 68, 65, 84, 120, 156, 99, 96, 96, 96, 248, 15, 0, 1,
+    4, 1, 0, 95, 229, 195, 75, 0, 0, 0, 0, 73, 69, 78, 68, 174, 66, 96, 130,
+];
+const PNG_B: &[u8] = &[
+    137, 80, 78, 71, 13, 10, 26, 10, 0, 0, 0, 13, 73, 72, 68, 82, 0, 0, 0, 2, 0, 0, 0, 1, 8, 6, 0,
+    0, 0, 244, 34, 127, 138, 0, 0, 0, 14, 73, 68, 65, 84, 120, 156, 99, 96, 96, 96, 248, 15, 194,
+    0, 6, 3, 1, 255, 207, 135, 198, 112, 0, 0, 0, 0, 73, 69, 78, 68, 174, 66, 96, 130,
+];
+
 fn pixel_doc() -> Json {
     json!({
         "example": "fish",
-        "source": b64(b"png!"),
-        "sheet": b64(b"sheet"),
+        "source": b64(PNG_A),
+        "sheet": b64(PNG_B),
         "sprite": null,
         "mask": {"width": 3, "height": 2, "bits": b64(&[0, 1, 2, 0, 0, 255])},
         "strokes": [[[0, 0], [3.5, 2.5]], [[-1, -1], [4, 3], [1, 1]]],
@@ -66,8 +79,8 @@ fn a_pixel_state_is_checked_and_normalised() {
         panic!("not a pixel state");
     };
     assert_eq!(s.example.as_deref(), Some("fish"));
-    assert_eq!(s.source, b"png!");
-    assert_eq!(s.sheet.as_deref(), Some(&b"sheet"[..]));
+    assert_eq!(s.source, PNG_A);
+    assert_eq!(s.sheet.as_deref(), Some(PNG_B));
     assert_eq!(s.sprite, None);
     assert_eq!(s.mask.bits, [0, 1, 1, 0, 0, 1], "bits become 0 or 1");
     assert_eq!(s.strokes[1], [[-1.0, -1.0], [4.0, 3.0], [1.0, 1.0]]);
