@@ -142,7 +142,7 @@ fn origins(a: &Args) -> Origins {
         ("mask", a.mask.display().to_string()),
         ("strokes", a.strokes.display().to_string()),
         ("params.d_max", "--dmax".into()),
-        ("params", "--params".into()),
+        ("params", "the Pixel settings".into()),
     ];
     if let Some(p) = &a.sheet {
         o.push(("sheet", p.display().to_string()));

@@ -379,7 +379,9 @@ impl PixelJob {
                      palette-based colour maps is {MAX_PALETTE} \
                      (is it pixel art? the HSV shift has no such limit)"
                 ))
-                .at("params"));
+                // The colour map is the setting to change (the CLI's
+                // --colour; it named --params, which Pixel does not have).
+                .at("params.colour"));
             }
             self.colours_before = Some(counter.count());
         }
@@ -744,7 +746,7 @@ mod tests {
         );
         let e = run(many, full, ColourStrategy::Auto);
         assert!(e.to_string().contains("palette limit"), "{e}");
-        assert_eq!(e.field(), Some("params"));
+        assert_eq!(e.field(), Some("params.colour"));
     }
 
     /// A `pixel` request from encoded files: `start_pixel` decodes
