@@ -186,6 +186,34 @@ test('a corrupt or hostile link says so plainly and leaves the autosaved work al
 
 // ---- project files ------------------------------------------------------------------------------
 
+// Issue 34: a Tangle link whose start is an SVG of 3,000 nested groups (it
+// crashed the worker: "memory access out of bounds") and one whose start
+// rectangle is a million units a side (one step asked for four million
+// pieces) are refused in plain words; the Tangle document stays.
+test('a Tangle link with a too-deep SVG or a huge start is refused; the work stays', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigree.testHooks?.tangle?.state()?.grammar);
+  const before = await page.evaluate(() => JSON.stringify(window.filigree.testHooks.tangle.state()));
+  const link = (start) => page.evaluate(async (start) => {
+    const { encodeShare } = await import('./www/app/share.js');
+    return encodeShare('tangle', {
+      example: null, grammar: 'outline(4) : a -> [b, c]\n', seed: 1, start,
+      wobble: 0, stroke_width: 1, edits: [], selected: null,
+    });
+  }, start);
+  const deep = `<svg xmlns="http://www.w3.org/2000/svg">${'<g>'.repeat(3000)}<rect width="9" height="9"/>${'</g>'.repeat(3000)}</svg>`;
+  for (const [start, message] of [
+    [{ kind: 'svg', svg: deep }, /could not be opened: start\.svg.*more than 256 deep/],
+    [{ kind: 'rect', width: 1e6, height: 1e6 }, /could not be opened: start\.width.*at most 20000/],
+  ]) {
+    const fragment = await link(start);
+    await page.evaluate((f) => { location.hash = f; }, fragment);
+    await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=doc-error]')?.textContent ?? ''), message.source);
+    assert.match(await page.textContent(ERROR), /Your own work is unchanged\.$/);
+    assert.equal(await page.evaluate(() => JSON.stringify(window.filigree.testHooks.tangle.state())), before, 'the document is untouched');
+  }
+});
+
 test('a corrupt project file is refused before anything is autosaved; the work stays', async () => {
   const page = await env.newPage({ path: '#tool=pixel' });
   await pixelReady(page);
