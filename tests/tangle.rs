@@ -626,3 +626,24 @@ fn shapes_and_points_serialise_as_byte_columns_that_decode_exactly() {
     assert!(r.steps.iter().any(|s| s.outputs.len() > 1));
     assert!(r.shapes.iter().any(|s| s.died >= 0) && r.shapes.iter().any(|s| s.born == -1));
 }
+
+/// Issue 34 item 7: an edit whose value is NaN (a JS number the page can
+/// send) said "outline has no parameter 'distance' (it has: distance)".
+#[test]
+fn an_edit_with_a_nan_value_says_so() {
+    let e = start_tangle(TangleRequest {
+        edits: vec![Edit {
+            step: 0,
+            params: BTreeMap::from([("distance".to_string(), f64::NAN)]),
+        }],
+        ..req("outline(4) : a -> [b, c]\n")
+    })
+    .and_then(run_quietly)
+    .expect_err("refused");
+    assert_eq!(e.field(), Some("edits.0.params.distance"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("distance must be a finite number (got NaN)"),
+        "{e}"
+    );
+}

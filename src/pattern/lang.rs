@@ -524,9 +524,11 @@ impl Parser {
     fn enter(&mut self) -> Result<()> {
         self.depth += 1;
         if self.depth > MAX_NESTING {
-            return Err(self
-                .pos()
-                .err(format!("nested more than {MAX_NESTING} levels deep")));
+            return Err(self.pos().err(format!(
+                "nested more than {MAX_NESTING} levels deep (blocks, calls, brackets and \
+                     each operator of a chain such as a + b + c count as levels; split a long \
+                     chain with let)"
+            )));
         }
         Ok(())
     }

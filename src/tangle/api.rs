@@ -678,6 +678,14 @@ impl TangleJob {
         } else {
             let mut op = step.op.clone();
             for (name, v) in &e.params {
+                if !v.is_finite() {
+                    // NaN said "outline has no parameter 'distance' (it has: distance)".
+                    return Err(Error::input(format!(
+                        "edit {}: {name} must be a finite number (got {v})",
+                        self.edit_no
+                    ))
+                    .at(format!("{field}.params.{name}")));
+                }
                 op = op.with_param(name, *v).ok_or_else(|| {
                     Error::input(format!(
                         "{} has no parameter '{name}' (it has: {})",
