@@ -17,7 +17,10 @@
 //       version: 1,                         // schema version of the state
 //       async defaults(ctx) → state,        // a fresh document (ctx.coreDefaults() for the core's defaults)
 //       migrate(raw, fromVersion) → raw,    // an older schema → the current one (before the core's check)
-//       toShare?(state) → shareState,       // what a link carries (small; throw Error to refuse)
+//       async? toShare(state) → shareState, // what a link carries (throw Error to refuse)
+//       shareLean?(state) → {state, omits} | null,  // when the link would pass share.js's
+//                                           // MAX_FRAGMENT: the state without its big inputs,
+//                                           // `omits` saying what ('the example'); said before copying
 //       async fromShare?(shareState, ctx) → raw state (then checked by the core),
 //     },
 //     mount(el, ctx) → view,                // build the DOM once; view = {render, markError?, keys?, unmount?}
@@ -43,7 +46,7 @@
 //                                controller.testHooks[name], removed when the panel is left
 //   ctx.readOnly, ctx.alive()
 import { Autosave, History, projectText, download, withTimeout } from './project.js';
-import { encodeShare, decodeShare, ShareTooBig } from './share.js';
+import { encodeShare, decodeShare, ShareTooBig, kb, LINK_LIMIT_TEXT } from './share.js';
 
 export const STORAGE_BLOCKED_NOTE = 'This page cannot save your work here (storage is blocked) — use Save project.';
 const AUTOSAVE_FORMAT = 'filigree-autosave';
@@ -512,14 +515,27 @@ export class DocumentController {
     return { pool: this.pool, run: (k, p, o) => this.pool.run(k, p, { module: tool.id, ...o }), coreDefaults: () => coreDefaults(this.pool, tool.id) };
   }
 
-  /** {tool, fragment} of the current document; throws ShareTooBig or an Error saying why it cannot be shared. */
+  /**
+   * {tool, fragment, omitted?} of the current document; throws ShareTooBig
+   * or an Error saying why it cannot be shared. A state whose link would be
+   * too big is shared without its big inputs when the tool says how
+   * (`state.shareLean(state) → {state, omits}`, `omits` in words: 'the
+   * example'); `omitted` = {what, size} then says what the link leaves out.
+   */
   async currentShare() {
     const cur = this.current;
     const state = cur && this.docs.get(cur.tool.id)?.history?.present;
     if (!state) throw new Error('There is nothing to share yet.');
-    const s = cur.tool.state.toShare ? cur.tool.state.toShare(state) : state;
-    const fragment = await encodeShare(cur.tool.id, s, { version: cur.tool.state.version });
-    return { tool: cur.tool.id, fragment };
+    const spec = cur.tool.state;
+    const s = spec.toShare ? await spec.toShare(state) : state;
+    try {
+      return { tool: cur.tool.id, fragment: await encodeShare(cur.tool.id, s, { version: spec.version }) };
+    } catch (err) {
+      const lean = err instanceof ShareTooBig && spec.shareLean?.(state);
+      if (!lean) throw err;
+      const fragment = await encodeShare(cur.tool.id, spec.toShare ? await spec.toShare(lean.state) : lean.state, { version: spec.version });
+      return { tool: cur.tool.id, fragment, omitted: { what: lean.omits, size: err.size } };
+    }
   }
 
   async copyLink() {
@@ -532,10 +548,30 @@ export class DocumentController {
       } else this.current?.ctx.error(err);
       return null;
     }
+    // A link that leaves something out says so before it is copied.
+    if (share.omitted) {
+      const { what, size } = share.omitted;
+      return new Promise((resolve) => {
+        const t = this.toast(`This link leaves out ${what} (${kb(size)} > the ${LINK_LIMIT_TEXT} a link holds): whoever opens it gets everything else. Save project keeps it all.`, {
+          timeout: 0, action: { label: 'Copy link without it', run: () => resolve(this.copyFragment(share.fragment, ` It leaves out ${what}.`)) },
+        });
+        t.dataset.omits = what;
+        const save = document.createElement('button');
+        save.type = 'button';
+        save.textContent = 'Save project';
+        save.onclick = () => { t.remove(); this.saveProject(); resolve(null); };
+        t.querySelector('button').after(save);
+      });
+    }
+    return this.copyFragment(share.fragment);
+  }
+
+  /** Copy the app's URL with `fragment` (shown in a toast when the clipboard refuses). */
+  async copyFragment(fragment, note = '') {
     const url = new URL(location.href);
     url.searchParams.delete('embed');
     url.searchParams.delete('mode');
-    url.hash = share.fragment;
+    url.hash = fragment;
     const link = url.href;
     this.lastLink = link;
     let copied = false;
@@ -543,7 +579,7 @@ export class DocumentController {
       await withTimeout(navigator.clipboard.writeText(link), 1000, 'clipboard');
       copied = true;
     } catch { /* no clipboard permission: show the link instead */ }
-    const t = this.toast(copied ? 'Link copied. Anyone who opens it sees this state.' : 'Copy this link (the clipboard is not available here):', { timeout: 12000 });
+    const t = this.toast(copied ? `Link copied. Anyone who opens it sees this state.${note}` : `Copy this link (the clipboard is not available here):${note}`, { timeout: 12000 });
     t.dataset.link = link;
     if (!copied) {
       const field = document.createElement('input');

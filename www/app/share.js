@@ -19,8 +19,18 @@
 
 /** Version of the link envelope itself (the tool's state has its own `version`). */
 export const SHARE_FORMAT = 1;
-/** Longest fragment a link may have; past this `encodeShare` throws a ShareTooBig. */
-export const MAX_FRAGMENT = 8 * 1024;
+/**
+ * Longest fragment a link may have (96 KB, what the app says links hold);
+ * past this `encodeShare` throws a ShareTooBig. Big inputs (a Texture
+ * example, a Pixel source) travel in the link, deflated, up to this size;
+ * a tool whose state is bigger names what its link leaves out
+ * (`state.shareLean`, document.js) or is shared as a project file. Browsers
+ * take far longer URLs (Chromium 2 MB); the bound keeps a link something a
+ * chat or a mail can carry.
+ */
+export const MAX_FRAGMENT = 96 * 1024;
+/** The size a link holds, in words. */
+export const LINK_LIMIT_TEXT = `${MAX_FRAGMENT / 1024} KB`;
 /** Decoding stops past this many decompressed bytes (a zip bomb stays small). */
 export const MAX_DECOMPRESSED = 1 << 20;
 /** A link longer than this is refused before it is even decoded. */
@@ -31,11 +41,14 @@ const TOOL_ID = /^[a-z][a-z0-9-]{0,31}$/;
 /** The state does not fit in a link; `size` is the fragment length it would need. */
 export class ShareTooBig extends Error {
   constructor(size) {
-    super(`This state is too big for a link (${Math.ceil(size / 1024)} KB; links hold ${MAX_FRAGMENT / 1024} KB). Use Save project to share it as a file.`);
+    super(`This state is too big for a link (${kb(size)} > the ${LINK_LIMIT_TEXT} a link holds). Use Save project to share it as a file.`);
     this.name = 'ShareTooBig';
     this.size = size;
   }
 }
+
+/** `bytes` in whole KB, rounded up, as words ('70 KB'). */
+export const kb = (bytes) => `${Math.ceil(bytes / 1024)} KB`;
 
 const bad = (why) => new Error(`This link is damaged or not a Filigree link: ${why}.`);
 
