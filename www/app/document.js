@@ -45,7 +45,7 @@
 //                                (globalThis.__filigreeTestHooks === true): set as
 //                                controller.testHooks[name], removed when the panel is left
 //   ctx.readOnly, ctx.alive()
-import { Autosave, History, projectText, download, withTimeout } from './project.js';
+import { Autosave, History, projectText, download, withTimeout, onOtherTab } from './project.js';
 import { encodeShare, decodeShare, ShareTooBig, kb, LINK_LIMIT_TEXT } from './share.js';
 
 export const STORAGE_BLOCKED_NOTE = 'This page cannot save your work here (storage is blocked) — use Save project.';
@@ -131,6 +131,11 @@ const CHROME = `
     <span class="doc-busy muted" aria-live="polite"></span>
   </div>
   <div class="doc-note" role="status" data-testid="doc-note" hidden></div>
+  <div class="doc-note doc-tabs" role="alert" data-testid="doc-tabs" hidden>
+    <span></span>
+    <button type="button" data-act="tab-reload" title="Show the other tab's version here (Undo brings yours back)">Reload</button>
+    <button type="button" data-act="tab-keep" title="Save this tab's version over the other tab's">Keep mine</button>
+  </div>
   <div class="error doc-error" role="alert" data-testid="doc-error" hidden></div>
   <div class="doc-body"></div>`;
 
@@ -154,6 +159,16 @@ export class DocumentController {
     this.keydown = (e) => this.onKey(e);
     document.addEventListener('keydown', this.keydown);
     addEventListener('pagehide', () => { for (const d of this.docs.values()) d.autosave?.flush(); });
+    // Another tab saved a document this tab holds: offer its version (tabs bar).
+    if (this.persist) {
+      onOtherTab(({ key, rev }) => this.docs.get(key)?.autosave?.noteOther(rev));
+      // A change held back by another tab's save is lost if the tab closes: the browser asks first.
+      addEventListener('beforeunload', (e) => {
+        if (![...this.docs.values()].some((d) => d.autosave?.held)) return;
+        e.preventDefault();
+        e.returnValue = '';
+      });
+    }
   }
 
   tool(id) {
@@ -168,7 +183,9 @@ export class DocumentController {
       d = {
         history: null,
         loading: null,
-        autosave: this.persist && tool.state ? new Autosave(tool.id, { onBlocked: () => this.blocked() }) : null,
+        autosave: this.persist && tool.state
+          ? new Autosave(tool.id, { onBlocked: () => this.blocked(), onConflict: () => this.showTabs() })
+          : null,
       };
       this.docs.set(tool.id, d);
     }
@@ -178,6 +195,49 @@ export class DocumentController {
   blocked() {
     this.storageBlocked = true;
     this.showNote();
+  }
+
+  /** The tabs bar: shown while another tab's newer save of this document is neither taken nor overruled. */
+  showTabs() {
+    const cur = this.current;
+    const bar = cur?.el.querySelector('.doc-tabs');
+    if (!bar) return;
+    const a = this.docs.get(cur.tool.id)?.autosave;
+    bar.hidden = !a?.conflict;
+    if (!a?.conflict) return;
+    bar.querySelector('span').textContent = `This ${cur.tool.title} document was changed in another tab.${a.held ? ' Your changes here are not saved until you choose.' : ''}`;
+  }
+
+  /** Reload: the other tab's save becomes this tab's document (an undoable step: Undo brings this tab's back). */
+  async takeOtherTab() {
+    const cur = this.current;
+    const d = cur && this.docs.get(cur.tool.id);
+    if (!d?.autosave || !d.history) return;
+    const saved = await d.autosave.load();
+    let state;
+    try {
+      if (!saved) throw new Error('the other tab\'s save is gone');
+      state = await this.check(cur.tool, saved.state, saved.version);
+    } catch (err) {
+      cur.ctx.error(new Error(`The other tab's version could not be read (${plainError(err) ?? 'cancelled'}); yours is kept.`));
+      return;
+    }
+    if (this.current !== cur) return;
+    d.autosave.adopt(d.autosave.rev);
+    d.history.push(state);
+    d.history.seal();
+    this.refresh(); // not saved again: it is what is stored
+    this.showTabs();
+  }
+
+  /** Keep mine: this tab's document is saved over the other tab's. */
+  keepMine() {
+    const cur = this.current;
+    const d = cur && this.docs.get(cur.tool.id);
+    if (!d?.autosave || !d.history) return;
+    const over = d.autosave.conflict;
+    d.autosave.save({ format: AUTOSAVE_FORMAT, version: cur.tool.state.version, state: d.history.present });
+    d.autosave.flush({ over }).then(() => this.showTabs());
   }
 
   showNote() {
@@ -299,6 +359,7 @@ export class DocumentController {
     el.querySelector('.doc-busy').textContent = tool.state ? 'loading…' : '';
     cur.view = tool.mount(el.querySelector('.doc-body'), cur.ctx) || {};
     this.showNote();
+    this.showTabs();
     this.onShow?.(tool.id);
   }
 
@@ -404,6 +465,8 @@ export class DocumentController {
       if (file) this.openProjectFile(file);
     };
     q('[data-act=copy-link]').onclick = () => this.copyLink();
+    q('[data-act=tab-reload]').onclick = () => this.takeOtherTab();
+    q('[data-act=tab-keep]').onclick = () => this.keepMine();
     if (cur.readOnly) for (const a of ['undo', 'redo', 'open-project']) q(`[data-act=${a}]`).hidden = true;
   }
 
@@ -416,6 +479,7 @@ export class DocumentController {
     const d = this.docs.get(cur.tool.id);
     if (d.autosave && this.persist && !cur.readOnly) {
       d.autosave.save({ format: AUTOSAVE_FORMAT, version: cur.tool.state.version, state: d.history.present });
+      if (d.autosave.conflict) this.showTabs(); // held: say that this change is not saved yet
     }
     this.refresh();
   }

@@ -60,21 +60,68 @@ async function withStore(mode, fn) {
 
 let persistAsked = false;
 
+// ---- tabs ---------------------------------------------------------------------------------
+//
+// Two tabs of the app share one autosave per tool. Every autosave carries a
+// revision (`rev`, counting up from 1) and the id of the tab that wrote it;
+// a tab writes only over the revision it last read or wrote, in the same
+// transaction as it checks, so a newer save of another tab is never
+// overwritten silently (`onConflict` hears about it instead). After a
+// write the tab says so on a BroadcastChannel, so the others learn at once
+// (`onOtherTab`), not only when they next save.
+
+/** This tab's id, in every autosave it writes. */
+export const TAB_ID = Math.random().toString(36).slice(2, 10);
+const CHANNEL_NAME = 'filigree-autosave';
+let channel = null;
+const tabListeners = new Set();
+
+function tabChannel() {
+  if (!channel && typeof BroadcastChannel === 'function') {
+    try {
+      channel = new BroadcastChannel(CHANNEL_NAME);
+      channel.onmessage = (e) => {
+        const m = e.data;
+        if (!m || typeof m.key !== 'string' || !Number.isInteger(m.rev) || m.tab === TAB_ID) return;
+        for (const fn of tabListeners) fn(m);
+      };
+    } catch { /* an opaque origin: no channel; the revision check still holds */ }
+  }
+  return channel;
+}
+
+/** `fn({key, rev, tab})` whenever another tab of this origin saved the autosave `key`. Returns an unsubscribe function. */
+export function onOtherTab(fn) {
+  tabChannel();
+  tabListeners.add(fn);
+  return () => tabListeners.delete(fn);
+}
+
+/** The revision of a stored autosave (0 for none, and for one saved before revisions). */
+const revOf = (v) => (Number.isInteger(v?.rev) && v.rev > 0 ? v.rev : 0);
+
 /**
  * Autosave of one key: `load()` once, `save(value)` on every change
  * (debounced), `flush()` on pagehide or when leaving. Every call fails fast
  * (STORAGE_TIMEOUT_MS); `onBlocked(err)` hears about the first failure so the
- * page can say plainly that it cannot save here.
+ * page can say plainly that it cannot save here. A write finds a newer
+ * revision than this tab's (another tab saved) and does not happen:
+ * `onConflict(rev)` hears it and the value stays pending until
+ * `flush({over: rev})` (the user keeps theirs) or `adopt(rev)` (they took
+ * the other tab's).
  */
 export class Autosave {
-  constructor(key, { delayMs = 400, onBlocked } = {}) {
+  constructor(key, { delayMs = 400, onBlocked, onConflict } = {}) {
     this.key = key;
     this.delayMs = delayMs;
     this.timer = null;
     this.pending = null;
     this.lastSaved = Promise.resolve();
     this.onBlocked = onBlocked;
+    this.onConflict = onConflict;
     this.blocked = false;
+    this.rev = 0; // the revision this tab last read or wrote
+    this.conflict = 0; // a newer revision of another tab, not taken nor overruled yet
   }
 
   fail(err) {
@@ -84,7 +131,10 @@ export class Autosave {
 
   async load() {
     try {
-      return (await withStore('readonly', (s) => s.get(this.key))) ?? null;
+      const v = (await withStore('readonly', (s) => s.get(this.key))) ?? null;
+      this.rev = revOf(v);
+      if (this.conflict <= this.rev) this.conflict = 0;
+      return v;
     } catch (err) {
       this.fail(err);
       return null;
@@ -109,13 +159,59 @@ export class Autosave {
     this.pending = null;
   }
 
-  flush() {
+  /** Another tab's revision `rev` is now this tab's document: later writes go over it. */
+  adopt(rev) {
+    this.rev = Math.max(this.rev, rev);
+    if (this.conflict <= rev) this.conflict = 0;
+    this.cancel();
+  }
+
+  /** Another tab said it saved revision `rev` (onOtherTab). */
+  noteOther(rev) {
+    if (rev > this.rev && rev > this.conflict) {
+      this.conflict = rev;
+      this.onConflict?.(rev);
+    }
+  }
+
+  /** Whether this tab holds a change that is not saved because another tab saved meanwhile. */
+  get held() {
+    return this.pending !== null && this.conflict > 0;
+  }
+
+  /**
+   * Write the pending value, unless a newer revision than this tab's is
+   * stored; `over` = the revision the user chose to overrule (Keep mine).
+   */
+  flush({ over = 0 } = {}) {
     clearTimeout(this.timer);
     if (this.pending === null) return this.lastSaved;
+    if (this.blocked) { this.pending = null; return this.lastSaved; }
+    if (this.conflict && over < this.conflict) return this.lastSaved; // held until the user decides
     const value = this.pending;
     this.pending = null;
-    if (this.blocked) return this.lastSaved;
-    this.lastSaved = withStore('readwrite', (s) => s.put(value, this.key)).catch((err) => this.fail(err));
+    const base = Math.max(this.rev, over);
+    let wrote = 0;
+    let found = 0;
+    this.lastSaved = withStore('readwrite', (s) => {
+      const get = s.get(this.key);
+      get.onsuccess = () => {
+        found = revOf(get.result);
+        if (found > base) return; // another tab saved after this one last read: do not overwrite it
+        wrote = found + 1;
+        s.put({ ...value, rev: wrote, tab: TAB_ID }, this.key);
+      };
+      return get;
+    }).then(() => {
+      if (wrote) {
+        this.rev = wrote;
+        if (this.conflict <= over) this.conflict = 0;
+        tabChannel()?.postMessage({ key: this.key, rev: wrote, tab: TAB_ID });
+      } else {
+        if (this.pending === null) this.pending = value; // kept for Keep mine
+        this.noteOther(found);
+      }
+    }, (err) => this.fail(err));
     return this.lastSaved;
   }
 }

@@ -1,0 +1,99 @@
+// Two tabs of the app on the same document (issue 35 item 5): a save in one
+// tab is announced in the other (BroadcastChannel), which offers Reload or
+// Keep mine; a tab never writes over the other's newer save without the
+// user choosing so (each autosave carries a revision, checked in the same
+// transaction as the write).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { launch, ready } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+const BAR = '[data-testid=doc-tabs]';
+const values = (p) => p.evaluate(() => window.filigree.testHooks.fit.state().values);
+
+/** What the tabs' shared autosave of Fit holds: {rev, values}. */
+const stored = (p) => p.evaluate(() => new Promise((resolve, reject) => {
+  const r = indexedDB.open('filigree');
+  r.onerror = () => reject(r.error);
+  r.onsuccess = () => {
+    const db = r.result;
+    const get = db.transaction('autosave', 'readonly').objectStore('autosave').get('fit');
+    get.onsuccess = () => { db.close(); resolve(get.result ? { rev: get.result.rev, values: get.result.state.values } : null); };
+    get.onerror = () => reject(get.error);
+  };
+}));
+
+const same = (x, y) => JSON.stringify(x) === JSON.stringify(y);
+
+/** The stored autosave once `ok(stored)` holds (10 s at most). */
+async function until(page, ok) {
+  let s = await stored(page);
+  for (let i = 0; i < 100 && !ok(s); i++) { await page.waitForTimeout(100); s = await stored(page); }
+  return s;
+}
+
+/** Move the slider of parameter `name` with the keyboard, as a person does. */
+async function nudge(page, name, presses = 5) {
+  await page.focus(`[data-testid=fit-sliders] .row[data-param=${name}] input`);
+  for (let i = 0; i < presses; i++) await page.keyboard.press('ArrowRight');
+}
+
+async function fitTab(page) {
+  await page.goto(`${env.url}#tool=fit`);
+  await ready(page, '#tool=fit');
+  await page.waitForSelector('[data-testid=fit-sliders] .row');
+  return page;
+}
+
+test('two tabs: a save in one is offered to the other, which never overwrites it silently', async () => {
+  const a = await fitTab(await env.newPage({ path: null }));
+  const b = await fitTab(await a.context().newPage());
+  const start = await values(a);
+  assert.deepEqual(await values(b), start);
+
+  // Tab A moves dx; its autosave lands and tab B hears of it at once.
+  await nudge(a, 'dx');
+  const mine = await values(a);
+  assert.notDeepEqual(mine, start);
+  await until(a, (s) => same(s?.values, mine));
+  const saved = await stored(a);
+  await b.waitForSelector(`${BAR}:not([hidden])`, { timeout: 5000 });
+  assert.match(await b.textContent(BAR), /Fit document was changed in another tab/);
+  assert.equal(await a.isHidden(BAR), true, 'the tab that saved has no bar');
+
+  // Tab B, not having chosen, moves dy: its change is held, not written over A's.
+  await nudge(b, 'dy');
+  const theirs = await values(b);
+  assert.equal(theirs[1] !== start[1], true, 'dy moved in B');
+  await b.waitForTimeout(1200); // past the autosave's debounce
+  assert.deepEqual(await stored(a), saved, 'B did not overwrite A\'s newer save');
+  assert.match(await b.textContent(BAR), /Your changes here are not saved until you choose/);
+
+  // The issue's case: reloading A shows A's change, not B's.
+  await fitTab(a);
+  assert.deepEqual(await values(a), mine, 'A\'s change survived its reload');
+
+  // B keeps its own: now that is stored, and A is told.
+  await b.click(`${BAR} button:text("Keep mine")`);
+  await b.waitForSelector(`${BAR}[hidden]`, { state: 'attached' });
+  const s = await until(a, (x) => same(x?.values, theirs));
+  assert.deepEqual(s.values, theirs, 'Keep mine wrote B\'s version');
+  assert.ok(s.rev > saved.rev, `revision ${saved.rev} → ${s.rev}`);
+  await a.waitForSelector(`${BAR}:not([hidden])`, { timeout: 5000 });
+
+  // A reloads B's version; the bar goes; Undo brings A's own back.
+  await a.click(`${BAR} button:text("Reload")`);
+  await a.waitForFunction((v) => JSON.stringify(window.filigree.testHooks.fit.state().values) === JSON.stringify(v), theirs);
+  assert.equal(await a.isHidden(BAR), true);
+  await a.waitForTimeout(800);
+  assert.equal((await stored(a)).rev, s.rev, 'taking the other tab\'s version writes nothing');
+  await a.click('button[data-act=undo]');
+  assert.deepEqual(await values(a), mine, 'Undo brings A\'s version back');
+  // …and that is an ordinary change of A, saved over what A last read; B hears of it.
+  await b.waitForSelector(`${BAR}:not([hidden])`, { timeout: 5000 });
+  await b.close();
+  await a.close();
+});
