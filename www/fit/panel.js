@@ -26,12 +26,8 @@ const html = `
   <div class="fit-layout">
     <section class="card fit-program" aria-label="Pattern program">
       <label class="inline">Generator <select name="generator" data-testid="fit-generator" data-field="generator"></select></label>
-      <details class="program">
-        <summary>Program</summary>
-        <div class="program-editor"></div>
-        <div class="row-buttons"><button type="button" data-act="apply-program">Apply program</button></div>
-      </details>
       <div class="muted program-facts" data-testid="fit-facts"></div>
+      <button type="button" class="link" data-act="show-program" aria-controls="fit-program-text">Edit the program ↓</button>
       <h3>Parameters</h3>
       <form class="sliders" data-testid="fit-sliders"></form>
       <div class="row-buttons">
@@ -44,6 +40,7 @@ const html = `
         <label class="inline">size <input type="number" name="brush" min="1" max="64" value="12"></label>
         <button type="button" data-act="clear-target">Clear</button>
       </div>
+      <p class="fit-legend muted">Solid: the target. <span class="fit-key">Pink outlines</span>: the pattern of the current values.</p>
       <div class="stack checker">
         <canvas class="target" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-target" aria-label="target: draw here, or drop an image"></canvas>
         <canvas class="overlay" width="${TARGET_SIZE}" height="${TARGET_SIZE}" data-testid="fit-overlay" aria-hidden="true"></canvas>
@@ -59,9 +56,10 @@ const html = `
         <label class="inline">Seed <input type="number" name="seed" min="0" value="1" data-field="settings.seed"></label>
       </div>
       <div class="row-buttons">
-        <button type="button" class="primary" data-act="fit">Run fit</button>
+        <button type="button" class="primary" data-act="fit" aria-describedby="fit-why">Run fit</button>
         <button type="button" data-act="cancel" disabled>Cancel</button>
       </div>
+      <p class="fit-why" id="fit-why" data-testid="fit-why" hidden></p>
       <progress max="1" value="0"></progress>
       <div class="status muted" data-testid="fit-status" aria-live="polite"></div>
       <canvas class="plot" data-testid="fit-plot" aria-label="loss plot"></canvas>
@@ -70,6 +68,13 @@ const html = `
         <button type="button" data-act="export-svg">Export SVG</button>
         <button type="button" data-act="export-json">Export JSON</button>
       </div>
+    </section>
+    <section class="card fit-editor" id="fit-program-text" aria-label="Program text">
+      <details class="program">
+        <summary>Program</summary>
+        <div class="program-editor"></div>
+        <div class="row-buttons"><button type="button" data-act="apply-program">Apply program</button></div>
+      </details>
     </section>
   </div>`;
 
@@ -93,6 +98,38 @@ function backgroundTarget(info) {
   const rgba = new Uint8Array(TARGET_SIZE * TARGET_SIZE * 4);
   for (let i = 0; i < rgba.length; i += 4) { rgba[i] = r; rgba[i + 1] = g; rgba[i + 2] = b; rgba[i + 3] = 255; }
   return { width: TARGET_SIZE, height: TARGET_SIZE, rgba };
+}
+
+/** Whether target `t` is blank: one colour everywhere (nothing to fit to). */
+const blankTargets = new WeakMap();
+function isBlank(t) {
+  if (!t?.rgba) return true;
+  if (!blankTargets.has(t)) {
+    const px = new Uint32Array(t.rgba.buffer, t.rgba.byteOffset, t.rgba.length >> 2);
+    let blank = true;
+    for (let i = 1; i < px.length && blank; i++) blank = px[i] === px[0];
+    blankTargets.set(t, blank);
+  }
+  return blankTargets.get(t);
+}
+
+// The overlay is the pattern of the current (or, while fitting, the best)
+// values drawn so it cannot pass for the target: its shapes' outlines in a
+// colour of no program's palette, their fill faint.
+const OUTLINE = [255, 43, 214];
+const FILL_ALPHA = 80;
+/** In place: `rgba` (w × h) with background `bg` transparent, shapes outlined. */
+function overlayLook(rgba, w, h, [br, bg, bb]) {
+  const on = new Uint8Array(w * h);
+  for (let i = 0, k = 0; k < on.length; i += 4, k++) on[k] = rgba[i] === br && rgba[i + 1] === bg && rgba[i + 2] === bb ? 0 : 1;
+  for (let y = 0; y < h; y++) {
+    for (let x = 0; x < w; x++) {
+      const k = y * w + x, i = 4 * k;
+      if (!on[k]) { rgba[i + 3] = 0; continue; }
+      const edge = x === 0 || y === 0 || x === w - 1 || y === h - 1 || !on[k - 1] || !on[k + 1] || !on[k - w] || !on[k + w];
+      if (edge) { rgba[i] = OUTLINE[0]; rgba[i + 1] = OUTLINE[1]; rgba[i + 2] = OUTLINE[2]; rgba[i + 3] = 255; } else rgba[i + 3] = FILL_ALPHA;
+    }
+  }
 }
 
 /** A fresh document for generator `g` (values at its defaults, an empty target). */
@@ -355,13 +392,11 @@ function mount(el, ctx) {
         if (vals.length !== info.params.length) return;
         // On the target's canvas, at its size: the overlay is not stretched.
         const r = await ctx.run('render-pattern', { program: doc().program, params: named(info, vals), ...sizeOf(doc().target) });
-        // Only the shapes: background pixels become transparent, so the
-        // target shows through wherever the pattern has nothing.
-        const [br, bg, bb] = palette()[0];
-        for (let i = 0; i < r.rgba.length; i += 4) {
-          if (r.rgba[i] === br && r.rgba[i + 1] === bg && r.rgba[i + 2] === bb) r.rgba[i + 3] = 0;
-        }
+        // Only the shapes, outlined: background pixels become transparent, so
+        // the target shows through wherever the pattern has nothing.
+        overlayLook(r.rgba, r.width, r.height, palette()[0]);
         putRgba(overlay, r.width, r.height, r.rgba);
+        overlay.dataset.values = JSON.stringify(vals);
       } catch (err) {
         ctx.error(err);
       } finally {
@@ -459,9 +494,15 @@ function mount(el, ctx) {
 
   // ---- fitting ----------------------------------------------------------------------------
 
+  // A blank target has nothing to fit to (every pattern is as far from it):
+  // Run fit waits for a target and says how to make one.
   function setRunning(on) {
     q('[data-act=cancel]').disabled = !on;
-    q('[data-act=fit]').disabled = on;
+    const blank = isBlank(doc()?.target);
+    q('[data-act=fit]').disabled = on || blank;
+    const why = q('[data-testid=fit-why]');
+    why.hidden = on || !blank;
+    why.textContent = blank ? 'The target is empty, so there is nothing to fit yet: draw on it in the pattern’s colours, upload an image, or press “Make target from these values”.' : '';
   }
 
   function stopFit() {
@@ -472,7 +513,7 @@ function mount(el, ctx) {
 
   async function fit() {
     const d = doc();
-    if (!d?.target || !info) return;
+    if (!d?.target || !info || isBlank(d.target)) return;
     running?.abort();
     const ctrl = new AbortController();
     running = ctrl;
@@ -518,7 +559,11 @@ function mount(el, ctx) {
       status(`fitted in ${((performance.now() - t0) / 1000).toFixed(1)} s — loss ${r.loss.toPrecision(4)} (${r.loss_name}) after ${r.evaluations} evaluations`);
     } catch (err) {
       if (err.kind === 'cancelled') {
-        if (ctx.alive() && (running === ctrl || running === null)) status('cancelled — the values from before the fit are kept');
+        if (ctx.alive() && (running === ctrl || running === null)) {
+          status('cancelled — the values from before the fit are kept');
+          // The overlay showed the fit's candidates: back to the kept values.
+          schedulePreview(doc().values);
+        }
       } else if (running === ctrl) ctx.error(err);
     } finally {
       if (running === ctrl) { running = null; setRunning(false); }
@@ -603,6 +648,11 @@ function mount(el, ctx) {
     }
   };
   q('[data-act=make-target]').onclick = () => makeTarget();
+  q('[data-act=show-program]').onclick = () => {
+    q('details.program').open = true;
+    q('.fit-editor').scrollIntoView({ block: 'start', behavior: 'smooth' });
+    editorReady.then((ed) => ctx.alive() && ed.focus());
+  };
   q('[data-act=clear-target]').onclick = () => info && ctx.commit({ ...doc(), target: backgroundTarget(info), truth: null });
   q('[data-act=fit]').onclick = fit;
   q('[data-act=cancel]').onclick = () => running?.abort();
@@ -653,7 +703,7 @@ function mount(el, ctx) {
     render(d, prev) {
       if (!d) return;
       for (const name of ['budget', 'loss', 'seed']) q(`[name=${name}]`).value = d.settings[name];
-      if (!prev || d.target !== prev.target) drawTarget(d.target);
+      if (!prev || d.target !== prev.target) { drawTarget(d.target); setRunning(!!running); }
       if (!info || keyOf(d, info) !== infoKey) {
         // A program or integer change: re-read the program (async), then sliders and preview.
         generatorsReady.then(() => ctx.alive() && syncProgram(d));

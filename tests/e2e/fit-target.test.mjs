@@ -1,0 +1,112 @@
+// Fit's target and overlay (issue 35 items 3 and 10): Run fit never runs
+// on an empty target (it waits, saying how to make one); the target and the
+// pattern drawn over it look different; after Cancel the overlay shows the
+// values that were kept, not the abandoned candidate.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { launch } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+const ready = (page) => page.waitForFunction(() => !!document.querySelector('[data-testid=fit-sliders] input'));
+/** FNV hash of a canvas's pixels. */
+const canvasHash = (page, sel) => page.$eval(sel, (c) => {
+  const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let h = 2166136261;
+  for (let i = 0; i < d.length; i++) { h ^= d[i]; h = Math.imul(h, 16777619) >>> 0; }
+  return h;
+});
+/** Pixels of a PNG screenshot that are the overlay's pink ([r, g, b] near 255, 43, 214). */
+async function pinkIn(page, sel) {
+  const png = await page.locator(sel).screenshot();
+  return page.evaluate(async (b64) => {
+    const bmp = await createImageBitmap(new Blob([Uint8Array.from(atob(b64), (c) => c.charCodeAt(0))], { type: 'image/png' }));
+    const c = new OffscreenCanvas(bmp.width, bmp.height);
+    const g = c.getContext('2d');
+    g.drawImage(bmp, 0, 0);
+    const d = g.getImageData(0, 0, bmp.width, bmp.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] > 200 && d[i + 1] < 140 && d[i + 2] > 150) n++;
+    return n;
+  }, png.toString('base64'));
+}
+
+test('fit: Run fit waits for a target and says why; drawing one enables it; target and overlay look different', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await ready(page);
+  // The default target is blank: the button is disabled and a visible reason says what to do.
+  await page.waitForSelector('[data-testid=fit-why]:not([hidden])');
+  assert.equal(await page.isDisabled('button[data-act=fit]'), true, 'Run fit disabled on a blank target');
+  assert.match(await page.textContent('[data-testid=fit-why]'), /target is empty.*draw.*upload.*Make target from these values/s);
+  assert.equal(await page.getAttribute('button[data-act=fit]', 'aria-describedby'), 'fit-why');
+  assert.equal(await page.textContent('[data-testid=fit-status]'), '', 'nothing ran');
+
+  // Draw a stroke on the target: the button is enabled and the reason goes.
+  const box = await page.locator('[data-testid=fit-target]').boundingBox();
+  await page.mouse.move(box.x + box.width * 0.3, box.y + box.height * 0.3);
+  await page.mouse.down();
+  for (let i = 1; i <= 8; i++) await page.mouse.move(box.x + box.width * (0.3 + i * 0.04), box.y + box.height * 0.35);
+  await page.mouse.up();
+  await page.waitForFunction(() => !document.querySelector('button[data-act=fit]').disabled);
+  assert.equal(await page.isHidden('[data-testid=fit-why]'), true);
+  // Clear: blank again, disabled again.
+  await page.click('button[data-act=clear-target]');
+  await page.waitForFunction(() => document.querySelector('button[data-act=fit]').disabled);
+  assert.equal(await page.isVisible('[data-testid=fit-why]'), true);
+
+  // A target made from the values: the very same shapes as the overlay, yet they look different.
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => !document.querySelector('button[data-act=fit]').disabled);
+  const targetPink = await page.$eval('[data-testid=fit-target]', (c) => {
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] > 200 && d[i + 1] < 140 && d[i + 2] > 150) n++;
+    return n;
+  });
+  assert.equal(targetPink, 0, 'the target alone has no pink');
+  assert.ok(await pinkIn(page, '.fit-target .stack') > 200, 'the pattern over it is outlined in pink');
+  assert.match(await page.textContent('.fit-legend'), /Solid: the target.*Pink outlines/);
+});
+
+test('fit: after Cancel the overlay shows the kept values, not the abandoned candidate', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await ready(page);
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth);
+  // Move r to its end: the values differ from the target's, so the fit's candidates differ from them.
+  await page.focus('[data-testid=fit-sliders] input[aria-label=r]');
+  await page.keyboard.press('End');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().values.at(-1) > 0.059);
+  const kept = await page.evaluate(() => window.filigree.testHooks.fit.state().values);
+  // The overlay of the kept values (once the preview has settled).
+  let h0 = -1;
+  for (let i = 0; i < 40; i++) {
+    await page.waitForTimeout(150);
+    const h = await canvasHash(page, '[data-testid=fit-overlay]');
+    if (h === h0) break;
+    h0 = h;
+  }
+  await page.selectOption('select[name=budget]', 'paper');
+  await page.click('button[data-act=fit]');
+  // A candidate is drawn over the target while the fit runs...
+  await page.waitForFunction((h) => {
+    const c = document.querySelector('[data-testid=fit-overlay]');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let x = 2166136261;
+    for (let i = 0; i < d.length; i++) { x ^= d[i]; x = Math.imul(x, 16777619) >>> 0; }
+    return x !== h;
+  }, h0, { timeout: 60000, polling: 100 });
+  await page.click('button[data-act=cancel]');
+  await page.waitForFunction(() => /^cancelled/.test(document.querySelector('[data-testid=fit-status]').textContent));
+  assert.deepEqual(await page.evaluate(() => window.filigree.testHooks.fit.state().values), kept, 'the values are kept');
+  // ...and after Cancel the overlay is the kept values' pattern again.
+  await page.waitForFunction((h) => {
+    const c = document.querySelector('[data-testid=fit-overlay]');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let x = 2166136261;
+    for (let i = 0; i < d.length; i++) { x ^= d[i]; x = Math.imul(x, 16777619) >>> 0; }
+    return x === h;
+  }, h0, { timeout: 5000, polling: 100 }).catch(() => assert.fail('the overlay still shows the abandoned candidate'));
+});
