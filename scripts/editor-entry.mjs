@@ -1,10 +1,10 @@
 // Source of www/vendor/code-editor.bundle.js (built by scripts/bundle-editor.mjs
 // with esbuild; the bundle is generated, not committed). It turns CodeMirror 6
 // into the small API www/ui/code-editor.js documents; nothing else imports it.
-import { EditorState, Compartment } from '@codemirror/state';
+import { EditorState, Compartment, StateField, StateEffect } from '@codemirror/state';
 import {
   EditorView, keymap, lineNumbers, highlightActiveLine, highlightActiveLineGutter, drawSelection,
-  highlightSpecialChars,
+  highlightSpecialChars, Decoration, WidgetType,
 } from '@codemirror/view';
 import { defaultKeymap, history, historyKeymap } from '@codemirror/commands';
 import {
@@ -72,6 +72,40 @@ const LANGUAGES = {
   }),
 };
 
+// ---- the error under its line -------------------------------------------------
+// The lint diagnostic underlines the token and marks the gutter; its message
+// would show only on hover. This block widget prints it right under the
+// line, where the eyes already are.
+
+const setInlineError = StateEffect.define();
+
+class ErrorWidget extends WidgetType {
+  constructor(message) { super(); this.message = message; }
+  eq(other) { return other.message === this.message; }
+  toDOM() {
+    const d = document.createElement('div');
+    d.className = 'cm-inline-error';
+    d.textContent = this.message;
+    return d;
+  }
+  ignoreEvent() { return false; }
+}
+
+const inlineError = StateField.define({
+  create: () => Decoration.none,
+  update(deco, tr) {
+    let next = deco.map(tr.changes);
+    for (const e of tr.effects) {
+      if (!e.is(setInlineError)) continue;
+      next = e.value
+        ? Decoration.set([Decoration.widget({ widget: new ErrorWidget(e.value.message), block: true, side: 1 }).range(e.value.pos)])
+        : Decoration.none;
+    }
+    return next;
+  },
+  provide: (f) => EditorView.decorations.from(f),
+});
+
 // ---- look ---------------------------------------------------------------------
 
 const highlight = HighlightStyle.define([
@@ -100,6 +134,10 @@ const theme = EditorView.theme({
   '.cm-lintRange-error': { backgroundImage: 'none', textDecoration: 'underline wavy #ff7b8a', textUnderlineOffset: '3px' },
   '.cm-tooltip': { backgroundColor: '#282436', border: '1px solid #363047', color: '#ebe7f3' },
   '.cm-diagnostic-error': { borderLeftColor: '#ff7b8a' },
+  '.cm-inline-error': {
+    color: '#ffd0d6', backgroundColor: '#3a1f29', borderLeft: '3px solid #ff7b8a', padding: '2px 8px', margin: '1px 0 3px',
+    fontFamily: 'system-ui, sans-serif', fontSize: '12px', whiteSpace: 'pre-wrap',
+  },
 }, { dark: true });
 
 // ---- the API ------------------------------------------------------------------
@@ -116,11 +154,13 @@ export function createEditor(parent, { value = '', language = 'filigree', onChan
       extensions: [
         lineNumbers(), highlightActiveLineGutter(), highlightSpecialChars(), history(), drawSelection(),
         indentOnInput(), bracketMatching(), highlightActiveLine(), lintGutter(),
-        indentUnit.of('  '), lang, syntaxHighlighting(highlight), theme,
+        indentUnit.of('  '), lang, syntaxHighlighting(highlight), theme, inlineError,
         // Tab is not bound: it moves focus out of the editor, as everywhere on
         // the page (indent with Ctrl+] / Ctrl+[ instead).
         keymap.of([...defaultKeymap, ...historyKeymap]),
-        ariaLabel.of(EditorView.contentAttributes.of({ ...attributes, 'aria-label': label, 'aria-multiline': 'true' })),
+        // tabindex: the editable content is a named Tab stop, so the scrolling box around it is
+        // reachable by keyboard (axe: scrollable-region-focusable).
+        ariaLabel.of(EditorView.contentAttributes.of({ ...attributes, 'aria-label': label, 'aria-multiline': 'true', tabindex: '0' })),
         EditorView.updateListener.of((u) => {
           if (u.docChanged && !quiet) onChange?.(u.state.doc.toString());
         }),
@@ -156,10 +196,12 @@ export function createEditor(parent, { value = '', language = 'filigree', onChan
       const to = Math.min(l.to, from + Math.max(1, word ? word[0].length : 1));
       const diag = { from, to: to > from ? to : from, severity: 'error', message: message || 'error' };
       view.dispatch(setDiagnostics(view.state, [diag]));
+      view.dispatch({ effects: setInlineError.of({ pos: l.to, message: diag.message }) });
       view.dispatch({ selection: { anchor: from }, effects: EditorView.scrollIntoView(from, { y: 'center' }) });
     },
     clearError() {
       view.dispatch(setDiagnostics(view.state, []));
+      view.dispatch({ effects: setInlineError.of(null) });
     },
     focus: () => view.focus(),
     destroy: () => view.destroy(),

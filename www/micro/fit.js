@@ -84,7 +84,8 @@ export function mountReconstruct(el, ctx) {
   const q = (s) => el.querySelector(s);
   const statusEl = q('[data-testid=micro-fit-status]');
   const status = (t) => { statusEl.textContent = t; };
-  const plot = new LossPlot(q('[data-testid=micro-fit-plot]'));
+  // The loss is a log MSE (it may be negative): a linear axis of the very numbers the status shows.
+  const plot = new LossPlot(q('[data-testid=micro-fit-plot]'), { log: false, format: (v) => v.toFixed(3) });
   const paramsEl = q('[data-testid=micro-fit-params]');
   const optSel = q('[name=fit-optimizer]');
   for (const [v, label] of OPTIMIZERS) {
@@ -216,14 +217,14 @@ export function mountReconstruct(el, ctx) {
           fractions[k] = p.fraction;
           if (k !== 0) return;
           const f = fractions.reduce((a, b) => a + b, 0) / n;
-          // The loss is a log MSE: the plot (log scale) shows the MSE.
-          if (p.figure != null && Number.isFinite(p.figure)) plot.push(f, Math.exp(p.figure));
+          if (p.figure != null && Number.isFinite(p.figure)) plot.push(f, p.figure);
           status(`${p.stage}: ${Math.round(f * 100)}%${p.figure != null ? ` — loss ${p.figure.toFixed(3)}` : ''}${n > 1 ? ` (${n} workers)` : ''}`);
         },
       });
       if (running !== ctrl || !ctx.alive()) return;
       result = { scene: r.scene, from, values: r.values, pointers: payload.params.map((p) => p.pointer) };
-      plot.points = r.history.map((l, i) => [r.history_evaluations[i] / r.evaluations, Math.exp(l)]).filter((p) => Number.isFinite(p[1]) && p[1] > 0);
+      // From the scene as given (the status's first number) to the best (its last).
+      plot.points = [[0, r.initial_loss], ...r.history.map((l, i) => [r.history_evaluations[i] / r.evaluations, l])].filter((p) => Number.isFinite(p[1]));
       plot.draw();
       const secs = (performance.now() - t0) / 1000;
       const vals = result.pointers.map((p, i) => `${p} = ${Number(r.values[i].toPrecision(6))}`).join(', ');

@@ -59,8 +59,18 @@ const STEP_MODES = [
   ['adaptive', 'Adaptive'],
 ];
 
-// Shipped scenes: fetched once per page.
-const examples = shippedExamples('micro-examples');
+// Shipped scenes: fetched once per page, their JSON pretty-printed (two
+// spaces, a key a line) so the editor shows one field a line; the numbers
+// read back as the same numbers.
+const shipped = shippedExamples('micro-examples');
+let prettyOf = null; // {list: the core's list, pretty: the same, pretty-printed}
+const prettyScene = (text) => {
+  try { return JSON.stringify(JSON.parse(text), null, 2); } catch { return text; }
+};
+const examples = (run) => shipped(run).then((list) => {
+  if (prettyOf?.list !== list) prettyOf = { list, pretty: list.map((ex) => ({ ...ex, scene: prettyScene(ex.scene) })) };
+  return prettyOf.pretty;
+});
 
 const html = `
   <div class="micro-layout">
@@ -108,16 +118,18 @@ const html = `
     <aside class="card micro-side">
       <h3>Scene</h3>
       <ul class="micro-examples" data-testid="micro-examples" aria-label="Shipped scenes"></ul>
-      <details class="micro-program" open>
-        <summary>Scene JSON</summary>
-        <div class="micro-editor"></div>
-      </details>
       <details class="micro-params" data-testid="micro-params">
         <summary>Parameters</summary>
         <div class="micro-param-list"></div>
       </details>
       <details class="micro-fit" data-testid="micro-fit"></details>
     </aside>
+    <section class="card micro-editor-card" aria-label="Scene JSON">
+      <details class="micro-program" open>
+        <summary>Scene JSON</summary>
+        <div class="micro-editor"></div>
+      </details>
+    </section>
   </div>`;
 
 
@@ -344,9 +356,20 @@ function mount(el, ctx) {
     const passes = spp > 0 ? passesOf(spp) : [[0, 0]];
     const frame = new ImageData(side, side);
     const acc = spp > 0 ? new Float64Array(side * side * 3) : null;
-    // Keep what is shown until the tiles replace it.
-    if (comp.width !== side || comp.height !== side) { comp.width = side; comp.height = side; }
-    if (bitmap && bitmap !== comp) { compG.imageSmoothingEnabled = true; compG.drawImage(bitmap, 0, 0, side, side); bitmap.close?.(); }
+    // Keep what is shown until the tiles replace it (a scene the core refuses
+    // replaces nothing: the last good picture stays, the error says why).
+    const resized = comp.width !== side || comp.height !== side;
+    if (bitmap && bitmap !== comp) { if (resized) { comp.width = side; comp.height = side; } compG.imageSmoothingEnabled = true; compG.drawImage(bitmap, 0, 0, side, side); bitmap.close?.(); } else if (!bitmap || resized) {
+      // The GPU drew straight on the canvas (or the size changed): start from what it shows.
+      const shownNow = document.createElement('canvas');
+      shownNow.width = canvas.width;
+      shownNow.height = canvas.height;
+      shownNow.getContext('2d').drawImage(canvas, 0, 0);
+      comp.width = side;
+      comp.height = side;
+      compG.imageSmoothingEnabled = true;
+      compG.drawImage(shownNow, 0, 0, side, side);
+    }
     bitmap = comp;
     const t0 = performance.now();
     let stats = null;
@@ -876,7 +899,7 @@ function mount(el, ctx) {
           let obj;
           try { obj = JSON.parse(cur.scene); } catch { return; }
           setPointer(obj, f.pointer, v);
-          ctx.commit({ ...cur, scene: JSON.stringify(obj, null, 1), example: null });
+          ctx.commit({ ...cur, scene: JSON.stringify(obj, null, 2), example: null });
         };
         label.append(`${f.label} `, input);
         fs.append(label);

@@ -1,10 +1,17 @@
-// A small live line plot of a loss curve (log-scaled y), drawn on a canvas.
+// A small live line plot of a loss curve, drawn on a canvas: log-scaled y
+// for a loss that is a plain positive number (Fit), linear for one that is
+// already a logarithm and may be negative (Micro's log MSE), so the axis
+// shows the numbers the status shows. The axis ends are also in the
+// canvas's data-top and data-bottom.
 // Forty lines do what a plotting library would here, with nothing to vendor.
 
 export class LossPlot {
-  constructor(canvas) {
+  /** `log`: a log-scaled y axis (losses > 0); `format(v)`: an axis label. */
+  constructor(canvas, { log = true, format = (v) => v.toPrecision(3) } = {}) {
     this.canvas = canvas;
     this.points = [];
+    this.log = log;
+    this.format = format;
   }
 
   clear() {
@@ -14,7 +21,7 @@ export class LossPlot {
 
   /** Add the loss at `x` (e.g. the job's progress fraction). */
   push(x, loss) {
-    if (!Number.isFinite(loss) || loss <= 0) return;
+    if (!Number.isFinite(loss) || (this.log && loss <= 0)) return;
     this.points.push([x, loss]);
     this.draw();
   }
@@ -34,16 +41,21 @@ export class LossPlot {
     ctx.fillStyle = '#a49cb8';
     ctx.font = '11px system-ui, sans-serif';
     if (this.points.length < 1) {
+      delete c.dataset.top;
+      delete c.dataset.bottom;
       ctx.fillText('loss appears here while fitting', pad.l + 8, h / 2);
       return;
     }
-    const ys = this.points.map((p) => Math.log10(p[1]));
+    const ys = this.points.map((p) => (this.log ? Math.log10(p[1]) : p[1]));
     let lo = Math.min(...ys), hi = Math.max(...ys);
     if (hi - lo < 1e-6) { lo -= 0.5; hi += 0.5; }
     const X = (x) => pad.l + x * (w - pad.l - pad.r);
     const Y = (y) => pad.t + (1 - (y - lo) / (hi - lo)) * (h - pad.t - pad.b);
-    ctx.fillText(`${(10 ** hi).toPrecision(3)}`, 2, pad.t + 9);
-    ctx.fillText(`${(10 ** lo).toPrecision(3)}`, 2, h - pad.b);
+    const [top, bottom] = [hi, lo].map((y) => this.format(this.log ? 10 ** y : y));
+    c.dataset.top = top;
+    c.dataset.bottom = bottom;
+    ctx.fillText(top, 2, pad.t + 9);
+    ctx.fillText(bottom, 2, h - pad.b);
     ctx.fillText('progress →', w - 70, h - 4);
     ctx.strokeStyle = '#c9a2ff';
     ctx.lineWidth = 1.6;
