@@ -110,3 +110,28 @@ test('fit: after Cancel the overlay shows the kept values, not the abandoned can
     return x === h;
   }, h0, { timeout: 5000, polling: 100 }).catch(() => assert.fail('the overlay still shows the abandoned candidate'));
 });
+
+test('fit: the program editor is as wide as the view; a broken program\'s error is printed under its line', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await ready(page);
+  await page.click('button[data-act=show-program]');
+  await page.waitForSelector('.fit-editor .code-editor .cm-content');
+  const w = await page.evaluate(() => ({ editor: document.querySelector('.fit-editor .cm-editor').getBoundingClientRect().width, view: document.querySelector('.fit-layout').getBoundingClientRect().width }));
+  assert.ok(w.editor > 0.9 * w.view, `the editor is ${Math.round(w.editor)} px of ${Math.round(w.view)} (it was a 260 px column)`);
+  await page.fill('[data-testid=fit-program]', 'param a in [0, 1] = 0.5;\n// two\ncircle(0.5, 0.5, a +, fill: "#000000");\n// four\n');
+  await page.click('button[data-act=apply-program]');
+  await page.waitForSelector('.fit-editor .cm-inline-error');
+  const at = await page.evaluate(() => {
+    const msg = document.querySelector('.fit-editor .cm-inline-error');
+    const third = [...document.querySelectorAll('.fit-editor .cm-line')][2].getBoundingClientRect();
+    const r = msg.getBoundingClientRect();
+    return { text: msg.textContent, gap: r.top - third.bottom, inView: r.top >= 0 && r.bottom <= innerHeight };
+  });
+  assert.match(at.text, /line 3, column \d+/);
+  assert.ok(Math.abs(at.gap) < 4, `under line 3 (gap ${at.gap} px)`);
+  assert.ok(at.inView, 'scrolled into view');
+  // Fixed and applied: the message goes.
+  await page.fill('[data-testid=fit-program]', 'param a in [0.1, 0.4] = 0.2;\ncircle(0.5, 0.5, a, fill: "#000000");\n');
+  await page.click('button[data-act=apply-program]');
+  await page.waitForSelector('.fit-editor .cm-inline-error', { state: 'detached' });
+});
