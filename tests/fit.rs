@@ -822,6 +822,7 @@ fn a_sharded_fit_equals_one_fit() {
         iterations: Some(30),
         polish: Some(5),
         seed: 9,
+        init: filigree::pattern::api::Init::Genetic,
         ..Default::default()
     };
     let whole = run_quietly(start_fit(&base).unwrap().into_fit()).unwrap();
@@ -897,6 +898,62 @@ fn a_sharded_fit_equals_one_fit() {
         "a population of 25, split"
     );
     // A job refuses input it did not ask for, and a shard cannot run alone.
+    // The default global stage (issue 37) is sharded the same way: each of
+    // its three batches (the spectral sample, the sensitivity probes, the
+    // phase sweep) is split and exchanged, then the bests.
+    let periodic = FitRequest {
+        init: filigree::pattern::api::Init::Periodic,
+        ..base.clone()
+    };
+    let whole_p = run_quietly(start_fit(&periodic).unwrap().into_fit()).unwrap();
+    let shards_p: Vec<_> = (0..2)
+        .map(|k| {
+            let s = FitRequest {
+                shards: Some((k, 2)),
+                ..periodic.clone()
+            };
+            start_fit(&s).unwrap().into_fit()
+        })
+        .collect();
+    let threaded = run_sharded_threads(shards_p, &Cancel::new(), |_, _| {}).unwrap();
+    assert_eq!(threaded, whole_p, "the global stage in 2 shards, threads");
+    let mut jobs: Vec<_> = (0..2)
+        .map(|k| {
+            let s = FitRequest {
+                shards: Some((k, 2)),
+                ..periodic.clone()
+            };
+            start_fit(&s).unwrap().into_fit()
+        })
+        .collect();
+    let (mut exchanges, mut finished) = (0, false);
+    while !finished {
+        let mut parts = vec![];
+        for job in jobs.iter_mut() {
+            loop {
+                match job.step().unwrap() {
+                    Step::Done(r) => {
+                        assert_eq!(r, whole_p);
+                        finished = true;
+                        break;
+                    }
+                    Step::Running(_) => {
+                        if let Some(p) = job.outbox() {
+                            parts.push(p);
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        if !parts.is_empty() {
+            exchanges += 1;
+            for job in &mut jobs {
+                job.inbox(parts.clone()).unwrap();
+            }
+        }
+    }
+    assert_eq!(exchanges, 3 + 1, "three global batches and the bests");
     let mut lone = start_fit(&base).unwrap();
     assert!(lone.inbox(vec![vec![1.0]]).is_err());
     let e = run_quietly(shards(2).remove(0)).unwrap_err();
@@ -1255,12 +1312,12 @@ fn a_fit_is_bounded_by_time_as_well_as_evaluations() {
     let mut o = FitOptions::budget(Budget::Paper);
     let plain = o;
     // 1e6 work units a loss (~20 ms): the paper budget (~9,000 losses) is minutes.
-    let f = fit_time_bound(&mut o, 1_000_000, 0, 10.0);
+    let f = fit_time_bound(&mut o, (1_000_000, 0, 1), 2, 10.0);
     assert!(f < 0.1, "{f}");
     assert!(o.ga.generations < plain.ga.generations && o.iterations < plain.iterations);
     assert!(o.ga.generations >= 1 && o.iterations >= 1);
     let mut same = plain;
-    assert_eq!(fit_time_bound(&mut same, 10, 0, 10.0), 1.0);
+    assert_eq!(fit_time_bound(&mut same, (10, 0, 1), 2, 10.0), 1.0);
     assert_eq!(same, plain);
     let req = |max_seconds: f64| FitRequest {
         program: generator("circles-grid").unwrap().source.into(),

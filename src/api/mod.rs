@@ -729,7 +729,7 @@ mod tests {
         assert_eq!(v["request"]["budget"], "quick");
         assert_eq!(v["request"]["seed"], 1);
         assert_eq!(v["request"]["tolerance"], 60.0);
-        assert_eq!(v["request"]["init"], "genetic");
+        assert_eq!(v["request"]["init"], "periodic");
         assert_eq!(v["budgets"]["paper"]["population"], 250);
         assert_eq!(v["budgets"]["quick"]["grid"], 64);
         let v = serde_json::to_value(defaults("pixel").unwrap()).unwrap();

@@ -44,6 +44,20 @@ pub enum Which {
         /// gradient) as JSON into this directory, for bench/jax_fit_reference.py.
         #[arg(long)]
         export_jax: Option<String>,
+        /// Instead: fit the real designs of `bench/designs/` with the
+        /// default settings and print each one's mean per-colour IoU.
+        #[arg(long)]
+        designs: bool,
+        /// With --designs: validation (default), test or all. Choose on
+        /// validation; look at test once, at the end.
+        #[arg(long, default_value = "validation")]
+        split: String,
+        /// With --designs: fit the anti-aliased `_hard` PNGs.
+        #[arg(long)]
+        hard: bool,
+        /// With --designs: the designs' folder.
+        #[arg(long, default_value = "bench/designs")]
+        designs_dir: std::path::PathBuf,
     },
     /// Step times of every request kind at its largest realistic size
     /// (render-pattern 2048², fit-eval at grid 1024, pixel 4096² full mask,
@@ -144,6 +158,21 @@ pub enum Which {
 
 pub fn run(w: Which) -> Result<(), String> {
     match w {
+        Which::Fit {
+            only,
+            threads,
+            designs: true,
+            split,
+            hard,
+            designs_dir,
+            ..
+        } => super::fit_designs::run(
+            &designs_dir,
+            &split,
+            only.as_deref(),
+            hard,
+            super::threads(threads)?,
+        ),
         Which::Fit {
             quick,
             seeds,

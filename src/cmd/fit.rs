@@ -14,7 +14,12 @@ use std::time::Instant;
 #[derive(clap::Args)]
 #[command(
     after_help = "Defaults (the same request the browser's Fit button sends):
-  --budget quick      GA 64 x 8 generations, 3 candidates x 120 Adam iterations
+  --init periodic     the global stage for repeating designs: 1024 low-resolution
+                      candidates compared by their spectra (period and angle, not
+                      phase), then the phase swept around the 6 best, at full
+                      resolution (--init genetic: the paper's GA)
+  --budget quick      3 candidates x 120 Adam iterations (GA 64 x 8 generations
+                      with --init genetic)
   --grid              an image target's longer side, 32..=128 px (a bigger image's
                       distance fields are computed at its resolution and sampled);
                       64 with --target-params
@@ -47,7 +52,7 @@ pub struct FitArgs {
     /// sdf (default) | l1 | pyramid | image
     #[arg(long)]
     loss: Option<String>,
-    /// genetic (default, ga) | random | nelder-mead (nm)
+    /// periodic (default: spectra, then a phase sweep) | genetic (ga, the paper's) | random | nelder-mead (nm)
     #[arg(long)]
     init: Option<String>,
     /// Loss grid's longer side in pixels, 8..=256 (default: an image target's longer side, 32..=128;

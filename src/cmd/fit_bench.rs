@@ -5,6 +5,7 @@ use filigree::core::rng::Rng;
 use filigree::pattern::field::Scene;
 use filigree::pattern::fit::{colour_indices, Budget, FitJob, FitOptions, FitResult};
 use filigree::pattern::generators::GENERATORS;
+use filigree::pattern::global::{GlobalOptions, Spectral};
 use filigree::pattern::loss::{LossKind, LossOptions, Objective, SdfUnits};
 use filigree::pattern::record::{Program, RecordLimits};
 use filigree::pattern::render::render;
@@ -80,16 +81,23 @@ fn report(c: &Case, r: &FitResult, secs: f64) -> Value {
 /// window is the figure least disturbed by other work on a shared machine.
 fn rate(obj: &mut Objective, p: &[f64], grad: bool) -> (f64, f64) {
     let mut g = vec![0.0; p.len()];
+    rate_of(|| {
+        if grad {
+            obj.loss_grad(p, &mut g)
+        } else {
+            obj.loss(p)
+        }
+    })
+}
+
+/// [`rate`] of any evaluation.
+fn rate_of(mut eval: impl FnMut() -> f64) -> (f64, f64) {
     let mut rates = vec![];
     for _ in 0..3 {
         let t = Instant::now();
         let mut n = 0u64;
         while t.elapsed().as_secs_f64() < 0.3 || n < 3 {
-            if grad {
-                std::hint::black_box(obj.loss_grad(p, &mut g));
-            } else {
-                std::hint::black_box(obj.loss(p));
-            }
+            std::hint::black_box(eval());
             n += 1;
         }
         rates.push(n as f64 / t.elapsed().as_secs_f64());
@@ -170,8 +178,13 @@ pub fn run(
                 let mut io = opts;
                 io.loss.kind = LossKind::Image;
                 let t1 = Instant::now();
-                let ri = run_quietly(FitJob::refine_from(c.scene.clone(), t, io, &r.start_points))
-                    .map_err(|e| e.to_string())?;
+                let ri = run_quietly(FitJob::refine_from(
+                    c.scene.clone(),
+                    t.clone(),
+                    io,
+                    &r.start_points,
+                ))
+                .map_err(|e| e.to_string())?;
                 let img_secs = t1.elapsed().as_secs_f64();
                 // Image-space L2 end to end (its own GA too): the paper's Fig. 3 setting.
                 let t2 = Instant::now();
@@ -179,12 +192,20 @@ pub fn run(
                 let rs = run_quietly(FitJob::from_parts(c.scene.clone(), tgt, io))
                     .map_err(|e| e.to_string())?;
                 let scratch_secs = t2.elapsed().as_secs_f64();
+                // The default request's global stage (`init: periodic`) in
+                // place of the GA, the rest as in `sdf`.
+                let mut po = opts;
+                po.global = Some(GlobalOptions::default());
+                let t3 = Instant::now();
+                let rp = fit_on_threads(&c.scene, &t, po, threads)?;
+                let periodic_secs = t3.elapsed().as_secs_f64();
                 let row = json!({
                     "generator": g.name, "paper_row": g.paper, "seed": seed,
                     "params": c.truth.len(), "shapes": c.scene.shape_count(), "truth": c.truth,
                     "sdf": report(&c, &r, sdf_secs),
                     "image_same_init": report(&c, &ri, img_secs),
                     "image_from_scratch": report(&c, &rs, scratch_secs),
+                    "periodic": report(&c, &rp, periodic_secs),
                 });
                 eprintln!("{row}");
                 fits.push(row);
@@ -223,12 +244,19 @@ pub fn run(
             obj.reference = true;
             let blo = rate(&mut obj, &p, false);
             let blg = rate(&mut obj, &p, true);
+            obj.reference = false;
+            // The global stage's candidates: a spectral comparison on its
+            // own grid (GlobalOptions::default().grid), one per candidate.
+            let mut sp = Spectral::new(&c.scene, &obj.target, GlobalOptions::default().grid);
+            let spectral = rate_of(|| sp.loss(&c.scene, &p));
             speed.push(json!({"generator": name, "grid": grid, "params": p.len(), "shapes": c.scene.shape_count(),
                               "loss_evals_per_s": lo.0.round(), "loss_grad_evals_per_s": lg.0.round(),
                               "median_loss_evals_per_s": lo.1.round(), "median_loss_grad_evals_per_s": lg.1.round(),
                               "before_loss_evals_per_s": blo.0.round(), "before_loss_grad_evals_per_s": blg.0.round(),
                               "after_over_before_loss": (lo.0 / blo.0 * 100.0).round() / 100.0,
-                              "after_over_before_loss_grad": (lg.0 / blg.0 * 100.0).round() / 100.0}));
+                              "after_over_before_loss_grad": (lg.0 / blg.0 * 100.0).round() / 100.0,
+                              "global_stage_candidates_per_s": spectral.0.round(), "global_stage_grid": sp.grid().w.max(sp.grid().h),
+                              "global_over_loss": (spectral.0 / lo.0 * 100.0).round() / 100.0}));
         }
     }
     // Field units: pixels (default) against canvas units, quick fits of the stripe patterns.
@@ -254,8 +282,19 @@ pub fn run(
             units.push(row);
         }
     }
+    let median_mse = |key: &str| {
+        let mut v: Vec<f64> = fits
+            .iter()
+            .filter_map(|f| f[key]["param_mse"].as_f64())
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied()
+    };
+    let summary = json!({"median_param_mse": {"sdf (GA)": median_mse("sdf"), "periodic (global stage)": median_mse("periodic"),
+        "image_same_init": median_mse("image_same_init"), "image_from_scratch": median_mse("image_from_scratch")},
+        "aim": "median parameter MSE <= 1e-4 (issue 37)"});
     let out = json!({"bench": "fit", "budget": if quick {"quick"} else {"paper"}, "threads": threads,
-                     "fits": fits, "throughput_one_core": speed,
+                     "summary": summary, "fits": fits, "throughput_one_core": speed,
                      "throughput_method": "best and median of three 0.3 s windows, one thread; before_*: the reference path (Objective::reference) in the same run", "units": units});
     println!(
         "{}",

@@ -1,6 +1,7 @@
 pub mod bench;
 pub mod fit;
 pub mod fit_bench;
+pub mod fit_designs;
 pub mod inspect;
 pub mod measure;
 pub mod micro;

@@ -10,6 +10,7 @@
 //! names; every error names the field at fault ([`Error::at`]).
 use super::field::Scene;
 use super::fit::{Budget, FitJob, FitOptions, FitResult, Preparation, TargetData, TargetSource};
+use super::global::GlobalOptions;
 use super::loss::{LossKind, Objective, SdfUnits};
 use super::optim::InitMethod;
 use super::record::{Canvas, Program, RecordLimits};
@@ -367,12 +368,15 @@ pub fn start_snap(req: PatternSnapRequest) -> Result<impl Job<Output = SnapRespo
 
 // ------------------------------------------------------------------------ fit
 
-/// How a fit picks its starting points (`genetic`, also `ga`; `random`;
-/// `nelder-mead`, also `nm`).
+/// How a fit picks its starting points (`periodic`, the default;
+/// `genetic`, also `ga`, the paper's; `random`; `nelder-mead`, also `nm`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum Init {
+    /// The global stage for repeating designs ([`super::global`]):
+    /// spectra over the whole box, then a sweep of the phase.
     #[default]
+    Periodic,
     #[serde(alias = "ga")]
     Genetic,
     Random,
@@ -380,12 +384,15 @@ pub enum Init {
     NelderMead,
 }
 
-impl From<Init> for InitMethod {
-    fn from(i: Init) -> InitMethod {
-        match i {
-            Init::Genetic => InitMethod::Genetic,
-            Init::Random => InitMethod::Random,
-            Init::NelderMead => InitMethod::NelderMead,
+impl Init {
+    /// The shared initialiser it names; `None` for [`Init::Periodic`],
+    /// which is Fit's own ([`FitOptions::global`]).
+    pub fn method(self) -> Option<InitMethod> {
+        match self {
+            Init::Periodic => None,
+            Init::Genetic => Some(InitMethod::Genetic),
+            Init::Random => Some(InitMethod::Random),
+            Init::NelderMead => Some(InitMethod::NelderMead),
         }
     }
 }
@@ -443,7 +450,8 @@ pub struct FitRequestOf<X> {
     pub budget: Budget,
     /// `sdf` (default), `l1`, `pyramid`, `image`.
     pub loss: LossKind,
-    /// `genetic` (default, `ga`), `random`, `nelder-mead` (`nm`).
+    /// `periodic` (default), `genetic` (`ga`, the paper's), `random`,
+    /// `nelder-mead` (`nm`).
     pub init: Init,
     /// Field units in the loss: `pixels` (default) or `canvas`.
     pub units: SdfUnits,
@@ -496,7 +504,7 @@ impl<X: Default> Default for FitRequestOf<X> {
             tolerance: 60.0,
             budget: Budget::Quick,
             loss: LossKind::Sdf,
-            init: Init::Genetic,
+            init: Init::Periodic,
             units: SdfUnits::Pixels,
             seed: 1,
             grid: None,
@@ -526,15 +534,36 @@ pub const AUTO_POLISH: usize = 100;
 /// a loss; counted as 2).
 pub const NS_PER_WORK: f64 = 20.0;
 
-/// Scale `o`'s GA generations, Adam iterations and polish down (by one
-/// factor, each kept at least 1) so that the fit's estimated time is at
-/// most `max_seconds`, one loss evaluation costing `work` weighted item
-/// evaluations plus one per field value. Returns the factor (1 = unchanged).
-pub fn fit_time_bound(o: &mut FitOptions, work: u64, field_values: usize, max_seconds: f64) -> f64 {
+/// Scale `o`'s GA generations (or global stage), Adam iterations and
+/// polish down (by one factor, each kept at least 1) so that the fit's
+/// estimated time is at most `max_seconds`, one loss evaluation costing
+/// `work` weighted item evaluations plus one per field value, on a grid of
+/// `grid_values` pixels, for `dim` float parameters. A spectral comparison
+/// of the global stage draws on its smaller grid (work scaled by the ratio
+/// of pixels) and transforms each of `field_values / grid_values` colours.
+/// Returns the factor (1 = unchanged).
+pub fn fit_time_bound(
+    o: &mut FitOptions,
+    (work, field_values, grid_values): (u64, usize, usize),
+    dim: usize,
+    max_seconds: f64,
+) -> f64 {
     let loss_ns = (work as f64 + field_values as f64) * NS_PER_WORK;
-    let ga = o.ga.population as f64 * (o.ga.generations + 1) as f64;
+    let init = match o.global {
+        Some(g) => {
+            let (spectra, losses) = g.evaluations(dim);
+            let px = (g.grid * g.grid) as f64;
+            let colours = (field_values / grid_values.max(1)) as f64;
+            let ratio = (px / grid_values.max(1) as f64).min(1.0);
+            // A transform: about 20 operations per value (log2 of 64² ≈ 12
+            // butterflies, the window, the blur).
+            let spectrum_ns = work as f64 * ratio * NS_PER_WORK + colours * px * 20.0 * NS_PER_WORK;
+            (spectra as f64 * spectrum_ns + losses as f64 * loss_ns) / loss_ns
+        }
+        None => o.ga.population as f64 * (o.ga.generations + 1) as f64,
+    };
     let adam = (o.candidates * o.iterations + o.polish) as f64;
-    let planned = (ga + 2.0 * adam) * loss_ns * 1e-9;
+    let planned = (init + 2.0 * adam) * loss_ns * 1e-9;
     if planned <= max_seconds {
         return 1.0;
     }
@@ -547,6 +576,10 @@ pub fn fit_time_bound(o: &mut FitOptions, work: u64, field_values: usize, max_se
         }
     };
     o.ga.generations = scale(o.ga.generations);
+    if let Some(g) = &mut o.global {
+        g.samples = scale(g.samples);
+        g.sweep = scale(g.sweep);
+    }
     o.iterations = scale(o.iterations);
     o.patience = o.patience.min(o.iterations);
     if o.polish > 0 {
@@ -599,7 +632,15 @@ impl<X> FitRequestOf<X> {
         let mut o = FitOptions::budget(self.budget);
         o.loss.kind = self.loss;
         o.loss.units = self.units;
-        o.init = self.init.into();
+        match self.init.method() {
+            Some(m) => o.init = m,
+            None => {
+                o.global = Some(match self.budget {
+                    Budget::Quick => GlobalOptions::default(),
+                    Budget::Paper => GlobalOptions::thorough(),
+                })
+            }
+        }
         o.seed = self.seed;
         if let Some(v) = self.grid {
             o.loss.grid = lim::int_in("grid", v, lim::GRID)?;
@@ -804,7 +845,8 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
             .forward(&scene.rec.float_values(), &mut nodes);
         ev.eval(&scene, &nodes, false);
         let fields = grid.len() * scene.channels.len();
-        fit_time_bound(&mut opts, ev.work, fields, max_seconds);
+        let dim = scene.rec.float_params.len();
+        fit_time_bound(&mut opts, (ev.work, fields, grid.len()), dim, max_seconds);
     }
     let job = FitJob::start(&p, &vals, t, opts).map_err(|e| e.at("program"))?;
     let scene = job.objective().scene.clone();

@@ -3,6 +3,7 @@
 //! then Adam for 250 iterations from each of the 10 best candidates with
 //! patience 100 and 3 refinements; the best result is returned).
 use super::field::{Evaluator, Grid, Scene};
+use super::global::{GlobalOptions, GlobalSearch, Metric, Spectral};
 use super::loss::{LossKind, LossOptions, Objective};
 use super::record::{Canvas, Program, RecordLimits};
 use super::target::{BuildWork, Target, TargetBuild};
@@ -79,6 +80,10 @@ pub struct FitOptions {
     /// unsharded fit, bit for bit. `(0, 1)` = alone.
     #[serde(default = "one_shard")]
     pub shards: (usize, usize),
+    /// The global stage for repeating designs ([`super::global`]) instead
+    /// of `init`'s initialiser (`None`: `init`, the paper's method).
+    #[serde(default)]
+    pub global: Option<GlobalOptions>,
 }
 
 fn one_shard() -> (usize, usize) {
@@ -101,6 +106,7 @@ impl FitOptions {
             work_per_step: 300_000,
             polish: 0,
             shards: (0, 1),
+            global: None,
         };
         match b {
             Budget::Paper => paper,
@@ -372,6 +378,12 @@ pub struct FitJob {
     all_values: Vec<f64>,
     phase: Phase,
     init: Initializer,
+    /// The global stage, when it replaces `init` ([`FitOptions::global`]).
+    global: Option<GlobalSearch>,
+    /// Its shift-invariant comparison (made once the target is built).
+    spectral: Option<Spectral>,
+    /// How the current batch is scored.
+    metric: Metric,
     batch: Vec<Vec<f64>>,
     batch_losses: Vec<f64>,
     archive: Vec<Scored>,
@@ -461,7 +473,9 @@ impl FitJob {
         let all_values = scene.rec.values.clone();
         let dim = lo.len();
         let init = Initializer::new(opts.init, dim, opts.ga);
-        let planned = init.budget() + opts.candidates * opts.iterations + opts.polish;
+        let global = opts.global.map(|g| GlobalSearch::new(dim, g));
+        let init_budget = global.as_ref().map_or(init.budget(), |g| g.budget());
+        let planned = init_budget + opts.candidates * opts.iterations + opts.polish;
         let obj = Objective::new(scene, target, opts.loss);
         FitJob {
             obj,
@@ -473,6 +487,9 @@ impl FitJob {
             all_values,
             phase: Phase::Init,
             init,
+            global,
+            spectral: None,
+            metric: Metric::Loss,
             batch: vec![],
             batch_losses: vec![],
             archive: vec![],
@@ -564,11 +581,14 @@ impl FitJob {
                     .map_or(1.0, |p| p.fraction(&self.obj.scene));
                 return Progress::new(0.01 * f, "preparing the target");
             }
-            Phase::Init => format!(
-                "initialisation ({:?}), batch {}",
-                self.opts.init,
-                self.generation + 1
-            ),
+            Phase::Init => match &self.global {
+                Some(g) => g.describe().to_string(),
+                None => format!(
+                    "initialisation ({:?}), batch {}",
+                    self.opts.init,
+                    self.generation + 1
+                ),
+            },
             Phase::Refine => format!(
                 "Adam on candidate {} of {}",
                 (self.cand + 1).min(self.candidates.len()),
@@ -587,21 +607,74 @@ impl FitJob {
         }
     }
 
+    /// Evaluations the initialisation (or the global stage) asks for at most.
+    fn init_budget(&self) -> usize {
+        self.global
+            .as_ref()
+            .map_or(self.init.budget(), |g| g.budget())
+    }
+
+    /// Score batch point `i` as the batch wants; returns the score and the work.
+    fn score_point(&mut self, i: usize) -> (f64, u64) {
+        let x = self.denormalise(&self.batch[i]);
+        match self.metric {
+            Metric::Loss => {
+                let l = self.obj.loss(&x);
+                (l, self.obj.last_work)
+            }
+            Metric::Spectrum => {
+                let sp = self.spectral.as_mut().expect("made with the global stage");
+                let l = sp.loss(&self.obj.scene, &x);
+                (l, sp.last_work)
+            }
+        }
+    }
+
     /// Evaluate the next batch point; returns work done.
     fn eval_batch_point(&mut self) -> u64 {
         let i = self.batch_losses.len();
-        let x = self.denormalise(&self.batch[i]);
-        let l = self.obj.loss(&x);
+        let (l, work) = self.score_point(i);
         self.record_point(i, l);
-        self.obj.last_work
+        work
     }
 
+    /// Record batch point `i`'s score. Only Fit's own loss makes a point a
+    /// candidate; a spectral score is the global stage's alone.
     fn record_point(&mut self, i: usize, l: f64) {
-        let u = self.batch[i].clone();
         self.batch_losses.push(l);
-        self.consider(&u, l);
-        self.archive.push(Scored { u, loss: l });
         self.done += 1;
+        if self.metric == Metric::Loss {
+            let u = self.batch[i].clone();
+            self.consider(&u, l);
+            self.archive.push(Scored { u, loss: l });
+        }
+    }
+
+    /// Tell the finished batch to the initialiser (or the global stage) and
+    /// ask for the next; an empty batch means the initialisation is over.
+    fn next_batch(&mut self) {
+        if !self.batch.is_empty() {
+            let b = std::mem::take(&mut self.batch);
+            let l = std::mem::take(&mut self.batch_losses);
+            match &mut self.global {
+                Some(g) => g.tell(b, &l),
+                None => self.init.tell(b, &l),
+            }
+            if self.best.loss.is_finite() {
+                self.history.push(self.best.loss);
+            }
+            self.generation += 1;
+        }
+        match &mut self.global {
+            Some(g) => {
+                if self.spectral.is_none() {
+                    let grid = self.opts.global.map_or(64, |o| o.grid);
+                    self.spectral = Some(Spectral::new(&self.obj.scene, &self.obj.target, grid));
+                }
+                (self.batch, self.metric) = g.ask(&mut self.rng).unwrap_or((vec![], Metric::Loss));
+            }
+            None => self.batch = self.init.ask(&mut self.rng),
+        }
     }
 }
 
@@ -695,7 +768,7 @@ impl FitJob {
         self.history = history;
         self.done = self
             .done
-            .max(self.init.budget() + self.opts.candidates * self.opts.iterations);
+            .max(self.init_budget() + self.opts.candidates * self.opts.iterations);
         self.shared_best = true;
         Ok(())
     }
@@ -756,14 +829,7 @@ impl Job for FitJob {
                 Phase::Prepare => unreachable!("prepared above"),
                 Phase::Init => {
                     if self.batch_losses.len() == self.batch.len() {
-                        if !self.batch.is_empty() {
-                            let b = std::mem::take(&mut self.batch);
-                            let l = std::mem::take(&mut self.batch_losses);
-                            self.init.tell(b, &l);
-                            self.history.push(self.best.loss);
-                            self.generation += 1;
-                        }
-                        self.batch = self.init.ask(&mut self.rng);
+                        self.next_batch();
                         self.shard_losses = vec![f64::NAN; self.batch.len()];
                         self.shard_next = 0;
                         if self.batch.is_empty() {
@@ -781,7 +847,7 @@ impl Job for FitJob {
                             }
                             self.archive = vec![];
                             self.init_loss = self.best.loss;
-                            self.done = self.done.max(self.init.budget());
+                            self.done = self.done.max(self.init_budget());
                             self.phase = Phase::Refine;
                         }
                         continue;
@@ -800,10 +866,10 @@ impl Job for FitJob {
                             return Ok(Step::Running(self.progress()));
                         }
                         let i = self.shard_next;
-                        let x = self.denormalise(&self.batch[i]);
-                        self.shard_losses[i] = self.obj.loss(&x);
+                        let (l, w) = self.score_point(i);
+                        self.shard_losses[i] = l;
                         self.shard_next += 1;
-                        work += self.obj.last_work;
+                        work += w;
                         evals += 1;
                         continue;
                     }

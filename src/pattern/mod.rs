@@ -64,6 +64,7 @@ pub mod field;
 pub mod fit;
 pub mod generators;
 pub mod geom;
+pub mod global;
 pub(crate) mod lang;
 pub mod loss;
 pub mod optim;

@@ -81,6 +81,43 @@ pub(crate) fn snap_to_palette_wh(
     (out, mix, far as f64 / (nw * nh) as f64)
 }
 
+/// Palette index of every pixel of an `nw × nh` grid laid over the image
+/// (the first part of [`snap_to_palette_wh`]): what a person sees as the
+/// image's colours, e.g. to compare a fitted render with its target.
+pub fn palette_indices(
+    img: &Rgba8Image,
+    palette: &[Rgb],
+    (nw, nh): (usize, usize),
+    tolerance: f64,
+) -> Vec<u16> {
+    snap_to_palette_wh(img, palette, nw, nh, tolerance).0
+}
+
+/// Mean intersection over union, over every palette index but 0 (the
+/// background) present in either picture, of two pictures as palette
+/// indices of the same size: the overlap a designer sees between a fitted
+/// render and its target (1 = identical).
+pub fn mean_iou(a: &[u16], b: &[u16]) -> f64 {
+    let max = a.iter().chain(b).copied().max().unwrap_or(0) as usize;
+    let (mut inter, mut union) = (vec![0usize; max + 1], vec![0usize; max + 1]);
+    for (&x, &y) in a.iter().zip(b) {
+        union[x as usize] += 1;
+        if x == y {
+            inter[x as usize] += 1;
+        } else {
+            union[y as usize] += 1;
+        }
+    }
+    let ious: Vec<f64> = (1..=max)
+        .filter(|&c| union[c] > 0)
+        .map(|c| inter[c] as f64 / union[c] as f64)
+        .collect();
+    if ious.is_empty() {
+        return 1.0;
+    }
+    ious.iter().sum::<f64>() / ious.len() as f64
+}
+
 /// How a pixel mixes its palette colour (its index) with a second one:
 /// the second colour's index and the fraction of the pixel the first
 /// covers (1 for a pure pixel, ≥ ½ always).
