@@ -11,15 +11,22 @@
 // headers on the host page (the app uses no SharedArrayBuffer, so no
 // COOP/COEP), works from any origin.
 //
-// Attributes
-//   state    the share-link fragment ("Copy link" in the app, without '#')
-//   tool     the tool id, used only for the facade's words when `title` is absent
-//   mode     "readonly" (default: the result, controls inert) or "interactive"
-//   src      the app's index.html (default: ../index.html next to this script)
-//   title    the facade's heading and the iframe's accessible title
-//   preview  an image URL shown on the facade
-//   load     "visible" (default: load when scrolled into view) or "click"
-//   height   CSS height of the embed (default: clamp(360px, 70vh, 640px))
+// Attributes (README.md, "Embedding Filigree in your page")
+//   state     the share-link fragment ("Copy link" in the app, without '#')
+//   tool      the tool id, for the facade's words when `title` is absent (else
+//             the tool named in `state`)
+//   mode      "readonly" (default: the reader explores, nothing is kept, Reset
+//             brings the author's state back) or "interactive" ("Open in
+//             Filigree" carries the reader's state)
+//   controls  "open": the tool's controls start open (default: the picture
+//             alone, with a Controls button)
+//   src       the app's index.html (default: ../index.html next to this script)
+//   title     the facade's heading and the iframe's accessible title
+//   preview   an image URL shown on the facade
+//   load      "visible" (default: load when scrolled into view) or "click"
+//   height    CSS height of the embed (a number is pixels); without it the
+//             height follows the content: the app in the frame posts its
+//             height ({type: 'filigree-embed:height'}) and the element takes it
 (() => {
   if (typeof customElements === 'undefined' || customElements.get('filigree-embed')) return;
 
@@ -30,7 +37,11 @@
     || location.href;
   const DEFAULT_SRC = new URL('../index.html', here).href;
 
-  const TOOL_NAMES = { pixel: 'Pixel', fit: 'Fit', inspect: 'Inspect image' };
+  const TOOL_NAMES = { pixel: 'Pixel', fit: 'Fit', inspect: 'Inspect image', tangle: 'Tangle', micro: 'Micro', texture: 'Texture' };
+  // Before the app says its height, an estimate: the picture's height per
+  // width (www/app/embed-mode.js, STAGES) and what is around it.
+  const RATIOS = { pixel: 0.5, fit: 0.6, tangle: 0.55, micro: 0.6, texture: 0.5 };
+  const AROUND_PX = 170; // the embed's bar, the card, its toolbar and status
 
   const CSS = `
     :host { display: block; position: relative; width: 100%; max-width: 100%;
@@ -59,18 +70,29 @@
   const LOGO = '<svg viewBox="0 0 32 32" width="22" height="22" aria-hidden="true"><g fill="none" stroke="currentColor" stroke-width="2.2" stroke-linecap="round"><path d="M16 3c6 5 6 21 0 26M16 3c-6 5-6 21 0 26M3 16c5-6 21-6 26 0M3 16c5 6 21 6 26 0"/><circle cx="16" cy="16" r="3"/></g></svg>';
 
   class FiligreeEmbed extends HTMLElement {
-    static get observedAttributes() { return ['state', 'mode', 'src', 'title', 'preview', 'height', 'tool']; }
+    static get observedAttributes() { return ['state', 'mode', 'src', 'title', 'preview', 'height', 'tool', 'controls']; }
 
     constructor() {
       super();
       this.attachShadow({ mode: 'open' });
       this.iframe = null;
       this.observer = null;
+      this.contentHeight = 0; // what the app in the frame said its height is
+      // The app in our frame says its height (size=content): take it unless the author set one.
+      this.onMessage = (e) => {
+        if (!this.iframe || e.source !== this.iframe.contentWindow) return;
+        const h = e.data?.type === 'filigree-embed:height' ? Number(e.data.height) : NaN;
+        if (!Number.isFinite(h) || h <= 0) return;
+        this.contentHeight = Math.min(4000, Math.max(120, Math.ceil(h)));
+        this.applyHeight();
+      };
     }
 
     connectedCallback() {
       // (Re)connected: start from the facade (a moved iframe reloads anyway).
       this.iframe = null;
+      this.contentHeight = 0;
+      window.addEventListener('message', this.onMessage);
       this.render();
       if (this.getAttribute('load') === 'click') return;
       if (!('IntersectionObserver' in window)) {
@@ -84,6 +106,7 @@
     }
 
     disconnectedCallback() {
+      window.removeEventListener('message', this.onMessage);
       this.observer?.disconnect();
       this.observer = null;
     }
@@ -100,9 +123,15 @@
       }
     }
 
+    /** The tool's id: the `tool` attribute, else the one the state names. */
+    get toolId() {
+      return this.getAttribute('tool') || new URLSearchParams((this.getAttribute('state') || '').replace(/^#/, '')).get('tool') || '';
+    }
+
     /** The facade's heading and the iframe's title. */
     get label() {
-      const tool = TOOL_NAMES[this.getAttribute('tool')] || this.getAttribute('tool');
+      const id = this.toolId;
+      const tool = TOOL_NAMES[id] || (id && id[0].toUpperCase() + id.slice(1));
       return this.getAttribute('title') || (tool ? `Filigree ${tool}` : 'Filigree');
     }
 
@@ -112,14 +141,28 @@
       url.searchParams.set('embed', '1');
       if (this.getAttribute('mode') === 'interactive') url.searchParams.set('mode', 'interactive');
       else url.searchParams.delete('mode');
+      if (this.getAttribute('controls') === 'open') url.searchParams.set('controls', 'open');
+      else url.searchParams.delete('controls');
+      // No height from the author: the app sizes its picture by the width and says its height.
+      if (this.getAttribute('height')) url.searchParams.delete('size');
+      else url.searchParams.set('size', 'content');
       const state = (this.getAttribute('state') || '').replace(/^#/, '');
       url.hash = state;
       return url.href;
     }
 
+    /** The author's height; else the content's, once the app said it; else an estimate from the width. */
     applyHeight() {
       const h = this.getAttribute('height');
-      if (h) this.style.setProperty('--filigree-embed-height', /^\d+(\.\d+)?$/.test(h) ? `${h}px` : h);
+      if (h) {
+        this.style.setProperty('--filigree-embed-height', /^\d+(\.\d+)?$/.test(h) ? `${h}px` : h);
+        return;
+      }
+      const width = this.getBoundingClientRect().width;
+      const ratio = RATIOS[this.toolId];
+      const estimate = width > 0 && ratio ? AROUND_PX + Math.min(480, Math.max(200, width * ratio)) : 0;
+      const px = this.contentHeight || estimate;
+      if (px) this.style.setProperty('--filigree-embed-height', `${px}px`);
       else this.style.removeProperty('--filigree-embed-height');
     }
 

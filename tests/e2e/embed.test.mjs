@@ -129,8 +129,8 @@ test('an embed on a third-party page waits below the fold, then shows the read-o
     save: [...document.querySelectorAll('button')].filter((b) => /save project/i.test(b.textContent) && b.offsetParent).length,
   }));
   assert.equal(chrome.header, 'none');
-  assert.match(chrome.bar, /Fit.*view only.*Open in Filigree/s);
-  assert.equal(chrome.inert, true, 'controls are inert in read-only mode');
+  assert.match(chrome.bar, /Fit.*read-only.*Open in Filigree/s);
+  assert.equal(chrome.inert, false, 'read-only is not inert (issue 35): the reader explores');
   assert.equal(chrome.save, 0, 'no visible Save project button');
   const preview = await waitForPreview(frame);
   assert.ok(preview.painted > 1000, `the pattern is drawn (${preview.painted} pixels)`);
@@ -140,11 +140,20 @@ test('an embed on a third-party page waits below the fold, then shows the read-o
     await p.waitForSelector('[data-testid=fit-sliders] .row');
     return p;
   })()));
-  // Read-only really is: a click on a slider changes nothing.
-  const slider = frame.locator('[data-testid=fit-sliders] input[type=range]').first();
-  await slider.click({ force: true, timeout: 2000 }).catch(() => {});
-  await page.waitForTimeout(400);
-  assert.equal((await overlayFacts(frame)).hash, preview.hash, 'the read-only preview did not change');
+  // Read-only does not change the author's state: the reader moves a slider
+  // (in the drawer), the preview follows, "Open in Filigree" still carries
+  // the author's state, and Reset brings it back.
+  const open = await frame.getAttribute('.embed-bar .open', 'href');
+  await frame.click('.embed-bar [data-act=embed-controls]');
+  const slider = '[data-testid=fit-sliders] input[type=range]';
+  await frame.focus(slider);
+  for (let i = 0; i < 30; i++) await frame.press(slider, 'ArrowRight');
+  const moved = await waitForPreview(frame, preview.hash);
+  assert.notEqual(moved.hash, preview.hash, 'the reader\'s slider moved the pattern');
+  assert.equal(await frame.getAttribute('.embed-bar .open', 'href'), open, 'Open in Filigree carries the author\'s state');
+  await frame.click('.embed-bar [data-act=embed-reset]');
+  await waitForPreview(frame, moved.hash);
+  assert.equal((await overlayFacts(frame)).hash, preview.hash, 'Reset: the author\'s picture again');
   assert.deepEqual(errors, []);
 });
 
@@ -333,5 +342,6 @@ test('a damaged embed link says so plainly and the tool still opens', async () =
   const { frame } = await embedFrame(page);
   await frame.waitForSelector('.embed-note');
   assert.match(await frame.textContent('.embed-note'), /This link is damaged or not a Filigree link/);
-  await frame.waitForSelector('[data-testid=fit-sliders] .row');
+  await frame.waitForSelector('[data-testid=fit-sliders] .row', { state: 'attached' });
+  await frame.waitForSelector('[data-testid=embed-stage] [data-testid=fit-target]');
 });

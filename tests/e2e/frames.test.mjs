@@ -42,7 +42,8 @@ const NOTE = /cannot save your work here/i;
 /** Wait until the Fit panel in `frame` is usable: sliders and the preview drawn. */
 async function fitWorks(frame) {
   await frame.waitForFunction(() => document.documentElement.dataset.coreReady === '1', null, { timeout: 30000 });
-  await frame.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 15000 });
+  // (In an embed the sliders are in the closed drawer: there, not shown.)
+  await frame.waitForSelector('[data-testid=fit-sliders] .row', { timeout: 15000, state: 'attached' });
   await frame.waitForFunction(() => {
     const c = document.querySelector('[data-testid=fit-overlay]');
     const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;

@@ -44,7 +44,10 @@
 //   ctx.expose(hooks, name = id) test hooks, only in a page opened by a test
 //                                (globalThis.__filigreeTestHooks === true): set as
 //                                controller.testHooks[name], removed when the panel is left
-//   ctx.readOnly, ctx.alive()
+//   ctx.readOnly                 a read-only embed: the reader explores (commits, undo and
+//                                Reset work, nothing persists); the panel locks the author's
+//                                inputs (drawing on them, replacing their files)
+//   ctx.alive()
 import { Autosave, History, projectText, download, withTimeout, onOtherTab } from './project.js';
 import { encodeShare, decodeShare, ShareTooBig, kb, LINK_LIMIT_TEXT } from './share.js';
 
@@ -156,6 +159,8 @@ export class DocumentController {
     this.storageBlocked = false;
     // Panels' test hooks (ctx.expose), by tool id or name; null unless a test opened the page.
     this.testHooks = globalThis.__filigreeTestHooks === true ? {} : null;
+    this.changeListeners = new Set(); // onChange
+
     this.keydown = (e) => this.onKey(e);
     document.addEventListener('keydown', this.keydown);
     addEventListener('pagehide', () => { for (const d of this.docs.values()) d.autosave?.flush(); });
@@ -173,6 +178,26 @@ export class DocumentController {
 
   tool(id) {
     return this.tools.find((t) => t.id === id);
+  }
+
+  /** `fn(present, toolId)` after every new present shown (a change, undo, redo, load). Returns an unsubscribe function. */
+  onChange(fn) {
+    this.changeListeners.add(fn);
+    return () => this.changeListeners.delete(fn);
+  }
+
+  /** The current tool's document, or null. */
+  present() {
+    return (this.current && this.docs.get(this.current.tool.id)?.history?.present) ?? null;
+  }
+
+  /** Make `state` the current tool's document again, as one undoable step (an embed's Reset). */
+  resetTo(state) {
+    const d = this.current && this.docs.get(this.current.tool.id);
+    if (!d?.history || d.history.present === state) return;
+    d.history.push(state);
+    d.history.seal();
+    this.changed();
   }
 
   // ---- per-tool documents -------------------------------------------------------------
@@ -376,7 +401,7 @@ export class DocumentController {
       alive: () => !life.dead,
       state: () => doc()?.history?.present ?? null,
       commit(next, opts) {
-        if (life.dead || cur.readOnly || !doc()?.history) return false;
+        if (life.dead || !doc()?.history) return false;
         doc().history.push(next, opts);
         ctl.changed();
         return true;
@@ -492,6 +517,7 @@ export class DocumentController {
     cur.el.querySelector('[data-act=undo]').disabled = !h?.canUndo;
     cur.el.querySelector('[data-act=redo]').disabled = !h?.canRedo;
     if (!h || h.present === cur.rendered) return;
+    for (const fn of this.changeListeners) fn(h.present, cur.tool.id);
     const prev = cur.rendered;
     cur.rendered = h.present;
     try {
@@ -503,14 +529,14 @@ export class DocumentController {
 
   undo() {
     const h = this.current && this.docs.get(this.current.tool.id)?.history;
-    if (!h?.canUndo || this.current.readOnly) return;
+    if (!h?.canUndo) return;
     h.undo();
     this.changed();
   }
 
   redo() {
     const h = this.current && this.docs.get(this.current.tool.id)?.history;
-    if (!h?.canRedo || this.current.readOnly) return;
+    if (!h?.canRedo) return;
     h.redo();
     this.changed();
   }

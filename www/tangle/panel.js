@@ -202,6 +202,7 @@ function mount(el, ctx) {
   let typingTimer = null;
   let refit = true;
   const view = { s: 1, tx: 0, ty: 0 };
+  let fitted = null; // viewKey() of the last fitted view
   let dpr = 1;
   let frame = 0;
   let sharpTimer = null;
@@ -381,7 +382,8 @@ function mount(el, ctx) {
       canvas.width = w;
       canvas.height = h;
       sharpView = null; // a resized canvas is blank until its next paint
-      if (refit || !T) fitView(); else paint();
+      // A view the user has not moved since it was fitted follows the viewport's size.
+      if (refit || !T || fitted === viewKey()) fitView(); else paint();
     }
   }
   const ro = new ResizeObserver(() => resize());
@@ -397,6 +399,7 @@ function mount(el, ctx) {
     view.s = Number.isFinite(s) && s > 0 ? s : 1;
     view.tx = (w - view.s * (x1 - x0)) / 2 - view.s * x0;
     view.ty = (h - view.s * (y1 - y0)) / 2 - view.s * y0;
+    fitted = viewKey();
     paint();
   }
 

@@ -510,6 +510,11 @@ function mount(el, ctx) {
   }
   const dropZone = q('[data-testid=texture-drop]');
   const removeFiles = acceptFiles(dropZone, onFile, { pickerLabel: 'Choose an image…' });
+  // A read-only embed keeps the author's example: no drop, no picker, and words that say so.
+  if (ctx.readOnly) {
+    dropZone.querySelector('p').textContent = 'The author\'s example.';
+    dropZone.querySelector('.pick').hidden = true;
+  }
 
   q('[data-act=render-example]').onclick = async () => {
     const m = list.find((x) => x.id === modelSel.value);
@@ -767,10 +772,9 @@ function mount(el, ctx) {
       out.textContent = String(v);
       out.title = est === null ? '' : `estimate of the example: ${est}`;
       input.setAttribute('aria-valuetext', `${v}${est === null ? '' : ` (the example's estimate: ${est})`}`);
-      input.disabled = !!ctx.readOnly;
     });
     sameBox.checked = !!s.sameModel;
-    sameBox.disabled = !s.predicted || !!ctx.readOnly;
+    sameBox.disabled = !s.predicted;
     if (s.predicted) {
       predictedEl.textContent = `Predicted model: ${nameOf(s.predicted.model)}`;
       predictedEl.dataset.model = s.predicted.model;
