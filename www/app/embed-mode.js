@@ -136,7 +136,7 @@ html[data-embed-size=content] .embed-picture { flex: none !important; height: cl
 .embed-stage > .card { height: 100%; margin: 0; display: flex; flex-direction: column; gap: .45rem; min-height: 0; padding: .6rem .7rem; }
 .embed-stage > .card > * { flex: none; margin: 0; min-width: 0; }
 .embed-stage > .card > .toolbar { gap: .3rem .6rem; }
-.embed-stage .embed-picture { flex: 1 1 0 !important; min-height: 5rem !important; height: auto !important; }
+.embed-stage .embed-picture { flex: 1 1 0 !important; min-height: 5rem !important; height: auto !important; max-height: none !important; }
 .embed-stage .embed-picture.square { width: auto !important; max-width: 100%; align-self: center; aspect-ratio: 1; }
 .embed-stage .embed-picture.square canvas { object-fit: contain; }
 .embed-stage .embed-picture.fill { width: 100%; }
