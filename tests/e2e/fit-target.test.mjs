@@ -99,7 +99,7 @@ test('fit: after Cancel the overlay shows the kept values, not the abandoned can
     return x !== h;
   }, h0, { timeout: 60000, polling: 100 });
   await page.click('button[data-act=cancel]');
-  await page.waitForFunction(() => /^cancelled/.test(document.querySelector('[data-testid=fit-status]').textContent));
+  await page.waitForFunction(() => /^stopped/.test(document.querySelector('[data-testid=fit-status]').textContent));
   assert.deepEqual(await page.evaluate(() => window.filigree.testHooks.fit.state().values), kept, 'the values are kept');
   // ...and after Cancel the overlay is the kept values' pattern again.
   await page.waitForFunction((h) => {

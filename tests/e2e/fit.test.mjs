@@ -61,7 +61,7 @@ test('fit a stripes target made from known parameters, cancel a second fit, expo
   await page.waitForFunction(() => /loss/.test(document.querySelector('[data-testid=fit-status]').textContent)
     && !document.querySelector('button[data-act=cancel]').disabled);
   await page.click('button[data-act=cancel]');
-  await page.waitForFunction(() => /^cancelled/.test(document.querySelector('[data-testid=fit-status]').textContent));
+  await page.waitForFunction(() => /^stopped/.test(document.querySelector('[data-testid=fit-status]').textContent));
   assert.deepEqual(await page.evaluate(() => window.filigree.testHooks.fit.state().values), values);
 
   // Export SVG of the fitted pattern.

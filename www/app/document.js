@@ -35,6 +35,12 @@
 //   ctx.seal()                   end a coalesced drag
 //   ctx.run(kind, payload, opts) pool.run tied to the panel: leaving aborts it; a result
 //                                arriving after leaving rejects as 'cancelled'
+//   ctx.startJob(name, {label}, body) a long job of the DOCUMENT (a fit, a reconstruction, a
+//                                tangle's growth): body(job) runs on when the panel is left, the
+//                                tool bar shows its progress, and it is there when the panel comes
+//                                back; see DocJob below. Starting one stops the last of that name.
+//   ctx.job(name)                that job (running or finished), or null
+//   ctx.follow(job, fn)          fn(job) on each of its changes while the panel is mounted
 //   ctx.signal                   aborts when the panel is left
 //   ctx.setTimeout/clearTimeout  timers cleared when the panel is left
 //   ctx.bitmap(imageData)        createImageBitmap, closed when the panel is left (ctx.release(b) earlier)
@@ -121,6 +127,110 @@ export function coreDefaults(pool, tool) {
   return defaultsCache.get(tool).then((d) => structuredClone(d));
 }
 
+// ---- jobs of a document ------------------------------------------------------------------
+
+/**
+ * A long job that belongs to a tool's document, not to its panel: leaving
+ * the panel does not stop it; the tool bar shows its progress; the panel
+ * finds it again when it comes back (`ctx.job(name)`) and shows where it is.
+ * Its body reports (`report`), keeps the best answer so far (`best`), and
+ * puts its outcome in the document with `commit`, whether the panel is
+ * mounted or not.
+ *
+ *   status   'running' | 'done' | 'stopped' (the user's Stop: `best` is kept
+ *            for the panel to offer) | 'cancelled' (`reason` says why) | 'failed' (`error`)
+ *   progress {fraction, stage, figure}; points: [fraction, figure] for a plot
+ *   data     the panel's own facts about the job (what it started from)
+ */
+export class DocJob {
+  constructor(ctl, tool, name, { label = name } = {}) {
+    this.ctl = ctl;
+    this.tool = tool;
+    this.name = name;
+    this.label = label;
+    this.ctrl = new AbortController();
+    this.signal = this.ctrl.signal;
+    this.status = 'running';
+    this.progress = { fraction: 0, stage: 'starting', figure: null };
+    this.points = [];
+    this.best = null;
+    this.result = null;
+    this.error = null;
+    this.reason = '';
+    this.data = {};
+    this.seen = false; // its outcome was shown in its panel
+    this.listeners = new Set();
+    this.startedAt = performance.now();
+    this.endedAt = null;
+  }
+
+  get running() { return this.status === 'running'; }
+
+  /** pool.run for this job: its module, its signal (Stop and cancel abort it). */
+  run(kind, payload, opts = {}) {
+    const signal = opts.signal ? AbortSignal.any([this.signal, opts.signal]) : this.signal;
+    return this.ctl.pool.run(kind, payload, { module: this.tool.id, ...opts, signal });
+  }
+
+  /** pool.runSharded for this job. */
+  runSharded(kind, payload, opts = {}) {
+    return this.ctl.pool.runSharded(kind, payload, { ...opts, signal: this.signal });
+  }
+
+  /** Where the job is: `progress` (merged), a plot `point`, a new `best`. */
+  report(progress, { point, best } = {}) {
+    if (!this.running) return;
+    this.progress = { ...this.progress, ...progress };
+    if (point && point.every(Number.isFinite)) this.points.push(point);
+    if (best !== undefined) this.best = best;
+    this.changed();
+  }
+
+  /** Stop with `status` 'stopped' (the user's Stop, the best kept) or 'cancelled' with a reason. */
+  stop(reason = '') {
+    if (!this.running) return;
+    this.stopAs = reason ? 'cancelled' : 'stopped';
+    this.reason = reason;
+    this.ctrl.abort();
+  }
+
+  /** The tool's document becomes `fn(present)` (null: unchanged), as one undoable step, mounted or not. */
+  commit(fn) {
+    return this.ctl.commitTo(this.tool.id, fn);
+  }
+
+  subscribe(fn) {
+    this.listeners.add(fn);
+    return () => this.listeners.delete(fn);
+  }
+
+  changed() {
+    for (const fn of this.listeners) {
+      try { fn(this); } catch (err) { console.error(err); }
+    }
+    this.ctl.jobChanged(this);
+  }
+
+  /** Run `body(job)` to its end; the job's status says how it ended. */
+  async start(body) {
+    try {
+      this.result = await body(this);
+      this.status = this.signal.aborted ? this.stopAs || 'cancelled' : 'done';
+    } catch (err) {
+      if (this.signal.aborted || err?.kind === 'cancelled') {
+        this.status = this.stopAs || 'cancelled';
+        if (!this.reason && !this.stopAs) this.reason = 'its work was stopped';
+      } else {
+        this.status = 'failed';
+        this.error = err;
+      }
+    }
+    this.endedAt = performance.now();
+    this.changed();
+    return this;
+  }
+}
+
 // ---- the controller -------------------------------------------------------------------
 
 const CHROME = `
@@ -147,8 +257,10 @@ export class DocumentController {
    * `tools`: the declared tools; `host`: the element panels mount into;
    * `persist`: false for an embedded instance (never writes autosave).
    */
-  constructor({ pool, toast, tools, host, persist = true, onShow }) {
+  constructor({ pool, toast, tools, host, persist = true, onShow, onJob }) {
     this.onShow = onShow;
+    this.onJob = onJob; // onJob(job): a document's job started, moved on or ended (the tool bar shows it)
+    this.jobs = new Map(); // tool id → Map(name → DocJob), the last of each name
     this.pool = pool;
     this.toast = toast;
     this.tools = tools;
@@ -184,6 +296,36 @@ export class DocumentController {
   onChange(fn) {
     this.changeListeners.add(fn);
     return () => this.changeListeners.delete(fn);
+  }
+
+  /** The jobs of tool `id`'s document (name → DocJob). */
+  jobsOf(id) {
+    if (!this.jobs.has(id)) this.jobs.set(id, new Map());
+    return this.jobs.get(id);
+  }
+
+  /** A job moved on: the tool bar hears it; an outcome shown in its mounted panel is seen. */
+  jobChanged(job) {
+    if (!job.running && this.current?.tool === job.tool) job.seen = true;
+    this.onJob?.(job);
+  }
+
+  /**
+   * Tool `id`'s document becomes `fn(present)` (null or the same: no
+   * change) as one undoable step: rendered when its panel is mounted,
+   * autosaved either way.
+   */
+  commitTo(id, fn) {
+    const tool = this.tool(id);
+    const d = this.docs.get(id);
+    if (!tool || !d?.history) return false;
+    const next = fn(d.history.present);
+    if (!next || next === d.history.present) return false;
+    d.history.push(next);
+    d.history.seal();
+    if (this.current?.tool === tool) this.changed();
+    else if (d.autosave && this.persist) d.autosave.save({ format: AUTOSAVE_FORMAT, version: tool.state.version, state: next });
+    return true;
   }
 
   /** The current tool's document, or null. */
@@ -309,7 +451,7 @@ export class DocumentController {
 
   // ---- mounting -------------------------------------------------------------------------
 
-  /** Leave the current panel: abort its jobs, clear its timers, close its bitmaps, flush its autosave. */
+  /** Leave the current panel: abort its requests (not its document's jobs), clear its timers, close its bitmaps, flush its autosave. */
   leave() {
     const cur = this.current;
     if (!cur) return;
@@ -322,6 +464,8 @@ export class DocumentController {
     cur.life.bitmaps.clear();
     for (const [name, hooks] of cur.life.hooks) if (this.testHooks?.[name] === hooks) delete this.testHooks[name];
     cur.life.hooks.clear();
+    for (const off of cur.life.follows) off(); // its jobs run on (ctx.startJob), unwatched
+    cur.life.follows.clear();
     try { cur.view?.unmount?.(); } catch (err) { console.error(err); }
     this.docs.get(cur.tool.id)?.autosave?.flush();
   }
@@ -376,7 +520,7 @@ export class DocumentController {
     if (!tool.state) el.querySelector('.doc-bar').hidden = true;
     if (readOnly) el.dataset.readonly = '1';
     this.host.replaceChildren(el);
-    const life = { ctrl: new AbortController(), timers: new Set(), bitmaps: new Set(), hooks: new Map(), dead: false };
+    const life = { ctrl: new AbortController(), timers: new Set(), bitmaps: new Set(), hooks: new Map(), follows: new Set(), dead: false };
     const cur = { tool, el, life, view: null, rendered: null, readOnly };
     this.current = cur;
     cur.ctx = this.context(cur);
@@ -386,6 +530,8 @@ export class DocumentController {
     this.showNote();
     this.showTabs();
     this.onShow?.(tool.id);
+    // Its jobs' outcomes are shown from here on.
+    for (const job of this.jobsOf(tool.id).values()) if (!job.running && !job.seen) { job.seen = true; this.onJob?.(job); }
   }
 
   context(cur) {
@@ -466,6 +612,22 @@ export class DocumentController {
         }
       },
       coreDefaults: () => coreDefaults(ctl.pool, tool.id),
+      startJob(name, opts, body) {
+        const jobs = ctl.jobsOf(tool.id);
+        jobs.get(name)?.stop('a new one started');
+        const job = new DocJob(ctl, tool, name, opts);
+        jobs.set(name, job);
+        job.promise = job.start(body);
+        ctl.onJob?.(job);
+        return job;
+      },
+      job: (name) => ctl.jobsOf(tool.id).get(name) ?? null,
+      follow(job, fn) {
+        if (life.dead) return () => {};
+        const off = job.subscribe(fn);
+        life.follows.add(off);
+        return () => { off(); life.follows.delete(off); };
+      },
       expose(hooks, name = tool.id) {
         if (!ctl.testHooks || life.dead) return;
         ctl.testHooks[name] = hooks;

@@ -60,7 +60,7 @@ const embed = embedOptions(); // ?embed=1: one tool, no chrome, never saves (emb
 // One document controller for every tool: history, autosave, project files,
 // share links, shortcuts and the panels' lifecycle (see document.js).
 const doc = new DocumentController({
-  pool, toast, tools: TOOLS, host: $('#panel'), persist: !embed,
+  pool, toast, tools: TOOLS, host: $('#panel'), persist: !embed, onJob: showJob,
   onShow(id) {
     leaveHome();
     document.documentElement.dataset.view = id;
@@ -115,6 +115,28 @@ for (const tool of TOOLS) {
   b.textContent = tool.title;
   b.onclick = () => doc.show(tool.id);
   $('#tools').append(b);
+}
+
+// A document's long job (a fit, a reconstruction, a tangle's growth) in the
+// tool bar: its progress while it runs, wherever the user is; how it ended
+// until its tool is shown again (document.js, DocJob).
+const JOB_ENDS = { done: 'done', stopped: 'stopped', cancelled: 'cancelled', failed: 'failed' };
+function showJob(job) {
+  const b = document.querySelector(`#tools button[data-tool="${job.tool.id}"]`);
+  if (!b) return;
+  let badge = b.querySelector('.tool-job');
+  const shown = job.running || !job.seen;
+  if (!shown) { badge?.remove(); delete b.dataset.job; return; }
+  if (!badge) {
+    badge = document.createElement('span');
+    badge.className = 'tool-job';
+    badge.dataset.testid = `tool-job-${job.tool.id}`;
+    b.append(badge);
+  }
+  b.dataset.job = job.status;
+  const pct = Math.round(100 * (job.progress.fraction || 0));
+  badge.textContent = job.running ? `${pct}%` : JOB_ENDS[job.status];
+  badge.title = job.running ? `${job.label}: ${job.progress.stage} ${pct}%` : `${job.label}: ${JOB_ENDS[job.status]}`;
 }
 
 // A share link (#tool=…&share=…) opens as a new, undoable document state;

@@ -57,7 +57,8 @@ const html = `
       </div>
       <div class="row-buttons">
         <button type="button" class="primary" data-act="fit" aria-describedby="fit-why">Run fit</button>
-        <button type="button" data-act="cancel" disabled>Cancel</button>
+        <button type="button" data-act="cancel" disabled title="Stop the fit; its best values so far can then be applied">Stop</button>
+        <button type="button" data-act="apply-fit" data-testid="fit-apply" disabled title="Put the stopped fit's best values so far into the document">Apply fitted values</button>
       </div>
       <p class="fit-why" id="fit-why" data-testid="fit-why" hidden></p>
       <progress max="1" value="0"></progress>
@@ -261,7 +262,6 @@ function mount(el, ctx) {
   let infoJob = 0;
   let generators = [];
   let brush = 0; // index into the brush colours (last = background)
-  let running = null; // AbortController of the fit in flight
   let previewBusy = false;
   let previewWanted = null;
   let lastPreviewAt = 0;
@@ -494,10 +494,24 @@ function mount(el, ctx) {
 
   // ---- fitting ----------------------------------------------------------------------------
 
+  // A fit is a job of the document (ctx.startJob): switching tools does not
+  // stop it, the tool bar shows its progress, and this panel shows it again
+  // when it comes back: its plot, its status, its best so far. Stop keeps
+  // the best values so far for "Apply fitted values"; a fit that ends goes
+  // into the document it started from (program unchanged), mounted or not.
+  let job = null; // the fit this panel shows (running or the last one)
+  let unfollow = null;
+  let plotted = 0; // job.points already on the plot
+  let previewedLoss = Infinity;
+
+  const running = () => !!job?.running;
+  const applicable = () => job?.status === 'stopped' && !!job.best && !job.data.appliedBest && doc()?.program === job.data.program;
+
   // A blank target has nothing to fit to (every pattern is as far from it):
   // Run fit waits for a target and says how to make one.
   function setRunning(on) {
     q('[data-act=cancel]').disabled = !on;
+    q('[data-act=apply-fit]').disabled = on || !applicable();
     const blank = isBlank(doc()?.target);
     q('[data-act=fit]').disabled = on || blank;
     const why = q('[data-testid=fit-why]');
@@ -505,96 +519,117 @@ function mount(el, ctx) {
     why.textContent = blank ? 'The target is empty, so there is nothing to fit yet: draw on it in the pattern’s colours, upload an image, or press “Make target from these values”.' : '';
   }
 
-  function stopFit() {
-    running?.abort();
-    running = null;
+  /** A change that makes the running fit meaningless cancels it, saying why. */
+  function stopFit(reason = 'the program changed') {
+    job?.stop(reason);
     setRunning(false);
   }
 
-  async function fit() {
+  function fit() {
     const d = doc();
     if (!d?.target || !info || isBlank(d.target)) return;
-    running?.abort();
-    const ctrl = new AbortController();
-    running = ctrl;
     ctx.clearError();
-    plot.clear();
-    q('progress').value = 0;
     // The figures of the last fit are stale from here on.
     q('.results tbody').querySelectorAll('[data-col=fitted]').forEach((td) => { td.textContent = '…'; });
-    status('starting…');
-    setRunning(true);
-    const t0 = performance.now();
     const fitInfo = info;
     const floatIdx = fitInfo.params.map((p, i) => (p.integer ? -1 : i)).filter((i) => i >= 0);
+    const full = (floats) => {
+      const values = [...d.values];
+      floatIdx.forEach((k, j) => { values[k] = floats[j]; });
+      return values;
+    };
     // A fresh payload per request: its pixel buffer is transferred to a worker.
-    const common = () => ({
+    const payload = () => ({
       program: d.program, params: named(fitInfo, d.values, { integersOnly: true }),
       target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
       budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
     });
-    let shownLoss = Infinity;
-    const show = (fraction, stage, loss, best) => {
-      if (running !== ctrl) return;
-      q('progress').value = fraction;
-      status(`${stage} ${Math.round(fraction * 100)}% — loss ${Number.isFinite(loss) ? loss.toPrecision(4) : '…'}`);
-      if (Number.isFinite(loss)) plot.push(fraction, loss);
-      if (best && loss <= shownLoss) {
-        shownLoss = loss;
-        const values = [...d.values];
-        floatIdx.forEach((k, j) => { values[k] = best[j]; });
-        schedulePreview(values);
-      }
-    };
-    try {
-      const r = await parallelFit(common, ctrl.signal, show);
+    const started = ctx.startJob('fit', { label: 'Fit' }, async (j) => {
+      // One fit sharded across the worker pool (all workers but one, which
+      // stays free for previews). The pool relays the shards' exchanges and
+      // the core merges them, so the result is exactly that of one fit
+      // (tests/fit.rs checks this with the native driver).
+      const n = Math.max(1, ctx.pool.slots.length - 1);
+      const fractions = Array(n).fill(0);
+      const losses = Array(n).fill(Infinity);
+      const r = await j.runSharded('fit', payload(), {
+        shards: n,
+        onProgress: (p, k) => {
+          fractions[k] = p.fraction;
+          if (p.figure != null) losses[k] = p.figure;
+          const loss = Math.min(...losses);
+          const fraction = fractions.reduce((a, b) => a + b, 0) / n;
+          const better = p.values && losses[k] === loss && loss < (j.best?.loss ?? Infinity);
+          j.report({ fraction, stage: n > 1 ? `${p.stage} (${n} workers)` : p.stage, figure: loss }, {
+            point: Number.isFinite(loss) ? [fraction, loss] : null,
+            ...(better ? { best: { values: full(p.values), params: [...p.values], loss } } : {}),
+          });
+        },
+      });
       // A fit finishes into the document it started from, or not at all.
-      if (running !== ctrl || doc().program !== d.program) return;
-      const values = [...doc().values];
-      floatIdx.forEach((k, j) => { values[k] = r.params[j]; });
-      ctx.commit({ ...doc(), values, result: { params: r.params, loss: r.loss, names: r.names, evaluations: r.evaluations } });
-      plot.push(1, r.loss);
-      q('progress').value = 1;
-      // One loss, named (the polish's image-space loss is a different one).
-      status(`fitted in ${((performance.now() - t0) / 1000).toFixed(1)} s — loss ${r.loss.toPrecision(4)} (${r.loss_name}) after ${r.evaluations} evaluations`);
-    } catch (err) {
-      if (err.kind === 'cancelled') {
-        if (ctx.alive() && (running === ctrl || running === null)) {
-          status('cancelled — the values from before the fit are kept');
-          // The overlay showed the fit's candidates: back to the kept values.
-          schedulePreview(doc().values);
-        }
-      } else if (running === ctrl) ctx.error(err);
-    } finally {
-      if (running === ctrl) { running = null; setRunning(false); }
-      if (ctx.alive() && !running) renderResults(doc());
-    }
+      j.data.applied = j.commit((cur) => (cur.program !== d.program ? null : {
+        ...cur, values: full(r.params).map((v, i) => (floatIdx.includes(i) ? v : cur.values[i])),
+        result: { params: r.params, loss: r.loss, names: r.names, evaluations: r.evaluations },
+      }));
+      j.report({ fraction: 1 }, { point: [1, r.loss] });
+      return r;
+    });
+    started.data = { program: d.program };
+    attach(started);
   }
 
-  // One fit sharded across the worker pool (all workers but one, which
-  // stays free for previews). The pool relays the shards' exchanges and
-  // the core merges them, so the result is exactly that of one fit
-  // (tests/fit.rs checks this with the native driver). Leaving the panel
-  // aborts it like any job of the panel.
-  async function parallelFit(common, signal, show) {
-    const n = Math.max(1, ctx.pool.slots.length - 1);
-    const fractions = Array(n).fill(0);
-    const losses = Array(n).fill(Infinity);
-    const both = AbortSignal.any([signal, ctx.signal]);
-    const r = await ctx.pool.runSharded('fit', common(), {
-      shards: n,
-      signal: both,
-      onProgress: (p, k) => {
-        if (both.aborted) return;
-        fractions[k] = p.fraction;
-        if (p.figure != null) losses[k] = p.figure;
-        const best = Math.min(...losses);
-        const stage = n > 1 ? `${p.stage} (${n} workers)` : p.stage;
-        show(fractions.reduce((a, b) => a + b, 0) / n, stage, best, losses[k] === best ? p.values : null);
-      },
-    });
-    if (!ctx.alive()) throw Object.assign(new Error('cancelled'), { name: 'JobError', kind: 'cancelled' });
-    return r;
+  /** Show job `j` in this panel (a new fit, or one found on coming back). */
+  function attach(j) {
+    unfollow?.();
+    job = j;
+    plot.clear();
+    plotted = 0;
+    previewedLoss = Infinity;
+    unfollow = ctx.follow(j, showJob);
+    showJob(j);
+  }
+
+  function showJob(j) {
+    if (j !== job || !ctx.alive()) return;
+    for (; plotted < j.points.length; plotted++) plot.push(...j.points[plotted]);
+    const pct = Math.round(100 * j.progress.fraction);
+    q('progress').value = j.status === 'done' ? 1 : j.progress.fraction;
+    const loss = j.progress.figure;
+    if (j.running) {
+      status(`${j.progress.stage} ${pct}% — loss ${Number.isFinite(loss) ? loss.toPrecision(4) : '…'}`);
+      // The best candidate so far over the target.
+      if (j.best && j.best.loss < previewedLoss) { previewedLoss = j.best.loss; schedulePreview(j.best.values); }
+    } else if (j.status === 'done') {
+      const r = j.result;
+      const secs = ((j.endedAt - j.startedAt) / 1000).toFixed(1);
+      // One loss, named (the polish's image-space loss is a different one).
+      status(`fitted in ${secs} s — loss ${r.loss.toPrecision(4)} (${r.loss_name}) after ${r.evaluations} evaluations${j.data.applied ? '' : ' (not applied: the program changed meanwhile)'}`);
+    } else if (j.status === 'stopped') {
+      status(j.best
+        ? `stopped at ${pct}% — the values from before the fit are kept; Apply fitted values puts in the best so far (loss ${j.best.loss.toPrecision(4)})`
+        : `stopped at ${pct}% — no candidate yet; the values from before the fit are kept`);
+    } else if (j.status === 'cancelled') {
+      status(`cancelled at ${pct}% (${j.reason}) — the values from before the fit are kept`);
+    } else if (j.status === 'failed') {
+      status('the fit failed (see above)');
+      ctx.error(j.error);
+    }
+    if (!j.running) {
+      // The overlay showed the fit's candidates: back to the document's values.
+      if (j.status !== 'done' && doc()) schedulePreview(doc().values);
+      renderResults(doc());
+    }
+    setRunning(j.running);
+  }
+
+  function applyFit() {
+    if (!applicable()) return;
+    const { best } = job;
+    if (ctx.commit({ ...doc(), values: best.values, result: { params: best.params, loss: best.loss, names: null, evaluations: null } })) {
+      status(`applied: the stopped fit's best values (loss ${best.loss.toPrecision(4)}); Undo puts the earlier ones back`);
+      job.data.appliedBest = true;
+      setRunning(false);
+    }
   }
 
   function renderResults(d) {
@@ -620,7 +655,7 @@ function mount(el, ctx) {
     const g = generators.find((x) => x.name === e.target.value);
     if (!g) return;
     // A new generator ends the fit of the old one: its values would not fit the new sliders.
-    stopFit();
+    stopFit('the generator changed');
     try {
       ctx.commit(await generatorDoc(ctx.run, g, doc()));
     } catch (err) {
@@ -655,7 +690,8 @@ function mount(el, ctx) {
   };
   q('[data-act=clear-target]').onclick = () => info && ctx.commit({ ...doc(), target: backgroundTarget(info), truth: null });
   q('[data-act=fit]').onclick = fit;
-  q('[data-act=cancel]').onclick = () => running?.abort();
+  q('[data-act=cancel]').onclick = () => job?.stop();
+  q('[data-act=apply-fit]').onclick = applyFit;
   q('[name=overlay]').oninput = (e) => { overlay.style.opacity = e.target.value; };
   overlay.style.opacity = q('[name=overlay]').value;
   for (const name of ['budget', 'loss', 'seed']) {
@@ -697,13 +733,16 @@ function mount(el, ctx) {
   }).catch((err) => ctx.error(err));
 
   // For the e2e tests (ctx.expose): the document, the program's parameters, the loss plot.
-  ctx.expose({ state: doc, info: () => info, plot, running: () => running !== null });
+  ctx.expose({ state: doc, info: () => info, plot, running, job: () => job });
+  // A fit of this document that ran (or ran on) while the panel was away.
+  if (ctx.job('fit')) attach(ctx.job('fit'));
 
   return {
     render(d, prev) {
       if (!d) return;
       for (const name of ['budget', 'loss', 'seed']) q(`[name=${name}]`).value = d.settings[name];
-      if (!prev || d.target !== prev.target) { drawTarget(d.target); setRunning(!!running); }
+      if (!prev || d.target !== prev.target) { drawTarget(d.target); setRunning(running()); }
+      else if (job && !job.running) setRunning(false); // Apply fitted values follows the document
       if (!info || keyOf(d, info) !== infoKey) {
         // A program or integer change: re-read the program (async), then sliders and preview.
         generatorsReady.then(() => ctx.alive() && syncProgram(d));
@@ -724,7 +763,7 @@ function mount(el, ctx) {
     unmount() {
       detachFiles();
       detachRadios();
-      running?.abort();
+      // The fit runs on: it is the document's (ctx.startJob).
     },
   };
 }

@@ -1,0 +1,108 @@
+// Jobs belong to the document, not the panel (issue 35 item 4): a fit keeps
+// running when the user opens another tool, the tool bar shows its
+// progress, and it is there when they come back; Stop keeps the best
+// values so far for "Apply fitted values"; a fit ended by a change says
+// it was cancelled and why.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { launch, pickGenerator } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+const STATUS = '[data-testid=fit-status]';
+const BADGE = '[data-testid=tool-job-fit]';
+const fitState = (page) => page.evaluate(() => window.filigree.testHooks.fit.state());
+
+/** Fit with a target made from the stripes' values moved off it, budget `budget`, Run fit pressed. */
+async function startFit(page, budget) {
+  await pickGenerator(page, 'stripes');
+  await page.click('button[data-act=make-target]');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.state().truth !== null);
+  await page.focus('[data-testid=fit-sliders] input');
+  for (let i = 0; i < 60; i++) await page.keyboard.press('ArrowRight');
+  await page.selectOption('select[name=budget]', budget);
+  await page.waitForFunction((b) => window.filigree.testHooks.fit.state().settings.budget === b, budget);
+  await page.click('button[data-act=fit]');
+  await page.waitForFunction(() => window.filigree.testHooks.fit.running());
+}
+
+async function openTool(page, id) {
+  await page.click(`#tools button[data-tool=${id}]`);
+  await page.waitForFunction((t) => document.documentElement.dataset.view === t && window.filigree.testHooks[t], id);
+}
+
+test('a fit runs on in another tool, with its progress in the tool bar; back in Fit, Stop keeps the best so far and Apply puts it in', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await startFit(page, 'paper');
+  await page.waitForFunction((s) => /loss \d/.test(document.querySelector(s).textContent), STATUS, { timeout: 30000 });
+  const before = (await fitState(page)).values;
+
+  // Off to Tangle: the fit goes on; the Fit button in the tool bar says how far.
+  await openTool(page, 'tangle');
+  await page.waitForSelector(BADGE);
+  const pct = async () => Number(/(\d+)%/.exec(await page.textContent(BADGE))?.[1] ?? NaN);
+  const first = await pct();
+  assert.ok(Number.isFinite(first), await page.textContent(BADGE));
+  await page.waitForFunction(([sel, p]) => {
+    const m = /(\d+)%/.exec(document.querySelector(sel)?.textContent ?? '');
+    return m && Number(m[1]) > p;
+  }, [BADGE, first], { timeout: 30000 });
+  assert.match(await page.getAttribute(BADGE, 'title'), /^Fit: .*\d+%$/);
+
+  // Back in Fit: the same fit, still running, its plot and status there.
+  await openTool(page, 'fit');
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.fit.running()), true, 'the fit is still running');
+  await page.waitForFunction((s) => / \d+% — loss \d/.test(document.querySelector(s).textContent), STATUS);
+  assert.ok(await page.evaluate(() => window.filigree.testHooks.fit.plot.points.length) > 1, 'the loss plot came back');
+  assert.ok(await page.$eval('.fit-run progress', (p) => p.value) > 0);
+  assert.equal(await page.isEnabled('button[data-act=cancel]'), true);
+
+  // Stop: the values stay, the best so far waits for Apply.
+  await page.waitForFunction(() => window.filigree.testHooks.fit.job()?.best);
+  await page.click('button[data-act=cancel]');
+  await page.waitForFunction((s) => /^stopped at \d+% — .*Apply fitted values puts in the best so far \(loss [\d.e+-]+\)/.test(document.querySelector(s).textContent), STATUS);
+  assert.deepEqual((await fitState(page)).values, before, 'Stop changed nothing yet');
+  assert.equal(await page.isEnabled('[data-testid=fit-apply]'), true, 'Apply fitted values is enabled after Stop');
+  const best = await page.evaluate(() => window.filigree.testHooks.fit.job().best);
+  await page.click('[data-testid=fit-apply]');
+  await page.waitForFunction((v) => JSON.stringify(window.filigree.testHooks.fit.state().values) === JSON.stringify(v), best.values);
+  const s = await fitState(page);
+  assert.equal(s.result.loss, best.loss);
+  assert.match(await page.textContent(STATUS), /^applied/);
+  assert.equal(await page.isDisabled('[data-testid=fit-apply]'), true, 'applied once');
+  assert.equal(await page.isVisible(BADGE), false, 'the tool bar has nothing more to say');
+  // One undo puts the values from before back.
+  await page.click('button[data-act=undo]');
+  assert.deepEqual((await fitState(page)).values, before);
+  await page.close();
+});
+
+test('a fit that ends while the user is in another tool is in the document when they come back', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await startFit(page, 'quick');
+  const before = (await fitState(page)).values;
+  await openTool(page, 'micro');
+  await page.waitForFunction((sel) => document.querySelector(sel)?.textContent === 'done', BADGE, { timeout: 60000 });
+  await openTool(page, 'fit');
+  const s = await fitState(page);
+  assert.ok(s.result && Number.isFinite(s.result.loss), 'the fit\'s result is in the document');
+  assert.notDeepEqual(s.values, before, 'its values too');
+  assert.match(await page.textContent(STATUS), /^fitted in [\d.]+ s — loss/);
+  assert.ok(await page.evaluate(() => window.filigree.testHooks.fit.plot.points.length) > 1);
+  assert.equal(await page.isVisible(BADGE), false, 'seen: the tool bar is quiet again');
+  // It is one undoable step, and autosaved like any change.
+  await page.click('button[data-act=undo]');
+  assert.deepEqual((await fitState(page)).values, before);
+  await page.close();
+});
+
+test('a fit cut short by a change of generator says it was cancelled, and why', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await startFit(page, 'paper');
+  await page.selectOption('[data-testid=fit-generator]', 'honeycomb');
+  await page.waitForFunction((s) => /^cancelled at \d+% \(the generator changed\) — the values from before the fit are kept/.test(document.querySelector(s).textContent), STATUS);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.fit.running()), false);
+  await page.close();
+});
