@@ -106,3 +106,51 @@ test('a fit cut short by a change of generator says it was cancelled, and why', 
   assert.equal(await page.evaluate(() => window.filigree.testHooks.fit.running()), false);
   await page.close();
 });
+
+test('Micro: a reconstruction runs on in another tool and comes back with its form as left; Stop keeps the best for Apply', async () => {
+  const page = await env.newPage({ path: '#tool=micro' });
+  await page.waitForSelector('[data-testid=micro-examples] [data-example=gyroid]', { timeout: 30000 });
+  await page.click('[data-example=gyroid]');
+  await page.waitForFunction(() => window.filigree.testHooks.micro.state()?.example === 'gyroid');
+  const scene0 = await page.evaluate(() => window.filigree.testHooks.micro.state().scene);
+  await page.click('[data-testid=micro-fit] > summary');
+  const row = '[data-testid=micro-fit-params] [data-pointer="/thickness"]';
+  await page.waitForSelector(row);
+  await page.check(`${row} [name=fit-on]`);
+  await page.fill(`${row} [name=fit-truth]`, '0.2');
+  await page.fill(`${row} [name=fit-lo]`, '0.05');
+  await page.fill(`${row} [name=fit-hi]`, '0.8');
+  await page.selectOption('[data-testid=micro-fit-optimizer]', 'powell');
+  await page.fill('[data-testid=micro-fit-budget]', '5000'); // long: it is stopped below
+  await page.click('[data-testid=micro-fit-run]');
+  await page.waitForFunction(() => /loss -?\d/.test(document.querySelector('[data-testid=micro-fit-status]').textContent), null, { timeout: 60000 });
+
+  // In Fit, the Micro button shows the reconstruction's progress.
+  await openTool(page, 'fit');
+  const badge = '[data-testid=tool-job-micro]';
+  await page.waitForSelector(badge);
+  assert.match(await page.textContent(badge), /^\d+%$/);
+  assert.match(await page.getAttribute(badge, 'title'), /^Reconstruct: /);
+
+  // Back in Micro: open, ticked, the same target and ranges, still running.
+  await openTool(page, 'micro');
+  await page.waitForSelector(`${row} [name=fit-on]:checked`);
+  assert.equal(await page.$eval('[data-testid=micro-fit]', (d) => d.open), true, 'Reconstruct is open as it was left');
+  assert.equal(await page.inputValue(`${row} [name=fit-truth]`), '0.2');
+  assert.equal(await page.inputValue(`${row} [name=fit-hi]`), '0.8');
+  assert.equal(await page.inputValue('[data-testid=micro-fit-budget]'), '5000');
+  assert.equal(await page.evaluate(() => window.filigree.testHooks['micro-fit'].running()), true);
+  await page.waitForFunction(() => window.filigree.testHooks['micro-fit'].job()?.best);
+  assert.ok(await page.evaluate(() => window.filigree.testHooks['micro-fit'].plotted()) >= 1, 'the loss plot came back');
+
+  await page.click('[data-testid=micro-fit-stop]');
+  await page.waitForFunction(() => /^stopped at \d+% — Apply fitted values puts in the best so far: \/thickness = /.test(document.querySelector('[data-testid=micro-fit-status]').textContent));
+  assert.equal(await page.isEnabled('[data-testid=micro-fit-apply]'), true, 'Apply fitted values is enabled after Stop');
+  const best = await page.evaluate(() => window.filigree.testHooks['micro-fit'].job().best);
+  await page.click('[data-testid=micro-fit-apply]');
+  await page.waitForFunction((s0) => window.filigree.testHooks.micro.state().scene !== s0, scene0);
+  const applied = JSON.parse(await page.evaluate(() => window.filigree.testHooks.micro.state().scene));
+  assert.equal(applied.thickness, best.values[0]);
+  assert.equal(applied.period, JSON.parse(scene0).period);
+  await page.close();
+});

@@ -41,6 +41,8 @@
 //                                back; see DocJob below. Starting one stops the last of that name.
 //   ctx.job(name)                that job (running or finished), or null
 //   ctx.follow(job, fn)          fn(job) on each of its changes while the panel is mounted
+//   ctx.memory                   an object of the tool's that outlives its panel (not saved):
+//                                what the user left in a form that is not the document
 //   ctx.signal                   aborts when the panel is left
 //   ctx.setTimeout/clearTimeout  timers cleared when the panel is left
 //   ctx.bitmap(imageData)        createImageBitmap, closed when the panel is left (ctx.release(b) earlier)
@@ -261,6 +263,7 @@ export class DocumentController {
     this.onShow = onShow;
     this.onJob = onJob; // onJob(job): a document's job started, moved on or ended (the tool bar shows it)
     this.jobs = new Map(); // tool id → Map(name → DocJob), the last of each name
+    this.memories = new Map(); // tool id → ctx.memory
     this.pool = pool;
     this.toast = toast;
     this.tools = tools;
@@ -622,6 +625,10 @@ export class DocumentController {
         return job;
       },
       job: (name) => ctl.jobsOf(tool.id).get(name) ?? null,
+      get memory() {
+        if (!ctl.memories.has(tool.id)) ctl.memories.set(tool.id, {});
+        return ctl.memories.get(tool.id);
+      },
       follow(job, fn) {
         if (life.dead) return () => {};
         const off = job.subscribe(fn);

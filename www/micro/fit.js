@@ -6,6 +6,12 @@
 // a live plot; "Apply" puts the fitted values into the scene as one
 // undoable change of the document.
 //
+// A reconstruction is a job of the document (ctx.startJob, issue 35 item
+// 4): it runs on when the user opens another tool, the tool bar shows its
+// progress, and this section shows it again on coming back, with the form
+// as the user left it (ctx.memory: ticks, targets, ranges, settings, open).
+// Stop keeps the best values so far for "Apply fitted values".
+//
 // mountReconstruct(el, ctx) → {render(doc), unmount()}; el is an empty
 // element inside the Micro panel. The request's defaults come from the
 // core (`defaults` for `micro-fit`), never from here.
@@ -106,28 +112,52 @@ export function mountReconstruct(el, ctx) {
   coreDefaults(ctx.pool, 'micro-fit').then((d) => {
     defaults = d;
     if (!ctx.alive()) return;
-    optSel.value = d.optimizer;
-    budgetIn.value = String(Math.min(d.budget, 400));
-    gridSel.value = String(Math.min(d.grid, 16));
-    c2fIn.checked = d.coarse_to_fine;
+    optSel.value = memo.optimizer ?? d.optimizer;
+    budgetIn.value = memo.budget ?? String(Math.min(d.budget, 400));
+    gridSel.value = memo.grid ?? String(Math.min(d.grid, 16));
+    c2fIn.checked = memo.c2f ?? d.coarse_to_fine;
   }).catch((err) => ctx.error(err, { prefix: 'Reconstruct' }));
 
   let scene = null; // the scene text the rows were built from
   let rows = []; // [{pointer, value, integer, el}]
-  let running = null;
-  let result = null; // {scene (fitted text), from (scene text it was fitted from), values}
   let slice = null; // {name, file}
+  let job = null; // the reconstruction this section shows (running or the last one)
+  let unfollow = null;
+  let plotted = 0;
+  // The form as the user left it, kept while they are in another tool.
+  const memo = ctx.memory.reconstruct ??= {};
 
   fileIn.onchange = () => {
     const f = fileIn.files?.[0];
     slice = f ? { name: f.name, file: f } : null;
     if (slice) status(`target: slice image ${slice.name}`);
+    remember();
   };
   for (const r of el.querySelectorAll('[name=fit-target]')) {
     r.onchange = () => {
       fileIn.hidden = r.value !== 'slice' || !r.checked;
       if (r.value === 'slice' && r.checked && !slice) fileIn.click();
     };
+  }
+
+  function remember() {
+    memo.open = el.open;
+    memo.target = q('[name=fit-target]:checked')?.value;
+    memo.slice = slice;
+    if (defaults) Object.assign(memo, { optimizer: optSel.value, budget: budgetIn.value, grid: gridSel.value, c2f: c2fIn.checked });
+    if (scene !== null) {
+      memo.scene = scene;
+      memo.rows = Object.fromEntries(rows.map((r) => [r.pointer, Object.fromEntries(['fit-truth', 'fit-lo', 'fit-hi'].map((n) => [n, r.el.querySelector(`[name=${n}]`).value]).concat([['on', r.el.querySelector('[name=fit-on]').checked]]))]));
+    }
+  }
+  el.addEventListener('input', remember);
+  el.addEventListener('change', remember);
+  el.addEventListener('toggle', remember);
+  if (memo.open) el.open = true;
+  if (memo.slice) slice = memo.slice;
+  if (memo.target) {
+    const radio = q(`[name=fit-target][value="${memo.target}"]`);
+    if (radio) { radio.checked = true; fileIn.hidden = memo.target !== 'slice'; }
   }
 
   function buildRows(text) {
@@ -154,6 +184,15 @@ export function mountReconstruct(el, ctx) {
       return { ...n, el: row };
     });
     paramsEl.replaceChildren(...rows.map((r) => r.el));
+    // The ticks and targets the user left for this scene.
+    if (memo.scene === text && memo.rows) {
+      for (const r of rows) {
+        const m = memo.rows[r.pointer];
+        if (!m) continue;
+        r.el.querySelector('[name=fit-on]').checked = m.on;
+        for (const n of ['fit-truth', 'fit-lo', 'fit-hi']) r.el.querySelector(`[name=${n}]`).value = m[n];
+      }
+    }
   }
 
   const num = (row, name) => Number(row.el.querySelector(`[name=${name}]`).value);
@@ -185,91 +224,145 @@ export function mountReconstruct(el, ctx) {
     };
   }
 
+  const running = () => !!job?.running;
+  const valuesText = (pointers, values) => pointers.map((p, i) => `${p.pointer} = ${Number(values[i].toPrecision(6))}`).join(', ');
+
+  /** The scene text `from` with the fitted `values` at `params` (integers rounded). */
+  function sceneWith(from, params, values) {
+    const t = JSON.parse(from);
+    params.forEach((p, i) => setPointer(t, p.pointer, p.integer ? Math.round(values[i]) : values[i]));
+    return JSON.stringify(t, null, 2);
+  }
+
+  /** What Apply puts in the scene: a finished fit's scene, or a stopped one's best so far. */
+  function applicable() {
+    if (!job || job.data.applied || job.data.from !== ctx.state()?.scene) return null;
+    if (job.status === 'done') return job.result.scene;
+    if (job.status === 'stopped' && job.best) return sceneWith(job.data.from, job.data.params, job.best.values);
+    return null;
+  }
+
   function setRunning(on) {
     runBtn.disabled = on;
     stopBtn.disabled = !on;
-    applyBtn.disabled = on || !result || result.from !== ctx.state()?.scene;
+    applyBtn.disabled = on || !applicable();
   }
 
   async function run() {
     if (!defaults) return;
-    const ctrl = new AbortController();
-    running?.abort();
-    running = ctrl;
-    result = null;
-    setRunning(true);
-    plot.clear();
     ctx.clearError('fit');
-    const from = ctx.state().scene;
-    const t0 = performance.now();
+    let payload;
     try {
-      const payload = await request();
-      // One fit sharded over the pool (all workers but one, which stays
-      // free for the view); the core merges, so this is one fit's result.
-      const n = Math.max(1, (ctx.pool.slots?.length ?? 2) - 1);
+      payload = await request();
+    } catch (err) {
+      status('the reconstruction failed (see above)');
+      ctx.error(err, { prefix: 'Reconstruct', source: 'fit' });
+      return;
+    }
+    const from = ctx.state().scene;
+    const params = payload.params.map((p) => ({ pointer: p.pointer, integer: !!rows.find((r) => r.pointer === p.pointer)?.integer }));
+    // One fit sharded over the pool (all workers but one, which stays
+    // free for the view); the core merges, so this is one fit's result.
+    const n = Math.max(1, (ctx.pool.slots?.length ?? 2) - 1);
+    const started = ctx.startJob('reconstruct', { label: 'Reconstruct' }, async (j) => {
       const fractions = Array(n).fill(0);
-      status('sampling the target…');
-      const r = await ctx.pool.runSharded('micro-fit', payload, {
+      j.report({ stage: 'sampling the target', fraction: 0 });
+      return j.runSharded('micro-fit', payload, {
         shards: n,
-        signal: AbortSignal.any([ctrl.signal, ctx.signal]),
         onProgress: (p, k) => {
-          if (running !== ctrl) return;
           fractions[k] = p.fraction;
           if (k !== 0) return;
           const f = fractions.reduce((a, b) => a + b, 0) / n;
-          if (p.figure != null && Number.isFinite(p.figure)) plot.push(f, p.figure);
-          status(`${p.stage}: ${Math.round(f * 100)}%${p.figure != null ? ` — loss ${p.figure.toFixed(3)}` : ''}${n > 1 ? ` (${n} workers)` : ''}`);
+          const loss = p.figure != null && Number.isFinite(p.figure) ? p.figure : null;
+          j.report({ fraction: f, stage: p.stage, figure: loss }, {
+            point: loss === null ? null : [f, loss],
+            ...(loss !== null && p.values ? { best: { values: [...p.values], loss } } : {}),
+          });
         },
       });
-      if (running !== ctrl || !ctx.alive()) return;
-      result = { scene: r.scene, from, values: r.values, pointers: payload.params.map((p) => p.pointer) };
+    });
+    started.data = { from, params, workers: n };
+    attach(started);
+  }
+
+  /** Show reconstruction `j` here (a new one, or one found on coming back). */
+  function attach(j) {
+    unfollow?.();
+    job = j;
+    plot.clear();
+    plotted = 0;
+    unfollow = ctx.follow(j, showJob);
+    showJob(j);
+  }
+
+  function showJob(j) {
+    if (j !== job || !ctx.alive()) return;
+    const pct = Math.round(100 * j.progress.fraction);
+    const loss = j.progress.figure;
+    if (j.running) {
+      for (; plotted < j.points.length; plotted++) plot.push(...j.points[plotted]);
+      status(`${j.progress.stage}: ${pct}%${loss != null ? ` — loss ${loss.toFixed(3)}` : ''}${j.data.workers > 1 ? ` (${j.data.workers} workers)` : ''}`);
+    } else if (j.status === 'done') {
+      const r = j.result;
       // From the scene as given (the status's first number) to the best (its last).
       plot.points = [[0, r.initial_loss], ...r.history.map((l, i) => [r.history_evaluations[i] / r.evaluations, l])].filter((p) => Number.isFinite(p[1]));
       plot.draw();
-      const secs = (performance.now() - t0) / 1000;
-      const vals = result.pointers.map((p, i) => `${p} = ${Number(r.values[i].toPrecision(6))}`).join(', ');
-      status(`fitted in ${secs.toFixed(1)} s: ${vals}; loss ${r.initial_loss.toFixed(3)} → ${r.loss.toFixed(3)} after ${r.evaluations} evaluations`
+      const secs = (j.endedAt - j.startedAt) / 1000;
+      status(`fitted in ${secs.toFixed(1)} s: ${valuesText(j.data.params, r.values)}; loss ${r.initial_loss.toFixed(3)} → ${r.loss.toFixed(3)} after ${r.evaluations} evaluations`
         + `${r.validation != null ? `, validation error ${r.validation.toPrecision(3)}` : ''}`);
       statusEl.dataset.initial = String(r.initial_loss);
       statusEl.dataset.loss = String(r.loss);
       statusEl.dataset.fits = String(Number(statusEl.dataset.fits || 0) + 1);
-    } catch (err) {
-      if (err?.kind === 'cancelled') { if (ctx.alive()) status('stopped'); } else if (ctx.alive()) {
+    } else {
+      for (; plotted < j.points.length; plotted++) plot.push(...j.points[plotted]);
+      if (j.status === 'stopped') {
+        status(j.best
+          ? `stopped at ${pct}% — Apply fitted values puts in the best so far: ${valuesText(j.data.params, j.best.values)} (loss ${j.best.loss.toFixed(3)})`
+          : `stopped at ${pct}%, before any candidate`);
+      } else if (j.status === 'cancelled') {
+        status(`cancelled at ${pct}% (${j.reason})`);
+      } else if (j.status === 'failed') {
         status('the reconstruction failed (see above)');
-        ctx.error(err, { prefix: 'Reconstruct', source: 'fit' });
+        ctx.error(j.error, { prefix: 'Reconstruct', source: 'fit' });
       }
-    } finally {
-      if (running === ctrl) { running = null; if (ctx.alive()) setRunning(false); }
     }
+    setRunning(j.running);
   }
 
   runBtn.onclick = () => run();
-  stopBtn.onclick = () => running?.abort();
+  stopBtn.onclick = () => job?.stop();
   applyBtn.onclick = () => {
     const doc = ctx.state();
-    if (!result || !doc || result.from !== doc.scene) return;
-    ctx.commit({ ...doc, scene: result.scene, example: null });
-    status(`applied: ${result.pointers.length} value(s) written into the scene (undo restores them)`);
+    const next = applicable();
+    if (!next || !doc) return;
+    const what = job.status === 'done' ? 'the fitted' : 'the best so far';
+    if (!ctx.commit({ ...doc, scene: next, example: null })) return;
+    job.data.applied = true;
+    status(`applied: ${what} ${job.data.params.length === 1 ? 'value' : 'values'} written into the scene (undo restores them)`);
+    setRunning(false);
   };
 
   // For the e2e tests (ctx.expose, beside the Micro panel's own).
   const hooks = {
     rows: () => rows.map((r) => ({ pointer: r.pointer, value: r.value })),
-    result: () => result && { scene: result.scene, values: result.values },
-    running: () => running !== null,
+    result: () => (job?.status === 'done' ? { scene: job.result.scene, values: job.result.values } : null),
+    running,
+    job: () => job,
     plotted: () => plot.points.length,
     request: () => request(),
   };
   ctx.expose(hooks, 'micro-fit');
+  // A reconstruction of this document that ran (or runs on) while the tool was away.
+  if (ctx.job('reconstruct')) attach(ctx.job('reconstruct'));
 
   return {
     render(doc) {
       if (!doc) return;
       if (doc.scene !== scene) buildRows(doc.scene);
-      if (!running) setRunning(false);
+      if (!running()) setRunning(false);
     },
     unmount() {
-      running?.abort();
+      unfollow?.(); // the reconstruction runs on: it is the document's
     },
   };
 }
