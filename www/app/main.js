@@ -12,6 +12,7 @@ import microTool from '../micro/panel.js';
 import textureTool from '../texture/panel.js';
 import { embedOptions, enterEmbed, serviceWorkerAllowed } from './embed-mode.js';
 import { mountHome } from './home.js';
+import { addToolHead } from './help.js';
 
 const TOOLS = [pixelTool, fitTool, inspectTool, tangleTool, microTool, textureTool];
 
@@ -63,6 +64,8 @@ const doc = new DocumentController({
   pool, toast, tools: TOOLS, host: $('#panel'), persist: !embed, onJob: showJob,
   onShow(id) {
     leaveHome();
+    // The view's one h1 (the tool's title) and its Help (help.js).
+    if (doc.current?.tool.id === id) addToolHead(doc.current.el, doc.current.tool);
     document.documentElement.dataset.view = id;
     for (const b of document.querySelectorAll('#tools button')) b.setAttribute('aria-current', String(b.dataset.tool === id));
     const params = new URLSearchParams(location.hash.slice(1));

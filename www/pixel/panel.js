@@ -44,8 +44,8 @@ const html = `
     <div class="card pixel-stage">
       <div class="toolbar" role="toolbar" aria-label="Pixel tools">
         <span class="group">
-          <button type="button" data-example="fish" class="primary">Fish example</button>
-          <button type="button" data-example="trunk">Trunk example</button>
+          <button type="button" data-example="fish" aria-pressed="false">Fish example</button>
+          <button type="button" data-example="trunk" aria-pressed="false">Trunk example</button>
         </span>
         <span class="group" role="radiogroup" aria-label="Brush">
           <button type="button" data-mode="stroke" role="radio" aria-checked="true" title="Draw orientation strokes (S)">✎ Strokes</button>
@@ -233,12 +233,15 @@ function mount(el, ctx) {
     try {
       if (which === 'source') {
         const img = await ctx.run('decode-image', { bytes: bytes.slice() });
-        // A new source keeps the mask when the sizes agree, else starts with a full one;
-        // strokes are rescaled to the new size so they stay on the same part of the picture.
-        const keepMask = doc?.mask && doc.mask.width === img.width && doc.mask.height === img.height;
+        // An example's mask and strokes were drawn for the example's picture: your own
+        // source starts with a full mask and no strokes. Over your own source, a new one
+        // keeps the mask when the sizes agree (else a full one), and the strokes rescaled
+        // to the new size so they stay on the same part of the picture.
+        const own = doc && doc.example == null;
+        const keepMask = own && doc.mask && doc.mask.width === img.width && doc.mask.height === img.height;
         const mask = keepMask ? doc.mask : { width: img.width, height: img.height, bits: new Uint8Array(img.width * img.height).fill(1) };
-        const sx = doc ? img.width / doc.mask.width : 1, sy = doc ? img.height / doc.mask.height : 1;
-        const strokes = (doc?.strokes || []).map((s) => s.map(([x, y]) => [Math.round(x * sx * 100) / 100, Math.round(y * sy * 100) / 100]));
+        const sx = own ? img.width / doc.mask.width : 1, sy = own ? img.height / doc.mask.height : 1;
+        const strokes = (own ? doc.strokes : []).map((s) => s.map(([x, y]) => [Math.round(x * sx * 100) / 100, Math.round(y * sy * 100) / 100]));
         ctx.commit({
           ...doc, example: null, source: bytes, mask, strokes, names: { ...(doc?.names || {}), source: file.name },
         });
@@ -701,6 +704,8 @@ function mount(el, ctx) {
   return {
     render(s, prev) {
       if (!s) return;
+      // The example the document is (none once your own source is in).
+      for (const b of el.querySelectorAll('[data-example]')) b.setAttribute('aria-pressed', String(b.dataset.example === s.example));
       if (s.source !== sourceOf && s.source !== loadingFor) loadSource(s);
       else if (sourceImg) {
         if (!prev || s.mask !== prev.mask) drawMaskFull();

@@ -484,17 +484,26 @@ export function paintBatches(g, { parts }, lineWidth, layers = null, key = '', k
   }
 }
 
+// A 1×1 canvas that layer bitmaps are drawn into to make the browser rasterise them.
+let touch = null;
+
 /**
  * Draw `part`'s bitmap for view `key` into `layers` ahead of need (idle
  * time), with transform `m` (a DOMMatrix) and pen `lineWidth`, and have the
  * browser rasterise it now rather than when a slider move first shows it.
+ * (Drawing one pixel of it elsewhere takes a snapshot, which rasterises it;
+ * reading a pixel back did too, but repeated read-backs of a canvas made
+ * Chromium warn and move it off the GPU: willReadFrequently.)
  */
 export function prebuildLayer(layers, part, key, w, h, m, lineWidth) {
   const c = layers.get(part, key, w, h, (lg) => {
     lg.setTransform(m);
     paintPart(lg, part, lineWidth);
   });
-  c.getContext('2d').getImageData(0, 0, 1, 1);
+  touch ??= document.createElement('canvas').getContext('2d');
+  touch.canvas.width = 1;
+  touch.canvas.height = 1;
+  touch.drawImage(c, 0, 0, 1, 1, 0, 0, 1, 1);
 }
 
 /** The final shapes of `r` fitted into `canvas` (white paper, thin black lines). */

@@ -1,5 +1,6 @@
-// One way in for images, shared by every tool: drag-and-drop onto a zone,
-// a file picker, and paste anywhere on the page while the zone is mounted.
+// One way in for images, shared by every tool: drag-and-drop onto the zone
+// or anywhere else in the window, a file picker, and paste anywhere on the
+// page while the zone is mounted.
 
 /**
  * Make `zone` accept image files. `onFile(file)` gets each file the user gives.
@@ -43,7 +44,29 @@ export function acceptFiles(zone, onFile, { accept = 'image/*', pickerLabel = 'C
   zone.addEventListener('dragleave', leave);
   zone.addEventListener('drop', drop);
   document.addEventListener('paste', paste);
-  return () => document.removeEventListener('paste', paste);
+  // A file dropped anywhere in the window is the zone's (a panel has one way in for
+  // a file): the zone lights up while a file is over the window. What handles a drop
+  // itself (the zone, an editor) has called preventDefault by the time it gets here.
+  const hasFiles = (e) => [...(e.dataTransfer?.types || [])].includes('Files');
+  const winOver = (e) => {
+    if (!hasFiles(e) || e.defaultPrevented) return;
+    e.preventDefault();
+    zone.classList.add('dragging');
+  };
+  const winLeave = (e) => { if (!e.relatedTarget) leave(); };
+  const winDrop = (e) => {
+    if (!hasFiles(e)) return leave();
+    if (!e.defaultPrevented) drop(e);
+  };
+  addEventListener('dragover', winOver);
+  addEventListener('dragleave', winLeave);
+  addEventListener('drop', winDrop);
+  return () => {
+    document.removeEventListener('paste', paste);
+    removeEventListener('dragover', winOver);
+    removeEventListener('dragleave', winLeave);
+    removeEventListener('drop', winDrop);
+  };
 }
 
 /**
