@@ -215,10 +215,11 @@ async function greyFromLink(x) {
 /** A user's image file → a grey PNG at most `EXAMPLE_SIDE` a side (and at most MAX_SOURCE_PNG bytes). */
 async function shrinkExample(file) {
   let bmp;
+  if (!file.size) throw new Error(`${file.name || 'the file'} is empty (0 bytes): there is no picture in it`);
   try {
     bmp = await createImageBitmap(file);
   } catch {
-    throw new Error(`${file.name || 'the file'} is not an image this browser can read (PNG, JPEG, WebP, GIF)`);
+    throw new Error(`${file.name || 'the file'} is not an image this browser can read (PNG, JPEG, WebP, GIF): it may be damaged`);
   }
   try {
     for (let side = EXAMPLE_SIDE; side >= 32; side = Math.round(side / 2)) {
@@ -505,7 +506,11 @@ function mount(el, ctx) {
       // Refused (too small to read, say): the canvas shows the document's example again.
       if (!(await useExample(source, png)) && ctx.alive()) await drawExample(state()?.source);
     } catch (err) {
+      // Nothing is being read any more: say so, and show the document's example again.
+      if (!ctx.alive()) return;
+      status('the example was not read (see above); the one before is kept');
       ctx.error(err, { prefix: 'Example' });
+      await drawExample(state()?.source).catch(() => {});
     }
   }
   const dropZone = q('[data-testid=texture-drop]');
