@@ -55,6 +55,10 @@ pub enum Which {
         /// With --designs: fit the anti-aliased `_hard` PNGs.
         #[arg(long)]
         hard: bool,
+        /// With --designs: how the fit starts, periodic (the default) or
+        /// genetic (the paper's GA: the "before" figures of issue 37).
+        #[arg(long, default_value = "periodic")]
+        init: String,
         /// With --designs: the designs' folder.
         #[arg(long, default_value = "bench/designs")]
         designs_dir: std::path::PathBuf,
@@ -165,12 +169,13 @@ pub fn run(w: Which) -> Result<(), String> {
             split,
             hard,
             designs_dir,
+            init,
             ..
         } => super::fit_designs::run(
             &designs_dir,
-            &split,
-            only.as_deref(),
+            (&split, only.as_deref()),
             hard,
+            &init,
             super::threads(threads)?,
         ),
         Which::Fit {

@@ -4,7 +4,7 @@
 //! Fit button sends, and print each one's mean per-colour IoU.
 use filigree::core::job::Cancel;
 use filigree::core::parallel::run_sharded_threads;
-use filigree::pattern::api::{start_fit, FitRequest};
+use filigree::pattern::api::{start_fit, FitRequest, Init};
 use filigree::pattern::field::Scene;
 use filigree::pattern::fit::colour_indices;
 use filigree::pattern::record::{Program, RecordLimits};
@@ -22,14 +22,16 @@ const TOLERANCE: f64 = 60.0;
 
 /// Fit the designs of `dir` whose split is `split` (`validation`, `test`
 /// or `all`; `only` names some), from their crisp PNGs or with `hard`
-/// their anti-aliased ones, on `threads` threads.
+/// their anti-aliased ones, starting with `init`, on `threads` threads.
 pub fn run(
     dir: &Path,
-    split: &str,
-    only: Option<&str>,
+    (split, only): (&str, Option<&str>),
     hard: bool,
+    init: &str,
     threads: usize,
 ) -> Result<(), String> {
+    let init: Init = serde_json::from_value(json!(init))
+        .map_err(|_| format!("--init {init}: use periodic, genetic, random or nelder-mead"))?;
     if !["validation", "test", "all"].contains(&split) {
         return Err(format!(
             "--split {split}: use validation, test or all (choose on validation; look at test once)"
@@ -52,7 +54,7 @@ pub fn run(
         {
             continue;
         }
-        let row = fit_design(dir, name, hard, threads)?;
+        let row = fit_design(dir, name, (hard, init), threads)?;
         eprintln!("{row}");
         rows.push(json!({"split": its_split, "kind": d["kind"], "row": row}));
     }
@@ -60,7 +62,7 @@ pub fn run(
         .iter()
         .filter(|r| r["row"]["iou"].as_f64().unwrap_or(0.0) >= GOOD_IOU)
         .count();
-    let out = json!({"bench": "fit-designs", "split": split, "hard": hard, "threads": threads,
+    let out = json!({"bench": "fit-designs", "split": split, "hard": hard, "init": init, "threads": threads,
         "settings": "defaults (the Fit button's request: program and target image only)",
         "good_iou": GOOD_IOU, "good": good, "of": rows.len(), "designs": rows});
     println!(
@@ -71,7 +73,12 @@ pub fn run(
 }
 
 /// Fit one design with the defaults; its IoU at the target's size.
-fn fit_design(dir: &Path, name: &str, hard: bool, threads: usize) -> Result<Value, String> {
+fn fit_design(
+    dir: &Path,
+    name: &str,
+    (hard, init): (bool, Init),
+    threads: usize,
+) -> Result<Value, String> {
     let read = |file: String| {
         let p = dir.join(&file);
         std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))
@@ -84,6 +91,7 @@ fn fit_design(dir: &Path, name: &str, hard: bool, threads: usize) -> Result<Valu
     let mut req = FitRequest {
         program: program.clone(),
         target_png: Some(png.clone()),
+        init,
         ..Default::default()
     };
     let t0 = Instant::now();
