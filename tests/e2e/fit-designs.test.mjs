@@ -40,6 +40,12 @@ test('a real diagonal-stripes design fits with the defaults: the global stage fi
   assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
   const statuses = await page.evaluate(() => window.__statuses);
   assert.ok(statuses.some((s) => /global search/.test(s)), `the status named the global stage: ${statuses.slice(0, 5)}`);
+  // The loss plot shades the share of the fit the global stage took (it
+  // has no loss of its own to plot), then plots the loss.
+  const stage = await page.getAttribute('[data-testid=fit-plot]', 'data-stage');
+  assert.match(stage ?? '', /^global search 0\.\d+$/, `the plot's stage: ${stage}`);
+  const points = await page.evaluate(() => window.filigree.testHooks.fit.plot.points.length);
+  assert.ok(points >= 5, `${points} loss points after the global stage`);
   const { values, params } = await page.evaluate(() => ({
     values: window.filigree.testHooks.fit.state().values,
     params: window.filigree.testHooks.fit.info().params,

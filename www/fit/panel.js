@@ -559,6 +559,9 @@ function mount(el, ctx) {
           if (p.figure != null) losses[k] = p.figure;
           const loss = Math.min(...losses);
           const fraction = fractions.reduce((a, b) => a + b, 0) / n;
+          // The global stage (spectra, then the phase sweep) has no loss to
+          // plot until its sweep: the plot shades how far it has come.
+          if (/^global search/.test(p.stage)) j.data.global = Math.max(j.data.global ?? 0, fraction);
           const better = p.values && losses[k] === loss && loss < (j.best?.loss ?? Infinity);
           j.report({ fraction, stage: n > 1 ? `${p.stage} (${n} workers)` : p.stage, figure: loss }, {
             point: Number.isFinite(loss) ? [fraction, loss] : null,
@@ -591,6 +594,7 @@ function mount(el, ctx) {
 
   function showJob(j) {
     if (j !== job || !ctx.alive()) return;
+    if (j.data?.global) plot.shade(j.data.global, 'global search');
     for (; plotted < j.points.length; plotted++) plot.push(...j.points[plotted]);
     const pct = Math.round(100 * j.progress.fraction);
     q('progress').value = j.status === 'done' ? 1 : j.progress.fraction;

@@ -16,6 +16,17 @@ export class LossPlot {
 
   clear() {
     this.points = [];
+    this.stage = null;
+    this.draw();
+  }
+
+  /**
+   * Shade the progress from 0 to `x` as a stage that has no loss of its own
+   * to plot (Fit's global search compares spectra, not the loss), labelled.
+   */
+  shade(x, label) {
+    if (!(x > 0) || (this.stage?.x === x && this.stage.label === label)) return;
+    this.stage = { x: Math.min(1, x), label };
     this.draw();
   }
 
@@ -38,12 +49,20 @@ export class LossPlot {
     const pad = { l: 44, r: 8, t: 8, b: 18 };
     ctx.strokeStyle = '#363047';
     ctx.strokeRect(pad.l, pad.t, w - pad.l - pad.r, h - pad.t - pad.b);
-    ctx.fillStyle = '#a49cb8';
     ctx.font = '11px system-ui, sans-serif';
+    if (this.stage) {
+      const sw = this.stage.x * (w - pad.l - pad.r);
+      ctx.fillStyle = 'rgba(201, 162, 255, 0.14)';
+      ctx.fillRect(pad.l, pad.t, sw, h - pad.t - pad.b);
+      ctx.fillStyle = '#a49cb8';
+      ctx.fillText(this.stage.label, pad.l + 4, h - pad.b - 4);
+      c.dataset.stage = `${this.stage.label} ${this.stage.x.toFixed(3)}`;
+    } else delete c.dataset.stage;
+    ctx.fillStyle = '#a49cb8';
     if (this.points.length < 1) {
       delete c.dataset.top;
       delete c.dataset.bottom;
-      ctx.fillText('loss appears here while fitting', pad.l + 8, h / 2);
+      if (!this.stage) ctx.fillText('loss appears here while fitting', pad.l + 8, h / 2);
       return;
     }
     const ys = this.points.map((p) => (this.log ? Math.log10(p[1]) : p[1]));
