@@ -38,6 +38,7 @@ import { prepareTangle, paintBatches, drawThumbnail, createLayers, prebuildLayer
 const RUN_DELAY_MS = 120;
 const BUSY_DELAY_MS = 150; // a run shows it is busy after this long
 const TYPING_DELAY_MS = 600;
+const WORD_DELAY_MS = 400; // a typed start word applies once the typing pauses this long
 const SHARP_DELAY_MS = 120;
 const THUMB = { width: 96, height: 72 };
 // A thumbnail grows only this far (its grammar runs once, cached for the page's life).
@@ -93,6 +94,9 @@ const html = `
       <h3>Selected step</h3>
       <div class="tangle-selected muted" data-testid="tangle-selected">Click a shape to select the step that made it; click it again to go further back.</div>
       <form class="tangle-params" data-testid="tangle-params"></form>
+      <h3 id="tangle-steps-title">Steps</h3>
+      <ol class="tangle-step-list" role="listbox" tabindex="0" aria-labelledby="tangle-steps-title" data-testid="tangle-step-list"
+        title="Arrow keys, Home and End choose a step; Escape deselects"></ol>
       <div class="row-buttons">
         <button type="button" data-act="reexpand" disabled title="Undo this step and everything grown from it, and expand it again with a new random draw">Re-expand</button>
         <button type="button" data-act="select-back" disabled title="The step that made this step's shapes">◂ Earlier step</button>
@@ -839,7 +843,63 @@ function mount(el, ctx) {
     drag = null;
   }
 
+  // ---- the step list: every step of the answer, a listbox in sync with the selection --------
+  // Keyboard (WAI-ARIA listbox, selection follows focus): arrows, Home, End, Page keys;
+  // Escape deselects. A click on a shape of the drawing selects the step here too.
+
+  const stepList = q('[data-testid=tangle-step-list]');
+  let listFor = null; // the answer the list shows
+  function buildStepList() {
+    if (listFor === T) return;
+    listFor = T;
+    if (!T) { stepList.replaceChildren(); return; }
+    stepList.replaceChildren(...T.r.steps.map((st, i) => {
+      const li = document.createElement('li');
+      li.id = `tangle-step-${i}`;
+      li.setAttribute('role', 'option');
+      li.setAttribute('aria-selected', 'false');
+      li.dataset.step = String(i);
+      li.textContent = `${i + 1}. ${st.operator} · ${T.r.tags[st.tag] ?? st.tag} · ${st.inputs.length} → ${st.outputs.length}`;
+      return li;
+    }));
+  }
+  function syncStepList() {
+    buildStepList();
+    const sel = selectedStep();
+    const was = stepList.querySelector('[aria-selected=true]');
+    if (was && Number(was.dataset.step) !== sel) was.setAttribute('aria-selected', 'false');
+    const opt = sel === null ? null : stepList.children[sel];
+    if (!opt) { stepList.removeAttribute('aria-activedescendant'); return; }
+    opt.setAttribute('aria-selected', 'true');
+    stepList.setAttribute('aria-activedescendant', opt.id);
+    // Into view inside the list only (the page does not jump).
+    if (opt.offsetTop < stepList.scrollTop) stepList.scrollTop = opt.offsetTop;
+    else if (opt.offsetTop + opt.offsetHeight > stepList.scrollTop + stepList.clientHeight) stepList.scrollTop = opt.offsetTop + opt.offsetHeight - stepList.clientHeight;
+  }
+  stepList.addEventListener('click', (e) => {
+    const li = e.target.closest('[role=option]');
+    if (!li) return;
+    lastPick = -1;
+    select(Number(li.dataset.step));
+  });
+  stepList.addEventListener('keydown', (e) => {
+    if (!T || !T.steps || e.altKey || e.ctrlKey || e.metaKey) return;
+    const sel = selectedStep();
+    const page = Math.max(1, Math.floor(stepList.clientHeight / (stepList.firstElementChild?.offsetHeight || 20)) - 1);
+    const at = sel ?? -1;
+    const next = {
+      ArrowDown: at + 1, ArrowUp: sel === null ? T.steps - 1 : at - 1, Home: 0, End: T.steps - 1,
+      PageDown: at + page, PageUp: Math.max(0, at - page),
+    }[e.key];
+    if (e.key === 'Escape' && sel !== null) { e.preventDefault(); e.stopPropagation(); lastPick = -1; select(null); return; }
+    if (next === undefined) return;
+    e.preventDefault();
+    lastPick = -1;
+    select(Math.max(0, Math.min(T.steps - 1, next)));
+  });
+
   function showSelected() {
+    syncStepList();
     const sel = selectedStep();
     const box = q('[data-testid=tangle-selected]');
     const form = q('[data-testid=tangle-params]');
@@ -1022,7 +1082,24 @@ function mount(el, ctx) {
     else if (kind === 'polygon') beginDrawing();
   };
   for (const n of ['start-width', 'start-height']) q(`[name=${n}]`).onchange = () => setStart(rectStart());
-  for (const n of ['start-text', 'start-text-height']) q(`[name=${n}]`).onchange = () => setStart(textStart());
+  // A typed word applies as you type, once the typing pauses (and at once on Enter or leaving the field).
+  let wordTimer = null;
+  const applyWord = () => {
+    ctx.clearTimeout(wordTimer);
+    wordTimer = null;
+    const next = textStart();
+    const cur = state()?.start;
+    if (cur?.kind === 'text' && cur.text === next.text && cur.height === next.height) return;
+    setStart(next);
+  };
+  for (const n of ['start-text', 'start-text-height']) {
+    const input = q(`[name=${n}]`);
+    input.onchange = applyWord;
+    input.oninput = () => {
+      ctx.clearTimeout(wordTimer);
+      wordTimer = ctx.setTimeout(applyWord, WORD_DELAY_MS);
+    };
+  }
   q('[name=start-svg]').onchange = async (e) => {
     const file = e.target.files[0];
     e.target.value = '';
@@ -1222,7 +1299,7 @@ function mount(el, ctx) {
     result: () => T?.r ?? null,
     /** The shown answer's points (a Float32Array). */
     points: () => T?.pts ?? null,
-    pending: () => runTimer !== null || running !== null || typingTimer !== null,
+    pending: () => runTimer !== null || running !== null || typingTimer !== null || wordTimer !== null,
     timing: () => ({ ...timing }),
     /** `{incremental}`: false switches the old path on (full repaints, nothing kept from the last answer). */
     options,
@@ -1305,7 +1382,12 @@ function mount(el, ctx) {
         showStartRows(kindSel.value);
       }
       if (s.start?.kind === 'rect') { q('[name=start-width]').value = String(s.start.width); q('[name=start-height]').value = String(s.start.height); }
-      if (s.start?.kind === 'text') { q('[name=start-text]').value = s.start.text; q('[name=start-text-height]').value = String(s.start.height); }
+      if (s.start?.kind === 'text' && wordTimer === null) {
+        // Not under the user's fingers: the field keeps what is typed (a trailing space, say).
+        const word = q('[name=start-text]');
+        if (document.activeElement !== word || word.value.trim() !== s.start.text) word.value = s.start.text;
+        q('[name=start-text-height]').value = String(s.start.height);
+      }
       markExample(s);
       if (!prev || !sameRequest(s, prev)) {
         if (!prev || prev.grammar !== s.grammar || prev.start !== s.start) refit = true;
