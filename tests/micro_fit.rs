@@ -458,6 +458,18 @@ fn bad_requests_get_typed_errors_naming_the_field() {
             "invalid-input",
             "budget",
         ),
+        // Issue 34: a budget below one generation returned the start
+        // unchanged after one evaluation, without a word.
+        (
+            MicroFitRequest {
+                budget: 20,
+                population: 20,
+                optimizer: Optimizer::Cmaes,
+                ..ok.clone()
+            },
+            "invalid-input",
+            "budget",
+        ),
         (
             MicroFitRequest {
                 scene: "{\"type\": \"sphere\"".into(),
@@ -695,7 +707,7 @@ fn lattice_sampling_equals_pointwise_sampling_bit_for_bit() {
                 grid: grid as u32,
                 center: [0.1, -0.2, 0.3],
                 half: 0.37,
-                ..gyroid_request(Optimizer::Cmaes, 10)
+                ..gyroid_request(Optimizer::Cmaes, 41)
             };
             req.params = match i {
                 0 => eta_param(),
@@ -778,7 +790,7 @@ fn a_fixed_number_of_loss_evaluations() {
     let evals: usize = std::env::var("EVALS").map_or(100, |v| v.parse().unwrap());
     let mut job = start_fit(MicroFitRequest {
         grid: 32,
-        ..gyroid_request(Optimizer::Cmaes, 10)
+        ..gyroid_request(Optimizer::Cmaes, 41)
     })
     .unwrap();
     job.step().unwrap();

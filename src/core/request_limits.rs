@@ -54,9 +54,21 @@ pub fn finite_in(field: &str, v: f64, (lo, hi): (f64, f64)) -> Result<f64> {
         Ok(v)
     } else {
         Err(Error::input(format!(
-            "`{field}` must be a finite number in {lo}..={hi} (got {v})"
+            "`{field}` must be a finite number in {lo}..={hi} (got {})",
+            short_number(v)
         ))
         .at(field))
+    }
+}
+
+/// A number for a message: as written when that is at most 12 characters,
+/// else in scientific notation (a 309-digit value is not echoed in full).
+pub fn short_number(v: f64) -> String {
+    let t = format!("{v}");
+    if t.len() <= 12 {
+        t
+    } else {
+        format!("{v:.4e}")
     }
 }
 
@@ -76,6 +88,16 @@ pub fn int_in<T: PartialOrd + std::fmt::Display + Copy>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 34: a 309-digit value was echoed in full in the refusal.
+    #[test]
+    fn huge_numbers_are_shortened_in_messages() {
+        let e = finite_in("tolerance", 1e308, (0.0, 442.0))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("1.0000e308") && e.len() < 120, "{e}");
+        assert_eq!(short_number(0.25), "0.25");
+    }
 
     #[test]
     fn checks_name_the_field_and_reject_non_finite() {

@@ -943,6 +943,20 @@ pub fn start_fit(req: MicroFitRequest) -> Result<MicroFitJob> {
         sigma: req.sigma,
         inner,
     };
+    if make.optimizer == Optimizer::Cmaes && inner > 0 && inner < make.population {
+        // Fewer evaluations than one generation: CMA-ES would never update
+        // and the fit would return its start unchanged. (A budget of 1
+        // asks for the start's loss alone, and gets it.)
+        return Err(Error::input(format!(
+            "`budget` {} is less than one CMA-ES generation: it needs at least {} \
+             evaluations (the start and a population of {}), or 1 for the start's \
+             loss alone; give a bigger budget or a smaller `population`",
+            req.budget,
+            make.population + 1,
+            make.population
+        ))
+        .at("budget"));
+    }
     let stages = if req.coarse_to_fine {
         COARSE_TO_FINE.to_vec()
     } else {

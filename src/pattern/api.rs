@@ -66,7 +66,7 @@ fn named_values_at(
         if !(v.is_finite() && (d.lo..=d.hi).contains(v)) {
             return Err(Error::input(format!(
                 "`{at}` is {}; the program declares '{k}' in [{}, {}]",
-                short_number(*v),
+                lim::short_number(*v),
                 d.lo,
                 d.hi
             ))
@@ -75,16 +75,6 @@ fn named_values_at(
         vals[i] = *v;
     }
     Ok(vals)
-}
-
-/// A number for a message: a 309-digit value is not echoed in full.
-fn short_number(v: f64) -> String {
-    let t = format!("{v}");
-    if t.len() <= 12 {
-        t
-    } else {
-        format!("{v:.4e}")
-    }
 }
 
 /// Float values (declaration order) out of all values.

@@ -242,9 +242,15 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     })?;
     let name = format_name(format);
     let reader = ImageReader::with_format(Cursor::new(bytes), format);
-    let decoder = reader
-        .into_decoder()
-        .map_err(|e| Error::input(format!("the {name} header could not be read: {e}")))?;
+    let decoder = reader.into_decoder().map_err(|e| match e {
+        image::ImageError::Limits(_) => over_memory(name),
+        e => match plain_reason(&e) {
+            Reason::Limit => over_memory(name),
+            Reason::Said(why) => {
+                Error::input(format!("the {name} header could not be read: {why}"))
+            }
+        },
+    })?;
     let mut decoder = decoder;
     let (w, h) = decoder.dimensions();
     if w == 0 || h == 0 {
@@ -264,14 +270,54 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
         ))
     })?;
     let img = image::DynamicImage::from_decoder(decoder).map_err(|e| match e {
-        image::ImageError::Limits(e) => Error::limit(format!(
-            "decoding this {name} needs more than the decode memory limit of {} MiB ({e})",
-            limits::MAX_DECODE_ALLOC >> 20
-        )),
-        e => Error::input(format!("the {name} data is damaged or truncated ({e})")),
+        image::ImageError::Limits(_) => over_memory(name),
+        e => match plain_reason(&e) {
+            Reason::Limit => over_memory(name),
+            Reason::Said(why) => {
+                Error::input(format!("the {name} data is damaged or truncated ({why})"))
+            }
+        },
     })?;
     let rgba = img.into_rgba8();
     Rgba8Image::from_raw_checked(w, h, rgba.into_raw())
+}
+
+/// The error for a file whose decoding needs more memory than allowed.
+fn over_memory(name: &str) -> Error {
+    Error::limit(format!(
+        "decoding this {name} needs more than the decode memory limit of {} MiB",
+        limits::MAX_DECODE_ALLOC >> 20
+    ))
+}
+
+/// What a decoder's error says, in words fit for a person.
+enum Reason {
+    /// It ran out of its memory allowance.
+    Limit,
+    Said(String),
+}
+
+/// The decoders' own messages sometimes print their internal structures
+/// ("ChunkType { type: IHDR, critical: true, … }") or a bare "Memory limit
+/// exceeded": keep a plain sentence, name a memory limit as such, and say
+/// only "it could not be decoded" for the rest.
+fn plain_reason(e: &image::ImageError) -> Reason {
+    let t = e.to_string();
+    let lower = t.to_lowercase();
+    if lower.contains("memory limit") || lower.contains("limit exceeded") {
+        return Reason::Limit;
+    }
+    if t.contains(['{', '}', '[', ']']) || t.contains("::") || t.len() > 160 {
+        let what = if lower.contains("crc") || lower.contains("checksum") {
+            "a checksum does not match: the file is damaged"
+        } else if lower.contains("chunk") {
+            "a chunk of the file is damaged or out of place"
+        } else {
+            "the decoder could not make sense of it"
+        };
+        return Reason::Said(what.into());
+    }
+    Reason::Said(t)
 }
 
 /// Pixels a [`Decoding`] step of a job decodes: a few milliseconds
@@ -486,6 +532,35 @@ use image::ImageEncoder;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 34: a PNG whose header checksum is wrong was refused with the
+    /// decoder's internals ("while decoding ChunkType { type: IHDR,
+    /// critical: true, … } chunk"); a decoder's bare "Memory limit
+    /// exceeded" now names the decode memory limit.
+    #[test]
+    fn decoder_errors_are_said_plainly() {
+        let mut png = encode_png(&Rgba8Image::new(4, 4)).unwrap();
+        // The IHDR chunk's CRC: bytes 29..33 (signature 8, length 4, type 4, data 13).
+        png[29] ^= 0xff;
+        let e = decode(&png, Limits::default()).unwrap_err().to_string();
+        assert!(!e.contains("ChunkType") && !e.contains('{'), "{e}");
+        assert!(e.contains("checksum") && e.contains("PNG"), "{e}");
+        let mem = image::ImageError::Decoding(image::error::DecodingError::new(
+            image::error::ImageFormatHint::Exact(image::ImageFormat::Png),
+            "Memory limit exceeded",
+        ));
+        assert!(matches!(plain_reason(&mem), Reason::Limit));
+        assert!(over_memory("PNG")
+            .to_string()
+            .contains("decode memory limit of"));
+        let kept = image::ImageError::Decoding(image::error::DecodingError::new(
+            image::error::ImageFormatHint::Exact(image::ImageFormat::Png),
+            "unexpected end of file",
+        ));
+        assert!(
+            matches!(plain_reason(&kept), Reason::Said(w) if w.ends_with("unexpected end of file"))
+        );
+    }
 
     fn checker(w: u32, h: u32) -> Rgba8Image {
         let mut img = Rgba8Image::new(w, h);

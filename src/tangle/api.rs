@@ -357,7 +357,7 @@ fn start_polys(rings: Vec<Vec<DVec2>>, field: &str) -> Result<Vec<Polygon>> {
         return Err(Error::input(format!(
             "the start shape is {} units across; start shapes are at most {MAX_START_SIDE} \
              units across (scale it down: operators work at the page's scale)",
-            short_number(side)
+            lim::short_number(side)
         ))
         .at(field.to_string()));
     }
@@ -369,22 +369,12 @@ fn start_rect(w: f64, h: f64, field: &str) -> Result<Polygon> {
     if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= MAX_START_SIDE) {
         return Err(Error::input(format!(
             "a start rectangle is between 0 and {MAX_START_SIDE} units a side (got {}×{})",
-            short_number(w),
-            short_number(h)
+            lim::short_number(w),
+            lim::short_number(h)
         ))
         .at(field.to_string()));
     }
     Ok(Polygon::rect(DVec2::ZERO, DVec2::new(w, h)))
-}
-
-/// A number for a message: at most 12 significant characters.
-fn short_number(v: f64) -> String {
-    let t = format!("{v}");
-    if t.len() <= 12 {
-        t
-    } else {
-        format!("{v:.4e}")
-    }
 }
 
 /// The start shapes (polygon, tag).
@@ -446,7 +436,7 @@ fn grammar_starts(g: &Grammar) -> Result<Vec<(Polygon, String)>> {
                 if !(*radius > 0.0 && 2.0 * radius <= MAX_START_SIDE) {
                     return Err(Error::input(format!(
                         "a start circle's diameter is at most {MAX_START_SIDE} units (got radius {})",
-                        short_number(*radius)
+                        lim::short_number(*radius)
                     ))
                     .at(field.to_string()));
                 }
