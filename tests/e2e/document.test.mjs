@@ -214,6 +214,45 @@ test('a Tangle link with a too-deep SVG or a huge start is refused; the work sta
   }
 });
 
+// Issue 34: the same bad Tangle states as a project file (Open project…):
+// a too-deep SVG start, a million-unit start and a runaway grammar are
+// refused in plain words before anything is autosaved; the work stays.
+test('a Tangle project file with a too-deep SVG or a huge start is refused; the autosave stays', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigree.testHooks?.tangle?.state()?.grammar);
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('button[data-act=save-project]')]);
+  const good = JSON.parse(fs.readFileSync(await download.path(), 'utf8'));
+  assert.equal(good.tool, 'tangle');
+  const before = await page.evaluate(() => JSON.stringify(window.filigree.testHooks.tangle.state()));
+  const saved = () => page.evaluate(() => new Promise((resolve) => {
+    const open = indexedDB.open('filigree');
+    open.onsuccess = () => {
+      const db = open.result;
+      const names = [...db.objectStoreNames];
+      if (!names.length) { resolve(null); return; }
+      const tx = db.transaction(names, 'readonly');
+      const all = names.map((n) => new Promise((r) => { const q = tx.objectStore(n).getAll(); q.onsuccess = () => r(q.result); }));
+      Promise.all(all).then((v) => resolve(JSON.stringify(v)));
+    };
+    open.onerror = () => resolve(null);
+  }));
+  const autosaveBefore = await saved();
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'filigree-tangle-'));
+  const deep = `<svg xmlns="http://www.w3.org/2000/svg">${'<g>'.repeat(3000)}<rect width="9" height="9"/>${'</g>'.repeat(3000)}</svg>`;
+  for (const [name, start, message] of [
+    ['deep.filigree.json', { kind: 'svg', svg: deep }, /deep\.filigree\.json was not opened — .*more than 256 deep/],
+    ['huge.filigree.json', { kind: 'rect', width: 1e6, height: 1e6 }, /huge\.filigree\.json was not opened — .*at most 20000/],
+  ]) {
+    const file = path.join(dir, name);
+    fs.writeFileSync(file, JSON.stringify({ ...good, state: { ...good.state, start } }));
+    await page.setInputFiles('input[data-input=project]', file);
+    await page.waitForFunction((re) => new RegExp(re).test(document.querySelector('[data-testid=doc-error]')?.textContent ?? ''), message.source, { timeout: 20000 });
+    assert.match(await page.textContent(ERROR), /Your work is unchanged\.$/);
+    assert.equal(await page.evaluate(() => JSON.stringify(window.filigree.testHooks.tangle.state())), before, 'the document is untouched');
+  }
+  assert.equal(await saved(), autosaveBefore, 'the autosave is untouched');
+});
+
 test('a corrupt project file is refused before anything is autosaved; the work stays', async () => {
   const page = await env.newPage({ path: '#tool=pixel' });
   await pixelReady(page);
