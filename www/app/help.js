@@ -21,7 +21,7 @@ const HELP = {
     ],
   },
   fit: {
-    about: 'Fit finds the parameters of a pattern program that best match a target picture: a genetic search, then gradient descent on the distance fields of the pattern’s colours.',
+    about: 'Fit finds the parameters of a pattern program that best match a target picture: a global search first (candidates compared by their spectra, which find a repeating design’s period and angle wherever it sits, then its phase swept), then gradient descent on the distance fields of the pattern’s colours.',
     controls: [
       ['Generator, Edit the program', 'pick a shipped pattern program or write your own (Apply program); its parameters become the sliders.'],
       ['Sliders', 'the pattern’s parameters; the pattern is drawn over the target with pink outlines.'],
