@@ -35,7 +35,7 @@
 //   ctx.seal()                   end a coalesced drag
 //   ctx.run(kind, payload, opts) pool.run tied to the panel: leaving aborts it; a result
 //                                arriving after leaving rejects as 'cancelled'
-//   ctx.startJob(name, {label}, body) a long job of the DOCUMENT (a fit, a reconstruction, a
+//   ctx.startJob(name, {label, quietMs}, body) a long job of the DOCUMENT (a fit, a reconstruction, a
 //                                tangle's growth): body(job) runs on when the panel is left, the
 //                                tool bar shows its progress, and it is there when the panel comes
 //                                back; see DocJob below. Starting one stops the last of that name.
@@ -145,7 +145,7 @@ export function coreDefaults(pool, tool) {
  *   data     the panel's own facts about the job (what it started from)
  */
 export class DocJob {
-  constructor(ctl, tool, name, { label = name } = {}) {
+  constructor(ctl, tool, name, { label = name, quietMs = 0 } = {}) {
     this.ctl = ctl;
     this.tool = tool;
     this.name = name;
@@ -164,6 +164,11 @@ export class DocJob {
     this.listeners = new Set();
     this.startedAt = performance.now();
     this.endedAt = null;
+    // A job that may well end at once (a tangle's growth after an edit) reaches the tool
+    // bar only once it has run `quietMs`; one that ends before stays quiet.
+    this.quietUntil = this.startedAt + quietMs;
+    this.announced = quietMs <= 0;
+    if (!this.announced) setTimeout(() => { if (this.running) ctl.jobChanged(this); }, quietMs);
   }
 
   get running() { return this.status === 'running'; }
@@ -310,6 +315,10 @@ export class DocumentController {
   /** A job moved on: the tool bar hears it; an outcome shown in its mounted panel is seen. */
   jobChanged(job) {
     if (!job.running && this.current?.tool === job.tool) job.seen = true;
+    if (!job.announced) {
+      if (!job.running || performance.now() < job.quietUntil) return;
+      job.announced = true;
+    }
     this.onJob?.(job);
   }
 
@@ -534,7 +543,7 @@ export class DocumentController {
     this.showTabs();
     this.onShow?.(tool.id);
     // Its jobs' outcomes are shown from here on.
-    for (const job of this.jobsOf(tool.id).values()) if (!job.running && !job.seen) { job.seen = true; this.onJob?.(job); }
+    for (const job of this.jobsOf(tool.id).values()) if (!job.running && !job.seen) { job.seen = true; if (job.announced) this.onJob?.(job); }
   }
 
   context(cur) {
@@ -621,7 +630,7 @@ export class DocumentController {
         const job = new DocJob(ctl, tool, name, opts);
         jobs.set(name, job);
         job.promise = job.start(body);
-        ctl.onJob?.(job);
+        ctl.jobChanged(job);
         return job;
       },
       job: (name) => ctl.jobsOf(tool.id).get(name) ?? null,

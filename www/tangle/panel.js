@@ -287,6 +287,9 @@ function mount(el, ctx) {
     if (!doc) return;
     ctx.clearTimeout(runTimer);
     runTimer = null;
+    // Already growing this very document (Generate after an edit): that growth answers.
+    const live = ctx.job('grow');
+    if (running && live?.running && live.data.doc && sameRequest(live.data.doc, doc)) return;
     running?.abort();
     const ctrl = new AbortController();
     running = ctrl;
@@ -304,15 +307,31 @@ function mount(el, ctx) {
     const t0 = performance.now();
     timing.runAt = t0;
     try {
-      const r = await ctx.run('tangle', { ...requestOf(doc), keep: true }, {
-        signal: ctrl.signal,
-        affinity: KEEP_AFFINITY,
-        onProgress: (p) => {
-          if (running !== ctrl || !busy) return;
-          status(`growing: ${p.figure != null ? `${Math.round(p.figure).toLocaleString('en')} shapes` : p.stage}`);
-        },
-      });
-      if (running !== ctrl) return;
+      // The growth is a job of the document (ctx.startJob, issue 35 item 4): it grows on
+      // when the user opens another tool, the tool bar shows it once it takes a while, and
+      // coming back takes its answer (or waits for it) instead of growing it again.
+      let job = ctx.job('grow');
+      if (!(job?.data.doc && sameRequest(job.data.doc, doc) && (job.running || job.status === 'done'))) {
+        const request = { ...requestOf(doc), keep: true };
+        job = ctx.startJob('grow', { label: 'Tangle', quietMs: BUSY_DELAY_MS }, (j) => j.run('tangle', request, {
+          affinity: KEEP_AFFINITY,
+          onProgress: (p) => j.report({
+            fraction: p.fraction, figure: p.figure,
+            stage: p.figure != null ? `${Math.round(p.figure).toLocaleString('en')} shapes` : p.stage,
+          }),
+        }));
+        job.data.doc = doc;
+      }
+      // Cancel, or a newer edit, ends it; leaving the panel does not.
+      const stop = () => job.stop('cancelled');
+      ctrl.signal.addEventListener('abort', stop, { once: true });
+      const unfollow = ctx.follow(job, (j) => { if (running === ctrl && busy && j.running) status(`growing: ${j.progress.stage}`); });
+      const ended = await job.promise;
+      unfollow();
+      ctrl.signal.removeEventListener('abort', stop);
+      if (running !== ctrl || !ctx.alive()) return;
+      if (ended.status !== 'done') throw ended.error ?? Object.assign(new Error('cancelled'), { kind: 'cancelled' });
+      const r = ended.result;
       const t1 = performance.now();
       timing.answeredAt = t1;
       // Only the edits differ from the last answer: its unchanged shapes keep their Path2Ds,
@@ -1263,7 +1282,9 @@ function mount(el, ctx) {
     input.onchange = () => ctx.seal();
   }
   q('[data-act=generate]').onclick = generate;
-  q('[data-act=cancel]').onclick = () => { running?.abort(); ctx.clearTimeout(runTimer); runTimer = null; };
+  q('[data-act=cancel]').onclick = () => { running?.abort(); ctx.job('grow')?.stop('cancelled'); ctx.clearTimeout(runTimer); runTimer = null; };
+  // A growth of this document under way (it went on while the tool was away): show it busy.
+  if (ctx.job('grow')?.running) { q('[data-act=cancel]').disabled = false; status('growing…'); }
 
   // ---- export --------------------------------------------------------------------------
 
@@ -1419,7 +1440,7 @@ function mount(el, ctx) {
       stopPlay();
       if (prebuildHandle) cancelIdle(prebuildHandle);
       cancelAnimationFrame(frame);
-      running?.abort();
+      running = null; // its growth goes on: it is the document's (ctx.startJob)
     },
   };
 }
