@@ -321,7 +321,9 @@ test('tangle: a curve drawn on the canvas joins the grammar and a split cuts alo
   // A zigzag drawn with five clicks, finished with the bar's button.
   await page.click('[data-act=draw-curve]');
   assert.equal(await page.textContent('[data-act=draw-finish]'), 'Add this curve');
+  // The drawing area is in view, though the button sits low in the side column.
   const box = await page.locator('[data-testid=tangle-canvas]').boundingBox();
+  assert.ok(box.y + box.height * 0.2 >= 0 && box.y + box.height * 0.8 <= 800, `the canvas is in view: ${JSON.stringify(box)}`);
   for (const [fx, fy] of [[0.2, 0.5], [0.35, 0.3], [0.5, 0.5], [0.65, 0.3], [0.8, 0.5]]) {
     await page.mouse.click(box.x + fx * box.width, box.y + fy * box.height);
   }

@@ -1140,6 +1140,8 @@ function mount(el, ctx) {
     q('[data-act=draw-finish]').textContent = p.finish;
     q('[data-testid=tangle-draw-count]').textContent = '0';
     status(`drawing ${p.what}: click to add points, double-click or "${p.finish}" to finish`);
+    // The drawing area comes into view: the button may sit far down the side column.
+    q('[data-testid=tangle-canvas]').scrollIntoView({ block: 'nearest' });
     paint();
   }
   function addDrawPoint(cx, cy) {
