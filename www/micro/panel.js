@@ -47,6 +47,10 @@ const TARGET = [-1e6, 1e6]; // the request's range for camera.target
 const GPU_REFINE_DELAY_MS = 120; // the camera rests this long before refining
 const GPU_FRAME_MS = 30; // aim for frames (and refinement slices) this long
 const GPU_MAX_DIV = 16;
+// A picture whose GPU work (shader compile, coarse frame, refinement) passes this is slow
+// (a software GPU takes 20–110 s): the panel says so and offers the CPU renderer.
+const SLOW_GPU_MS = 2000;
+const RENDERER_KEY = 'filigree-micro-renderer'; // sessionStorage: 'cpu' | 'gpu' (the user's choice)
 const DEFAULT_CAMERA = { yaw: 35, pitch: 28, distance: 3.6, target: [0, 0, 0] };
 const DISTANCE = [1e-6, 1e5];
 const TILE_GRID = 4; // the full CPU picture: TILE_GRID² tiles
@@ -114,6 +118,12 @@ const html = `
       <div class="status muted" data-testid="micro-status" aria-live="polite"></div>
       <div class="status muted" data-testid="micro-gpu-note" hidden></div>
       <div class="status muted" data-testid="micro-cpu-note" hidden></div>
+      <div class="status micro-renderer" data-testid="micro-renderer" role="status" hidden>
+        <span></span>
+        <button type="button" data-act="use-cpu" hidden>Draw on the CPU</button>
+        <button type="button" data-act="keep-gpu" hidden>Keep the GPU</button>
+        <button type="button" data-act="use-gpu" hidden>Use the GPU again</button>
+      </div>
     </section>
     <aside class="card micro-side">
       <h3>Scene</h3>
@@ -460,8 +470,64 @@ function mount(el, ctx) {
 
   /** Whether the GPU draws this document. */
   function onGpu(doc) {
-    return !!gpu && !gpu.lost && doc.view === 'render' && !(doc.spp > 0) && !gpuFailed.has(shaderKey(doc)) && usable(doc.camera, fullSide());
+    return !!gpu && !gpu.lost && choice !== 'cpu' && doc.view === 'render' && !(doc.spp > 0) && !gpuFailed.has(shaderKey(doc)) && usable(doc.camera, fullSide());
   }
+
+  // ---- the slow-GPU guard: the user may choose the CPU renderer -------------------------
+  //
+  // A picture whose GPU time passes `slowGpuMs` (SLOW_GPU_MS; a test hook sets it
+  // lower) is said to be slow in the status, with an offer of the CPU renderer (the
+  // tiled `micro-render` path). The choice holds for the tab's session, reloads
+  // included (sessionStorage; the panel's memory where storage is blocked), and
+  // "Use the GPU again" undoes it.
+  const rendererEl = q('[data-testid=micro-renderer]');
+  let slowGpuMs = SLOW_GPU_MS;
+  let slowOffer = null; // the GPU time (ms) of the slow picture while the offer is shown
+  const readChoice = () => {
+    try { return sessionStorage.getItem(RENDERER_KEY); } catch { return ctx.memory.renderer ?? null; }
+  };
+  const writeChoice = (v) => {
+    ctx.memory.renderer = v;
+    try { sessionStorage.setItem(RENDERER_KEY, v); } catch { /* blocked storage: the panel's memory holds it */ }
+  };
+  let choice = readChoice(); // 'cpu', 'gpu' (the GPU kept: no more offers) or null
+
+  function showRenderer() {
+    const say = (text, acts) => {
+      rendererEl.hidden = !text;
+      rendererEl.querySelector('span').textContent = text;
+      for (const b of rendererEl.querySelectorAll('button')) b.hidden = !acts.includes(b.dataset.act);
+    };
+    if (!gpu || gpu.lost) say('', []);
+    else if (choice === 'cpu') say('Drawn on the CPU, as you chose (the GPU was slow here).', ['use-gpu']);
+    else if (slowOffer !== null) {
+      say(`The GPU is slow here: this picture took ${(slowOffer / 1000).toFixed(1)} s of GPU work (a software renderer?), `
+        + 'and the page waits while it draws. The CPU renderer draws in tiles over the workers and may be faster.', ['use-cpu', 'keep-gpu']);
+    } else say('', []);
+  }
+
+  /** After a slice of GPU work for `job`: offer the CPU once the picture has taken too long. */
+  function guardSlow(job, ms) {
+    job.gpuMs = (job.gpuMs || 0) + ms;
+    if (choice || slowOffer !== null || job.gpuMs <= slowGpuMs) return;
+    slowOffer = job.gpuMs;
+    showRenderer();
+  }
+
+  function chooseRenderer(v) {
+    choice = v;
+    slowOffer = null;
+    writeChoice(v);
+    showRenderer();
+    const doc = state();
+    if (!doc) return;
+    if (onGpu(doc)) gpuRun(doc);
+    else if (v === 'cpu') { stopGpu(); run(false); }
+  }
+  rendererEl.querySelector('[data-act=use-cpu]').onclick = () => chooseRenderer('cpu');
+  rendererEl.querySelector('[data-act=keep-gpu]').onclick = () => { choice = 'gpu'; slowOffer = null; writeChoice('gpu'); showRenderer(); };
+  rendererEl.querySelector('[data-act=use-gpu]').onclick = () => chooseRenderer('gpu');
+  showRenderer();
 
   /** Say why a render is drawn on the CPU although the GPU view is on. */
   const cpuNote = q('[data-testid=micro-cpu-note]');
@@ -507,8 +573,9 @@ function mount(el, ctx) {
       p.catch(() => shaders.delete(key));
     }
     const sh = await shaders.get(key);
-    gpu.use(sh); // throws when the GPU cannot compile it
-    return sh;
+    const t = performance.now();
+    gpu.use(sh); // throws when the GPU cannot compile it (at once when it is the one in use)
+    return performance.now() - t;
   }
 
   /** The GPU could not draw: say why (a compile failure) and draw on the CPU. */
@@ -532,8 +599,9 @@ function mount(el, ctx) {
     const job = gpuJob;
     if (!job || job.token !== token) return;
     const doc = job.doc;
+    let compileMs;
     try {
-      await gpuShader(doc);
+      compileMs = await gpuShader(doc);
     } catch (err) {
       if (gpuJob?.token === token) gpuFallback(doc, err);
       return;
@@ -551,6 +619,7 @@ function mount(el, ctx) {
       return;
     }
     const ms = performance.now() - t;
+    guardSlow(job, compileMs + ms);
     msPerPixel = ms / (side * side);
     // Keep the next coarse frame near GPU_FRAME_MS.
     if (ms > GPU_FRAME_MS && gpuDiv < GPU_MAX_DIV) gpuDiv *= 2;
@@ -595,6 +664,7 @@ function mount(el, ctx) {
       return;
     }
     const ms = performance.now() - t;
+    guardSlow(job, ms);
     msPerPixel = 0.5 * msPerPixel + 0.5 * ms / (rows * full);
     job.ms += ms;
     paintRows(r.rgba, full, job.y, rows);
@@ -926,6 +996,8 @@ function mount(el, ctx) {
     gpu: () => (gpu && !gpu.lost ? { note: gpuNote.hidden ? null : gpuNote.textContent } : null),
     /** Coarse GPU frames at 1/n of the full side (1: what a fast GPU reaches). */
     gpuPreviewDiv: (n) => { gpuDiv = n; },
+    /** The slow-GPU guard's threshold (ms of GPU work for one picture); SLOW_GPU_MS by default. */
+    slowGpuMs: (ms) => { slowGpuMs = ms; },
   };
   ctx.expose(hooks);
 
