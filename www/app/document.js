@@ -28,6 +28,11 @@
 //   view.render(state, previous)            // after every change (commit, undo, redo, load); diff by identity
 //   view.markError?(err)                    // e.g. put the editor cursor at err.line/err.column
 //   view.keys?                              // {s: () => …}: single-key shortcuts (no modifier held)
+//   async view.drop?(file)                  // a file dropped anywhere in the window that is not a
+//                                           // project (those the controller opens in any tool):
+//                                           // check it, then commit it; throw an Error in plain words
+//                                           // to refuse it (the document stays). A panel that takes
+//                                           // images through ui/file-input.js (acceptFiles) needs none.
 //
 // ctx (one per mount; dead once the panel is left):
 //   ctx.state()                  the current document
@@ -87,6 +92,20 @@ export function plainError(err) {
     return 'Something went wrong inside Filigree (an internal error); your work is kept. Details are in the browser console.';
   }
   return String(err.message || err);
+}
+
+const hasFiles = (e) => [...(e.dataTransfer?.types || [])].includes('Files');
+const isJson = (file) => /\.json$/i.test(file.name) || /\bjson\b/i.test(file.type);
+
+/** Whether `file` is a Filigree project: named so, or JSON whose envelope says so (its first bytes). */
+async function isProjectFile(file) {
+  if (/\.filigree\.json$/i.test(file.name)) return true;
+  if (!isJson(file)) return false;
+  try {
+    return /^\s*\{[^]*"format"\s*:\s*"filigree-project"/.test(await file.slice(0, 4096).text());
+  } catch {
+    return false;
+  }
 }
 
 function cancelled() {
@@ -283,6 +302,10 @@ export class DocumentController {
 
     this.keydown = (e) => this.onKey(e);
     document.addEventListener('keydown', this.keydown);
+    // A file dropped anywhere in the window: the controller sees it first (capture).
+    addEventListener('dragover', (e) => this.onDragOver(e), true);
+    addEventListener('dragleave', (e) => { if (!e.relatedTarget) this.dragHint(false); }, true);
+    addEventListener('drop', (e) => this.onDrop(e), true);
     addEventListener('pagehide', () => { for (const d of this.docs.values()) d.autosave?.flush(); });
     // Another tab saved a document this tab holds: offer its version (tabs bar).
     if (this.persist) {
@@ -873,6 +896,69 @@ export class DocumentController {
       cur.ctx.error(new Error(msg));
       return false;
     }
+  }
+
+  // ---- files dropped anywhere ---------------------------------------------------------------
+  //
+  // A project file opens in any tool, whatever it is dropped on. Any other file
+  // goes to the panel's `view.drop` when it has one (Tangle, Micro), wherever it
+  // lands (the editors included: they would paste the file's bytes as text);
+  // else to the panel's own drop zone (ui/file-input.js: images, anywhere too).
+  // A refused file leaves the document as it was and says why.
+
+  /** Whether the current panel takes dropped files here (not a read-only embed, not the home view). */
+  dropTarget() {
+    const cur = this.current;
+    return cur && !cur.life.dead && !cur.readOnly && cur.tool.state ? cur : null;
+  }
+
+  onDragOver(e) {
+    if (!hasFiles(e)) return;
+    const cur = this.dropTarget();
+    if (!cur?.view?.drop) return;
+    // The panel's: not an editor's either (it would paste the file as text).
+    e.preventDefault();
+    e.stopPropagation();
+    e.dataTransfer.dropEffect = 'copy';
+    this.dragHint(true);
+  }
+
+  /** The tool lit while a file is over the window (and every zone dark again after). */
+  dragHint(on) {
+    const el = this.current?.el;
+    el?.classList.toggle('drop-over', on);
+    if (!on) for (const z of document.querySelectorAll('.dragging')) z.classList.remove('dragging');
+  }
+
+  onDrop(e) {
+    const file = hasFiles(e) && e.dataTransfer.files[0];
+    const cur = file && this.dropTarget();
+    if (!cur) { this.dragHint(false); return; }
+    // Images for a panel without view.drop: its zone's (acceptFiles) to take.
+    if (!cur.view?.drop && !isJson(file)) { this.current?.el.classList.remove('drop-over'); return; }
+    e.preventDefault();
+    e.stopPropagation();
+    this.dragHint(false);
+    this.openDropped(file);
+  }
+
+  /** Open a dropped file: a project as a project, else the panel's (view.drop); says plainly when refused. */
+  async openDropped(file) {
+    const cur = this.current;
+    if (await isProjectFile(file)) return this.openProjectFile(file);
+    if (this.current !== cur) return false;
+    try {
+      if (!cur.view?.drop) throw new Error(`it is not a Filigree project, and ${cur.tool.title} opens images and projects`);
+      await cur.view.drop(file);
+    } catch (err) {
+      if (this.current !== cur || err?.kind === 'cancelled') return false;
+      const line = Number.isInteger(err?.line) && !/\bline \d/.test(err.message || '') ? `line ${err.line}: ` : '';
+      const why = `${line}${plainError(err) ?? 'it was cancelled'}`.replace(/\.$/, '');
+      cur.ctx.error(new Error(`${file.name} was not opened — ${why}. Your work is unchanged.`), { source: 'drop' });
+      return false;
+    }
+    if (this.current === cur) cur.ctx.clearError('drop');
+    return true;
   }
 
   // ---- keys ---------------------------------------------------------------------------------

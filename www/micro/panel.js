@@ -54,6 +54,7 @@ const RENDERER_KEY = 'filigree-micro-renderer'; // sessionStorage: 'cpu' | 'gpu'
 const DEFAULT_CAMERA = { yaw: 35, pitch: 28, distance: 3.6, target: [0, 0, 0] };
 const DISTANCE = [1e-6, 1e5];
 const TILE_GRID = 4; // the full CPU picture: TILE_GRID² tiles
+const MAX_SCENE_BYTES = 256 * 1024; // the core's MAX_MICRO_SCENE_BYTES (src/core/limits.rs)
 const PASS_MAX = 256; // most samples per pixel in one progressive pass
 const SHADING_DEFAULTS = { shading: 'lambert', roughness: 0.35, specular: 0.04, absorption: 0, spp: 0, max_depth: 4 };
 const SPP_CHOICES = [0, 4, 16, 64, 256, 1024];
@@ -1001,7 +1002,32 @@ function mount(el, ctx) {
   };
   ctx.expose(hooks);
 
+  /**
+   * A scene JSON file dropped anywhere in the window (document.js: view.drop):
+   * read and traced once by the core (a 2×2 picture) before it replaces the
+   * scene; a file the core refuses leaves the document as it is.
+   */
+  async function dropScene(file) {
+    if (!/\.json$/i.test(file.name) && !/\bjson\b/i.test(file.type)) {
+      throw new Error('Micro opens scene JSON files (like Export scene JSON writes) and Filigree projects');
+    }
+    if (file.size > MAX_SCENE_BYTES) throw new Error(`it is ${Math.ceil(file.size / 1024)} KB, more than a scene may be (${MAX_SCENE_BYTES / 1024} KB)`);
+    const text = await file.text();
+    try { JSON.parse(text); } catch (err) { throw new Error(`it is not JSON (${err.message})`); }
+    const doc = state();
+    if (!doc) throw new Error('the panel is still loading');
+    const [kind, payload] = requestOf({ ...doc, scene: text, view: 'render', spp: 0 }, 2);
+    await ctx.run(kind, payload);
+    const now = state();
+    if (!now || !ctx.alive()) return;
+    ctx.clearTimeout(typingTimer);
+    typingTimer = null;
+    ctx.commit({ ...now, scene: prettyScene(text), example: null });
+    status(`opened the scene ${file.name}`);
+  }
+
   return {
+    drop: dropScene,
     render(s, prev) {
       if (!s) return;
       recon.render(s);
