@@ -449,6 +449,114 @@ test('changing the generator during a fit stops the old fit; the new sliders sta
 
 // ---- storage ------------------------------------------------------------------------------------
 
+/** The Fit autosave's undo history as stored: {past, future} lengths and values. */
+const storedHistory = (page) => page.evaluate(() => new Promise((resolve, reject) => {
+  const r = indexedDB.open('filigree');
+  r.onerror = () => reject(r.error);
+  r.onsuccess = () => {
+    const db = r.result;
+    const get = db.transaction('autosave', 'readonly').objectStore('autosave').get('fit');
+    get.onsuccess = () => {
+      db.close();
+      const h = get.result?.history;
+      resolve(h ? { past: h.past.map((s) => s.values), future: h.future.map((s) => s.values), present: get.result.state.values } : null);
+    };
+    get.onerror = () => reject(get.error);
+  };
+}));
+
+test('undo history survives a reload: Undo and Redo go where they went before, within the stored bound', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  const errors = watchErrors(page);
+  await page.waitForSelector('[data-testid=fit-sliders] .row[data-param=dx]');
+  const values = () => page.evaluate(() => window.filigree.testHooks.fit.state().values);
+  const press = async (name) => {
+    await page.focus(`[data-testid=fit-sliders] .row[data-param=${name}] input`);
+    await page.keyboard.press('ArrowRight');
+  };
+  const v0 = await values();
+  await press('dx');
+  const v1 = await values();
+  await press('dy');
+  const v2 = await values();
+  assert.notDeepEqual(v1, v0);
+  assert.notDeepEqual(v2, v1);
+  // Saved with its history (the autosave's debounce), then reloaded.
+  for (let i = 0; i < 50 && JSON.stringify((await storedHistory(page))?.present) !== JSON.stringify(v2); i++) await page.waitForTimeout(100);
+  await page.reload();
+  await ready(page, '#tool=fit');
+  await page.waitForSelector('[data-testid=fit-sliders] .row[data-param=dx]');
+  assert.deepEqual(await values(), v2);
+  await page.waitForSelector('button[data-act=undo]:not([disabled])', { timeout: 10000 });
+  await page.click('button[data-act=undo]');
+  assert.deepEqual(await values(), v1, 'Undo after the reload goes back to the state before');
+  await page.click('button[data-act=undo]');
+  assert.deepEqual(await values(), v0);
+  // Redo comes back after a reload too.
+  for (let i = 0; i < 50 && JSON.stringify((await storedHistory(page))?.present) !== JSON.stringify(v0); i++) await page.waitForTimeout(100);
+  await page.reload();
+  await ready(page, '#tool=fit');
+  await page.waitForSelector('button[data-act=redo]:not([disabled])', { timeout: 10000 });
+  await page.click('button[data-act=redo]');
+  assert.deepEqual(await values(), v1, 'Redo after the reload');
+
+  // The bound: the newest HISTORY_STATES each way, and HISTORY_BYTES in all (bytes shared by states counted once).
+  const bound = await page.evaluate(async () => {
+    const { keptHistory, History, HISTORY_STATES, HISTORY_BYTES } = await import('/www/app/project.js');
+    const run = (make, n) => {
+      const h = new History(make(0));
+      for (let i = 1; i <= n; i++) h.push(make(i));
+      for (let i = 0; i < 3; i++) h.undo();
+      const k = keptHistory(h);
+      return { past: k.past.map((s) => s.i), future: k.future.map((s) => s.i) };
+    };
+    const shared = new Uint8Array(200 * 1024);
+    return {
+      states: HISTORY_STATES,
+      bytes: HISTORY_BYTES,
+      small: run((i) => ({ i, text: 'x'.repeat(100) }), 80),
+      big: run((i) => ({ i, text: String(i).repeat(100 * 1024) }), 80),
+      sharedBytes: run((i) => ({ i, image: shared }), 80),
+    };
+  });
+  assert.equal(bound.states, 50);
+  const range = (a, b) => Array.from({ length: b - a + 1 }, (_, i) => a + i);
+  assert.deepEqual(bound.small, { past: range(27, 76), future: [78, 79, 80].reverse() }, 'the newest 50 states back, the oldest dropped');
+  assert.ok(bound.big.past.length < 10 && bound.big.past.length > 0, `100 KB states: ${bound.big.past.length} kept within ${bound.bytes} bytes`);
+  assert.deepEqual(bound.big.past, range(77 - bound.big.past.length, 76), 'the newest kept');
+  assert.equal(bound.sharedBytes.past.length, 50, 'an image shared by every state counts once');
+  assert.deepEqual(errors, []);
+});
+
+test('undo history: a link opened at load starts from the autosave alone, as before', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await page.waitForSelector('[data-testid=fit-sliders] .row[data-param=dx]');
+  const values = () => page.evaluate(() => window.filigree.testHooks.fit.state().values);
+  for (const name of ['dx', 'dy']) {
+    await page.focus(`[data-testid=fit-sliders] .row[data-param=${name}] input`);
+    await page.keyboard.press('ArrowRight');
+  }
+  const mine = await values();
+  for (let i = 0; i < 50 && JSON.stringify((await storedHistory(page))?.present) !== JSON.stringify(mine); i++) await page.waitForTimeout(100);
+  assert.equal((await storedHistory(page)).past.length, 2);
+  // A link to the defaults, opened in this browser: one Undo back to the autosaved work, no further.
+  await page.click('button[data-act=undo]');
+  await page.click('button[data-act=undo]');
+  const link = `${env.url}#${(await page.evaluate(() => window.filigree.currentShare())).fragment}`;
+  await page.click('button[data-act=redo]');
+  await page.click('button[data-act=redo]');
+  for (let i = 0; i < 50 && JSON.stringify((await storedHistory(page))?.present) !== JSON.stringify(mine); i++) await page.waitForTimeout(100);
+  await page.goto('about:blank');
+  await page.goto(link);
+  await ready(page, '#tool=fit');
+  await page.waitForFunction((m) => { const v = window.filigree.testHooks.fit?.state()?.values; return v && JSON.stringify(v) !== JSON.stringify(m); }, mine);
+  await page.click('button[data-act=undo]');
+  assert.deepEqual(await values(), mine, 'Undo goes back to the autosaved work');
+  await page.waitForTimeout(500);
+  assert.equal(await page.isDisabled('button[data-act=undo]'), true, 'and no further: the autosave\'s history is not restored under a link');
+});
+
+
 test('when storage hangs the panels still work and say plainly that they cannot save', async () => {
   const page = await env.newPage({ path: null });
   // IndexedDB that never answers (as in some sandboxed or about:blank hosts).

@@ -61,7 +61,7 @@
 //                                Reset work, nothing persists); the panel locks the author's
 //                                inputs (drawing on them, replacing their files)
 //   ctx.alive()
-import { Autosave, History, projectText, download, withTimeout, onOtherTab } from './project.js';
+import { Autosave, History, keptHistory, shareBytes, projectText, download, withTimeout, onOtherTab } from './project.js';
 import { encodeShare, decodeShare, ShareTooBig, kb, LINK_LIMIT_TEXT } from './share.js';
 
 export const STORAGE_BLOCKED_NOTE = 'This page cannot save your work here (storage is blocked) — use Save project.';
@@ -359,7 +359,7 @@ export class DocumentController {
     d.history.push(next);
     d.history.seal();
     if (this.current?.tool === tool) this.changed();
-    else if (d.autosave && this.persist) d.autosave.save({ format: AUTOSAVE_FORMAT, version: tool.state.version, state: next });
+    else if (d.autosave && this.persist) d.autosave.save(this.autosaved(tool, d));
     return true;
   }
 
@@ -378,6 +378,50 @@ export class DocumentController {
   }
 
   // ---- per-tool documents -------------------------------------------------------------
+
+  /**
+   * What the autosave of `tool`'s document `d` writes, made when it is
+   * written (the debounce's last): the present and the newest of its undo
+   * history (keptHistory: bounded in states and bytes), so Undo after a
+   * reload goes back where it went before.
+   */
+  autosaved(tool, d) {
+    return () => ({ format: AUTOSAVE_FORMAT, version: tool.state.version, state: d.history.present, history: keptHistory(d.history) });
+  }
+
+  /**
+   * Put the undo history an autosave kept (`saved` = {past, future}) back
+   * under the document just loaded from it. Each state is checked by the
+   * core as the present was (nearest the present first; a refused one ends
+   * its side there); meanwhile the document works as it is and nothing is
+   * saved, and what the user did meanwhile stays on top.
+   */
+  async restoreHistory(tool, d, saved) {
+    const h = d.history;
+    const base = h.present;
+    const valid = async (list) => {
+      if (!Array.isArray(list)) return [];
+      let i = list.length;
+      for (; i > 0; i--) {
+        try {
+          await this.check(tool, list[i - 1], tool.state.version);
+        } catch {
+          break;
+        }
+        if (d.history !== h) return [];
+      }
+      return list.slice(i);
+    };
+    const past = await valid(saved?.past);
+    const future = await valid(saved?.future);
+    if (d.history !== h || (!past.length && !future.length)) return;
+    shareBytes([...past, ...future], base);
+    // Redo only while the document is still the one loaded (any change since ends that branch).
+    if (!h.past.length && !h.future.length && h.present === base) h.future = future;
+    h.past.unshift(...past);
+    if (h.past.length > h.limit) h.past.splice(0, h.past.length - h.limit);
+    if (this.current?.tool === tool) this.refresh();
+  }
 
   docOf(tool) {
     let d = this.docs.get(tool.id);
@@ -438,7 +482,7 @@ export class DocumentController {
     const d = cur && this.docs.get(cur.tool.id);
     if (!d?.autosave || !d.history) return;
     const over = d.autosave.conflict;
-    d.autosave.save({ format: AUTOSAVE_FORMAT, version: cur.tool.state.version, state: d.history.present });
+    d.autosave.save(this.autosaved(cur.tool, d));
     d.autosave.flush({ over }).then(() => this.showTabs());
   }
 
@@ -474,7 +518,10 @@ export class DocumentController {
     if (saved) {
       try {
         const legacy = saved.format !== AUTOSAVE_FORMAT; // before the controller: the bare state, version 1
-        return await this.check(tool, legacy ? saved : saved.state, legacy ? 1 : saved.version);
+        const state = await this.check(tool, legacy ? saved : saved.state, legacy ? 1 : saved.version);
+        // Its undo history, when saved with this schema version (an older one starts afresh).
+        d.savedHistory = !legacy && saved.version === tool.state.version ? saved.history ?? null : null;
+        return state;
       } catch (err) {
         // A crashed or cancelled check says nothing about the autosave: keep it.
         if (err?.name === 'JobError' && !['invalid-input', 'bad-request', 'limit'].includes(err.kind)) throw err;
@@ -537,6 +584,13 @@ export class DocumentController {
       }
     }
     cur.el.querySelector('.doc-busy').textContent = '';
+    // The autosave's undo history comes back under its document; a link or a
+    // project opened at first sight starts from the autosave alone, as before.
+    if (d.savedHistory && d.history) {
+      const saved = d.savedHistory;
+      d.savedHistory = null;
+      if (!incoming) this.restoreHistory(tool, d, saved).catch((err) => console.warn('undo history not restored:', err));
+    }
     if (cur.life.dead) return cur;
     if (incoming) {
       d.history.push(incoming.state);
@@ -704,7 +758,7 @@ export class DocumentController {
     if (!cur) return;
     const d = this.docs.get(cur.tool.id);
     if (d.autosave && this.persist && !cur.readOnly) {
-      d.autosave.save({ format: AUTOSAVE_FORMAT, version: cur.tool.state.version, state: d.history.present });
+      d.autosave.save(this.autosaved(cur.tool, d));
       if (d.autosave.conflict) this.showTabs(); // held: say that this change is not saved yet
     }
     this.refresh();
