@@ -90,15 +90,22 @@ test('fit: after Cancel the overlay shows the kept values, not the abandoned can
   }
   await page.selectOption('select[name=budget]', 'paper');
   await page.click('button[data-act=fit]');
-  // A candidate is drawn over the target while the fit runs...
-  await page.waitForFunction((h) => {
+  // A candidate is drawn over the target while the fit runs (the first
+  // ones come after the global stage, late in the fit), and Stop is
+  // clicked in the same poll that sees it: a round trip from the test
+  // lost the race to the fit's end on a loaded machine.
+  const when = await page.waitForFunction((h) => {
     const c = document.querySelector('[data-testid=fit-overlay]');
     const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
     let x = 2166136261;
     for (let i = 0; i < d.length; i++) { x ^= d[i]; x = Math.imul(x, 16777619) >>> 0; }
-    return x !== h;
-  }, h0, { timeout: 60000, polling: 100 });
-  await page.click('button[data-act=cancel]');
+    if (x === h) return false;
+    const stop = document.querySelector('button[data-act=cancel]');
+    if (stop.disabled) return 'ended';
+    stop.click();
+    return 'stopped';
+  }, h0, { timeout: 90000, polling: 50 });
+  assert.equal(await when.jsonValue(), 'stopped', 'the fit was still running when its candidate was drawn');
   await page.waitForFunction(() => /^stopped/.test(document.querySelector('[data-testid=fit-status]').textContent));
   assert.deepEqual(await page.evaluate(() => window.filigree.testHooks.fit.state().values), kept, 'the values are kept');
   // ...and after Cancel the overlay is the kept values' pattern again.
