@@ -50,6 +50,7 @@
 //! non-positive size, a negative or non-finite distance, an empty motif)
 //! places nothing and gives the whole region back as the remainder.
 use crate::core::rng::Rng;
+use crate::tangle::geom::edge_grid::EdgeGrid;
 use crate::tangle::geom::polygon::{Polygon, SLIVER_AREA};
 use glam::DVec2;
 use std::cmp::Reverse;
@@ -151,12 +152,15 @@ pub fn place(
     if raster.inside_cells.is_empty() {
         return nothing();
     }
-    let mut centres = dart_throw(region, &raster, &params, rng);
+    // Every dart, centroid and disc asks the region where a point is: the
+    // edge grid answers from the edges nearby (the same answers).
+    let edges = EdgeGrid::new(region);
+    let mut centres = dart_throw(region, &edges, &raster, &params, rng);
     if centres.is_empty() {
         return nothing();
     }
-    lloyd(region, &raster, &mut centres);
-    let discs = fit_discs(region, &centres, &params);
+    lloyd(&edges, &raster, &mut centres);
+    let discs = fit_discs(region, &edges, &centres, &params);
     let placed: Vec<Polygon> = discs
         .into_iter()
         .map(|(c, r)| Polygon {
@@ -388,7 +392,13 @@ impl PointGrid {
 }
 
 /// Step 1: Poisson disc centres by dart throwing.
-fn dart_throw(region: &Polygon, raster: &Raster, params: &Params, rng: &mut Rng) -> Vec<DVec2> {
+fn dart_throw(
+    region: &Polygon,
+    edges: &EdgeGrid,
+    raster: &Raster,
+    params: &Params,
+    rng: &mut Rng,
+) -> Vec<DVec2> {
     let (lo, hi) = region.bbox();
     let mut grid = PointGrid::new(lo, hi, params.spacing);
     let spacing2 = params.spacing * params.spacing;
@@ -405,8 +415,8 @@ fn dart_throw(region: &Polygon, raster: &Raster, params: &Params, rng: &mut Rng)
         let ok = grid
             .near(p)
             .all(|j| centres[j].distance_squared(p) >= spacing2)
-            && region.contains(p)
-            && region.boundary_distance(p) >= margin;
+            && edges.contains(p)
+            && edges.boundary_distance_at_least(p, margin);
         if ok {
             grid.insert(p, centres.len());
             centres.push(p);
@@ -489,7 +499,7 @@ fn dist_key(d: f64) -> u64 {
 /// Step 2: Lloyd relaxation of the geodesic centroidal Voronoi diagram.
 /// Centres stay inside the region (a centroid outside is snapped to its
 /// own cell's nearest raster cell).
-fn lloyd(region: &Polygon, raster: &Raster, centres: &mut [DVec2]) {
+fn lloyd(region: &EdgeGrid, raster: &Raster, centres: &mut [DVec2]) {
     let tolerance = raster.cell * 0.25;
     for _ in 0..LLOYD_ITERATIONS {
         let label = geodesic_cells(raster, centres);
@@ -556,14 +566,19 @@ fn lloyd(region: &Polygon, raster: &Raster, centres: &mut [DVec2]) {
 
 /// Steps 3 and 4: each centre's bounding disc `(centre, radius)`, shrunk
 /// to keep `e` from the boundary and `d` from the other discs.
-fn fit_discs(region: &Polygon, centres: &[DVec2], params: &Params) -> Vec<(DVec2, f64)> {
+fn fit_discs(
+    region: &Polygon,
+    edges: &EdgeGrid,
+    centres: &[DVec2],
+    params: &Params,
+) -> Vec<(DVec2, f64)> {
     let gap = params.gap;
     // Step 3: fit inside, exactly (the motif lies in its bounding disc).
     let mut discs: Vec<(DVec2, f64)> = centres
         .iter()
-        .filter(|&&c| region.contains(c))
+        .filter(|&&c| edges.contains(c))
         .map(|&c| {
-            let room = region.boundary_distance(c) - params.edge;
+            let room = edges.boundary_distance(c) - params.edge;
             (c, params.radius.min(room))
         })
         .filter(|&(_, r)| r >= params.min_radius && r.is_finite())
@@ -847,7 +862,7 @@ mod tests {
         let region = ring(c, 40.0, 50.0);
         let raster = Raster::new(&region, 8.0);
         let mut centres = vec![DVec2::new(45.0, 0.0)];
-        lloyd(&region, &raster, &mut centres);
+        lloyd(&EdgeGrid::new(&region), &raster, &mut centres);
         assert!(region.contains(centres[0]), "{:?}", centres[0]);
         let r = centres[0].length();
         assert!(r > 40.0 && r < 50.0, "{r}");

@@ -4,6 +4,7 @@
 //! ([`svg`]), mean value coordinates ([`mvc`]) and Perlin noise for the
 //! wobbly pen ([`noise`]; the Texture models have their own, tuned to
 //! their index). Only Tangle uses them, so they live in its folder.
+pub mod edge_grid;
 pub mod mvc;
 pub mod noise;
 pub mod offset;
