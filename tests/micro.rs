@@ -746,6 +746,64 @@ fn tile_errors_name_their_field() {
     assert_eq!(e.field(), Some("sample_start"));
 }
 
+/// A path-traced render whose samples pass the size checks but whose
+/// work does not (issue 34: 4,096 samples per pixel were accepted with no
+/// time bound) is refused once its first pass shows what the rest would
+/// cost, with `spp` named, long before it would have ended; the same
+/// image at a few samples renders.
+#[test]
+fn a_path_trace_over_the_work_budget_is_refused_after_its_first_pass() {
+    use filigree::core::job::{Job, Step};
+    use filigree::micro::api::MAX_MICRO_RENDER_WORK;
+    let req = MicroRenderRequest {
+        scene: asset("gyroid"),
+        width: 96,
+        height: 96,
+        spp: 4096,
+        ..Default::default()
+    };
+    let mut job = start_render(req.clone()).expect("within the size checks");
+    let cost = job.scene().eval_cost() as f64;
+    let mut fraction = 0.0;
+    let err = loop {
+        match job.step() {
+            Ok(Step::Running(p)) => fraction = p.fraction,
+            Ok(Step::Done(_)) => panic!("rendered {} samples", 96 * 96 * 4096),
+            Err(e) => break e,
+        }
+    };
+    assert!(
+        fraction <= 2.0 / 4096.0,
+        "refused after its first pass, not at {fraction}"
+    );
+    let m = err.to_string();
+    assert_eq!(err.field(), Some("spp"), "{m}");
+    assert!(
+        m.contains("4096 samples per pixel") && m.contains("fewer samples"),
+        "{m}"
+    );
+    // What the first pass cost, projected to 4,096 passes, is over the
+    // budget (so the refusal is the projection's, not a guess).
+    let one = run_to_end(
+        start_render(MicroRenderRequest {
+            spp: 1,
+            ..req.clone()
+        })
+        .unwrap(),
+        &Cancel::new(),
+        |_| {},
+    )
+    .unwrap();
+    assert!(one.stats.sdf_evals as f64 * cost * 4096.0 > MAX_MICRO_RENDER_WORK as f64);
+    assert!(one.stats.sdf_evals as f64 * cost * 4.0 < MAX_MICRO_RENDER_WORK as f64);
+    run_to_end(
+        start_render(MicroRenderRequest { spp: 4, ..req }).unwrap(),
+        &Cancel::new(),
+        |_| {},
+    )
+    .expect("a few samples render");
+}
+
 /// The native core's PNG bytes for the shared requests of
 /// `tests/fixtures/micro-native/requests.json` (one per step mode, adaptive
 /// steps with checks every N and by D(p) cells, a path traced image, a

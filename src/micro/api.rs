@@ -216,6 +216,16 @@ fn check_size(width: u32, height: u32) -> Result<()> {
 /// Scene evaluations per job step: a few milliseconds of work.
 const EVALS_PER_STEP: u64 = 60_000;
 
+/// The work one render job may do, in evaluation units (scene evaluations,
+/// counted as it traces, × [`Scene::eval_cost`], so native and wasm stop
+/// at the same place): about a minute natively on one core (25–85 s on
+/// the shipped scenes). The size checks
+/// bound the samples, not what each costs (a path's bounces, a ray's steps
+/// through a scene of many nodes), so a path tracer's cost is projected
+/// from its first pass and refused then, and any render is stopped once it
+/// passes the budget by a quarter.
+pub const MAX_MICRO_RENDER_WORK: u64 = 6_000_000_000;
+
 /// A render in progress: pixels in row order, a bounded slice per step.
 pub struct RenderJob {
     scene: Scene,
@@ -472,8 +482,9 @@ impl RenderJob {
     }
 
     /// Work a bounded slice (a few milliseconds); the fraction done, or
-    /// `None` once every pixel is rendered.
-    fn advance(&mut self) -> Option<f64> {
+    /// `None` once every pixel is rendered; an error once the render is
+    /// seen to need more than [`MAX_MICRO_RENDER_WORK`].
+    fn advance(&mut self) -> Result<Option<f64>> {
         let pixels = self.tile.w as u64 * self.tile.h as u64;
         let total = pixels * self.spp.max(1) as u64;
         let budget = self.stats.sdf_evals + EVALS_PER_STEP;
@@ -485,7 +496,42 @@ impl RenderJob {
             }
             self.next += 1;
         }
-        (self.next < total).then(|| self.next as f64 / total as f64)
+        self.check_work(pixels, total)?;
+        Ok((self.next < total).then(|| self.next as f64 / total as f64))
+    }
+
+    /// [`MAX_MICRO_RENDER_WORK`]: the work done so far, and (once a whole
+    /// pass is done) the work the remaining passes will take at its rate.
+    fn check_work(&self, pixels: u64, total: u64) -> Result<()> {
+        let done = self.stats.sdf_evals as f64 * self.scene.eval_cost() as f64;
+        let projected = if self.next >= pixels && self.next < total {
+            done / self.next as f64 * total as f64
+        } else {
+            done
+        };
+        let (limit, over) = if projected > done {
+            (MAX_MICRO_RENDER_WORK as f64, projected)
+        } else {
+            (1.25 * MAX_MICRO_RENDER_WORK as f64, done)
+        };
+        if over <= limit {
+            return Ok(());
+        }
+        let what = if self.spp > 0 {
+            format!(
+                "{} samples per pixel of this scene at {}×{}",
+                self.spp, self.tile.w, self.tile.h
+            )
+        } else {
+            format!("this scene at {}×{}", self.tile.w, self.tile.h)
+        };
+        Err(Error::limit(format!(
+            "{what} would take about {over:.1e} units of work, more than the {:.1e} one render \
+             may do (about a minute on one core); use fewer samples per pixel, a smaller image, \
+             fewer steps or a simpler scene",
+            MAX_MICRO_RENDER_WORK as f64,
+        ))
+        .at(if self.spp > 0 { "spp" } else { "width" }))
     }
 
     /// The finished tile's pixels (after [`Self::advance`] returned `None`).
@@ -515,7 +561,7 @@ impl RenderJob {
     /// counters (for drivers that assemble tiles, such as the CLI's
     /// `--threads`). Checks `cancel` between slices.
     pub fn run_rgba(mut self, cancel: &crate::core::job::Cancel) -> Result<(Rgba8Image, Stats)> {
-        while self.advance().is_some() {
+        while self.advance()?.is_some() {
             if cancel.is_cancelled() {
                 return Err(Error::Cancelled);
             }
@@ -572,7 +618,7 @@ pub fn assemble(
 impl Job for RenderJob {
     type Output = MicroRenderResponse;
     fn step(&mut self) -> Result<Step<MicroRenderResponse>> {
-        if let Some(f) = self.advance() {
+        if let Some(f) = self.advance()? {
             return Ok(Step::Running(Progress::new(
                 f,
                 if self.spp > 0 {
