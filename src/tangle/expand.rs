@@ -119,6 +119,11 @@ struct Pending {
 /// outline of one shape is well under a millisecond for typical sizes).
 const SHAPES_PER_WORK: usize = 8;
 
+/// Work (see [`MAX_WORK`]) after which an [`Expansion::work`] call takes
+/// no further shape: about 40 ms natively, so a step of a few costly
+/// shapes (placements into large regions) is still cut into short slices.
+const WORK_PER_CALL: u64 = 2_000_000;
+
 /// The work budget of a tangle: the operators' cost (points read and
 /// written, booleans weighted n·log n, a fixed cost per application) of
 /// the steps it holds, counted, not timed, so native and wasm stop at the
@@ -454,9 +459,15 @@ impl Expansion {
                 Progress::Working
             });
         };
-        let end = (p.next + SHAPES_PER_WORK).min(p.inputs.len());
-        for k in p.next..end {
-            let i = p.inputs[k];
+        // Shapes until SHAPES_PER_WORK or WORK_PER_CALL (counted, so the
+        // slices fall alike natively and in wasm), at least one.
+        let (first, mut end, mut call_work) = (p.next, p.next, 0u64);
+        while end < p.inputs.len()
+            && end < first + SHAPES_PER_WORK
+            && (end == first || call_work < WORK_PER_CALL)
+        {
+            let i = p.inputs[end];
+            end += 1;
             let input = &self.records[i as usize].shape.poly;
             let (shapes, points, work) = estimate(&p.op, input, &self.settings);
             let made_so_far: usize = p.slots.iter().map(Vec::len).sum();
@@ -482,6 +493,7 @@ impl Expansion {
             let made = self.apply(&p, i)?;
             let out_points: usize = made.iter().flatten().map(Polygon::vertices).sum();
             let done = weight(&p.op) * sweep_work(in_points + out_points) + fixed;
+            call_work += done;
             p.work += done;
             self.work_total = self.work_total.saturating_add(done);
             for (slot, polys) in made.into_iter().enumerate() {
@@ -987,6 +999,47 @@ mod tests {
         let area: f64 = finals(&x).iter().map(|r| r.shape.poly.area()).sum();
         assert!((area - 8100.0).abs() < 1.0, "{area}");
         assert!(finals(&x).len() > 10);
+    }
+
+    /// A step of a few costly shapes is still cut into short slices: eight
+    /// large placements (each past `WORK_PER_CALL`) take eight `work`
+    /// calls, not one (issue 34: every `step()` a short slice; they took
+    /// 2.3 s in one wasm step).
+    #[test]
+    fn costly_shapes_are_worked_one_call_each() {
+        let g = Grammar {
+            rules: vec![rule(
+                Op::Place {
+                    size: 20.0,
+                    distance: 3.0,
+                    shape: "circle".into(),
+                },
+                "b",
+                &["c", "d"],
+            )],
+            ..Default::default()
+        };
+        let start = (0..8)
+            .map(|k| {
+                let x0 = 210.0 * k as f64;
+                let strip = Polygon::rect(DVec2::new(x0, 0.0), DVec2::new(x0 + 200.0, 3000.0));
+                (strip, "b".to_string())
+            })
+            .collect();
+        let mut motifs = HashMap::new();
+        motifs.insert("circle".to_string(), Polygon::circle(DVec2::ZERO, 1.0, 32));
+        let mut x = Expansion::new(g, start, motifs, settings()).unwrap();
+        let mut calls = 0;
+        loop {
+            match x.work().unwrap() {
+                Progress::Working => calls += 1,
+                Progress::Stepped(_) => break,
+                Progress::Ended => panic!("ended before the step"),
+            }
+        }
+        // One call begins the step, then one per strip (the last one ends it).
+        assert!(calls >= 8, "{calls} calls");
+        assert!(x.steps[0].work > 8 * WORK_PER_CALL, "{}", x.steps[0].work);
     }
 
     /// The work a tangle holds is its steps' (undone steps give theirs

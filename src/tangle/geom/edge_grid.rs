@@ -115,8 +115,14 @@ impl EdgeGrid {
         }
         let dim = |len: f64| ((len / cell).floor() as usize + 1).min(MAX_SIDE + 1);
         let (w, h) = (dim(size.x), dim(size.y));
-        let n_bands = (edges.len() / EDGES_PER_BAND).clamp(1, MAX_BANDS);
-        let band = (size.y / n_bands as f64).max(cell / MAX_BANDS as f64);
+        let wanted = (edges.len() / EDGES_PER_BAND).clamp(1, MAX_BANDS);
+        // Bands no thinner than an edge's mean height, so that an edge
+        // spans about two (thinner bands multiply the lists, not speed).
+        let mean_height = edges.iter().map(|(a, b)| (b.y - a.y).abs()).sum::<f64>() / n;
+        let band = (size.y / wanted as f64)
+            .max(mean_height)
+            .max(cell / MAX_BANDS as f64);
+        let n_bands = ((size.y / band).floor() as usize + 1).min(MAX_BANDS);
         let pad = 1e-6 * cell + 1e-12 * lo.abs().max(hi.abs()).max_element();
         let mut grid = EdgeGrid {
             edges,
