@@ -465,9 +465,295 @@ pub fn tangle_grammar(data: &[u8]) {
         .unwrap_or_else(|e| panic!("to_text wrote what parse refuses: {e}\n{written}"));
     assert_eq!(
         strip(again),
-        strip(g),
+        strip(g.clone()),
         "to_text → parse changed the grammar"
     );
+    // Cost oracle: the grammar grown from its own start shapes must be
+    // refused or stay within the tangle's budgets (see `grow_checked`).
+    let req = tangle_fuzz_request(text.into_owned());
+    let gate = filigree::tangle::api::start_tangle(req.clone());
+    let setup = tangle_setup(g);
+    assert_eq!(
+        gate.is_ok(),
+        setup.is_ok(),
+        "the fuzz body's start shapes differ from start_tangle's: {:?} vs {:?}",
+        gate.err(),
+        setup.err()
+    );
+    if let Ok((g, start, motifs)) = setup {
+        grow_checked(g, start, motifs, &req);
+    }
+}
+
+/// Steps and live shapes a fuzzed tangle may grow (a request's defaults
+/// are 5,000 and 50,000; up to 100,000 and 250,000 may be asked). The
+/// budgets that bound any request whatever it asks (`MAX_WORK`,
+/// `MAX_POINTS`, `MAX_HISTORY`) are the product's, and the per-step
+/// time-per-work oracle holds at any step count.
+pub const TANGLE_FUZZ_STEPS: usize = 200;
+pub const TANGLE_FUZZ_SHAPES: usize = 5_000;
+
+/// CPU seconds one fuzz input may take (with [`CPU_ORACLES`] on, as the
+/// fuzz targets set it; the replay in `cargo test` runs unoptimised). libFuzzer's own `-timeout`
+/// is wall-clock time, which a shared machine stretches.
+pub const MAX_INPUT_CPU_SECONDS: f64 = 10.0;
+
+/// Time-per-work oracle of a tangle step (with [`CPU_ORACLES`] on): a step's
+/// CPU time is at most `STEP_CPU_SLACK + work × STEP_CPU_PER_WORK` seconds.
+/// `MAX_WORK` (150M) is meant to be seconds natively (~20 ns a unit); the
+/// bound is ~25× that, so only a cost the work measure misses by far (a
+/// step whose time its estimate and count do not see) trips it.
+pub const STEP_CPU_SLACK: f64 = 0.25;
+pub const STEP_CPU_PER_WORK: f64 = 500e-9;
+
+/// Whether the CPU-time oracles are on: the fuzz targets turn them on
+/// (instrumented optimised builds); the replay in `cargo test` leaves them
+/// off (unoptimised, and a test's time is not a finding).
+pub static CPU_ORACLES: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn cpu_oracles() -> bool {
+    CPU_ORACLES.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// CPU time of this thread, seconds (Linux `schedstat`, nanoseconds);
+/// `None` where it cannot be read.
+pub fn thread_cpu() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
+    Some(ns as f64 * 1e-9)
+}
+
+/// CPU seconds since `since` (a [`thread_cpu`] reading); 0 without one.
+fn cpu_since(since: Option<f64>) -> f64 {
+    match (since, thread_cpu()) {
+        (Some(a), Some(b)) => b - a,
+        _ => 0.0,
+    }
+}
+
+/// The per-input CPU cap ([`MAX_INPUT_CPU_SECONDS`]) in fuzz builds.
+fn cpu_cap(since: Option<f64>, what: &str) {
+    if cpu_oracles() {
+        let t = cpu_since(since);
+        assert!(
+            t <= MAX_INPUT_CPU_SECONDS,
+            "cost oracle: {what} took {t:.1} s of CPU (cap {MAX_INPUT_CPU_SECONDS} s)"
+        );
+    }
+}
+
+/// The request a fuzzed grammar runs under: the defaults, with the fuzz
+/// step and shape budgets.
+pub fn tangle_fuzz_request(grammar: String) -> filigree::tangle::api::TangleRequest {
+    filigree::tangle::api::TangleRequest {
+        grammar,
+        max_steps: TANGLE_FUZZ_STEPS,
+        max_shapes: TANGLE_FUZZ_SHAPES,
+        ..Default::default()
+    }
+}
+
+type TangleStart = (
+    filigree::tangle::ast::Grammar,
+    Vec<(filigree::tangle::geom::polygon::Polygon, String)>,
+    std::collections::HashMap<String, filigree::tangle::geom::polygon::Polygon>,
+);
+
+/// What `tangle::api::start_tangle` sets up for a request without a
+/// `start` (its private `flatten_svg_defs`, `grammar_starts` and `motifs`,
+/// from the public pieces they use, with the same checks): SVG curves as
+/// polylines, the grammar's start shapes (an 800×600 rectangle when it has
+/// none), the motifs `place` can use. The body checks it agrees with
+/// `start_tangle` on what is refused.
+pub fn tangle_setup(mut g: filigree::tangle::ast::Grammar) -> Result<TangleStart, String> {
+    use filigree::tangle::api::{LETTER_HEIGHT, MAX_START_POINTS};
+    use filigree::tangle::ast::{CurveDef, DefKind, StartShape};
+    use filigree::tangle::geom::polygon::Polygon;
+    use filigree::tangle::geom::svg::path_rings;
+    use filigree::tangle::MAX_START_SIDE;
+    use glam::DVec2;
+    const TOL: f64 = 0.05;
+    for d in &mut g.defs {
+        if let CurveDef::Svg(path) = &d.curve {
+            let rings = path_rings(path, TOL).map_err(|e| e.to_string())?;
+            let first = rings.into_iter().next().ok_or("no points")?;
+            d.curve = CurveDef::Polyline(first);
+        }
+    }
+    let polys = |rings: Vec<Vec<DVec2>>| -> Result<Vec<Polygon>, String> {
+        let n: usize = rings.iter().map(Vec::len).sum();
+        if n > MAX_START_POINTS {
+            return Err(format!("{n} start points"));
+        }
+        let v = Polygon::new(rings).ok_or("not finite")?;
+        if v.is_empty() {
+            return Err("no area".into());
+        }
+        let (lo, hi) = Polygon::bbox_all(&v);
+        if (hi - lo).max_element() > MAX_START_SIDE {
+            return Err("too large".into());
+        }
+        Ok(v)
+    };
+    let rect = |w: f64, h: f64| -> Result<Polygon, String> {
+        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0 && w.max(h) <= MAX_START_SIDE) {
+            return Err("bad rect".into());
+        }
+        Ok(Polygon::rect(DVec2::ZERO, DVec2::new(w, h)))
+    };
+    let mut start = vec![];
+    for s in &g.start {
+        let made = match &s.shape {
+            StartShape::Rect { width, height } => vec![rect(*width, *height)?],
+            StartShape::Circle { radius } => {
+                if !(*radius > 0.0 && 2.0 * radius <= MAX_START_SIDE) {
+                    return Err("bad circle".into());
+                }
+                let n = (std::f64::consts::TAU * radius / 2.0).clamp(16.0, 4096.0);
+                vec![Polygon::circle(DVec2::splat(*radius), *radius, n as usize)]
+            }
+            StartShape::Polygon(pts) => polys(vec![pts.clone()])?,
+            StartShape::Svg(d) => polys(path_rings(d, TOL).map_err(|e| e.to_string())?)?,
+            StartShape::Text(t) => polys(
+                filigree::tangle::letters::text_rings(t, LETTER_HEIGHT)
+                    .map_err(|e| e.to_string())?,
+            )?,
+        };
+        start.extend(made.into_iter().map(|p| (p, s.tag.clone())));
+    }
+    if g.start.is_empty() {
+        let tag = g.rules.first().map(|r| r.tag.clone()).unwrap_or_default();
+        start.push((rect(800.0, 600.0)?, tag));
+    }
+    let mut motifs = std::collections::HashMap::new();
+    motifs.insert("circle".to_string(), Polygon::circle(DVec2::ZERO, 1.0, 32));
+    for d in &g.defs {
+        if d.kind != DefKind::Shape {
+            continue;
+        }
+        let poly = match &d.curve {
+            CurveDef::Circle => Some(Polygon::circle(DVec2::ZERO, 1.0, 32)),
+            CurveDef::Ngon(n) => Some(Polygon::circle(
+                DVec2::ZERO,
+                1.0,
+                (*n as usize).clamp(3, 64),
+            )),
+            CurveDef::Polyline(pts) => Polygon::new(vec![pts.clone()])
+                .and_then(|v| v.into_iter().next())
+                .and_then(|p| filigree::tangle::place::normalise_motif(&p)),
+            _ => None,
+        };
+        if let Some(p) = poly {
+            motifs.insert(d.name.clone(), p);
+        }
+    }
+    Ok((g, start, motifs))
+}
+
+/// Cost oracles of a tangle: grow `start` under `g` with `req`'s settings
+/// (`tangle::expand::Expansion`, as a `tangle` job does) and check, with
+/// the measures the engine keeps:
+/// - every step's recorded work counts at least the points it read and
+///   wrote, and (fuzz builds) its CPU time is within
+///   `STEP_CPU_SLACK + work × STEP_CPU_PER_WORK`;
+/// - the work held is the steps' sum and within `MAX_WORK`;
+/// - the history within `MAX_HISTORY` shapes, the points held (each
+///   polygon once) within `MAX_POINTS`, the live shapes and the steps
+///   within the request's budgets; the expansion ends;
+/// - the answer (`respond`) has finite points, within the same budgets;
+/// - (fuzz builds) the whole input within `MAX_INPUT_CPU_SECONDS`.
+pub fn grow_checked(
+    g: filigree::tangle::ast::Grammar,
+    start: Vec<(filigree::tangle::geom::polygon::Polygon, String)>,
+    motifs: std::collections::HashMap<String, filigree::tangle::geom::polygon::Polygon>,
+    req: &filigree::tangle::api::TangleRequest,
+) {
+    use filigree::tangle::expand::{
+        Expansion, Progress, Settings, MAX_HISTORY, MAX_POINTS, MAX_WORK,
+    };
+    let settings = Settings {
+        seed: req.seed,
+        max_steps: req.max_steps,
+        max_shapes: req.max_shapes,
+        resolution: req.resolution,
+        wobble: req.wobble,
+        wavelength: req.wavelength,
+    };
+    let begun = thread_cpu();
+    let Ok(mut x) = Expansion::new(g, start, motifs, settings) else {
+        return;
+    };
+    let mut step_began = thread_cpu();
+    loop {
+        match x.work() {
+            Err(_) | Ok(Progress::Ended) => break,
+            Ok(Progress::Working) => {}
+            Ok(Progress::Stepped(k)) => {
+                let s = &x.steps[k];
+                let points = |ids: &[u32]| -> u64 {
+                    ids.iter()
+                        .map(|&i| x.records[i as usize].shape.poly.vertices() as u64)
+                        .sum()
+                };
+                let (read, written) = (points(&s.inputs), points(&s.outputs));
+                assert!(
+                    s.work >= read + written,
+                    "cost oracle: step {k} ({}) counts {} work for {read} points read and \
+                     {written} written",
+                    s.op.name(),
+                    s.work
+                );
+                if cpu_oracles() {
+                    let t = cpu_since(step_began);
+                    let bound = STEP_CPU_SLACK + s.work as f64 * STEP_CPU_PER_WORK;
+                    assert!(
+                        t <= bound,
+                        "cost oracle: step {k} ({:?}) took {t:.2} s of CPU for {} work \
+                         (bound {bound:.2} s; {read} points in, {written} out)",
+                        s.op,
+                        s.work
+                    );
+                }
+                step_began = thread_cpu();
+            }
+        }
+        cpu_cap(begun, "growing the tangle");
+    }
+    let held: u64 = x.steps.iter().map(|s| s.work).sum();
+    assert_eq!(held, x.work_held(), "the work held is not the steps' sum");
+    assert!(held <= MAX_WORK, "cost oracle: {held} work > MAX_WORK");
+    assert!(
+        x.records.len() <= MAX_HISTORY,
+        "cost oracle: {} shapes made > MAX_HISTORY",
+        x.records.len()
+    );
+    let mut seen = std::collections::HashSet::new();
+    let held_points: usize = x
+        .records
+        .iter()
+        .filter(|r| seen.insert(std::sync::Arc::as_ptr(&r.shape.poly)))
+        .map(|r| r.shape.poly.vertices())
+        .sum();
+    assert!(
+        held_points <= MAX_POINTS,
+        "cost oracle: {held_points} points held > MAX_POINTS"
+    );
+    assert!(x.live() <= req.max_shapes, "{} live shapes", x.live());
+    assert!(x.steps.len() <= req.max_steps, "{} steps", x.steps.len());
+    if let Ok(r) = filigree::tangle::api::respond(&x, req) {
+        assert!(r.points.iter().all(|v| v.is_finite()), "non-finite point");
+        // Every shape's points, shared polygons once per shape: what the
+        // engine's point budget counts.
+        assert!(
+            r.points.len() / 2 <= MAX_POINTS,
+            "cost oracle: the answer has {} points > MAX_POINTS",
+            r.points.len() / 2
+        );
+        assert!(r.shapes.len() <= MAX_HISTORY);
+        assert!(r.stats.shapes <= req.max_shapes);
+        assert!(r.steps.len() <= req.max_steps);
+    }
+    cpu_cap(begun, "growing the tangle and its answer");
 }
 
 /// Vector start shapes as the page and the CLI hand them to the core: the
@@ -478,6 +764,7 @@ pub fn tangle_grammar(data: &[u8]) {
 pub fn tangle_start(data: &[u8]) {
     use filigree::tangle::geom::polygon::Polygon;
     use filigree::tangle::geom::svg::{document_polygons, path_rings, MAX_POINTS};
+    let begun = thread_cpu();
     let text = String::from_utf8_lossy(data);
     let mut sources = vec![];
     // A document's shapes, fitted into a frame: inside it, finite.
@@ -509,7 +796,7 @@ pub fn tangle_start(data: &[u8]) {
         let area: f64 = polys.iter().map(Polygon::area).sum();
         assert!(area.is_finite());
         let req = filigree::tangle::api::TangleRequest {
-            grammar: "regularSplit(line, 20, 1) : a -> [b]\noutline(3) : b -> [c, d]\n".into(),
+            grammar: START_GRAMMAR.into(),
             start: Some(filigree::tangle::api::StartRequest::Rings {
                 rings: rings
                     .iter()
@@ -520,16 +807,41 @@ pub fn tangle_start(data: &[u8]) {
             max_shapes: 400,
             ..Default::default()
         };
-        let Ok(job) = filigree::tangle::api::start_tangle(req) else {
+        // What the product refuses is not grown; what it accepts grows
+        // under the cost oracles of `grow_checked`.
+        if filigree::tangle::api::start_tangle(req.clone()).is_err() {
             continue;
-        };
-        let Ok(r) = filigree::core::job::run_quietly(job) else {
-            continue;
-        };
-        assert!(r.points.iter().all(|v| v.is_finite()));
-        assert!(r.stats.shapes <= 400);
+        }
+        let g = filigree::tangle::grammar::parse(START_GRAMMAR).expect("parses");
+        let start = polys.into_iter().map(|p| (p, "a".to_string())).collect();
+        grow_checked(g, start, Default::default(), &req);
     }
+    // The same text as the request's typed word (`StartRequest::Text`, as
+    // the page sends it), 10 to 400 units tall (the size a grammar's
+    // `start text(...)` has; larger words are the cost oracles' job in
+    // `tangle_grammar`, whose start shapes go up to the product's limit).
+    let word: String = text.chars().take(80).collect();
+    let height = 10.0 + f64::from(data.first().copied().unwrap_or(0)) * (390.0 / 255.0);
+    let req = filigree::tangle::api::TangleRequest {
+        grammar: START_GRAMMAR.into(),
+        start: Some(filigree::tangle::api::StartRequest::Text { text: word, height }),
+        max_steps: 20,
+        max_shapes: 400,
+        ..Default::default()
+    };
+    if let Ok(job) = filigree::tangle::api::start_tangle(req) {
+        if let Ok(r) = filigree::core::job::run_quietly(job) {
+            assert!(r.points.iter().all(|v| v.is_finite()));
+            assert!(r.stats.shapes <= 400 && r.steps.len() <= 20);
+            assert!(r.points.len() / 2 <= filigree::tangle::expand::MAX_POINTS);
+        }
+    }
+    cpu_cap(begun, "the start shapes and their tangles");
 }
+
+/// The grammar `tangle_start` grows its start shapes with: a split into
+/// strips, each outlined.
+const START_GRAMMAR: &str = "regularSplit(line, 20, 1) : a -> [b]\noutline(3) : b -> [c, d]\n";
 
 /// Insets (`geom::offset`, cavalier_contours) of polygons read from raw
 /// bytes: the first byte picks the distance, then each 5-byte record is a
@@ -592,11 +904,19 @@ pub fn inset(data: &[u8]) {
 /// default limits; what compiles is evaluated at a few points (never NaN;
 /// finite, or +∞ for an empty scene) and sphere-traced and sliced at 6×4.
 pub fn micro_scene(data: &[u8]) {
+    use filigree::core::limits::MAX_MICRO_NODES;
     use filigree::micro::api::{start_render, start_slice, MicroRenderRequest, MicroSliceRequest};
+    let begun = thread_cpu();
     let text = String::from_utf8_lossy(data).into_owned();
     let Ok(scene) = filigree::micro::parse(&text) else {
+        cpu_cap(begun, "refusing the scene");
         return;
     };
+    assert!(
+        scene.nodes >= 1 && scene.nodes <= MAX_MICRO_NODES,
+        "{} nodes",
+        scene.nodes
+    );
     for p in [
         [0.0, 0.0, 0.0],
         [0.3, -0.7, 0.2],
@@ -613,10 +933,23 @@ pub fn micro_scene(data: &[u8]) {
         max_steps: 64,
         ..Default::default()
     };
+    let max_steps = u64::from(req.max_steps);
     if let Some(out) = step_some(start_render(req).expect("the scene parsed")) {
-        assert_eq!(out.stats.rays, 24);
+        let st = &out.stats;
+        assert_eq!(st.rays, 24);
         assert!(!out.png.is_empty());
+        // Cost oracle: the trace's counted work within what its step
+        // limit allows (a ray: one evaluation, at most three per step
+        // (a gradient check, the step, an undone step) or 60 bisections;
+        // a hit: six more for its normal).
+        assert!(st.hits <= st.rays && st.exhausted <= st.rays, "{st:?}");
+        assert!(st.steps <= st.rays * max_steps, "cost oracle: {st:?}");
+        assert!(
+            st.sdf_evals <= st.rays * (1 + 3 * max_steps + 60) + 6 * st.hits,
+            "cost oracle: {st:?}"
+        );
     }
+    cpu_cap(begun, "the scene's evaluation and render");
     let req = MicroSliceRequest {
         scene: text,
         width: 6,
@@ -626,6 +959,7 @@ pub fn micro_scene(data: &[u8]) {
     if let Some(out) = step_some(start_slice(req).expect("the scene parsed")) {
         assert!(out.min.is_finite() && out.max.is_finite() && (0.0..=1.0).contains(&out.inside));
     }
+    cpu_cap(begun, "the scene's evaluation, render and slice");
 }
 
 /// A human-ratings CSV for the Texture tool's perceptual scales

@@ -1,7 +1,12 @@
-//! cargo-fuzz target `micro_scene`: see `bodies::micro_scene` (shared with `tests/fuzz_corpus.rs`).
+//! cargo-fuzz target `micro_scene`: see `bodies::micro_scene` (shared with `tests/fuzz_corpus.rs`),
+//! with its CPU-time cost oracles on. Run with `-rss_limit_mb=512` (the memory cap).
 #![no_main]
 
 #[path = "../bodies.rs"]
 mod bodies;
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| bodies::micro_scene(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    // The CPU-time cost oracles (see `bodies::CPU_ORACLES`): on when fuzzing.
+    bodies::CPU_ORACLES.store(true, std::sync::atomic::Ordering::Relaxed);
+    bodies::micro_scene(data)
+});

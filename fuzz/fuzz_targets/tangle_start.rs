@@ -1,7 +1,12 @@
-//! cargo-fuzz target `tangle_start`: see `bodies::tangle_start` (shared with `tests/fuzz_corpus.rs`).
+//! cargo-fuzz target `tangle_start`: see `bodies::tangle_start` (shared with `tests/fuzz_corpus.rs`),
+//! with its CPU-time cost oracles on. Run with `-rss_limit_mb=512` (the memory cap).
 #![no_main]
 
 #[path = "../bodies.rs"]
 mod bodies;
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| bodies::tangle_start(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    // The CPU-time cost oracles (see `bodies::CPU_ORACLES`): on when fuzzing.
+    bodies::CPU_ORACLES.store(true, std::sync::atomic::Ordering::Relaxed);
+    bodies::tangle_start(data)
+});
