@@ -1,5 +1,5 @@
 //! cargo-fuzz target `tangle_start`: see `bodies::tangle_start` (shared with `tests/fuzz_corpus.rs`),
-//! with its CPU-time cost oracles on. Run with `-rss_limit_mb=512` (the memory cap).
+//! with its CPU-time cost oracles on. Run with `-malloc_limit_mb=512 -rss_limit_mb=1024` (README).
 #![no_main]
 
 #[path = "../bodies.rs"]
