@@ -504,7 +504,7 @@ pub const MAX_INPUT_CPU_SECONDS: f64 = 20.0;
 
 /// Time-per-work oracle of a tangle step (with [`CPU_ORACLES`] on): a step's
 /// CPU time is at most `STEP_CPU_SLACK + work × STEP_CPU_PER_WORK` seconds.
-/// `MAX_WORK` (150M) is meant to be seconds natively (~20 ns a unit); the
+/// `MAX_WORK` (100M) is meant to be seconds natively (~20 ns a unit); the
 /// bound is ~25× that, so only a cost the work measure misses by far (a
 /// step whose time its estimate and count do not see) trips it.
 pub const STEP_CPU_SLACK: f64 = 0.25;
