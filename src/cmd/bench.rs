@@ -91,6 +91,16 @@ pub enum Which {
         /// e.g. '{"c_model": 1, "pcn": {"hash_bits": 8}}'.
         #[arg(long)]
         index_config: Option<String>,
+        /// Random looks per base (default: the shipped index's).
+        #[arg(long)]
+        looks: Option<usize>,
+        /// The cross-implementation set (`python3 bench/texture-xset/make_set.py DIR`);
+        /// skipped with a note when DIR has no labels.csv.
+        #[arg(long, default_value = "target/texture-xset")]
+        xset: std::path::PathBuf,
+        /// Which part of it: validation (for choices), test (once, at the end) or all.
+        #[arg(long, default_value = "validation")]
+        xset_split: String,
         #[arg(long)]
         json: bool,
     },
@@ -213,8 +223,19 @@ pub fn run(w: Which) -> Result<(), String> {
             size,
             no_augment,
             index_config,
+            looks,
+            xset,
+            xset_split,
             ..
-        } => super::texture_index::bench(per_model, size, !no_augment, index_config.as_deref()),
+        } => super::texture_index::bench(super::texture_index::BenchArgs {
+            per_model,
+            size,
+            augment: !no_augment,
+            index: index_config,
+            looks,
+            xset,
+            xset_split,
+        }),
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
         Which::TextureModels {
             repeats,

@@ -12,6 +12,7 @@ pub mod tangle;
 pub mod tangle_bench;
 pub mod texture;
 pub mod texture_index;
+pub mod texture_xset;
 
 use filigree::core::job::{run_to_end, Cancel, Job};
 use filigree::Error;

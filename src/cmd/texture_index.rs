@@ -44,6 +44,7 @@ fn config(per_model: usize, size: usize, augment: bool) -> BuildConfig {
     let d = DatasetConfig {
         per_model,
         size,
+        looks: c.dataset.looks,
         ..DatasetConfig::default()
     };
     c.dataset = if augment { d.augmented() } else { d };
@@ -198,6 +199,8 @@ pub fn run_query(a: QueryArgs) -> Result<(), String> {
     let retrieved: Vec<f32> = got.scales.iter().map(|&v| v as f32).collect();
     let answer = json!({
         "predicted": {"model": analysis.model, "model_name": analysis.model_name, "scales": named(&analysis.scales.map(|v| v as f32))},
+        "top": analysis.top.iter().map(|c| json!({"model": c.model, "model_name": c.model_name, "probability": c.probability})).collect::<Vec<_>>(),
+        "close": analysis.close,
         "requested": named(&scales),
         "retrieved": {"model": got.model, "model_name": got.model_name, "params": params, "seed": got.seed, "scales": named(&retrieved), "sample": got.sample},
         "cosine": got.cosine,
@@ -208,9 +211,23 @@ pub fn run_query(a: QueryArgs) -> Result<(), String> {
             serde_json::to_string_pretty(&answer).map_err(|e| e.to_string())?
         );
     } else {
+        if analysis.close {
+            println!(
+                "predicted model: {} ({})",
+                analysis.model_name, analysis.model
+            );
+        } else {
+            println!("predicted model: no close model (the image is far from every model in the index)");
+        }
         println!(
-            "predicted model: {} ({})",
-            analysis.model_name, analysis.model
+            "{}: {}",
+            if analysis.close { "most likely" } else { "nearest" },
+            analysis
+                .top
+                .iter()
+                .map(|c| format!("{} {:.0}%", c.model_name, 100.0 * c.probability))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
         println!(
             "predicted scales: {}",
@@ -270,13 +287,28 @@ fn bench_config(
 /// textures between the dataset's points (parameters drawn at random in
 /// the dataset ranges). Every image's features are computed once, with
 /// filters learnt from the training bases' images.
-pub fn bench(
-    per_model: usize,
-    size: usize,
-    augment: bool,
-    index: Option<&str>,
-) -> Result<(), String> {
-    let cfg = bench_config(per_model, size, augment, index)?;
+/// `bench texture`'s settings.
+pub struct BenchArgs {
+    pub per_model: usize,
+    pub size: usize,
+    pub augment: bool,
+    pub index: Option<String>,
+    pub looks: Option<usize>,
+    pub xset: PathBuf,
+    pub xset_split: String,
+}
+
+pub fn bench(a: BenchArgs) -> Result<(), String> {
+    let BenchArgs {
+        per_model,
+        size,
+        augment,
+        ..
+    } = a;
+    let mut cfg = bench_config(per_model, size, augment, a.index.as_deref())?;
+    if let Some(l) = a.looks {
+        cfg.dataset.looks = l;
+    }
     let mut stats = BuildStats::default();
     let t0 = Instant::now();
     let samples = build::labelled(&cfg.dataset, &[], &mut stats).map_err(|e| e.to_string())?;
@@ -397,8 +429,17 @@ pub fn bench(
     // Every image of the held-out bases (all crops and lights), from the
     // features computed above, and where each model's misses went.
     let held_ids: Vec<usize> = (0..samples.len())
-        .filter(|&i| held[samples[i].0.base])
+        .filter(|&i| held[samples[i].0.base] && samples[i].0.look.is_none())
         .collect();
+    // The held-out bases' random looks (other programs' renderings of the
+    // same textures), one window each.
+    let look_ids: Vec<usize> = (0..samples.len())
+        .filter(|&i| held[samples[i].0.base] && samples[i].0.look.is_some())
+        .collect();
+    let looks_right = look_ids
+        .iter()
+        .filter(|&&i| index.predict_model(&features[i]) as usize == samples[i].0.model)
+        .count();
     let mut confusion = vec![vec![0usize; MODELS.len()]; MODELS.len()];
     for &i in &held_ids {
         let got = index.predict_model(&features[i]) as usize;
@@ -449,7 +490,7 @@ pub fn bench(
     let mut image_test = vec![false; samples.len()];
     for m in 0..MODELS.len() {
         let mut mine: Vec<usize> = (0..samples.len())
-            .filter(|&i| samples[i].0.model == m)
+            .filter(|&i| samples[i].0.model == m && samples[i].0.look.is_none())
             .collect();
         rng.shuffle(&mut mine);
         for &i in mine.iter().take(mine.len() / 4) {
@@ -605,8 +646,18 @@ pub fn bench(
         }
         _ => (0.0, 0.0),
     };
+    let xset = if a.xset.join("labels.csv").is_file() {
+        let t = Instant::now();
+        let mut v = super::texture_xset::evaluate(&full, &a.xset, &a.xset_split)?;
+        v["seconds_per_image"] = json!(t.elapsed().as_secs_f64() / v["images"].as_f64().unwrap_or(1.0));
+        v["index"] = json!("trained on every base, as the shipped index");
+        v
+    } else {
+        json!(format!("no set at {}: python3 bench/texture-xset/make_set.py {}", a.xset.display(), a.xset.display()))
+    };
     let out = json!({
-        "dataset": {"per_model": per_model, "size": size, "augmented": augment, "images": stats.images, "bases": stats.bases, "test_bases": tests.len()},
+        "cross_implementation": xset,
+        "dataset": {"per_model": per_model, "size": size, "augmented": augment, "looks": cfg.dataset.looks, "images": stats.images, "bases": stats.bases, "test_bases": tests.len()},
         "protocols": {
             "held_out_bases": "25% of each model's base textures with all their crops and lights held out; tests are their first images",
             "held_out_bases_256_renders_two_windows": "the same bases' 256² renders under the main light (their four crops joined), read by Index::analyse as two diagonal 128² windows (quadrants 0 and 3) with summed scores",
@@ -616,7 +667,7 @@ pub fn bench(
             "table2_shipped_analysis": "the scales Index::analyse gives: the image's own estimator measures at the dataset's cut points (the labels are the estimators', Index::measured); a 256² render is measured over its four 128² quadrants, which is how its base was labelled, so that figure is 1 by construction and checks that analyse follows the labelling",
             "table2_svm_classifiers": "the paper's method: linear one-vs-rest SVMs from PCN features and global values to each scale (what analyse gives for an index built on human ratings)",
         },
-        "table1_model_accuracy": {"held_out_bases": model_right as f64 / n, "held_out_bases_256_renders_two_windows": render_right as f64 / n, "held_out_bases_all_images": held_all_right as f64 / held_ids.len().max(1) as f64, "random_draws": drawn_right as f64 / drawn.max(1) as f64, "paper_images": paper_model, "paper_pcn2": 0.9989},
+        "table1_model_accuracy": {"held_out_bases": model_right as f64 / n, "held_out_bases_256_renders_two_windows": render_right as f64 / n, "held_out_bases_all_images": held_all_right as f64 / held_ids.len().max(1) as f64, "held_out_bases_looks": looks_right as f64 / look_ids.len().max(1) as f64, "random_draws": drawn_right as f64 / drawn.max(1) as f64, "paper_images": paper_model, "paper_pcn2": 0.9989},
         "held_out_bases_all_images_by_model": by_model,
         "model_accuracy_by_c_held_out_bases": c_sweep,
         "table2_scale_accuracy": SCALES.iter().enumerate().map(|(k, name)| json!({

@@ -232,9 +232,27 @@ pub struct TextureAnalyseRequest {
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct TextureAnalysis {
+    /// The most likely model (`top[0]`), even when it is not close.
     pub model: &'static str,
     pub model_name: &'static str,
     pub scales: [u8; 12],
+    /// The [`TOP_MODELS`] most likely models with their calibrated
+    /// probabilities ([`crate::texture::index::Confidence`]).
+    pub top: Vec<ModelChance>,
+    /// False when the image is far from every model in the index ("no
+    /// close model"): then `top` names the nearest, not a match.
+    pub close: bool,
+}
+
+/// How many models an analysis lists.
+pub const TOP_MODELS: usize = 3;
+
+/// A model and the probability that it drew the example.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ModelChance {
+    pub model: &'static str,
+    pub model_name: &'static str,
+    pub probability: f64,
 }
 
 /// An encoded image as grey levels (Rec. 709 luma over white for alpha).
@@ -253,10 +271,23 @@ pub fn decode_gray(bytes: &[u8]) -> Result<Gray> {
 pub fn analyse(index: &Index, img: &Gray) -> Result<TextureAnalysis> {
     let a = index.analyse(img)?;
     let m = &MODELS[a.model as usize];
+    let top = a
+        .reading
+        .ranked
+        .iter()
+        .take(TOP_MODELS)
+        .map(|&(k, probability)| ModelChance {
+            model: MODELS[k as usize].id,
+            model_name: MODELS[k as usize].name,
+            probability,
+        })
+        .collect();
     Ok(TextureAnalysis {
         model: m.id,
         model_name: m.name,
         scales: a.scales,
+        top,
+        close: a.reading.close,
     })
 }
 

@@ -46,6 +46,7 @@ use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::rng::Rng;
 use crate::texture::image::Gray;
+use crate::texture::models::look::Look;
 use crate::texture::models::{render_height, shade, Light, Model, MODELS};
 
 /// What to build.
@@ -61,6 +62,11 @@ pub struct DatasetConfig {
     pub crops: bool,
     /// Seed of the whole dataset; each base sample derives its own.
     pub seed: u64,
+    /// Further images per base under random [`Look`]s (issue 36: other
+    /// programs' lights, reliefs, tones, blur, noise, scales and
+    /// rotations), each a `size`² window of the rendered height map. They
+    /// train the classifiers and never enter the space.
+    pub looks: usize,
 }
 
 impl Default for DatasetConfig {
@@ -73,6 +79,7 @@ impl Default for DatasetConfig {
             lights: vec![Light::DEFAULT],
             crops: false,
             seed: 1,
+            looks: 0,
         }
     }
 }
@@ -140,12 +147,15 @@ pub struct Sample {
     pub model: usize,
     pub params: Vec<f64>,
     pub seed: u64,
-    /// Index into the config's lights, and the light itself.
+    /// Index into the config's lights, and the light itself; a look's
+    /// image has `lights.len() + j` for its `j`-th look.
     pub light_index: usize,
     pub light: Light,
     /// Quadrant 0..4 (row-major: top-left, top-right, bottom-left,
     /// bottom-right) or `None` for the whole texture.
     pub crop: Option<u8>,
+    /// The look of a varied image ([`DatasetConfig::looks`]).
+    pub look: Option<Look>,
     pub image: Gray,
 }
 
@@ -271,9 +281,25 @@ pub fn render_base(config: &DatasetConfig, spec: &BaseSpec) -> Result<Vec<Sample
                 light_index: li,
                 light,
                 crop: c,
+                look: None,
                 image,
             });
         }
+    }
+    let mut rng = Rng::new(spec.seed ^ 0x1005_cafe);
+    for j in 0..config.looks {
+        let look = Look::random(&mut rng);
+        out.push(Sample {
+            base: spec.base,
+            model: spec.model,
+            params: spec.params.clone(),
+            seed: spec.seed,
+            light_index: config.lights.len() + j,
+            light: look.light.unwrap_or_default(),
+            crop: None,
+            look: Some(look),
+            image: look.apply(&height, config.size),
+        });
     }
     Ok(out)
 }

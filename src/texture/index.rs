@@ -52,7 +52,9 @@ pub const SHORTLIST: usize = 8;
 /// 4: the scale classifiers read the global values too
 /// ([`GlobalScaler::scale_row`]); the scales' cut points follow them when
 /// the labels are the estimators' ([`Index::measured`]).
-pub const VERSION: u32 = 4;
+/// 5: the model classifier's [`Confidence`] (temperature and closeness
+/// threshold) after the global scaler.
+pub const VERSION: u32 = 5;
 
 /// One training texture: its grey image, where it came from, and its
 /// scales (1–9). Augmented copies have `base: false`: they train the
@@ -120,7 +122,87 @@ pub struct IndexConfig {
     /// makes up for it: the sliders' response (`examples/texture_rerank.rs`)
     /// was the same at 0.2 and 0.1.
     pub min_correlation: f64,
+    /// How the model classifier's scores become probabilities and when an
+    /// image is "no close model" ([`Confidence`]).
+    pub confidence: Confidence,
 }
+
+/// How sure the model classifier is (issue 36). Its one-vs-rest scores,
+/// averaged over an image's views, become probabilities by a softmax at
+/// `temperature`. An image is "no close model" when it is far from every
+/// model's training images: its [`Index::closeness`] (distance to the
+/// nearest model's centre over that model's [`Region::radius`]) is above
+/// `close`. (The classifier's own best score cannot say it: linear scores
+/// grow without bound away from the data, and a flat grey picture or a
+/// ramp scored higher than most textures.)
+///
+/// Both are chosen on the validation part of the cross-implementation set
+/// (`bench/texture-xset/`), never on its test part: the temperature that
+/// minimises the negative log-likelihood of the right models, and the
+/// threshold below which few validation textures fall while flat, ramp,
+/// text and photo-like pictures do (`filigree bench texture --xset`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Confidence {
+    pub temperature: f32,
+    pub close: f32,
+}
+
+impl Default for Confidence {
+    fn default() -> Self {
+        Confidence {
+            temperature: 1.0,
+            close: 1.5,
+        }
+    }
+}
+
+/// The model classifier's reading of an image ([`Index::read_models`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Reading {
+    /// Every model with its probability, most likely first.
+    pub ranked: Vec<(u16, f64)>,
+    /// The image's [`Index::closeness`]: 1 is as far from the nearest
+    /// model as the model's own typical training image.
+    pub distance: f64,
+    /// Whether `distance` is at most [`Confidence::close`].
+    pub close: bool,
+}
+
+/// Where one model's training images lie, in the scale classifiers' rows
+/// ([`GlobalScaler::scale_row`]: the square-rooted histograms and the
+/// standardised global values): their mean and standard deviation per
+/// value, and the 90th percentile of their own standardised distances to
+/// the mean ([`Region::distance`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Region {
+    pub centre: Vec<f32>,
+    pub spread: Vec<f32>,
+    pub radius: f32,
+}
+
+/// Added (in quadrature) to every value's deviation in a [`Region`], so a
+/// bin a model never fills does not make the smallest difference there
+/// infinite.
+const SPREAD_FLOOR: f64 = 0.02;
+
+impl Region {
+    /// The root-mean-square of `row`'s differences from the centre, each
+    /// over its value's spread (a diagonal Mahalanobis distance).
+    pub fn distance(&self, row: &[f32]) -> f64 {
+        let sum: f64 = row
+            .iter()
+            .zip(&self.centre)
+            .zip(&self.spread)
+            .map(|((x, m), s)| ((*x as f64 - *m as f64) / *s as f64).powi(2))
+            .sum();
+        (sum / self.centre.len().max(1) as f64).sqrt()
+    }
+}
+
+/// The 90th percentile of a model's images' distances to their centre is
+/// its [`Region::radius`].
+const REGION_QUANTILE: f64 = 0.9;
 
 impl Default for IndexConfig {
     fn default() -> Self {
@@ -132,6 +214,7 @@ impl Default for IndexConfig {
             isomap_k: 10,
             filter_images: 240,
             min_correlation: 0.1,
+            confidence: Confidence::default(),
         }
     }
 }
@@ -146,6 +229,10 @@ pub struct Index {
     pub model_classifier: OneVsRest,
     /// Standardises the global values for the classifiers.
     pub globals: GlobalScaler,
+    /// The model classifier's probabilities and closeness.
+    pub confidence: Confidence,
+    /// Each model's region, in the model classifier's class order.
+    pub regions: Vec<Region>,
     /// Read [`GlobalScaler::scale_row`]s.
     pub scale_classifiers: Vec<OneVsRest>,
     /// The cut points that made the samples' scales, when every label is
@@ -243,6 +330,8 @@ impl GlobalScaler {
 pub struct Analysis {
     pub model: u16,
     pub scales: [u8; 12],
+    /// The model classifier's reading: `model` is its first.
+    pub reading: Reading,
 }
 
 /// A retrieved sample and how well it matches the request.
@@ -402,6 +491,7 @@ impl Index {
         drop(mapped);
         let scale_rows: Vec<Vec<f32>> =
             features.iter().map(|f| globals.scale_row(f, dim)).collect();
+        let regions = Self::regions(&scale_rows, &models, &model_classifier.classes);
         let scale_ids: Vec<usize> = (0..12).collect();
         let scale_classifiers = par_map(&scale_ids, |&k| {
             let labels: Vec<u16> = training.iter().map(|t| t.scales[k] as u16).collect();
@@ -424,11 +514,82 @@ impl Index {
             pcn,
             model_classifier,
             globals,
+            confidence: config.confidence,
+            regions,
             scale_classifiers,
             measured,
             axes,
             samples,
         })
+    }
+
+    /// Each class's [`Region`] over its rows.
+    pub fn regions(rows: &[Vec<f32>], labels: &[u16], classes: &[u16]) -> Vec<Region> {
+        classes
+            .iter()
+            .map(|&c| {
+                let mine: Vec<&Vec<f32>> = rows
+                    .iter()
+                    .zip(labels)
+                    .filter(|(_, &l)| l == c)
+                    .map(|(r, _)| r)
+                    .collect();
+                let dim = rows.first().map_or(0, |r| r.len());
+                let mut centre = vec![0f64; dim];
+                for r in &mine {
+                    for (m, v) in centre.iter_mut().zip(r.iter()) {
+                        *m += *v as f64;
+                    }
+                }
+                let n = mine.len().max(1) as f64;
+                let centre: Vec<f32> = centre.iter().map(|m| (m / n) as f32).collect();
+                let mut var = vec![0f64; dim];
+                for r in &mine {
+                    for ((v, x), m) in var.iter_mut().zip(r.iter()).zip(&centre) {
+                        *v += (*x as f64 - *m as f64).powi(2) / n;
+                    }
+                }
+                let spread: Vec<f32> = var
+                    .iter()
+                    .map(|v| (v + SPREAD_FLOOR * SPREAD_FLOOR).sqrt() as f32)
+                    .collect();
+                let mut region = Region {
+                    centre,
+                    spread,
+                    radius: 1.0,
+                };
+                let mut d: Vec<f64> = mine.iter().map(|r| region.distance(r)).collect();
+                d.sort_by(f64::total_cmp);
+                region.radius = d
+                    .get(((d.len().max(1) - 1) as f64 * REGION_QUANTILE) as usize)
+                    .copied()
+                    .unwrap_or(1.0)
+                    .max(1e-6) as f32;
+                region
+            })
+            .collect()
+    }
+
+    /// How far the feature rows of an image's views are from the nearest
+    /// model: the [`Region::distance`] of their mean scale row
+    /// ([`GlobalScaler::scale_row`]) from each model's region over its
+    /// radius, the smallest of those.
+    pub fn closeness(&self, views: &[Vec<f32>]) -> f64 {
+        let dim = self.pcn.config.feature_len();
+        let mut mean: Vec<f32> = Vec::new();
+        for f in views {
+            let row = self.globals.scale_row(f, dim);
+            if mean.is_empty() {
+                mean = vec![0.0; row.len()];
+            }
+            for (m, v) in mean.iter_mut().zip(&row) {
+                *m += v / views.len() as f32;
+            }
+        }
+        self.regions
+            .iter()
+            .map(|r| r.distance(&mean) / r.radius as f64)
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// The perceptual space of the base samples and its axis regressions.
@@ -518,10 +679,7 @@ impl Index {
         // Test-time augmentation: every classifier's scores summed over
         // the image's windows (one for an image the size of the view).
         let views = self.view_features(img)?;
-        let mut model = vec![0f64; self.model_classifier.classes.len()];
-        for f in &views {
-            add(&mut model, &self.model_scores(f));
-        }
+        let reading = self.read_views(&views);
         let scales = match &self.measured {
             None => self.classify_scales(&views),
             Some(q) => {
@@ -543,14 +701,47 @@ impl Index {
             }
         };
         Ok(Analysis {
-            model: self
-                .model_classifier
-                .classes
-                .get(argmax(&model))
-                .copied()
-                .unwrap_or(0),
+            model: reading.ranked.first().map_or(0, |r| r.0),
             scales,
+            reading,
         })
+    }
+
+    /// The model classifier's reading of `img` ([`Index::read_views`]).
+    pub fn read_models(&self, img: &Gray) -> Result<Reading> {
+        Ok(self.read_views(&self.view_features(img)?))
+    }
+
+    /// Every model with its probability, from the feature rows of an
+    /// image's views: the one-vs-rest scores averaged over the views, a
+    /// softmax at [`Confidence::temperature`], and whether the best score
+    /// reaches [`Confidence::close`].
+    pub fn read_views(&self, views: &[Vec<f32>]) -> Reading {
+        let mut sum = vec![0f64; self.model_classifier.classes.len()];
+        for f in views {
+            add(&mut sum, &self.model_scores(f));
+        }
+        let n = views.len().max(1) as f64;
+        let mean: Vec<f64> = sum.iter().map(|s| s / n).collect();
+        let best = mean.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let t = (self.confidence.temperature as f64).max(1e-6);
+        let e: Vec<f64> = mean.iter().map(|s| libm::exp((s - best) / t)).collect();
+        let z: f64 = e.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+        let mut ranked: Vec<(u16, f64)> = self
+            .model_classifier
+            .classes
+            .iter()
+            .zip(&e)
+            .map(|(&c, &p)| (c, p / z))
+            .collect();
+        // Ties keep the classifier's order, as argmax did.
+        ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let distance = self.closeness(views);
+        Reading {
+            ranked,
+            distance,
+            close: distance <= self.confidence.close as f64,
+        }
     }
 
     /// The feature rows ([`Index::image_features`]) of the windows
@@ -815,6 +1006,14 @@ impl Index {
         w.f32s(&self.globals.mean);
         w.f32s(&self.globals.sd);
         w.f32(self.globals.weight);
+        w.f32(self.confidence.temperature);
+        w.f32(self.confidence.close);
+        w.len(self.regions.len());
+        for r in &self.regions {
+            w.f32s(&r.centre);
+            w.f32s(&r.spread);
+            w.f32(r.radius);
+        }
         for c in &self.scale_classifiers {
             w.ovr(c);
         }
@@ -921,6 +1120,38 @@ impl Index {
             return Err(corrupt("a global value's deviation is not positive"));
         }
         let globals = GlobalScaler { mean, sd, weight };
+        let confidence = Confidence {
+            temperature: r.f32("temperature")?,
+            close: r.f32("closeness threshold")?,
+        };
+        if !(confidence.temperature > 0.0 && confidence.temperature.is_finite())
+            || !confidence.close.is_finite()
+        {
+            return Err(corrupt("the confidence settings are not usable numbers"));
+        }
+        let region_count = r.len(4, "regions")?;
+        if region_count != model_classifier.classes.len() {
+            return Err(corrupt("one region per model class is needed"));
+        }
+        let regions = (0..region_count)
+            .map(|_| {
+                let centre = r.f32s("region centre")?;
+                let spread = r.f32s("region spread")?;
+                let radius = r.f32("region radius")?;
+                if centre.len() != dim + GLOBALS
+                    || spread.len() != centre.len()
+                    || spread.iter().any(|s| !(*s > 0.0 && s.is_finite()))
+                    || !(radius > 0.0 && radius.is_finite())
+                {
+                    return Err(corrupt("a model's region has the wrong size or spread"));
+                }
+                Ok(Region {
+                    centre,
+                    spread,
+                    radius,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         let scale_classifiers = (0..12)
             .map(|_| r.ovr(dim + GLOBALS, "scale classifier"))
             .collect::<Result<Vec<_>>>()?;
@@ -1008,6 +1239,8 @@ impl Index {
             },
             model_classifier,
             globals,
+            confidence,
+            regions,
             scale_classifiers,
             measured,
             axes,

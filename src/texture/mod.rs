@@ -7,6 +7,7 @@
 //! - [`models`]: the procedural models (height maps) and the one shading.
 //! - [`dataset`]: models' parameters on a linear grid, rendered, augmented.
 //! - [`pcn`]: the PCN-2 feature extractor.
+//! - [`lbp`]: rotation-invariant local binary patterns beside PCN-2 (issue 36).
 //! - [`learn`]: support vector machines and Isomap.
 //! - [`scales`]: estimators of the twelve perceptual scales, 1–9.
 //! - [`globals`]: global values (scale measures, radial spectrum, grey
@@ -19,6 +20,7 @@ pub mod dataset;
 pub mod globals;
 pub mod image;
 pub mod index;
+pub mod lbp;
 pub mod learn;
 pub mod models;
 pub mod pcn;

@@ -63,6 +63,18 @@ pub struct PcnConfig {
     /// their size, so an index trained on crops sets `2 · side`. 0 reads
     /// every image whole (its centre square resampled to `side`).
     pub texture_side: usize,
+    /// Scales of rotation-invariant LBP histograms appended to the
+    /// features ([`super::lbp`]; 0: none, the paper's features alone).
+    /// 3, chosen on the validation part of the cross-implementation set
+    /// (issue 36; 4 looks a base): 26.1% of its textures recognised
+    /// without, 30.4% with.
+    pub lbp_scales: usize,
+    /// The network reads the view's grey levels as ranks (histogram
+    /// equalised; ties share their mean rank), so its filters and codes do
+    /// not change with a tone curve (issue 36). The intensity histogram
+    /// and the LBP still read the view itself. On, chosen on the same
+    /// validation part: 30.4% → 33.2% recognised.
+    pub equalise: bool,
 }
 
 impl Default for PcnConfig {
@@ -80,6 +92,8 @@ impl Default for PcnConfig {
             intensity_bins: 16,
             combination: Vec::new(),
             texture_side: 0,
+            lbp_scales: 3,
+            equalise: true,
         }
     }
 }
@@ -148,6 +162,9 @@ impl PcnConfig {
                     self.texture_side
                 ),
             ));
+        }
+        if self.lbp_scales > 4 {
+            return Err(bad("lbp_scales", "at most 4 LBP scales".into()));
         }
         if self.intensity_bins > 256 {
             return Err(bad("intensity_bins", "at most 256 grey-level bins".into()));
@@ -235,6 +252,30 @@ impl PcnConfig {
             .collect()
     }
 
+    /// The network's input map of a prepared view ([`PcnConfig::equalise`]).
+    fn network_input(&self, view: &Gray) -> Map {
+        if !self.equalise {
+            return as_map(view);
+        }
+        let n = view.data.len();
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| view.data[a].total_cmp(&view.data[b]));
+        let mut ranked = view.clone();
+        let mut i = 0;
+        while i < n {
+            let mut j = i + 1;
+            while j < n && view.data[order[j]] == view.data[order[i]] {
+                j += 1;
+            }
+            let r = ((i + j - 1) as f64 / 2.0 / (n.max(2) - 1) as f64) as f32;
+            for &k in &order[i..j] {
+                ranked.data[k] = r;
+            }
+            i = j;
+        }
+        as_map(&ranked)
+    }
+
     /// The indexing matrix's rows (identity when none is given).
     pub fn subsets(&self) -> Vec<Vec<usize>> {
         if self.combination.is_empty() {
@@ -250,7 +291,9 @@ impl PcnConfig {
         let bins: usize = (0..groups)
             .map(|g| 1usize << (self.l2 - g * self.hash_bits).min(self.hash_bits))
             .sum();
-        self.subsets().len() * self.blocks * self.blocks * bins + self.intensity_bins
+        self.subsets().len() * self.blocks * self.blocks * bins
+            + self.intensity_bins
+            + self.lbp_scales * super::lbp::bins_per_scale()
     }
 }
 
@@ -607,7 +650,7 @@ impl Pcn {
         let taps = c.k1 * c.k2;
         let inputs: Vec<Map> = images
             .iter()
-            .map(|g| c.view(g).map(|g| as_map(&g)))
+            .map(|g| c.view(g).map(|g| c.network_input(&g)))
             .collect::<Result<_>>()?;
         let mut cov = vec![0f64; taps * taps];
         let mut count = 0;
@@ -651,7 +694,7 @@ impl Pcn {
     pub fn features(&self, img: &Gray) -> Result<Vec<f32>> {
         let c = &self.config;
         let prepared = c.view(img)?;
-        let input = as_map(&prepared);
+        let input = c.network_input(&prepared);
         let pooled: Vec<Map> = convolve(&input, &self.stage1, c.k1, c.k2)
             .iter()
             .map(|o| max_pool(o, c.pool))
@@ -673,6 +716,9 @@ impl Pcn {
             }
             let n = prepared.data.len() as f32;
             out.extend(hist.iter().map(|h| (h / n).sqrt()));
+        }
+        if c.lbp_scales > 0 {
+            out.extend(super::lbp::lbp_histograms(&prepared, c.lbp_scales));
         }
         Ok(out)
     }

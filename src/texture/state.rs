@@ -6,7 +6,9 @@
 //! { source: null
 //!         | {kind: "model", model: id, params: [number], seed}
 //!         | {kind: "image", name: text, png: bytes},
-//!   predicted: null | {model: id, scales: [12 × 1–9]},
+//!   predicted: null | {model: id, scales: [12 × 1–9],
+//!                      top: [≤ 3 × {model: id, probability: 0–1}],
+//!                      close: bool},
 //!   scales: [12 × number in 1–9],
 //!   sameModel: bool,
 //!   retrieved: null | {model: id, params: [number], seed, sample: int | null,
@@ -20,7 +22,10 @@
 //!   [`MAX_SOURCE_PNG`] bytes).
 //! - `predicted` is the core's analysis of the example (`texture-analyse`):
 //!   the model and the twelve scale **estimates** (see
-//!   [`super::scales`]: computational estimates, not human ratings).
+//!   [`super::scales`]: computational estimates, not human ratings), the
+//!   most likely models with their probabilities (`top`, most likely
+//!   first; missing in older documents) and whether any model is close
+//!   (`close`, true when missing).
 //! - `scales` are the twelve requested scales (the sliders), 1–9,
 //!   fractions allowed, in [`super::index::SCALES`] order.
 //! - `sameModel`: retrieve within the predicted model only.
@@ -74,6 +79,15 @@ pub enum Source {
 pub struct Predicted {
     pub model: String,
     pub scales: [u8; 12],
+    pub top: Vec<Chance>,
+    pub close: bool,
+}
+
+/// A model the analysis found likely, with its probability.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Chance {
+    pub model: String,
+    pub probability: f64,
 }
 
 /// The texture shown: a retrieved sample, its parameters perhaps edited.
@@ -275,10 +289,56 @@ fn source(v: &Value) -> Result<Source> {
 }
 
 fn predicted(v: &Value) -> Result<Predicted> {
-    let p = object(v, "predicted", "null or {model, scales}")?;
+    let p = object(v, "predicted", "null or {model, scales, top, close}")?;
+    let top = match p.get("top") {
+        None | Some(Value::Null) => Vec::new(),
+        Some(t) => {
+            let list = t
+                .as_list()
+                .filter(|l| l.len() <= crate::texture::api::TOP_MODELS)
+                .ok_or_else(|| {
+                    invalid(
+                        "predicted.top",
+                        format!(
+                            "must be a list of at most {} models",
+                            crate::texture::api::TOP_MODELS
+                        ),
+                    )
+                })?;
+            list.iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let field = format!("predicted.top.{i}");
+                    let c = object(c, &field, "{model, probability}")?;
+                    Ok(Chance {
+                        model: model_of(c.get("model"), &format!("{field}.model"))?
+                            .id
+                            .to_string(),
+                        probability: c
+                            .get("probability")
+                            .and_then(Value::finite)
+                            .filter(|p| (0.0..=1.0).contains(p))
+                            .ok_or_else(|| {
+                                invalid(
+                                    &format!("{field}.probability"),
+                                    "must be a number from 0 to 1",
+                                )
+                            })?,
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?
+        }
+    };
+    let close = match p.get("close") {
+        None | Some(Value::Null) => true,
+        Some(Value::Bool(b)) => *b,
+        Some(_) => return Err(invalid("predicted.close", "must be true or false")),
+    };
     Ok(Predicted {
         model: model_of(p.get("model"), "predicted.model")?.id.to_string(),
         scales: likert(p.get("scales"), "predicted.scales")?,
+        top,
+        close,
     })
 }
 
@@ -383,7 +443,9 @@ mod tests {
     fn doc() -> Json {
         json!({
             "source": {"kind": "model", "model": "perlin", "params": models::find("perlin").unwrap().defaults(), "seed": 7},
-            "predicted": {"model": "perlin", "scales": [5, 5, 4, 3, 6, 7, 2, 5, 5, 4, 6, 8]},
+            "predicted": {"model": "perlin", "scales": [5, 5, 4, 3, 6, 7, 2, 5, 5, 4, 6, 8],
+                          "top": [{"model": "perlin", "probability": 0.6}, {"model": "folding-perlin", "probability": 0.25}],
+                          "close": false},
             "scales": [5, 5, 4, 3, 6, 7, 2, 5, 5, 9, 6, 8.5],
             "sameModel": true,
             "retrieved": {"model": "cellular", "params": models::find("cellular").unwrap().defaults(),
@@ -402,6 +464,25 @@ mod tests {
             "{e} names its field first"
         );
         e.field().unwrap().to_string()
+    }
+
+    #[test]
+    fn the_analysis_keeps_its_likely_models_and_closeness() {
+        let p = check(&value(&doc())).unwrap().predicted.unwrap();
+        assert_eq!(p.top.len(), 2);
+        assert_eq!((p.top[1].model.as_str(), p.top[1].probability), ("folding-perlin", 0.25));
+        assert!(!p.close);
+        // Older documents have neither: no list, and close.
+        let mut old = doc();
+        old["predicted"] = json!({"model": "perlin", "scales": [5; 12]});
+        let p = check(&value(&old)).unwrap().predicted.unwrap();
+        assert!(p.top.is_empty() && p.close);
+        assert_eq!(field_of("/predicted/top/1/probability", json!(1.5)), "predicted.top.1.probability");
+        assert_eq!(field_of("/predicted/top/0/model", json!("nope")), "predicted.top.0.model");
+        assert_eq!(field_of("/predicted/close", json!(1)), "predicted.close");
+        let mut long = doc();
+        long["predicted"]["top"] = json!([{"model": "perlin", "probability": 0.1}; 4]);
+        assert_eq!(check(&value(&long)).unwrap_err().field(), Some("predicted.top"));
     }
 
     #[test]

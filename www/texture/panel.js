@@ -254,6 +254,15 @@ const same = (a, b) => a === b || (Array.isArray(a) && Array.isArray(b) && a.len
 const keyOf = (r) => (r ? `${r.model}|${r.params.join(',')}|${r.seed}` : '');
 const sourceKey = (s) => (!s ? '' : s.kind === 'model' ? `m|${s.model}|${s.params.join(',')}|${s.seed}` : `i|${s.name}|${s.png.length}|${s.png.slice(0, 64).join(',')}|${s.png.slice(-64).join(',')}`);
 
+/** The predicted part of a document from a `texture-analyse` answer: the model, the scale
+ * estimates, the three likeliest models with their probabilities, and whether any is close. */
+const predictedOf = (a) => ({
+  model: a.model,
+  scales: [...a.scales],
+  top: (a.top || []).map((c) => ({ model: c.model, probability: c.probability })),
+  close: a.close !== false,
+});
+
 /** The retrieved part of a document from a `texture-retrieve` answer. */
 const retrievedOf = (r) => ({ model: r.model, params: r.params, seed: r.seed, sample: r.sample, scales: [...r.scales], cosine: r.cosine, edited: false });
 
@@ -267,7 +276,7 @@ const textureState = {
     try {
       const img = await ctx.run('texture-render', { model: m.id, params: doc.source.params, seed: 1, size: SIDE });
       const a = await withIndex(ctx.run, 'texture-analyse', { bytes: await grayPng(img.gray, SIDE) }, { transfer: [] });
-      doc.predicted = { model: a.model, scales: [...a.scales] };
+      doc.predicted = predictedOf(a);
       doc.scales = [...a.scales];
       const r = await withIndex(ctx.run, 'texture-retrieve', { scales: doc.scales, model: '', size: 0 });
       doc.retrieved = retrievedOf(r);
@@ -310,6 +319,7 @@ const html = `
         <button type="button" data-act="render-example">Render as example</button>
       </div>
       <p class="texture-predicted" data-testid="texture-predicted" aria-live="polite"></p>
+      <ol class="texture-top" data-testid="texture-top" aria-label="Likeliest models"></ol>
     </section>
     <section class="card texture-result" aria-label="Retrieved texture">
       <div class="toolbar" role="toolbar" aria-label="Texture">
@@ -348,6 +358,7 @@ function mount(el, ctx) {
   const sameBox = q('[name=same-model]');
   const modelSel = q('[name=example-model]');
   const predictedEl = q('[data-testid=texture-predicted]');
+  const topEl = q('[data-testid=texture-top]');
   const retrievedEl = q('[data-testid=texture-retrieved]');
   const cosineEl = q('[data-testid=texture-cosine]');
   const paramList = q('.texture-param-list');
@@ -479,9 +490,9 @@ function mount(el, ctx) {
       const retrieved = retrievedOf(r);
       if (r.image) shown = { key: keyOf(retrieved), image: grayImage(r.image.gray, r.image.size) };
       counters.retrievals = String(Number(counters.retrievals) + 1);
-      ctx.commit({ ...state(), source, predicted: { model: a.model, scales }, scales, retrieved });
+      ctx.commit({ ...state(), source, predicted: predictedOf(a), scales, retrieved });
       ctx.seal();
-      status(`predicted ${a.model_name}; retrieved sample ${r.sample}`);
+      status(`${a.close === false ? 'no close model' : `predicted ${a.model_name}`}; retrieved sample ${r.sample}`);
       ctx.clearError();
       return true;
     } catch (err) {
@@ -780,13 +791,26 @@ function mount(el, ctx) {
     });
     sameBox.checked = !!s.sameModel;
     sameBox.disabled = !s.predicted;
-    if (s.predicted) {
-      predictedEl.textContent = `Predicted model: ${nameOf(s.predicted.model)}`;
-      predictedEl.dataset.model = s.predicted.model;
+    const p = s.predicted;
+    if (p) {
+      const close = p.close !== false;
+      predictedEl.textContent = close
+        ? `Predicted model: ${nameOf(p.model)}`
+        : 'No close model: the example is far from every model in the index. The nearest are below.';
+      predictedEl.dataset.model = p.model;
+      predictedEl.dataset.close = String(close);
     } else {
       predictedEl.textContent = 'No prediction yet: give an example.';
       delete predictedEl.dataset.model;
+      delete predictedEl.dataset.close;
     }
+    topEl.replaceChildren(...(p?.top || []).map((c) => {
+      const li = document.createElement('li');
+      li.dataset.model = c.model;
+      li.textContent = `${nameOf(c.model)} — ${(100 * c.probability).toFixed(c.probability < 0.1 ? 1 : 0)}%`;
+      return li;
+    }));
+    topEl.hidden = !p?.top?.length;
     const r = s.retrieved;
     if (r) {
       retrievedEl.textContent = `${nameOf(r.model)}, seed ${r.seed}${r.sample === null ? '' : ` (sample ${r.sample})`}${r.edited ? ' — parameters edited' : ''}`;

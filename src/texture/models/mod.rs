@@ -36,6 +36,7 @@ pub mod common;
 pub mod composite;
 pub mod fractal;
 pub mod islamic;
+pub mod look;
 pub mod matrix;
 pub mod perlin;
 pub mod reaction;
@@ -345,9 +346,17 @@ pub const RELIEF: f32 = 0.04;
 /// the wrapped central-difference gradient (height 1 = [`RELIEF`] of the
 /// image side), brightness `max(0, n·l)`. The one place textures are lit.
 pub fn shade(height: &Gray, light: Light) -> Gray {
+    let k = RELIEF * height.width.max(height.height) as f32 * 0.5;
+    shade_k(height, light, k, 0.0)
+}
+
+/// [`shade`] with the gradient's scale `k` (height units to pixels) and
+/// an ambient light: brightness `ambient + (1 − ambient) · max(0, n·l)`
+/// (the same bits as `shade` at its `k` and no ambient). [`look`] varies
+/// them.
+pub(crate) fn shade_k(height: &Gray, light: Light, k: f32, ambient: f32) -> Gray {
     let (w, h) = (height.width, height.height);
     let [lx, ly, lz] = light.vector();
-    let k = RELIEF * w.max(h) as f32 * 0.5;
     let mut out = Gray::new(w, h);
     for y in 0..h {
         for x in 0..w {
@@ -357,7 +366,8 @@ pub fn shade(height: &Gray, light: Light) -> Gray {
             let dy = (height.wrapped(xi, yi - 1) - height.wrapped(xi, yi + 1)) * k;
             let (nx, ny, nz) = (-dx, -dy, 1.0f32);
             let len = (nx * nx + ny * ny + nz * nz).sqrt();
-            out.data[y * w + x] = ((nx * lx + ny * ly + nz * lz) / len).clamp(0.0, 1.0);
+            let lit = ((nx * lx + ny * ly + nz * lz) / len).clamp(0.0, 1.0);
+            out.data[y * w + x] = ambient + (1.0 - ambient) * lit;
         }
     }
     out
