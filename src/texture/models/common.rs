@@ -85,16 +85,51 @@ pub fn value_noise(x: f32, y: f32, period: u32, seed: u64) -> f32 {
 /// image side at the first octave, doubling each octave, amplitude times
 /// `gain` per octave; `turbulence` in [0, 1] blends toward |noise|.
 pub fn fbm(n: usize, base: u32, octaves: u32, gain: f32, turbulence: f32, seed: u64) -> Vec<f32> {
+    fbm_with(n, base, octaves, gain, turbulence, Basis::Gradient, seed)
+}
+
+/// The lattice noise an octave sum is made of: Perlin's gradient noise
+/// (smooth, no lattice-aligned plateaus) or value noise (random heights at
+/// the lattice points, interpolated: blockier, with visible lattice
+/// alignment at few octaves).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Basis {
+    Gradient,
+    Value,
+}
+
+/// [`fbm`] over either [`Basis`]. Value noise is centred to about [-1, 1]
+/// and its octaves are seeded as `fractal-one-over-f`'s are, so that its
+/// octave sum at persistence 0.5 is that model's at β = 2 (up to an
+/// affine map, which normalising removes).
+pub fn fbm_with(
+    n: usize,
+    base: u32,
+    octaves: u32,
+    gain: f32,
+    turbulence: f32,
+    basis: Basis,
+    seed: u64,
+) -> Vec<f32> {
     let mut out = vec![0.0f32; n * n];
     let mut amp = 1.0f32;
     let mut period = base.max(1);
     for o in 0..octaves.max(1) {
-        let s = seed.wrapping_add(0x51_7cc1_b727_220a_u64.wrapping_mul(o as u64 + 1));
+        let s = match basis {
+            Basis::Gradient => {
+                seed.wrapping_add(0x51_7cc1_b727_220a_u64.wrapping_mul(o as u64 + 1))
+            }
+            Basis::Value => seed ^ 0xa076_1d64_78bd_642f_u64.wrapping_mul(o as u64 + 1),
+        };
         let scale = period as f32 / n as f32;
         for y in 0..n {
             let fy = (y as f32 + 0.5) * scale;
             for x in 0..n {
-                let v = gradient_noise((x as f32 + 0.5) * scale, fy, period, s);
+                let fx = (x as f32 + 0.5) * scale;
+                let v = match basis {
+                    Basis::Gradient => gradient_noise(fx, fy, period, s),
+                    Basis::Value => value_noise(fx, fy, period, s) * 2.0 - 1.0,
+                };
                 let v = v + turbulence * (v.abs() * 2.0 - 0.6 - v);
                 out[y * n + x] += amp * v;
             }
@@ -107,8 +142,44 @@ pub fn fbm(n: usize, base: u32, octaves: u32, gain: f32, turbulence: f32, seed: 
 
 /// Worley (cellular) distances on an `n`×`n` torus: `cells` feature points
 /// per side, one per cell, displaced by `jitter` in [0, 1] of a cell.
-/// Returns (F1, F2) in cell units.
+/// Returns (F1, F2) in cell units (Euclidean).
 pub fn worley(n: usize, cells: u32, jitter: f32, seed: u64) -> (Vec<f32>, Vec<f32>) {
+    let w = worley_with(n, cells, jitter, Metric::Euclidean, seed);
+    (w.f1, w.f2)
+}
+
+/// The distance [`worley_with`] measures: Euclidean (round cells),
+/// Manhattan (|dx| + |dy|: diamond-like cells with straight, diagonal
+/// walls) or Chebyshev (max(|dx|, |dy|): square-cornered cells).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Metric {
+    Euclidean,
+    Manhattan,
+    Chebyshev,
+}
+
+impl Metric {
+    /// 0 Euclidean, 1 Manhattan, anything else Chebyshev.
+    pub fn from_index(i: usize) -> Metric {
+        match i {
+            0 => Metric::Euclidean,
+            1 => Metric::Manhattan,
+            _ => Metric::Chebyshev,
+        }
+    }
+}
+
+/// Worley distances per pixel: the nearest and second-nearest feature
+/// point's distances (cell units) and the nearest one's cell (`y·cells +
+/// x`, for per-cell values).
+pub struct Worley {
+    pub f1: Vec<f32>,
+    pub f2: Vec<f32>,
+    pub id: Vec<u32>,
+}
+
+/// [`worley`] under `metric`, with the nearest point's cell.
+pub fn worley_with(n: usize, cells: u32, jitter: f32, metric: Metric, seed: u64) -> Worley {
     let c = cells.max(1) as i64;
     let pts: Vec<(f32, f32)> = (0..c * c)
         .map(|i| {
@@ -121,6 +192,7 @@ pub fn worley(n: usize, cells: u32, jitter: f32, seed: u64) -> (Vec<f32>, Vec<f3
         .collect();
     let mut f1 = vec![0.0f32; n * n];
     let mut f2 = vec![0.0f32; n * n];
+    let mut id = vec![0u32; n * n];
     let scale = c as f32 / n as f32;
     for y in 0..n {
         let py = (y as f32 + 0.5) * scale;
@@ -128,17 +200,23 @@ pub fn worley(n: usize, cells: u32, jitter: f32, seed: u64) -> (Vec<f32>, Vec<f3
         for x in 0..n {
             let px = (x as f32 + 0.5) * scale;
             let cx = px.floor() as i64;
-            let (mut d1, mut d2) = (f32::MAX, f32::MAX);
+            let (mut d1, mut d2, mut i1) = (f32::MAX, f32::MAX, 0u32);
             for dy in -1..=1 {
                 for dx in -1..=1 {
                     let (gx, gy) = (cx + dx, cy + dy);
-                    let (ox, oy) = pts[(gy.rem_euclid(c) * c + gx.rem_euclid(c)) as usize];
+                    let cell = gy.rem_euclid(c) * c + gx.rem_euclid(c);
+                    let (ox, oy) = pts[cell as usize];
                     let ex = gx as f32 + ox - px;
                     let ey = gy as f32 + oy - py;
-                    let d = (ex * ex + ey * ey).sqrt();
+                    let d = match metric {
+                        Metric::Euclidean => (ex * ex + ey * ey).sqrt(),
+                        Metric::Manhattan => ex.abs() + ey.abs(),
+                        Metric::Chebyshev => ex.abs().max(ey.abs()),
+                    };
                     if d < d1 {
                         d2 = d1;
                         d1 = d;
+                        i1 = cell as u32;
                     } else if d < d2 {
                         d2 = d;
                     }
@@ -146,22 +224,116 @@ pub fn worley(n: usize, cells: u32, jitter: f32, seed: u64) -> (Vec<f32>, Vec<f3
             }
             f1[y * n + x] = d1;
             f2[y * n + x] = d2;
+            id[y * n + x] = i1;
         }
     }
-    (f1, f2)
+    Worley { f1, f2, id }
 }
 
 /// The number of texton shapes [`texton`] knows.
-pub const SHAPES: usize = 5;
+pub const SHAPES: usize = 19;
+
+/// Every shape's name, by index (what the `shape` parameters select).
+pub const SHAPE_NAMES: [&str; SHAPES] = [
+    "bump",
+    "pyramid",
+    "cross",
+    "ring",
+    "bar",
+    "flat disc",
+    "cone",
+    "flat square",
+    "domed square",
+    "flat triangle",
+    "triangular pyramid",
+    "flat hexagon",
+    "domed hexagon",
+    "flat five-point star",
+    "conical five-point star",
+    "conical four-point star",
+    "domed six-point star",
+    "flat cross",
+    "flat ring",
+];
+
+/// The shapes with a flat top (where many overlap, one plateau).
+pub const FLAT_TOPPED: [usize; 7] = [5, 7, 9, 11, 13, 17, 18];
+
+/// How a texton rises inside its outline.
+#[derive(Clone, Copy)]
+enum Profile {
+    /// A flat top with a steep rim (the outer 15% of the radius).
+    Flat,
+    /// A half-ellipsoid: round, steepest at the outline.
+    Domed,
+    /// Straight sides up to a point (a cone or a pyramid).
+    Conical,
+}
+
+/// The height of a profile at gauge `g` (0 at the centre, 1 on the
+/// outline, more outside).
+#[inline]
+fn profile(p: Profile, g: f32) -> f32 {
+    if g >= 1.0 {
+        return 0.0;
+    }
+    match p {
+        Profile::Flat => {
+            let t = ((1.0 - g) / 0.15).min(1.0);
+            t * t * (3.0 - 2.0 * t)
+        }
+        Profile::Domed => (1.0 - g * g).sqrt(),
+        Profile::Conical => 1.0 - g,
+    }
+}
+
+const SIN_60: f32 = 0.866_025_4;
+
+/// The gauge of an equilateral triangle of circumradius 1 with a vertex on
+/// +x (centred on its centroid): the largest of its sides' normal
+/// coordinates over the inradius ½.
+#[inline]
+fn triangle_gauge(u: f32, v: f32) -> f32 {
+    let a = 0.5 * u + SIN_60 * v;
+    let b = 0.5 * u - SIN_60 * v;
+    a.max(b).max(-u) * 2.0
+}
+
+/// The gauge of a regular hexagon of circumradius 1 with a vertex on +x.
+#[inline]
+fn hexagon_gauge(u: f32, v: f32) -> f32 {
+    let a = (SIN_60 * u + 0.5 * v).abs();
+    let b = (SIN_60 * u - 0.5 * v).abs();
+    a.max(b).max(v.abs()) / SIN_60
+}
+
+/// The gauge of a star of `k` points (outer radius 1, inner radius
+/// `inner`): the radius over the outline's radius at that angle, the
+/// outline running straight in angle between tips and notches.
+#[inline]
+fn star_gauge(k: u32, inner: f32, u: f32, v: f32) -> f32 {
+    let rho = (u * u + v * v).sqrt();
+    if rho < 1e-6 {
+        return 0.0;
+    }
+    let step = 2.0 * std::f32::consts::PI / k as f32;
+    let a = libm::atan2f(v, u).rem_euclid(step) / step; // 0 and 1 at tips
+    let tip = (2.0 * a - 1.0).abs(); // 1 at a tip, 0 at a notch
+    rho / (inner + (1.0 - inner) * tip)
+}
 
 /// A texton's height at local coordinates (u, v) (the texton fills the unit
-/// disk / square): 0 bump, 1 pyramid, 2 cross, 3 ring, 4 bar.
+/// disk / square), by shape index ([`SHAPE_NAMES`]): 0 bump, 1 pyramid,
+/// 2 cross, 3 ring, 4 bar, then outlines (disc, square, triangle,
+/// hexagon, stars of 4, 5 and 6 points, plus sign, annulus) under flat,
+/// domed and conical profiles.
 #[inline]
 pub fn texton(shape: usize, u: f32, v: f32) -> f32 {
     let (au, av) = (u.abs(), v.abs());
     if au >= 1.0 || av >= 1.0 {
         return 0.0;
     }
+    let disc = || (u * u + v * v).sqrt();
     match shape {
         0 => {
             let d2 = u * u + v * v;
@@ -187,6 +359,28 @@ pub fn texton(shape: usize, u: f32, v: f32) -> f32 {
             let t = (d - 0.7) / 0.25;
             (1.0 - t * t).max(0.0)
         }
+        5 => profile(Profile::Flat, disc()),
+        6 => profile(Profile::Conical, disc()),
+        // Squares of side 1.6 (inside the unit square, with room to turn
+        // a little before the corners clip).
+        7 => profile(Profile::Flat, au.max(av) / 0.8),
+        8 => profile(Profile::Domed, au.max(av) / 0.8),
+        9 => profile(Profile::Flat, triangle_gauge(u, v)),
+        10 => profile(Profile::Conical, triangle_gauge(u, v)),
+        11 => profile(Profile::Flat, hexagon_gauge(u, v)),
+        12 => profile(Profile::Domed, hexagon_gauge(u, v)),
+        13 => profile(Profile::Flat, star_gauge(5, 0.45, u, v)),
+        14 => profile(Profile::Conical, star_gauge(5, 0.45, u, v)),
+        15 => profile(Profile::Conical, star_gauge(4, 0.35, u, v)),
+        16 => profile(Profile::Domed, star_gauge(6, 0.55, u, v)),
+        // A plus sign of arms 0.6 wide, flat-topped.
+        17 => profile(
+            Profile::Flat,
+            (au.max(av / 0.3)).min(av.max(au / 0.3)) / 0.95,
+        ),
+        // An annulus of radii 0.45 and 0.95, flat-topped.
+        18 => profile(Profile::Flat, (disc() - 0.7).abs() / 0.25),
+        // 4, the bar (and any larger index).
         _ => {
             if av < 0.3 {
                 (1.0 - (av / 0.3) * (av / 0.3)) * (1.0 - au * au * au * au)

@@ -6,7 +6,7 @@ use super::cellular::cellular_raw;
 use super::common::{fold, normalise};
 use super::fractal::one_over_f_raw;
 use super::perlin::perlin_raw;
-use super::texton::random_grid_raw;
+use super::texton::{random_grid_raw, SHAPE_HI};
 use super::{int, real, Family, Model, ParamSpec};
 
 fn seed2(seed: u64) -> u64 {
@@ -185,7 +185,7 @@ const FUSE_CT_PARAMS: &[ParamSpec] = &[
     // Dataset from 6 (see `BACKGROUND_FLOOR`).
     int("cells", 3.0, 16.0, 6.0).dataset(BACKGROUND_FLOOR, 16.0),
     int("grid", 4.0, 16.0, 10.0),
-    int("shape", 0.0, 4.0, 0.0),
+    int("shape", 0.0, SHAPE_HI, 0.0),
 ];
 
 /// `weight` × cellular walls + (1 − `weight`) × a random texton grid,
@@ -231,7 +231,7 @@ const FUSE_PT_PARAMS: &[ParamSpec] = &[
     // Dataset from 6 (see `BACKGROUND_FLOOR`).
     int("frequency", 2.0, 16.0, 6.0).dataset(BACKGROUND_FLOOR, 16.0),
     int("grid", 4.0, 16.0, 8.0),
-    int("shape", 0.0, 4.0, 3.0),
+    int("shape", 0.0, SHAPE_HI, 3.0),
 ];
 
 /// `weight` × Perlin noise + (1 − `weight`) × a random texton grid, each

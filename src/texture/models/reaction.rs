@@ -2,9 +2,13 @@
 //! `grid` cells, from a random start, for a bounded number of steps; the
 //! height is the concentration of V, resampled to the output size.
 //!
-//! (F, k) pairs come from Pearson's chart along a path of patterned
-//! regimes (`pattern` 0 → 1: mazes, holes, coral, spots), so every
-//! parameter value forms a pattern rather than dying out.
+//! (F, k) pairs come from Pearson's chart (in the usual scaling
+//! D_u = 0.2097, D_v = 0.105 a cell², Δt = 1) along a path through his
+//! patterned regimes (`pattern` 0 → 1: labyrinth, holes, holes mixed with
+//! stripes, coral labyrinth, stripes, mitosis (spots and stripes
+//! dividing), spots), so every parameter value forms a pattern rather
+//! than dying out (each waypoint and the midpoints between them simulated
+//! at 72² for 1200 steps, 2026-12-04).
 use super::common::{normalise, resample};
 use super::{int, real, Family, Model, ParamSpec};
 use crate::core::rng::Rng;
@@ -15,13 +19,29 @@ const PARAMS: &[ParamSpec] = &[
     int("steps", 400.0, 1600.0, 1200.0),
 ];
 
-/// Pearson-chart waypoints (F, k) the `pattern` parameter runs through.
-const PATH: [(f32, f32); 4] = [
-    (0.029, 0.057),
-    (0.039, 0.058),
-    (0.0545, 0.062),
-    (0.035, 0.065),
+/// Pearson-chart waypoints `(pattern, F, k)` the `pattern` parameter runs
+/// through (piecewise linear). Holes and coral stay at 0.375 and 0.625, so
+/// the default 0.5 is their midpoint as before (the same bits).
+const PATH: [(f32, f32, f32); 7] = [
+    (0.0, 0.030, 0.0565),   // labyrinth
+    (0.1875, 0.037, 0.060), // labyrinth, finer
+    (0.375, 0.039, 0.058),  // holes
+    (0.625, 0.0545, 0.062), // coral (labyrinth with loops)
+    (0.75, 0.042, 0.063),   // stripes (worms)
+    (0.875, 0.045, 0.0635), // mitosis: spots and worms dividing
+    (1.0, 0.038, 0.064),    // spots
 ];
+
+/// (F, k) at `pattern` in [0, 1].
+fn feed_kill(pattern: f32) -> (f32, f32) {
+    let i = PATH[..PATH.len() - 1]
+        .iter()
+        .rposition(|w| w.0 <= pattern)
+        .unwrap_or(0);
+    let (a, b) = (PATH[i], PATH[i + 1]);
+    let f = ((pattern - a.0) / (b.0 - a.0)).clamp(0.0, 1.0);
+    (a.1 + f * (b.1 - a.1), a.2 + f * (b.2 - a.2))
+}
 
 /// `pattern` picks the regime; `grid` the cells per side (fewer → larger
 /// features); `steps` how far the pattern has developed.
@@ -34,11 +54,7 @@ pub const REACTION_DIFFUSION: Model = Model {
 };
 
 fn reaction(p: &[f64], seed: u64, n: usize) -> Vec<f32> {
-    let t = p[0] as f32 * (PATH.len() - 1) as f32;
-    let i = (t.floor() as usize).min(PATH.len() - 2);
-    let f = t - i as f32;
-    let feed = PATH[i].0 + f * (PATH[i + 1].0 - PATH[i].0);
-    let kill = PATH[i].1 + f * (PATH[i + 1].1 - PATH[i].1);
+    let (feed, kill) = feed_kill(p[0] as f32);
     let g = p[1] as usize;
     let steps = p[2] as usize;
     let mut rng = Rng::new(seed);
@@ -112,5 +128,23 @@ impl Rows<'_> {
         let uvv = ui * vi * vi;
         nu[x] = ui + c.du * lu - uvv + c.feed * (1.0 - ui);
         nv[x] = vi + c.dv * lv + uvv - (c.feed + c.kill) * vi;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_pattern_is_the_old_paths_midpoint_and_the_waypoints_are_reached() {
+        // Before 2026-12-04 the path was mazes, holes, coral, spots at
+        // equal steps; the default 0.5 was halfway from holes to coral.
+        let (f, k) = feed_kill(0.5);
+        assert_eq!(f, 0.039f32 + 0.5 * (0.0545f32 - 0.039));
+        assert_eq!(k, 0.058f32 + 0.5 * (0.062f32 - 0.058));
+        for w in PATH {
+            let (f, k) = feed_kill(w.0);
+            assert!((f - w.1).abs() < 1e-7 && (k - w.2).abs() < 1e-7, "{w:?}");
+        }
     }
 }

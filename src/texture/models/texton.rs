@@ -1,9 +1,12 @@
-//! Texton models: small shapes ("textons": bump, pyramid, cross, ring, bar;
-//! see [`super::common::texton`]) placed on the torus by five rules —
+//! Texton models: small shapes ("textons": bump, pyramid, cross, ring, bar,
+//! and discs, squares, triangles, hexagons, stars, plus signs and rings
+//! under flat, domed and conical profiles; see [`super::common::texton`]
+//! and [`SHAPE_NAMES`](super::common::SHAPE_NAMES)) placed on the torus by
+//! five rules —
 //! addition (random positions, heights added), probability map (positions
 //! drawn from a noise map), random grid (a jittered lattice), random walk
 //! (chains) and regular (a lattice with a row offset).
-use super::common::{fbm, normalise, scatter, stamp, Combine, Stamp, SHAPES};
+use super::common::{fbm, normalise, scatter, stamp, Combine, Stamp, FLAT_TOPPED, SHAPES};
 use super::{int, real, Family, Model, ParamSpec};
 use crate::core::rng::Rng;
 use std::f32::consts::PI;
@@ -17,10 +20,14 @@ fn shape_of(v: f64) -> usize {
     (v as usize).min(SHAPES - 1)
 }
 
+/// The largest `shape` index (every texton shape, for every model that
+/// draws textons).
+pub(crate) const SHAPE_HI: f64 = (SHAPES - 1) as f64;
+
 const ADDITION_PARAMS: &[ParamSpec] = &[
     int("count", 20.0, 400.0, 150.0),
     real("size", 0.02, 0.12, 0.05),
-    int("shape", 0.0, 4.0, 0.0),
+    int("shape", 0.0, SHAPE_HI, 0.0),
     real("size_variation", 0.0, 1.0, 0.5),
 ];
 
@@ -64,7 +71,7 @@ const PROB_PARAMS: &[ParamSpec] = &[
     real("size", 0.015, 0.06, 0.03),
     int("map_frequency", 2.0, 8.0, 3.0),
     real("clustering", 0.5, 6.0, 3.0),
-    int("shape", 0.0, 4.0, 0.0),
+    int("shape", 0.0, SHAPE_HI, 0.0),
 ];
 
 /// Textons placed by rejection sampling from a probability map (Perlin
@@ -124,7 +131,7 @@ const GRID_PARAMS: &[ParamSpec] = &[
     // broken (rendered side by side, 2026-12-02).
     real("jitter", 0.0, 0.5, 0.25).dataset(0.2, 0.5),
     real("size", 0.2, 0.6, 0.4),
-    int("shape", 0.0, 4.0, 1.0),
+    int("shape", 0.0, SHAPE_HI, 1.0),
     real("rotation", 0.0, 1.0, 0.5),
 ];
 
@@ -189,7 +196,7 @@ const WALK_PARAMS: &[ParamSpec] = &[
     real("stride", 0.5, 2.0, 1.0),
     real("size", 0.01, 0.04, 0.02),
     real("turn", 0.1, 1.5, 0.5),
-    int("shape", 0.0, 4.0, 0.0),
+    int("shape", 0.0, SHAPE_HI, 0.0),
 ];
 
 /// `walks` random walks of `steps` textons each: every step moves
@@ -211,6 +218,15 @@ fn random_walk(p: &[f64], seed: u64, n: usize) -> Vec<f32> {
     for _ in 0..p[0] as usize {
         let (mut x, mut y) = (rng.f64() as f32, rng.f64() as f32);
         let mut heading = rng.f64() as f32 * 2.0 * PI;
+        // Flat-topped textons of one height merge into one plateau where
+        // chains cross (at the most walks and steps, everywhere): each
+        // chain of them stands at its own height. (The older shapes keep
+        // one height, and their random numbers.)
+        let amp = if FLAT_TOPPED.contains(&shape) {
+            0.6 + 0.4 * rng.f64() as f32
+        } else {
+            1.0
+        };
         for _ in 0..p[1] as usize {
             let s = Stamp {
                 x,
@@ -218,7 +234,7 @@ fn random_walk(p: &[f64], seed: u64, n: usize) -> Vec<f32> {
                 r: size,
                 angle: heading,
                 shape,
-                amp: 1.0,
+                amp,
             };
             stamp(&mut h, n, &s, Combine::Max);
             heading += (rng.f64() as f32 * 2.0 - 1.0) * turn;
@@ -232,7 +248,7 @@ fn random_walk(p: &[f64], seed: u64, n: usize) -> Vec<f32> {
 const REGULAR_PARAMS: &[ParamSpec] = &[
     int("grid", 4.0, 20.0, 8.0),
     real("size", 0.2, 0.6, 0.4),
-    int("shape", 0.0, 4.0, 2.0),
+    int("shape", 0.0, SHAPE_HI, 2.0),
     real("angle", 0.0, 90.0, 0.0),
     real("row_offset", 0.0, 0.5, 0.0),
 ];
