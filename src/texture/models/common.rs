@@ -316,6 +316,10 @@ fn star_gauge(k: u32, inner: f32, u: f32, v: f32) -> f32 {
     if rho < 1e-6 {
         return 0.0;
     }
+    if rho >= 1.0 {
+        // Outside every tip (and most of a stamp's square): no angle needed.
+        return rho;
+    }
     let step = 2.0 * std::f32::consts::PI / k as f32;
     let a = libm::atan2f(v, u).rem_euclid(step) / step; // 0 and 1 at tips
     let tip = (2.0 * a - 1.0).abs(); // 1 at a tip, 0 at a notch
