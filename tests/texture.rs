@@ -161,6 +161,13 @@ fn requests_load_the_index_by_id_and_answer_like_the_library() {
     let want = api::analyse(&index, &api::decode_gray(&png).unwrap()).unwrap();
     assert_eq!(a["model"], want.model);
     assert_eq!(a["scales"], serde_json::json!(want.scales));
+    // The three likeliest models with probabilities, the first the
+    // prediction, and whether any is close (issue 36).
+    let top = a["top"].as_array().unwrap();
+    assert_eq!(top.len(), api::TOP_MODELS);
+    assert_eq!(top[0]["model"], a["model"]);
+    assert!(top.windows(2).all(|w| w[0]["probability"].as_f64() >= w[1]["probability"].as_f64()));
+    assert_eq!(a["close"], serde_json::json!(want.close));
     let r = filigree::api::run_json(
         "texture-retrieve",
         &serde_json::json!({ "index": id, "scales": [5, 5, 5, 5, 5, 5, 5, 5, 5, 9, 5, 5], "model": a["model"], "size": 24 }).to_string(),

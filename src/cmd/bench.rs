@@ -104,6 +104,20 @@ pub enum Which {
         #[arg(long)]
         json: bool,
     },
+    /// Texture: a built index (the shipped one by default) on the
+    /// cross-implementation set: accuracy, top-3, calibration, "no close
+    /// model", per model and family (issue 36).
+    TextureXset {
+        #[arg(long, default_value = "assets/texture-index.bin")]
+        index: std::path::PathBuf,
+        #[arg(long, default_value = "target/texture-xset")]
+        xset: std::path::PathBuf,
+        /// validation (for choices), test (once, at the end) or all.
+        #[arg(long, default_value = "validation")]
+        split: String,
+        #[arg(long)]
+        json: bool,
+    },
     /// Texture models: render ms per model at SIZE², dataset time at DATASET_SIZE².
     TextureModels {
         #[arg(long, default_value_t = 5)]
@@ -237,6 +251,9 @@ pub fn run(w: Which) -> Result<(), String> {
             xset_split,
         }),
         Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
+        Which::TextureXset {
+            index, xset, split, ..
+        } => super::texture_xset::run(&index, &xset, &split),
         Which::TextureModels {
             repeats,
             size,

@@ -131,6 +131,18 @@ pub fn evaluate(index: &Index, dir: &Path, split: &str) -> Result<Value, String>
     }))
 }
 
+/// `bench texture-xset`: the index file at `index` on `split` of the set.
+pub fn run(index: &Path, dir: &Path, split: &str) -> Result<(), String> {
+    let bytes = std::fs::read(index).map_err(|e| format!("{}: {e}", index.display()))?;
+    let index = api::parse_index(&bytes).map_err(|e| format!("{}: {e}", index.display()))?;
+    let out = evaluate(&index, dir, split)?;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

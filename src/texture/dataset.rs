@@ -440,6 +440,30 @@ mod tests {
     }
 
     #[test]
+    fn looks_add_their_own_windows_after_the_papers_images() {
+        let config = DatasetConfig {
+            per_model: 2,
+            size: 16,
+            looks: 3,
+            ..DatasetConfig::default()
+        }
+        .augmented();
+        let specs = plan(&config).unwrap();
+        let one = render_base(&config, &specs[7]).unwrap();
+        assert_eq!(one.len(), 8 + 3);
+        assert!(one[..8].iter().all(|s| s.look.is_none()));
+        for (j, s) in one[8..].iter().enumerate() {
+            assert_eq!((s.image.width, s.image.height), (16, 16));
+            assert_eq!(s.light_index, 2 + j, "after the two lights");
+            assert!(s.look.is_some() && s.crop.is_none());
+        }
+        assert_ne!(one[8].image, one[9].image);
+        // Without looks the paper's images are unchanged.
+        let plain = render_base(&DatasetConfig { looks: 0, ..config }, &specs[7]).unwrap();
+        assert_eq!(plain[..], one[..8]);
+    }
+
+    #[test]
     fn the_job_the_threads_and_the_plain_build_agree() {
         let config = DatasetConfig {
             per_model: 2,

@@ -481,7 +481,7 @@ mod tests {
         assert_eq!(field_of("/predicted/top/0/model", json!("nope")), "predicted.top.0.model");
         assert_eq!(field_of("/predicted/close", json!(1)), "predicted.close");
         let mut long = doc();
-        long["predicted"]["top"] = json!([{"model": "perlin", "probability": 0.1}; 4]);
+        long["predicted"]["top"] = Json::Array(vec![json!({"model": "perlin", "probability": 0.1}); 4]);
         assert_eq!(check(&value(&long)).unwrap_err().field(), Some("predicted.top"));
     }
 

@@ -1,8 +1,8 @@
 // Issue 36: the Texture panel says how sure it is. A texture of one of
 // the models shows the three likeliest models with probabilities, most
 // likely first and the predicted one on top; a picture that is no
-// procedural texture (lines of text) says "No close model" and still lists
-// the nearest three. Both are kept in the document, so a reload shows them.
+// procedural texture (a smooth ramp with two large shapes) says "No close
+// model" and still lists the nearest three. Both are kept in the document, so a reload shows them.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, dropFile } from './harness.mjs';
@@ -15,19 +15,25 @@ const state = (page) => page.evaluate(() => window.filigree.testHooks.texture.st
 const settled = () => !!window.filigree?.testHooks?.texture && !window.filigree.testHooks.texture.pending()
   && !!document.querySelector('[data-testid=texture-retrieved][data-model]');
 
-/** A 256² PNG drawn by the page: `kind` 'text' (lines of black text on white) or a model's render. */
+/** A 256² PNG drawn by the page: `kind` 'shapes' (a grey ramp, a disc and a bar) or a model's render. */
 async function picture(page, kind) {
   const b64 = await page.evaluate(async (kind) => {
     const c = document.createElement('canvas');
     c.width = 256;
     c.height = 256;
     const g = c.getContext('2d');
-    if (kind === 'text') {
-      g.fillStyle = '#fff';
+    if (kind === 'shapes') {
+      const ramp = g.createLinearGradient(0, 0, 256, 0);
+      ramp.addColorStop(0, '#222');
+      ramp.addColorStop(1, '#ddd');
+      g.fillStyle = ramp;
       g.fillRect(0, 0, 256, 256);
-      g.fillStyle = '#000';
-      g.font = '13px sans-serif';
-      for (let i = 0; i < 14; i++) g.fillText(`The quick brown fox jumps over ${i}`, 6, 16 + i * 18);
+      g.fillStyle = '#111';
+      g.beginPath();
+      g.arc(90, 100, 60, 0, 2 * Math.PI);
+      g.fill();
+      g.fillStyle = '#888';
+      g.fillRect(150, 160, 90, 50);
     } else {
       const r = await window.filigree.pool.run('texture-render', { model: kind, seed: 31, size: 256 });
       const rgba = new Uint8ClampedArray(r.size * r.size * 4);
@@ -54,7 +60,7 @@ async function drop(page, name, png) {
 /** The listed models as [id, percent] pairs. */
 const listed = (page) => page.$$eval('[data-testid=texture-top] li', (xs) => xs.map((x) => [x.dataset.model, Number(x.textContent.match(/([\d.]+)%/)[1])]));
 
-test('a texture lists its three likeliest models; a page of text says no close model', async () => {
+test('a texture lists its three likeliest models; a ramp with two shapes says no close model', async () => {
   const page = await env.newPage({ path: '#tool=texture' });
   await page.waitForFunction(settled, null, { timeout: 45000 });
 
@@ -72,9 +78,9 @@ test('a texture lists its three likeliest models; a page of text says no close m
   assert.match(await page.textContent('[data-testid=texture-predicted]'), /^Predicted model: /);
   assert.equal(await page.getAttribute('[data-testid=texture-predicted]', 'data-close'), 'true');
 
-  await drop(page, 'text.png', await picture(page, 'text'));
+  await drop(page, 'shapes.png', await picture(page, 'shapes'));
   s = await state(page);
-  assert.equal(s.predicted.close, false, `text is no texture (nearest ${s.predicted.model})`);
+  assert.equal(s.predicted.close, false, `two shapes on a ramp are no texture (nearest ${s.predicted.model})`);
   assert.match(await page.textContent('[data-testid=texture-predicted]'), /No close model/);
   assert.equal(await page.getAttribute('[data-testid=texture-predicted]', 'data-close'), 'false');
   assert.equal((await listed(page)).length, 3, 'the nearest three are still listed');
@@ -85,7 +91,7 @@ test('a texture lists its three likeliest models; a page of text says no close m
   await page.reload();
   await page.waitForFunction(settled, null, { timeout: 45000 });
   s = await state(page);
-  assert.equal(s.source.name, 'text.png');
+  assert.equal(s.source.name, 'shapes.png');
   assert.equal(s.predicted.close, false);
   assert.match(await page.textContent('[data-testid=texture-predicted]'), /No close model/);
   assert.equal((await listed(page)).length, 3);
