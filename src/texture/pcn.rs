@@ -790,8 +790,36 @@ mod tests {
             patch_step: 2,
             side: 32,
             intensity_bins: 4,
+            // The paper's network alone (the shipped additions are tested
+            // on their own below and in `super::super::lbp`).
+            lbp_scales: 0,
+            equalise: false,
             ..PcnConfig::default()
         }
+    }
+
+    #[test]
+    fn the_equalised_network_is_blind_to_a_tone_curve_and_lbp_extends_the_features() {
+        let cfg = PcnConfig {
+            equalise: true,
+            lbp_scales: 2,
+            ..small()
+        };
+        let imgs = [noise(48, 3), stripes(48, 5.0, true)];
+        let pcn = Pcn::train(&imgs, cfg.clone()).unwrap();
+        let img = noise(32, 9); // the view itself: no resampling between the tone curve and the ranks
+        let mut toned = img.clone();
+        for v in &mut toned.data {
+            *v = v.powf(1.7);
+        }
+        let (a, b) = (pcn.features(&img).unwrap(), pcn.features(&toned).unwrap());
+        assert_eq!(a.len(), cfg.feature_len());
+        let network = cfg.feature_len() - cfg.intensity_bins - 2 * crate::texture::lbp::bins_per_scale();
+        assert_eq!(a[..network], b[..network], "the network reads ranks");
+        assert_ne!(a[network..network + 4], b[network..network + 4], "the grey levels do move");
+        // Unequalised, the same tone curve changes the network's codes.
+        let plain = Pcn::train(&imgs, small()).unwrap();
+        assert_ne!(plain.features(&img).unwrap()[..network], plain.features(&toned).unwrap()[..network]);
     }
 
     #[test]

@@ -474,7 +474,7 @@ mod tests {
         assert!(!p.close);
         // Older documents have neither: no list, and close.
         let mut old = doc();
-        old["predicted"] = json!({"model": "perlin", "scales": [5; 12]});
+        old["predicted"] = json!({"model": "perlin", "scales": vec![5; 12]});
         let p = check(&value(&old)).unwrap().predicted.unwrap();
         assert!(p.top.is_empty() && p.close);
         assert_eq!(field_of("/predicted/top/1/probability", json!(1.5)), "predicted.top.1.probability");

@@ -298,7 +298,7 @@ mod tests {
     fn random_looks_differ_stay_in_range_and_repeat_from_their_seed() {
         let h = height();
         let mut rng = Rng::new(9);
-        let looks: Vec<Look> = (0..12).map(|_| Look::random(&mut rng)).collect();
+        let looks: Vec<Look> = (0..40).map(|_| Look::random(&mut rng)).collect();
         let images: Vec<Gray> = looks.iter().map(|l| l.apply(&h, 32)).collect();
         for img in &images {
             assert_eq!((img.width, img.height), (32, 32));
