@@ -114,10 +114,12 @@ fn evaluate(
         }
         if s.look.is_some() {
             look_n += 1;
-            look_right += (index.read_models(&s.image).unwrap().ranked[0].0 as usize == s.model) as usize;
+            look_right +=
+                (index.read_models(&s.image).unwrap().ranked[0].0 as usize == s.model) as usize;
         } else if s.light_index == 0 && seen.insert(s.base) {
             first_n += 1;
-            first_right += (index.read_models(&s.image).unwrap().ranked[0].0 as usize == s.model) as usize;
+            first_right +=
+                (index.read_models(&s.image).unwrap().ranked[0].0 as usize == s.model) as usize;
         }
     }
     println!(
@@ -148,18 +150,22 @@ fn evaluate(
         let reading = index.read_views(&views);
         distances.push(reading.distance);
         let ranked = reading.ranked;
-        let mut mean = vec![0f64; MODELS.len()];
+        // The classifier's scores averaged over the views, in its class order.
+        let mut mean = vec![0f64; index.model_classifier.classes.len()];
         for f in &views {
-            for (m, (c, v)) in mean
-                .iter_mut()
-                .zip(index.model_classifier.classes.iter().zip(index.model_scores(f)))
-                .map(|(m, cv)| (m, cv))
-            {
-                let _ = c;
+            for (m, v) in mean.iter_mut().zip(index.model_scores(f)) {
                 *m += v / views.len() as f64;
             }
         }
-        raw.push((mean, index.model_classifier.classes.iter().position(|&c| c as usize == want).unwrap()));
+        raw.push((
+            mean,
+            index
+                .model_classifier
+                .classes
+                .iter()
+                .position(|&c| c as usize == want)
+                .unwrap(),
+        ));
         n += 1;
         let got = ranked[0].0 as usize;
         top1 += (got == want) as usize;
@@ -200,13 +206,22 @@ fn evaluate(
             best_t = (v, t);
         }
     }
-    println!("temperature {:.3} (NLL {:.3}; at 1: {:.3})", best_t.1, best_t.0, nll(1.0));
+    println!(
+        "temperature {:.3} (NLL {:.3}; at 1: {:.3})",
+        best_t.1,
+        best_t.0,
+        nll(1.0)
+    );
     let mut bests = distances.clone();
     bests.sort_by(f64::total_cmp);
     let q = |p: f64| bests[((bests.len() - 1) as f64 * p) as usize];
     println!(
         "closeness percentiles 50/90/95/98/99%: {:.3} {:.3} {:.3} {:.3} {:.3}",
-        q(0.5), q(0.9), q(0.95), q(0.98), q(0.99)
+        q(0.5),
+        q(0.9),
+        q(0.95),
+        q(0.98),
+        q(0.99)
     );
     if let Ok(dir) = std::fs::read_dir("target/texture-negatives") {
         let mut names: Vec<_> = dir.flatten().map(|e| e.path()).collect();
@@ -214,14 +229,19 @@ fn evaluate(
         for p in names {
             let img = api::decode_gray(&std::fs::read(&p).unwrap()).unwrap();
             let r = index.read_models(&img).unwrap();
-            println!("  negative {}: closeness {:.3} ({})", p.display(), r.distance, MODELS[r.ranked[0].0 as usize].id);
+            println!(
+                "  negative {}: closeness {:.3} ({})",
+                p.display(),
+                r.distance,
+                MODELS[r.ranked[0].0 as usize].id
+            );
         }
     }
     for (m, (r, k)) in &per {
         println!("  {r}/{k}  {m}");
     }
     let mut conf: Vec<_> = confusion.into_iter().collect();
-    conf.sort_by(|a, b| b.1.cmp(&a.1));
+    conf.sort_by_key(|c| std::cmp::Reverse(c.1));
     for ((a, b), k) in conf.iter().take(15) {
         println!("  {k}x {a} -> {b}");
     }

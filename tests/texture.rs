@@ -166,7 +166,9 @@ fn requests_load_the_index_by_id_and_answer_like_the_library() {
     let top = a["top"].as_array().unwrap();
     assert_eq!(top.len(), api::TOP_MODELS);
     assert_eq!(top[0]["model"], a["model"]);
-    assert!(top.windows(2).all(|w| w[0]["probability"].as_f64() >= w[1]["probability"].as_f64()));
+    assert!(top
+        .windows(2)
+        .all(|w| w[0]["probability"].as_f64() >= w[1]["probability"].as_f64()));
     assert_eq!(a["close"], serde_json::json!(want.close));
     let r = filigree::api::run_json(
         "texture-retrieve",

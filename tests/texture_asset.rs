@@ -150,6 +150,9 @@ fn each_slider_moves_the_retrieved_scale_its_way() {
     );
 }
 
+/// A grey level for each point of the unit square.
+type Picture = fn(f32, f32) -> f32;
+
 /// Issue 36: the index says how sure it is. Every model's default picture
 /// (unseen seed) gets three models with probabilities, most likely first,
 /// and is close to the index; pictures that are no procedural texture (a
@@ -167,20 +170,33 @@ fn the_index_lists_likely_models_and_knows_when_nothing_is_close() {
         assert_eq!(a.top.len(), api::TOP_MODELS);
         assert_eq!(a.top[0].model, a.model, "the prediction is the likeliest");
         let p: Vec<f64> = a.top.iter().map(|c| c.probability).collect();
-        assert!(p.windows(2).all(|w| w[0] >= w[1]) && p.iter().sum::<f64>() <= 1.0 + 1e-9, "{p:?}");
+        assert!(
+            p.windows(2).all(|w| w[0] >= w[1]) && p.iter().sum::<f64>() <= 1.0 + 1e-9,
+            "{p:?}"
+        );
         if !a.close {
             eprintln!("{}: no close model", m.id);
         }
         close += a.close as usize;
     }
-    assert!(close * 10 >= MODELS.len() * 9, "{close} of {} close", MODELS.len());
-    let pictures: [(&str, fn(f32, f32) -> f32); 3] = [
+    assert!(
+        close * 10 >= MODELS.len() * 9,
+        "{close} of {} close",
+        MODELS.len()
+    );
+    let pictures: [(&str, Picture); 3] = [
         ("flat", |_, _| 0.5),
         ("ramp", |x, _| x),
         ("shapes", |x, y| {
             let disc = (x - 0.35).powi(2) + (y - 0.4).powi(2) < 0.06;
             let bar = (0.55..0.9).contains(&x) && (0.6..0.8).contains(&y);
-            if disc { 0.1 } else if bar { 0.6 } else { 0.9 }
+            if disc {
+                0.1
+            } else if bar {
+                0.6
+            } else {
+                0.9
+            }
         }),
     ];
     for (name, f) in pictures {
@@ -192,6 +208,10 @@ fn the_index_lists_likely_models_and_knows_when_nothing_is_close() {
         }
         let a = api::analyse(&index, &g).unwrap();
         assert!(!a.close, "{name} is taken as close to {}", a.model);
-        assert_eq!(a.top.len(), api::TOP_MODELS, "{name}: the nearest are still listed");
+        assert_eq!(
+            a.top.len(),
+            api::TOP_MODELS,
+            "{name}: the nearest are still listed"
+        );
     }
 }

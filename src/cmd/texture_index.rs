@@ -217,11 +217,17 @@ pub fn run_query(a: QueryArgs) -> Result<(), String> {
                 analysis.model_name, analysis.model
             );
         } else {
-            println!("predicted model: no close model (the image is far from every model in the index)");
+            println!(
+                "predicted model: no close model (the image is far from every model in the index)"
+            );
         }
         println!(
             "{}: {}",
-            if analysis.close { "most likely" } else { "nearest" },
+            if analysis.close {
+                "most likely"
+            } else {
+                "nearest"
+            },
             analysis
                 .top
                 .iter()
@@ -649,11 +655,16 @@ pub fn bench(a: BenchArgs) -> Result<(), String> {
     let xset = if a.xset.join("labels.csv").is_file() {
         let t = Instant::now();
         let mut v = super::texture_xset::evaluate(&full, &a.xset, &a.xset_split)?;
-        v["seconds_per_image"] = json!(t.elapsed().as_secs_f64() / v["images"].as_f64().unwrap_or(1.0));
+        v["seconds_per_image"] =
+            json!(t.elapsed().as_secs_f64() / v["images"].as_f64().unwrap_or(1.0));
         v["index"] = json!("trained on every base, as the shipped index");
         v
     } else {
-        json!(format!("no set at {}: python3 bench/texture-xset/make_set.py {}", a.xset.display(), a.xset.display()))
+        json!(format!(
+            "no set at {}: python3 bench/texture-xset/make_set.py {}",
+            a.xset.display(),
+            a.xset.display()
+        ))
     };
     let out = json!({
         "cross_implementation": xset,

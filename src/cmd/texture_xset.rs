@@ -28,7 +28,11 @@ fn read_labels(dir: &Path, split: &str) -> Result<Vec<Item>, String> {
     for (no, line) in text.lines().enumerate().skip(1) {
         let cols: Vec<&str> = line.splitn(4, ',').collect();
         if cols.len() < 3 {
-            return Err(format!("{}:{}: expected file,model,split", path.display(), no + 1));
+            return Err(format!(
+                "{}:{}: expected file,model,split",
+                path.display(),
+                no + 1
+            ));
         }
         if split != "all" && cols[2] != split {
             continue;

@@ -1132,8 +1132,9 @@ impl Index {
             temperature: r.f32("temperature")?,
             close: r.f32("closeness threshold")?,
         };
-        if !(confidence.temperature > 0.0 && confidence.temperature.is_finite())
-            || !confidence.close.is_finite()
+        if !(confidence.temperature > 0.0
+            && confidence.temperature.is_finite()
+            && confidence.close.is_finite())
         {
             return Err(corrupt("the confidence settings are not usable numbers"));
         }

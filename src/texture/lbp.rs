@@ -127,7 +127,8 @@ mod tests {
         for y in 0..side {
             for x in 0..side {
                 let (u, v) = if transpose { (y, x) } else { (x, y) };
-                let s = ((u as f32 * 0.45).sin() * (v as f32 * 0.3).cos() * 0.5 + 0.5).clamp(0.0, 1.0);
+                let s =
+                    ((u as f32 * 0.45).sin() * (v as f32 * 0.3).cos() * 0.5 + 0.5).clamp(0.0, 1.0);
                 g.data[y * side + x] = s.powf(gamma);
             }
         }

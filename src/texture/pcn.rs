@@ -814,12 +814,20 @@ mod tests {
         }
         let (a, b) = (pcn.features(&img).unwrap(), pcn.features(&toned).unwrap());
         assert_eq!(a.len(), cfg.feature_len());
-        let network = cfg.feature_len() - cfg.intensity_bins - 2 * crate::texture::lbp::bins_per_scale();
+        let network =
+            cfg.feature_len() - cfg.intensity_bins - 2 * crate::texture::lbp::bins_per_scale();
         assert_eq!(a[..network], b[..network], "the network reads ranks");
-        assert_ne!(a[network..network + 4], b[network..network + 4], "the grey levels do move");
+        assert_ne!(
+            a[network..network + 4],
+            b[network..network + 4],
+            "the grey levels do move"
+        );
         // Unequalised, the same tone curve changes the network's codes.
         let plain = Pcn::train(&imgs, small()).unwrap();
-        assert_ne!(plain.features(&img).unwrap()[..network], plain.features(&toned).unwrap()[..network]);
+        assert_ne!(
+            plain.features(&img).unwrap()[..network],
+            plain.features(&toned).unwrap()[..network]
+        );
     }
 
     #[test]

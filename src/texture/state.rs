@@ -470,19 +470,32 @@ mod tests {
     fn the_analysis_keeps_its_likely_models_and_closeness() {
         let p = check(&value(&doc())).unwrap().predicted.unwrap();
         assert_eq!(p.top.len(), 2);
-        assert_eq!((p.top[1].model.as_str(), p.top[1].probability), ("folding-perlin", 0.25));
+        assert_eq!(
+            (p.top[1].model.as_str(), p.top[1].probability),
+            ("folding-perlin", 0.25)
+        );
         assert!(!p.close);
         // Older documents have neither: no list, and close.
         let mut old = doc();
         old["predicted"] = json!({"model": "perlin", "scales": vec![5; 12]});
         let p = check(&value(&old)).unwrap().predicted.unwrap();
         assert!(p.top.is_empty() && p.close);
-        assert_eq!(field_of("/predicted/top/1/probability", json!(1.5)), "predicted.top.1.probability");
-        assert_eq!(field_of("/predicted/top/0/model", json!("nope")), "predicted.top.0.model");
+        assert_eq!(
+            field_of("/predicted/top/1/probability", json!(1.5)),
+            "predicted.top.1.probability"
+        );
+        assert_eq!(
+            field_of("/predicted/top/0/model", json!("nope")),
+            "predicted.top.0.model"
+        );
         assert_eq!(field_of("/predicted/close", json!(1)), "predicted.close");
         let mut long = doc();
-        long["predicted"]["top"] = Json::Array(vec![json!({"model": "perlin", "probability": 0.1}); 4]);
-        assert_eq!(check(&value(&long)).unwrap_err().field(), Some("predicted.top"));
+        long["predicted"]["top"] =
+            Json::Array(vec![json!({"model": "perlin", "probability": 0.1}); 4]);
+        assert_eq!(
+            check(&value(&long)).unwrap_err().field(),
+            Some("predicted.top")
+        );
     }
 
     #[test]

@@ -169,7 +169,10 @@ fn view(src: &Gray, side: usize, rotation: f64, zoom: f64) -> Gray {
     let mut out = Gray::new(side, side);
     for y in 0..side {
         for x in 0..side {
-            let (u, v) = ((x as f64 + 0.5 - half) * step, (y as f64 + 0.5 - half) * step);
+            let (u, v) = (
+                (x as f64 + 0.5 - half) * step,
+                (y as f64 + 0.5 - half) * step,
+            );
             let sx = cx + c * u - s * v - 0.5;
             let sy = cy + s * u + c * v - 0.5;
             let (x0, y0) = (libm::floor(sx), libm::floor(sy));
