@@ -79,8 +79,16 @@ pub enum Source {
 pub struct Predicted {
     pub model: String,
     pub scales: [u8; 12],
+    /// Left out when empty and `close` when true, so a document written
+    /// before them opens and saves unchanged.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub top: Vec<Chance>,
+    #[serde(skip_serializing_if = "is_true")]
     pub close: bool,
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 /// A model the analysis found likely, with its probability.
