@@ -256,12 +256,15 @@ const sourceKey = (s) => (!s ? '' : s.kind === 'model' ? `m|${s.model}|${s.param
 
 /** The predicted part of a document from a `texture-analyse` answer: the model, the scale
  * estimates, the three likeliest models with their probabilities, and whether any is close. */
-const predictedOf = (a) => ({
-  model: a.model,
-  scales: [...a.scales],
-  top: (a.top || []).map((c) => ({ model: c.model, probability: c.probability })),
-  close: a.close !== false,
-});
+const predictedOf = (a) => {
+  // The shape the core's document check gives back (state.rs): `top` left
+  // out when empty and `close` when true, so a link or a project opens equal.
+  const p = { model: a.model, scales: [...a.scales] };
+  const top = (a.top || []).map((c) => ({ model: c.model, probability: c.probability }));
+  if (top.length) p.top = top;
+  if (a.close === false) p.close = false;
+  return p;
+};
 
 /** The retrieved part of a document from a `texture-retrieve` answer. */
 const retrievedOf = (r) => ({ model: r.model, params: r.params, seed: r.seed, sample: r.sample, scales: [...r.scales], cosine: r.cosine, edited: false });
