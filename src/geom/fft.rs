@@ -30,7 +30,11 @@
 //! rustfft path, kept in the bench).
 use crate::core::error::{Error, Result};
 use realfft::num_complex::Complex;
-use rustfft::{Fft, FftPlanner};
+use rustfft::algorithm::butterflies::{
+    Butterfly16, Butterfly2, Butterfly32, Butterfly4, Butterfly8,
+};
+use rustfft::algorithm::Dft;
+use rustfft::{Fft, FftDirection};
 use std::sync::Arc;
 
 /// A complex number.
@@ -58,17 +62,32 @@ enum Plan {
     },
 }
 
+/// rustfft's kernel for a power-of-two length ≤ [`LEAF`]: the very
+/// algorithm its scalar planner picks for that length (a checked test), made
+/// directly, so that the planner and the algorithms it would pick for other
+/// lengths (Rader, Bluestein, mixed radix: about 200 KB of wasm) are not
+/// linked into every module that uses this FFT.
+fn leaf(len: usize, inverse: bool) -> Arc<dyn Fft<f64>> {
+    let d = if inverse {
+        FftDirection::Inverse
+    } else {
+        FftDirection::Forward
+    };
+    match len {
+        2 => Arc::new(Butterfly2::new(d)),
+        4 => Arc::new(Butterfly4::new(d)),
+        8 => Arc::new(Butterfly8::new(d)),
+        16 => Arc::new(Butterfly16::new(d)),
+        32 => Arc::new(Butterfly32::new(d)),
+        // Length 1 (the planner's choice too); no other length reaches here.
+        _ => Arc::new(Dft::new(len, d)),
+    }
+}
+
 impl Plan {
-    fn new(n: usize, inverse: bool, planner: &mut FftPlanner<f64>) -> Plan {
-        let leaf = |len: usize, planner: &mut FftPlanner<f64>| {
-            if inverse {
-                planner.plan_fft_inverse(len)
-            } else {
-                planner.plan_fft_forward(len)
-            }
-        };
+    fn new(n: usize, inverse: bool) -> Plan {
         if n <= LEAF {
-            return Plan::Leaf(leaf(n, planner));
+            return Plan::Leaf(leaf(n, inverse));
         }
         let (n1, n2) = (LEAF, n / LEAF);
         let sign = if inverse { 1.0 } else { -1.0 };
@@ -82,8 +101,8 @@ impl Plan {
         Plan::Split {
             n1,
             n2,
-            first: leaf(n1, planner),
-            second: Box::new(Plan::new(n2, inverse, planner)),
+            first: leaf(n1, inverse),
+            second: Box::new(Plan::new(n2, inverse)),
             twiddles,
         }
     }
@@ -865,9 +884,8 @@ pub fn fft2(re: &mut [f32], im: &mut [f32], w: usize, h: usize, inverse: bool) -
             im.len()
         )));
     }
-    let mut planner = FftPlanner::<f64>::new();
-    let fx = (w > 1).then(|| Plan::new(w, inverse, &mut planner));
-    let fy = (h > 1).then(|| Plan::new(h, inverse, &mut planner));
+    let fx = (w > 1).then(|| Plan::new(w, inverse));
+    let fy = (h > 1).then(|| Plan::new(h, inverse));
     let mut buf: Vec<C64> = re
         .iter()
         .zip(im.iter())
@@ -1071,6 +1089,36 @@ mod tests {
             }
         }
         assert_eq!(0.5f64.sqrt().to_bits(), libm::sqrt(0.5).to_bits());
+    }
+
+    /// [`leaf`] is the kernel rustfft's own planner picks: the same bits
+    /// for every length ≤ [`LEAF`] and both directions.
+    #[test]
+    fn leaves_are_the_planners_kernels() {
+        let mut planner = rustfft::FftPlanner::<f64>::new();
+        for n in [1usize, 2, 4, 8, 16, 32] {
+            for inverse in [false, true] {
+                let theirs = if inverse {
+                    planner.plan_fft_inverse(n)
+                } else {
+                    planner.plan_fft_forward(n)
+                };
+                let ours = leaf(n, inverse);
+                assert_eq!(ours.len(), n);
+                let input: Vec<C64> = (0..n)
+                    .map(|k| C64::new((k as f64 * 0.37).sin() + 0.1, (k as f64 * 1.3).cos() - 0.2))
+                    .collect();
+                let (mut a, mut b) = (input.clone(), input);
+                theirs.process(&mut a);
+                ours.process(&mut b);
+                let bits = |v: &[C64]| {
+                    v.iter()
+                        .flat_map(|c| [c.re.to_bits(), c.im.to_bits()])
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(bits(&a), bits(&b), "n={n} inverse={inverse}");
+            }
+        }
     }
 
     /// Lengths above [`LEAF`] go through the four-step split.
