@@ -32,12 +32,23 @@ export async function ready(page, path) {
   }
 }
 
+/**
+ * The test layer's hooks (tests/e2e/hooks/*.js): classic scripts that each
+ * add `globalThis.__filigreeHookBuilders[<tool id or name>] = (parts) => hooks`,
+ * where `parts` are the raw references a panel hands to `ctx.expose`
+ * (www/app/document.js). They run as init scripts of every test page and
+ * frame, before the app; the app does not ship them (scripts/precache.mjs
+ * lists what ships: index.html, www, pkg, assets).
+ */
+export const HOOK_SCRIPTS = fs.readdirSync(path.join(ROOT, 'tests/e2e/hooks'))
+  .filter((n) => n.endsWith('.js')).sort().map((n) => path.join(ROOT, 'tests/e2e/hooks', n));
+
 /** Start server (serving `root`, the repository by default) + browser (extra Chromium `args`).
  * Returns {url, browser, server, newPage({path, ...context options}), close()};
  * newPage goes to `path` (the home view by default; null: nowhere) and waits
  * until it is ready (see `ready`). Its pages (and their frames) are test pages:
  * the panels' test hooks are in `window.filigree.testHooks[<tool id or name>]`
- * (`ctx.expose`, www/app/document.js). */
+ * (`ctx.expose`, www/app/document.js, built by HOOK_SCRIPTS). */
 export async function launch({ root = ROOT, args = [] } = {}) {
   const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
@@ -49,6 +60,7 @@ export async function launch({ root = ROOT, args = [] } = {}) {
       const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true, ...opts });
       contexts.push(context);
       await context.addInitScript(() => { globalThis.__filigreeTestHooks = true; });
+      for (const file of HOOK_SCRIPTS) await context.addInitScript({ path: file });
       const page = await context.newPage();
       page.on('pageerror', (e) => console.error('[page error]', e.message));
       if (p !== null) {

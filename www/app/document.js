@@ -54,8 +54,11 @@
 //   ctx.error(err, {prefix, source})  the panel's ONE error area (replaced, not appended), plain words
 //   ctx.clearError(source?)      hide it; with `source`, only an error raised with that source
 //   ctx.coreDefaults()           the tool's default request(s) from the core
-//   ctx.expose(hooks, name = id) test hooks, only in a page opened by a test
-//                                (globalThis.__filigreeTestHooks === true): set as
+//   ctx.expose(parts, name = id) the panel's raw parts for tests, only in a page opened
+//                                by a test (globalThis.__filigreeTestHooks === true): the
+//                                test layer's hooks of `name` (tests/e2e/hooks/<tool>.js,
+//                                not shipped: globalThis.__filigreeHookBuilders[name](parts))
+//                                or, for a tool without them, `parts` as they are; set as
 //                                controller.testHooks[name], removed when the panel is left
 //   ctx.readOnly                 a read-only embed: the reader explores (commits, undo and
 //                                Reset work, nothing persists); the panel locks the author's
@@ -721,8 +724,10 @@ export class DocumentController {
         life.follows.add(off);
         return () => { off(); life.follows.delete(off); };
       },
-      expose(hooks, name = tool.id) {
+      expose(parts, name = tool.id) {
         if (!ctl.testHooks || life.dead) return;
+        const build = globalThis.__filigreeHookBuilders?.[name];
+        const hooks = typeof build === 'function' ? build(parts) : parts;
         ctl.testHooks[name] = hooks;
         life.hooks.set(name, hooks);
       },
