@@ -14,62 +14,14 @@
 //
 // mountReconstruct(el, ctx) → {render(doc), unmount()}; el is an empty
 // element inside the Micro panel. The request's defaults come from the
-// core (`defaults` for `micro-fit`), never from here.
+// core (`defaults` for `micro-fit`), never from here. Its markup is
+// fit-layout.js; the scene's numbers (JSON pointers, ranges) scene-numbers.js.
 import { LossPlot } from '../ui/loss-plot.js';
 import { coreDefaults } from '../app/document.js';
+import { html } from './fit-layout.js';
+import { numbersOf, setPointer, rangeOf } from './scene-numbers.js';
 
-const MAX_ROWS = 24; // numbers of the scene offered for fitting
 const OPTIMIZERS = [['cmaes', 'CMA-ES'], ['nelder-mead', 'Nelder–Mead'], ['powell', 'Powell']];
-
-const html = `
-  <summary>Reconstruct</summary>
-  <p class="muted small">Fit numbers of the scene to a target with the Fourier loss (amplitude and phase spectra of the sampled field).</p>
-  <div class="micro-fit-params" style="max-height:16rem;overflow:auto" data-testid="micro-fit-params" role="group" aria-label="Numbers to fit"></div>
-  <div class="micro-fit-target">
-    <label class="inline"><input type="radio" name="fit-target" value="scene" checked data-testid="micro-fit-target-scene"> This scene with the target values</label>
-    <label class="inline"><input type="radio" name="fit-target" value="slice" data-testid="micro-fit-target-slice"> A slice image</label>
-    <input type="file" accept="image/*" name="fit-slice" data-testid="micro-fit-slice" hidden>
-  </div>
-  <div class="micro-fit-settings">
-    <label class="inline">Optimizer <select name="fit-optimizer" data-testid="micro-fit-optimizer"></select></label>
-    <label class="inline">Evaluations <input type="number" name="fit-budget" min="2" max="100000" step="1" data-testid="micro-fit-budget"></label>
-    <label class="inline">Grid <select name="fit-grid"><option>8</option><option>16</option><option>32</option><option>64</option></select></label>
-    <label class="inline" title="Blurred power profiles first, then amplitudes, then the paper's loss: finds several frequencies at once (gyroid 3D/5D) where the paper's loss alone has needle-thin basins. The loss shown is always the paper's."><input type="checkbox" name="fit-c2f" data-testid="micro-fit-c2f"> Coarse to fine</label>
-  </div>
-  <div class="micro-fit-actions">
-    <button type="button" data-act="fit-run" data-testid="micro-fit-run">Reconstruct</button>
-    <button type="button" data-act="fit-stop" data-testid="micro-fit-stop" disabled>Stop</button>
-    <button type="button" data-act="fit-apply" data-testid="micro-fit-apply" disabled>Apply fitted values</button>
-  </div>
-  <canvas class="loss-plot" style="display:block;width:100%;height:140px" data-testid="micro-fit-plot" aria-label="loss while fitting"></canvas>
-  <div class="status muted" data-testid="micro-fit-status" aria-live="polite"></div>`;
-
-/** Every number in a JSON value: [{pointer, value, integer}], document order. */
-export function numbersOf(value, pointer = '', out = []) {
-  if (out.length >= MAX_ROWS) return out;
-  if (typeof value === 'number') out.push({ pointer, value, integer: Number.isInteger(value) });
-  else if (Array.isArray(value)) value.forEach((v, i) => numbersOf(v, `${pointer}/${i}`, out));
-  else if (value && typeof value === 'object') {
-    for (const [k, v] of Object.entries(value)) numbersOf(v, `${pointer}/${k.replace(/~/g, '~0').replace(/\//g, '~1')}`, out);
-  }
-  return out;
-}
-
-/** The JSON value with `pointer` (RFC 6901) set to `v`. */
-function setPointer(root, pointer, v) {
-  const keys = pointer.split('/').slice(1).map((k) => k.replace(/~1/g, '/').replace(/~0/g, '~'));
-  let o = root;
-  for (const k of keys.slice(0, -1)) o = o[k];
-  o[keys[keys.length - 1]] = v;
-  return root;
-}
-
-/** A default range around a value. */
-function rangeOf(v) {
-  if (v === 0) return [-1, 1];
-  const a = Math.abs(v);
-  return [v - a, v + a].sort((x, y) => x - y).map((x) => Number(x.toPrecision(6)));
-}
 
 /** An image file scaled to side×side grey, as PNG bytes. */
 async function slicePng(file, side) {
@@ -342,16 +294,8 @@ export function mountReconstruct(el, ctx) {
     setRunning(false);
   };
 
-  // For the e2e tests (ctx.expose, beside the Micro panel's own).
-  const hooks = {
-    rows: () => rows.map((r) => ({ pointer: r.pointer, value: r.value })),
-    result: () => (job?.status === 'done' ? { scene: job.result.scene, values: job.result.values } : null),
-    running,
-    job: () => job,
-    plotted: () => plot.points.length,
-    request: () => request(),
-  };
-  ctx.expose(hooks, 'micro-fit');
+  // For the e2e tests: the raw parts (tests/e2e/hooks/micro.js reads them).
+  ctx.expose({ rows: () => rows, job: () => job, running, plot, request }, 'micro-fit');
   // A reconstruction of this document that ran (or runs on) while the tool was away.
   if (ctx.job('reconstruct')) attach(ctx.job('reconstruct'));
 
