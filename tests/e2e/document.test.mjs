@@ -10,7 +10,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { launch, pickGenerator, ready } from './harness.mjs';
+import { launch, pickGenerator, ready, ROOT, HOOK_SCRIPTS } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -587,7 +587,7 @@ test('test hooks are published only in a page a test opened, and leave with thei
     await plain.waitForSelector('[data-testid=micro-fit]');
     assert.deepEqual(await plain.evaluate(() => ({
       registry: 'testHooks' in window.filigree,
-      globals: Object.keys(window).filter((k) => /^filigree./i.test(k)),
+      globals: Object.keys(window).filter((k) => /^(__)?filigree./i.test(k)),
     })), { registry: false, globals: [] });
   } finally {
     await context.close();
@@ -603,6 +603,23 @@ test('test hooks are published only in a page a test opened, and leave with thei
   await page.click('#tools button[data-tool=fit]');
   await page.waitForFunction(() => window.filigree.testHooks.fit);
   assert.deepEqual(await names(), ['fit']);
+});
+
+test('what the tests compute from a panel is test-only code: not precached, not in a shipped file', async () => {
+  // What ships: the service worker's precache list (scripts/precache.mjs).
+  const manifest = fs.readFileSync(path.join(ROOT, 'pkg/precache-manifest.js'), 'utf8');
+  const urls = [...manifest.matchAll(/"url": "\.\/([^"]+)"/g)].map((m) => m[1]);
+  assert.ok(urls.includes('www/app/document.js') && urls.includes('www/micro/panel.js'), 'the list names what ships');
+  assert.ok(HOOK_SCRIPTS.length >= 3, 'the test layer has its hook files');
+  assert.deepEqual(urls.filter((u) => u.startsWith('tests/')), [], 'nothing of tests/ ships');
+  // Only the controller names the test layer's builders; no shipped script makes one.
+  const naming = urls.filter((u) => /\.m?js$/.test(u) && fs.existsSync(path.join(ROOT, u))
+    && fs.readFileSync(path.join(ROOT, u), 'utf8').includes('__filigreeHookBuilders'));
+  assert.deepEqual(naming, ['www/app/document.js']);
+  // A test page's hooks are the test layer's, built from the panel's raw parts.
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await page.waitForFunction(() => window.filigree.testHooks.pixel?.state());
+  assert.deepEqual(await page.evaluate(() => Object.keys(window.filigree.testHooks.pixel).sort()), ['pending', 'result', 'state']);
 });
 
 test('the app in an about:blank host loads and works', async () => {
