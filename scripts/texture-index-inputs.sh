@@ -10,7 +10,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 {
   find src/texture src/core src/raster src/geom -type f -name '*.rs' -print
-  echo src/cmd/texture_index.rs
-  echo src/main.rs
+  echo src/cli/cmd/texture_index.rs
+  echo src/cli/main.rs
   echo Cargo.lock
 } | LC_ALL=C sort | xargs sha256sum | sha256sum | cut -c1-64

@@ -132,6 +132,27 @@ where
     }
 }
 
+/// Threads for a native parallel run (the CLI's and the benchmarks'
+/// `--threads`): `asked` when it is within [`request_limits::THREADS`],
+/// else all cores up to that limit's top.
+///
+/// [`request_limits::THREADS`]: crate::core::request_limits::THREADS
+pub fn threads(asked: Option<usize>) -> Result<usize> {
+    let (lo, hi) = crate::core::request_limits::THREADS;
+    match asked {
+        Some(n) if (lo..=hi).contains(&n) => Ok(n),
+        Some(n) => Err(Error::input(format!(
+            "`threads` must be in {lo}..={hi} (got {n})"
+        ))),
+        #[cfg(not(target_arch = "wasm32"))]
+        None => Ok(std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(hi)),
+        #[cfg(target_arch = "wasm32")]
+        None => Ok(1),
+    }
+}
+
 /// Maps `f` over `items` on all cores natively (one thread in wasm),
 /// keeping the order. Each thread takes the next item when it is free, so
 /// items of very different cost (an SVM that converges in 50 epochs beside

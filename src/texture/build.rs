@@ -36,7 +36,7 @@ impl Default for BuildConfig {
     /// augmentation (two lights × four crops) and 4 random looks a base
     /// (issue 36: on the validation part of the cross-implementation set,
     /// 16.8% of textures recognised with none, 26.1% with 4 looks, and no
-    /// more with 8; `examples/texture_xset.rs`).
+    /// more with 8; `src/bench/examples/texture_xset.rs`).
     fn default() -> Self {
         BuildConfig {
             dataset: DatasetConfig {
@@ -53,6 +53,25 @@ impl Default for BuildConfig {
 }
 
 impl BuildConfig {
+    /// The shipped settings with `per_model` bases per model at `size`²,
+    /// with or without the paper's augmentation (`filigree build-index`'s
+    /// `--per-model`, `--size`, `--no-augment`, and `bench texture`). The
+    /// network's window is the dataset's image side, so `size` 256 reads
+    /// 256² crops whole (the paper's crop size) as 128 (the shipped index)
+    /// reads 128² ones.
+    pub fn sized(per_model: usize, size: usize, augment: bool) -> Self {
+        let mut c = BuildConfig::default();
+        let d = DatasetConfig {
+            per_model,
+            size,
+            looks: c.dataset.looks,
+            ..DatasetConfig::default()
+        };
+        c.dataset = if augment { d.augmented() } else { d };
+        c.index.pcn.side = size;
+        c.synced()
+    }
+
     /// The settings with the network's pixel scale taken from the dataset:
     /// crops are windows of textures rendered at twice their size, so the
     /// index reads any image as a texture `2 · side` pixels across (see

@@ -15,7 +15,7 @@
 //! textures between the levels for other models: two thirds of textures
 //! with parameters drawn at random in the dataset ranges were recognised,
 //! against 89% of held-out grid points, which share the training levels
-//! (`examples/texture_compare.rs`,
+//! (`src/bench/examples/texture_compare.rs`,
 //! `docs/bench/texture-retrieval-2026-12-03d.md`). Each model's defaults,
 //! the picture the app shows first, are one more point unless they are
 //! one already (every default lies in its dataset range; a test checks).

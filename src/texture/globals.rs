@@ -18,7 +18,7 @@
 //! The index standardises them with the training images' means and
 //! standard deviations ([`super::index::GlobalScaler`]). Chosen on a
 //! validation split of the training bases, never the test set
-//! (`examples/texture_tta.rs`, `docs/bench/texture-accuracy-2026-12-03.md`).
+//! (`src/bench/examples/texture_tta.rs`, `docs/bench/texture-accuracy-2026-12-03.md`).
 //! `libm` and the crate's FFT: the same bits natively and in wasm.
 use super::scales;
 use super::Gray;

@@ -96,7 +96,7 @@ pub struct IndexConfig {
     pub pcn: PcnConfig,
     /// SVM penalty of the model classifier. 10, chosen on a validation
     /// split of the training bases (a third of each model's, never the
-    /// held-out test bases; `examples/texture_validation.rs`): 1 → 10
+    /// held-out test bases; `src/bench/examples/texture_validation.rs`): 1 → 10
     /// raised it by 0.7 and 2 points at 12 and 24 training bases per
     /// model, 30 gave no more (`docs/bench/texture-accuracy-2026-12-02.md`).
     pub c_model: f64,
@@ -114,12 +114,12 @@ pub struct IndexConfig {
     pub filter_images: usize,
     /// A scale joins an axis's regression if |r| with the axis is at least
     /// this (the best three always do). 0.1, chosen on a validation split
-    /// of the bases (`examples/texture_space.rs`; the Latin-hypercube
+    /// of the bases (`src/bench/examples/texture_space.rs`; the Latin-hypercube
     /// dataset, 2026-12-03d): R² of the three axes 0.993 / 0.915 / 0.879
     /// at 0.3, 0.993 / 0.915 / 0.944 at 0.2, 0.993 / 0.967 / 0.956 at 0.1.
     /// Lower thresholds blend more scales into every axis, so one slider
     /// moves the requested point less; [`Index::retrieve`]'s shortlist
-    /// makes up for it: the sliders' response (`examples/texture_rerank.rs`)
+    /// makes up for it: the sliders' response (`src/bench/examples/texture_rerank.rs`)
     /// was the same at 0.2 and 0.1.
     pub min_correlation: f64,
     /// How the model classifier's scores become probabilities and when an
@@ -151,7 +151,7 @@ pub struct Confidence {
 impl Default for Confidence {
     fn default() -> Self {
         // Chosen on the validation part of the cross-implementation set
-        // (issue 36; `examples/texture_xset.rs`): the temperature that
+        // (issue 36; `src/bench/examples/texture_xset.rs`): the temperature that
         // minimises the right models' negative log-likelihood (1.18: 2.511
         // nats, 2.520 at 1); the closeness of its textures is at most 0.77
         // at the 99th percentile, while a flat grey picture has 1.40, a
@@ -249,7 +249,7 @@ pub struct Index {
     /// ([`Index::analyse`]): a scale *is* its estimator, and computing it
     /// beats a classifier's guess of it (validation, first images: 72.9%
     /// exact and 96.3% within one, against 48.1% and 84.1% for the
-    /// classifiers; `examples/texture_scales.rs`). With ratings the
+    /// classifiers; `src/bench/examples/texture_scales.rs`). With ratings the
     /// classifiers predict them, as in the paper.
     pub measured: Option<ScaleQuantiles>,
     pub axes: Vec<Axis>,
@@ -313,7 +313,7 @@ impl GlobalScaler {
     /// standardised global values times the weight. (The global values
     /// raised the scales' validation accuracy from 41.9 to 48.1% exact and
     /// from 79.7 to 84.1% within one; the χ² map gave no more and costs
-    /// three times the weights: `examples/texture_scales.rs`.)
+    /// three times the weights: `src/bench/examples/texture_scales.rs`.)
     pub fn scale_row(&self, f: &[f32], dim: usize) -> Vec<f32> {
         let mut out = f[..dim].to_vec();
         self.push_standardised(&f[dim..], &mut out);

@@ -200,7 +200,7 @@ pub fn run(repeats: usize, only: Option<&str>) -> Result<(), String> {
     if want("baseline") {
         let (mut ours, min) = expand(BASELINE_GRAMMAR, 0.0, repeats)?;
         let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scripts/tangle_shapely_baseline.py");
+            .join("../../scripts/tangle_shapely_baseline.py");
         let shapely = std::process::Command::new("python3")
             .arg(&script)
             .arg(repeats.max(1).to_string())

@@ -1,5 +1,28 @@
-//! `filigree bench <tool>`: benchmarks that print one JSON object.
-use super::measure::fixture;
+//! `filigree bench <tool>`: the benchmarks, each printing one JSON object.
+//! They measure the library from outside, as the CLI uses it: they are
+//! part of the `filigree` binary only when it is built with the `bench`
+//! feature (on by default; `--no-default-features --features cli` builds
+//! the CLI without them), and never of the library or a wasm module. The
+//! CLI (`src/cli/`) only hands `filigree bench`'s arguments to [`run`].
+//! Research probes are the package's examples (`src/bench/examples/`,
+//! `cargo run --example NAME`).
+
+pub mod fit_bench;
+pub mod fit_designs;
+pub mod measure;
+pub mod micro_bench;
+pub mod slices_bench;
+pub mod tangle_bench;
+pub mod texture_bench;
+pub mod texture_xset;
+
+/// Median and minimum of a list of timings (seconds).
+pub fn min_median(mut v: Vec<f64>) -> (f64, f64) {
+    v.sort_by(|a, b| a.total_cmp(b));
+    (v[0], v[v.len() / 2])
+}
+
+use self::measure::fixture;
 use clap::Subcommand;
 use filigree::core::job::{Job, Step};
 use filigree::inspect::{inspect, InspectOptions};
@@ -195,12 +218,12 @@ pub fn run(w: Which) -> Result<(), String> {
             designs_dir,
             init,
             ..
-        } => super::fit_designs::run(
+        } => fit_designs::run(
             &designs_dir,
             (&split, only.as_deref()),
             hard,
             &init,
-            super::threads(threads)?,
+            crate::cmd::threads(threads)?,
         ),
         Which::Fit {
             quick,
@@ -210,7 +233,7 @@ pub fn run(w: Which) -> Result<(), String> {
             speed_only,
             export_jax,
             ..
-        } => super::fit_bench::run(
+        } => fit_bench::run(
             quick,
             seeds,
             only.as_deref(),
@@ -227,7 +250,7 @@ pub fn run(w: Which) -> Result<(), String> {
                 inspect(png, &opts).map_err(|e| e.to_string())?;
                 secs.push(t.elapsed().as_secs_f64());
             }
-            let (min, median) = super::min_median(secs);
+            let (min, median) = min_median(secs);
             let out = json!({"bench": "inspect", "image": "1024x1024 png", "png_bytes": png.len(), "seconds": {"min": min, "median": median}});
             println!("{out}");
             Ok(())
@@ -241,7 +264,7 @@ pub fn run(w: Which) -> Result<(), String> {
             xset,
             xset_split,
             ..
-        } => super::texture_index::bench(super::texture_index::BenchArgs {
+        } => texture_bench::bench(texture_bench::BenchArgs {
             per_model,
             size,
             augment: !no_augment,
@@ -250,10 +273,10 @@ pub fn run(w: Which) -> Result<(), String> {
             xset,
             xset_split,
         }),
-        Which::Slices { only, .. } => super::slices_bench::run(only.as_deref()),
+        Which::Slices { only, .. } => slices_bench::run(only.as_deref()),
         Which::TextureXset {
             index, xset, split, ..
-        } => super::texture_xset::run(&index, &xset, &split),
+        } => texture_xset::run(&index, &xset, &split),
         Which::TextureModels {
             repeats,
             size,
@@ -261,8 +284,8 @@ pub fn run(w: Which) -> Result<(), String> {
             threads,
             augmented,
             ..
-        } => super::texture::bench(repeats, size, dataset_size, threads, augmented),
-        Which::Tangle { repeats, only, .. } => super::tangle_bench::run(repeats, only.as_deref()),
+        } => texture_bench::models(repeats, size, dataset_size, threads, augmented),
+        Which::Tangle { repeats, only, .. } => tangle_bench::run(repeats, only.as_deref()),
         Which::Micro {
             repeats,
             size,
@@ -276,15 +299,15 @@ pub fn run(w: Which) -> Result<(), String> {
             if !matches!(only, None | Some("render") | Some("fit") | Some("loss")) {
                 return Err("--only: expected `render`, `fit` or `loss`".into());
             }
-            let parts = super::micro_bench::Parts {
+            let parts = micro_bench::Parts {
                 render: only.is_none() || only == Some("render"),
                 fit: only.is_none() || only == Some("fit"),
                 loss: only == Some("loss"),
                 quick,
                 seeds,
-                threads: super::threads(threads)?,
+                threads: crate::cmd::threads(threads)?,
             };
-            super::micro_bench::run(repeats, size, parts)
+            micro_bench::run(repeats, size, parts)
         }
         Which::Pixel { repeats, .. } => {
             println!("{}", pixel_bench(repeats.max(1))?);
@@ -327,7 +350,7 @@ fn pixel_case(name: &str) -> Result<(PixelInputs, PixelParams), String> {
 }
 
 fn min_median_json(v: Vec<f64>) -> serde_json::Value {
-    let (min, median) = super::min_median(v);
+    let (min, median) = min_median(v);
     json!({"min": min, "median": median})
 }
 

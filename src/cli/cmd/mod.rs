@@ -1,18 +1,10 @@
-pub mod bench;
 pub mod fit;
-pub mod fit_bench;
-pub mod fit_designs;
 pub mod inspect;
-pub mod measure;
 pub mod micro;
-pub mod micro_bench;
 pub mod pixel;
-pub mod slices_bench;
 pub mod tangle;
-pub mod tangle_bench;
 pub mod texture;
 pub mod texture_index;
-pub mod texture_xset;
 
 use filigree::core::job::{run_to_end, Cancel, Job};
 use filigree::Error;
@@ -84,12 +76,6 @@ pub fn read_image(path: &Path) -> Result<filigree::raster::Rgba8Image, String> {
     let bytes = read_file(path)?;
     filigree::raster::decode(&bytes, filigree::raster::Limits::default())
         .map_err(|e| format!("{}: {e}", path.display()))
-}
-
-/// Median and minimum of a list of timings (seconds).
-pub fn min_median(mut v: Vec<f64>) -> (f64, f64) {
-    v.sort_by(|a, b| a.total_cmp(b));
-    (v[0], v[v.len() / 2])
 }
 
 /// Where a request field came from on the command line: `(field, what)`,
@@ -169,18 +155,8 @@ pub fn put<T: Serialize>(
     Ok(())
 }
 
-/// Threads for a parallel run: all cores by default, at most the shards a
-/// fit can be split into.
+/// `--threads`: the asked number when in range, else all cores
+/// ([`filigree::core::parallel::threads`]).
 pub fn threads(asked: Option<usize>) -> Result<usize, String> {
-    let (lo, hi) = filigree::core::request_limits::THREADS;
-    match asked {
-        Some(n) if (lo..=hi).contains(&n) => Ok(n),
-        Some(n) => Err(format!(
-            "--threads: `threads` must be in {lo}..={hi} (got {n})"
-        )),
-        None => Ok(std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-            .min(hi)),
-    }
+    filigree::core::parallel::threads(asked).map_err(|e| format!("--threads: {e}"))
 }

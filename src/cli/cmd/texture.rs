@@ -2,13 +2,11 @@
 //! list them, or a contact sheet of all), and `filigree bench
 //! texture-models`: per-model render and dataset times as JSON.
 use clap::Subcommand;
-use filigree::texture::dataset::{self, DatasetConfig};
 use filigree::texture::models::{self, render_height, shade, Light, MODELS};
 use filigree::texture::scales;
 use filigree::texture::Gray;
 use serde_json::json;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 #[derive(Subcommand)]
 pub enum Which {
@@ -223,64 +221,4 @@ fn write_png(path: &Path, g: &Gray) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}", path.display()))?;
     w.write_image_data(&g.to_bytes())
         .map_err(|e| format!("{}: {e}", path.display()))
-}
-
-/// `filigree bench texture-models`: per-model height + shade time at
-/// `size`² (median of `repeats`, default parameters, one core), and the
-/// time and size of a dataset at `dataset_size`² on `threads` threads.
-pub fn bench(
-    repeats: usize,
-    size: usize,
-    dataset_size: usize,
-    threads: usize,
-    augmented: bool,
-) -> Result<(), String> {
-    let mut per_model = Vec::new();
-    let mut total = 0.0;
-    for m in &MODELS {
-        let d = m.defaults();
-        let mut secs = Vec::new();
-        for r in 0..repeats.max(1) {
-            let t = Instant::now();
-            let h = render_height(m, &d, r as u64, size).map_err(|e| e.to_string())?;
-            std::hint::black_box(shade(&h, Light::DEFAULT));
-            secs.push(t.elapsed().as_secs_f64());
-        }
-        let (min, median) = super::min_median(secs);
-        total += median;
-        per_model.push(json!({"model": m.id, "ms_min": min * 1e3, "ms_median": median * 1e3}));
-    }
-    let mut out = json!({
-        "bench": "texture-models",
-        "size": size,
-        "models": per_model,
-        "ms_median_sum": total * 1e3,
-    });
-    if dataset_size > 0 {
-        let mut config = DatasetConfig {
-            size: dataset_size,
-            ..DatasetConfig::default()
-        };
-        if augmented {
-            config = config.augmented();
-        }
-        let specs = dataset::plan(&config).map_err(|e| e.to_string())?;
-        let t = Instant::now();
-        let data = dataset::build_threads(&config, threads).map_err(|e| e.to_string())?;
-        let secs = t.elapsed().as_secs_f64();
-        out["dataset"] = json!({
-            "size": dataset_size,
-            "base_samples": specs.len(),
-            "images": data.len(),
-            "lights": config.lights.len(),
-            "crops": config.crops,
-            "threads": threads,
-            "seconds": secs,
-        });
-    }
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
-    Ok(())
 }

@@ -196,7 +196,7 @@ pub fn run(repeats: usize, size: u32, parts: Parts) -> Result<(), String> {
             })
             .collect();
         // The variants alternate within each repeat (as in `tile_scaling`
-        // and `examples/micro_table2.rs`), so a change of the machine's
+        // and `src/bench/examples/micro_table2.rs`), so a change of the machine's
         // load weighs on all alike; beside the wall clock, this thread's
         // time on a core (the render runs on it), which load does not
         // inflate.

@@ -1,12 +1,18 @@
 //! The `filigree` command-line tool: a thin layer over the library.
-//! Each subcommand lives in `src/cmd/<name>.rs` and only parses, calls the
-//! core and prints; no algorithm lives here.
+//! Each subcommand lives in `src/cli/cmd/<name>.rs` and only parses, calls
+//! the core and prints; no algorithm lives here. `filigree bench` is
+//! `src/bench/` (the `bench` feature).
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 // The CLI may time things and use threads; the library may not (clippy.toml).
 #[allow(clippy::disallowed_methods)]
 mod cmd;
+// `filigree bench`: only in a binary built with the `bench` feature.
+#[cfg(feature = "bench")]
+#[allow(clippy::disallowed_methods)]
+#[path = "../bench/mod.rs"]
+mod bench;
 
 #[derive(Parser)]
 #[command(
@@ -49,9 +55,10 @@ enum Command {
     /// Build the Texture tool's index (dataset, scales, PCN-2, SVMs, space).
     BuildIndex(cmd::texture_index::BuildArgs),
     /// Benchmarks that print JSON.
+    #[cfg(feature = "bench")]
     Bench {
         #[command(subcommand)]
-        which: cmd::bench::Which,
+        which: bench::Which,
     },
 }
 
@@ -89,7 +96,8 @@ fn main() -> ExitCode {
         } => cmd::texture::run(which),
         Command::Texture { which: None, query } => cmd::texture_index::run_query(*query),
         Command::BuildIndex(a) => cmd::texture_index::run_build(a),
-        Command::Bench { which } => cmd::bench::run(which),
+        #[cfg(feature = "bench")]
+        Command::Bench { which } => bench::run(which),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

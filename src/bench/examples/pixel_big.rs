@@ -29,7 +29,7 @@ fn main() {
         .nth(1)
         .and_then(|s| s.parse().ok())
         .unwrap_or(4096);
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/pixel");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/pixel");
     let img = |n: &str| decode(&std::fs::read(dir.join(n)).unwrap(), Limits::default()).unwrap();
     let fish = img("fish.png");
     let mut source = Rgba8Image::new(side, side);

@@ -1,258 +1,18 @@
-//! `filigree build-index`, `filigree texture --index … --image …` and
-//! `filigree bench texture`: the Texture index from the command line.
-//! The pipeline is `filigree::texture::build`; requests are the browser's
-//! (`filigree::texture::api`).
+//! `filigree bench texture` (the paper's Tables 1–3, timings and the
+//! cross-implementation set) and `filigree bench texture-models` (each
+//! model's drawing time and a dataset's).
 use filigree::core::rng::Rng;
 use filigree::texture::api::{self, TextureRetrieveRequest};
 use filigree::texture::build::{self, BuildConfig, BuildStats};
-use filigree::texture::dataset::{random_point, DatasetConfig};
+use filigree::texture::dataset::{self, random_point, DatasetConfig};
 use filigree::texture::index::{GlobalScaler, Index, Training, SCALES};
 use filigree::texture::learn::isomap::pearson;
 use filigree::texture::learn::svm::OneVsRest;
-use filigree::texture::models::MODELS;
+use filigree::texture::models::{render_height, shade, Light, MODELS};
 use filigree::texture::pcn::{convolve_direct, convolve_im2col, Pcn, PcnConfig};
-use filigree::texture::scales::parse_ratings;
 use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
-
-#[derive(clap::Args)]
-pub struct BuildArgs {
-    /// Where to write the index (the app serves www/assets/texture-index.bin).
-    #[arg(long)]
-    out: PathBuf,
-    /// Base textures per model (parameter grid points).
-    #[arg(long, default_value_t = BuildConfig::default().dataset.per_model)]
-    per_model: usize,
-    /// Side of every dataset image, pixels.
-    #[arg(long, default_value_t = BuildConfig::default().dataset.size)]
-    size: usize,
-    /// Skip the paper's augmentation (second light, four crops).
-    #[arg(long)]
-    no_augment: bool,
-    /// Human ratings (CSV: id + the twelve scales) replacing the estimates.
-    #[arg(long)]
-    ratings: Option<PathBuf>,
-}
-
-/// The build settings for `--per-model`, `--size` and the augmentation.
-/// The network's window is the dataset's image side, so `--size 256` reads
-/// 256² crops whole (the paper's crop size) as `--size 128` (the shipped
-/// index) reads 128² ones.
-fn config(per_model: usize, size: usize, augment: bool) -> BuildConfig {
-    let mut c = BuildConfig::default();
-    let d = DatasetConfig {
-        per_model,
-        size,
-        looks: c.dataset.looks,
-        ..DatasetConfig::default()
-    };
-    c.dataset = if augment { d.augmented() } else { d };
-    c.index.pcn.side = size;
-    c.synced()
-}
-
-fn read_ratings(path: Option<&Path>) -> Result<Vec<filigree::texture::scales::Rating>, String> {
-    let Some(p) = path else { return Ok(Vec::new()) };
-    let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
-    parse_ratings(&text).map_err(|e| format!("{}: {e}", p.display()))
-}
-
-pub fn run_build(a: BuildArgs) -> Result<(), String> {
-    super::out_path(&a.out, &["bin"])?;
-    let cfg = config(a.per_model, a.size, !a.no_augment);
-    let ratings = read_ratings(a.ratings.as_deref())?;
-    let t = Instant::now();
-    let (index, stats) = build::build_index(&cfg, &ratings).map_err(|e| e.to_string())?;
-    let seconds = t.elapsed().as_secs_f64();
-    let bytes = index.to_bytes();
-    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    }
-    std::fs::write(&a.out, &bytes).map_err(|e| format!("{}: {e}", a.out.display()))?;
-    let out = json!({
-        "out": a.out.display().to_string(), "bytes": bytes.len(), "id": api::index_id(&bytes),
-        "images": stats.images, "bases": stats.bases, "rated": stats.rated,
-        "feature_len": index.pcn.config.feature_len(), "seconds": seconds,
-    });
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
-    Ok(())
-}
-
-#[derive(clap::Args)]
-pub struct QueryArgs {
-    /// The index file (`filigree build-index`).
-    #[arg(long)]
-    index: Option<PathBuf>,
-    /// An example texture (PNG, JPEG, ...), at least half the network's window on its short side
-    /// (64 px with the shipped index; a smaller picture is refused, not enlarged into a blur).
-    #[arg(long)]
-    image: Option<PathBuf>,
-    /// Change a predicted scale, `name=value` with value 1–9 (repeatable),
-    /// e.g. `--set regularity=8`. Names: contrast, repetition, granularity,
-    /// randomness, roughness, feature_density, directionality,
-    /// structural_complexity, coarseness, regularity, local_orientation,
-    /// uniformity.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    set: Vec<String>,
-    /// Retrieve only among the predicted model's samples.
-    #[arg(long)]
-    same_model: bool,
-    /// Write the retrieved texture (grey PNG).
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Side of the written texture, pixels.
-    #[arg(long, default_value_t = api::DEFAULT_SIZE)]
-    size: u32,
-    /// Print the whole answer as JSON (default: a short summary).
-    #[arg(long)]
-    json: bool,
-}
-
-fn scale_index(name: &str) -> Option<usize> {
-    let norm = |s: &str| s.replace([' ', '-'], "_").to_ascii_lowercase();
-    SCALES.iter().position(|s| norm(s) == norm(name))
-}
-
-pub fn run_query(a: QueryArgs) -> Result<(), String> {
-    let (Some(index_path), Some(image_path)) = (a.index.as_ref(), a.image.as_ref()) else {
-        return Err("texture: give --index I and --image IMG, or a subcommand (render, models, sheet); see --help".into());
-    };
-    if let Some(out) = &a.out {
-        super::out_path(out, &["png"])?;
-        let (lo, hi) = (
-            filigree::texture::models::MIN_SIZE,
-            filigree::texture::models::MAX_SIZE,
-        );
-        if !(lo..=hi).contains(&(a.size as usize)) {
-            return Err(format!(
-                "--size: the retrieved texture written to {} must be {lo}..={hi} pixels (got {})",
-                out.display(),
-                a.size
-            ));
-        }
-    }
-    let bytes = std::fs::read(index_path).map_err(|e| format!("{}: {e}", index_path.display()))?;
-    let index = api::parse_index(&bytes).map_err(|e| format!("{}: {e}", index_path.display()))?;
-    let img_bytes =
-        std::fs::read(image_path).map_err(|e| format!("{}: {e}", image_path.display()))?;
-    let gray =
-        api::decode_gray(&img_bytes).map_err(|e| format!("{}: {e}", image_path.display()))?;
-    let analysis = api::analyse(&index, &gray).map_err(|e| e.to_string())?;
-    let mut scales: [f32; 12] = analysis.scales.map(|v| v as f32);
-    for s in &a.set {
-        let (k, v) = s
-            .split_once('=')
-            .ok_or_else(|| format!("--set {s}: expected NAME=VALUE"))?;
-        let i = scale_index(k.trim()).ok_or_else(|| {
-            format!(
-                "--set {s}: unknown scale '{k}' (known: {})",
-                SCALES.join(", ")
-            )
-        })?;
-        let v: f32 = v
-            .trim()
-            .parse()
-            .map_err(|_| format!("--set {s}: '{v}' is not a number"))?;
-        if !(1.0..=9.0).contains(&v) {
-            return Err(format!("--set {s}: scales run from 1 to 9"));
-        }
-        scales[i] = v;
-    }
-    let req = TextureRetrieveRequest {
-        index: String::new(),
-        scales,
-        model: if a.same_model {
-            analysis.model.to_string()
-        } else {
-            String::new()
-        },
-        size: if a.out.is_some() { a.size } else { 0 },
-    };
-    let got = api::retrieve(&index, &req).map_err(|e| e.to_string())?;
-    if let (Some(out), Some(img)) = (&a.out, &got.image) {
-        let png = image::GrayImage::from_raw(img.size, img.size, img.gray.clone())
-            .ok_or("internal: image size")?;
-        png.save(out)
-            .map_err(|e| format!("{}: {e}", out.display()))?;
-    }
-    let named = |s: &[f32]| {
-        SCALES
-            .iter()
-            .zip(s)
-            .map(|(n, v)| (n.to_string(), json!(v)))
-            .collect::<serde_json::Map<_, _>>()
-    };
-    let model = MODELS
-        .iter()
-        .find(|m| m.id == got.model)
-        .ok_or("internal: model")?;
-    let params: serde_json::Map<_, _> = model
-        .params
-        .iter()
-        .zip(&got.params)
-        .map(|(p, v)| (p.name.to_string(), json!(v)))
-        .collect();
-    let retrieved: Vec<f32> = got.scales.iter().map(|&v| v as f32).collect();
-    let answer = json!({
-        "predicted": {"model": analysis.model, "model_name": analysis.model_name, "scales": named(&analysis.scales.map(|v| v as f32))},
-        "top": analysis.top.iter().map(|c| json!({"model": c.model, "model_name": c.model_name, "probability": c.probability})).collect::<Vec<_>>(),
-        "close": analysis.close,
-        "requested": named(&scales),
-        "retrieved": {"model": got.model, "model_name": got.model_name, "params": params, "seed": got.seed, "scales": named(&retrieved), "sample": got.sample},
-        "cosine": got.cosine,
-    });
-    if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&answer).map_err(|e| e.to_string())?
-        );
-    } else {
-        if analysis.close {
-            println!(
-                "predicted model: {} ({})",
-                analysis.model_name, analysis.model
-            );
-        } else {
-            println!(
-                "predicted model: no close model (the image is far from every model in the index)"
-            );
-        }
-        println!(
-            "{}: {}",
-            if analysis.close {
-                "most likely"
-            } else {
-                "nearest"
-            },
-            analysis
-                .top
-                .iter()
-                .map(|c| format!("{} {:.0}%", c.model_name, 100.0 * c.probability))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        println!(
-            "predicted scales: {}",
-            SCALES
-                .iter()
-                .zip(analysis.scales)
-                .map(|(n, v)| format!("{n} {v}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        println!(
-            "retrieved: {} with {}",
-            got.model_name,
-            serde_json::to_string(&params).unwrap_or_default()
-        );
-        println!("cosine(requested, retrieved scales) = {:.3}", got.cosine);
-    }
-    Ok(())
-}
 
 const AXES: [&str; 3] = ["X", "Y", "Z"];
 /// Random parameter points per model in `bench texture`'s table 1.
@@ -263,7 +23,7 @@ const PAPER_TABLE2: [f64; 12] = [
     0.998, 0.997, 0.992, 0.992, 0.998, 0.996, 0.998, 0.994, 0.994, 0.997, 0.998, 0.992,
 ];
 
-/// [`config`] with `--index-config`'s settings (missing fields default;
+/// [`BuildConfig::sized`] with `--index-config`'s settings (missing fields default;
 /// the window follows `--size` unless the settings name `pcn.side`).
 fn bench_config(
     per_model: usize,
@@ -271,7 +31,7 @@ fn bench_config(
     augment: bool,
     index: Option<&str>,
 ) -> Result<BuildConfig, String> {
-    let mut cfg = config(per_model, size, augment);
+    let mut cfg = BuildConfig::sized(per_model, size, augment);
     if let Some(json) = index {
         let v: serde_json::Value =
             serde_json::from_str(json).map_err(|e| format!("--index-config: {e}"))?;
@@ -765,6 +525,66 @@ fn quadrants_joined(
     Some(big)
 }
 
+/// `filigree bench texture-models`: per-model height + shade time at
+/// `size`² (median of `repeats`, default parameters, one core), and the
+/// time and size of a dataset at `dataset_size`² on `threads` threads.
+pub fn models(
+    repeats: usize,
+    size: usize,
+    dataset_size: usize,
+    threads: usize,
+    augmented: bool,
+) -> Result<(), String> {
+    let mut per_model = Vec::new();
+    let mut total = 0.0;
+    for m in &MODELS {
+        let d = m.defaults();
+        let mut secs = Vec::new();
+        for r in 0..repeats.max(1) {
+            let t = Instant::now();
+            let h = render_height(m, &d, r as u64, size).map_err(|e| e.to_string())?;
+            std::hint::black_box(shade(&h, Light::DEFAULT));
+            secs.push(t.elapsed().as_secs_f64());
+        }
+        let (min, median) = super::min_median(secs);
+        total += median;
+        per_model.push(json!({"model": m.id, "ms_min": min * 1e3, "ms_median": median * 1e3}));
+    }
+    let mut out = json!({
+        "bench": "texture-models",
+        "size": size,
+        "models": per_model,
+        "ms_median_sum": total * 1e3,
+    });
+    if dataset_size > 0 {
+        let mut config = DatasetConfig {
+            size: dataset_size,
+            ..DatasetConfig::default()
+        };
+        if augmented {
+            config = config.augmented();
+        }
+        let specs = dataset::plan(&config).map_err(|e| e.to_string())?;
+        let t = Instant::now();
+        let data = dataset::build_threads(&config, threads).map_err(|e| e.to_string())?;
+        let secs = t.elapsed().as_secs_f64();
+        out["dataset"] = json!({
+            "size": dataset_size,
+            "base_samples": specs.len(),
+            "images": data.len(),
+            "lights": config.lights.len(),
+            "crops": config.crops,
+            "threads": threads,
+            "seconds": secs,
+        });
+    }
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -772,15 +592,18 @@ mod tests {
     #[test]
     fn the_default_options_give_the_shipped_settings() {
         let d = BuildConfig::default();
-        assert_eq!(config(d.dataset.per_model, d.dataset.size, true), d);
+        assert_eq!(
+            BuildConfig::sized(d.dataset.per_model, d.dataset.size, true),
+            d
+        );
     }
 
     #[test]
     fn the_window_follows_the_image_size() {
-        let c = config(24, 256, true);
+        let c = BuildConfig::sized(24, 256, true);
         assert_eq!((c.dataset.size, c.index.pcn.side), (256, 256));
         assert_eq!(c.index.pcn.texture_side, 512);
-        let c = config(24, 64, false);
+        let c = BuildConfig::sized(24, 64, false);
         assert_eq!((c.index.pcn.side, c.index.pcn.texture_side), (64, 0));
         // With other index settings too, unless they name the window.
         let c = bench_config(24, 256, true, Some(r#"{"c_model": 1}"#)).unwrap();

@@ -158,7 +158,7 @@ pub fn run(
     export: Option<&str>,
 ) -> Result<(), String> {
     let budget = if quick { Budget::Quick } else { Budget::Paper };
-    let threads = super::threads(threads)?;
+    let threads = crate::cmd::threads(threads)?;
     let wanted: Option<Vec<&str>> = only.map(|s| s.split(',').map(str::trim).collect());
     let mut fits = vec![];
     if !speed_only {
