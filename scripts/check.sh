@@ -49,11 +49,22 @@ index_check=$!
 # If a step below fails, the rebuild stops too.
 trap 'pkill -f filigree-index-check 2>/dev/null || true' EXIT
 
-step "cargo test"
+# The release wasm build (one module per tool, and the test-hooks Inspect
+# module) runs beside `cargo test`: they share no build directory, and each
+# leaves a core idle for long stretches (the modules' single-threaded LTO
+# links; the tests' links and single-threaded test binaries), so together
+# they take less than one after the other.
+step "cargo test, beside the release wasm build (one module per tool)"
+FILIGREE_TEST_HOOKS=1 bash scripts/build.sh > target/wasm-build.log 2>&1 &   # pkg/ and the test-only pkg-test/
+wasm_build=$!
+trap 'pkill -f filigree-index-check 2>/dev/null || true; kill "$wasm_build" 2>/dev/null || true' EXIT
 cargo test
-
-step "release wasm build: one module per tool (and the test-hooks Inspect module)"
-FILIGREE_TEST_HOOKS=1 bash scripts/build.sh   # pkg/ and the test-only pkg-test/
+step "the release wasm build (started beside cargo test) has ended"
+if ! wait "$wasm_build"; then
+  cat target/wasm-build.log
+  exit 1
+fi
+cat target/wasm-build.log
 
 # The rebuild gets both cores for what is left of it before the browser
 # tests start: left running beside them, it doubled their time (nice 19 did
