@@ -589,8 +589,26 @@ fn ms_per(n: usize, f: impl FnMut()) -> f64 {
     timed(n, f).0
 }
 
-/// (c) Table 3: reconstruction per problem × optimiser × seed.
+/// (c) Table 3: reconstruction per problem × optimiser × seed; `quick`:
+/// gyroid 1D and spheres 2D, one seed, budget 300.
 pub fn table3(quick: bool, seeds: u64, threads: usize) -> Result<Value, String> {
+    if quick {
+        table3_of(&["gyroid-1d", "spheres-2d"], 300, false, 1, threads)
+    } else {
+        table3_of(&[], 1500, true, seeds.max(1), threads)
+    }
+}
+
+/// [`table3`] for the problems named in `only` (all when empty), each fit
+/// within `budget` evaluations (coarse to fine with its own larger budget
+/// when `c2f_budgets`), over seeds `1..=seeds`.
+fn table3_of(
+    only: &[&str],
+    budget: u32,
+    c2f_budgets: bool,
+    seeds: u64,
+    threads: usize,
+) -> Result<Value, String> {
     use filigree::micro::fit::{fourier_loss, Fourier};
     // What one loss evaluation costs at 32³, split in its two parts.
     let n = 32;
@@ -616,11 +634,9 @@ pub fn table3(quick: bool, seeds: u64, threads: usize) -> Result<Value, String> 
         }
         std::hint::black_box(s);
     });
-    let budget = if quick { 300 } else { 1500 };
-    let seeds = if quick { 1 } else { seeds.max(1) };
     let mut rows = vec![];
     for (name, start, target, params, truth, c, half) in problems() {
-        if quick && !matches!(name, "gyroid-1d" | "spheres-2d") {
+        if !only.is_empty() && !only.contains(&name) {
             continue;
         }
         let paper = TABLE3.iter().find(|r| r.0 == name).map(|r| r.1);
@@ -648,7 +664,7 @@ pub fn table3(quick: bool, seeds: u64, threads: usize) -> Result<Value, String> 
             [Optimizer::Cmaes, Optimizer::NelderMead, Optimizer::Powell].map(|o| (o, c))
         });
         for (opt, coarse_to_fine) in combos {
-            let budget = if coarse_to_fine && !quick {
+            let budget = if coarse_to_fine && c2f_budgets {
                 c2f_budget(name)
             } else {
                 budget
@@ -1067,6 +1083,51 @@ mod legacy {
                 count += w;
             }
             Ok(libm::log(s / (2.0 * f64::max(count, 1.0)) + 1e-12))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fast check of `bench micro`'s Table 3 (the table itself, a
+    /// minute even with `--quick`, is the benchmark's): for one problem on a
+    /// tiny budget, a row per optimiser with and without coarse to fine,
+    /// each within its budget, beside the paper's cells.
+    #[test]
+    fn table_3_has_a_row_per_optimiser_within_its_budget() {
+        let t = table3_of(&["gyroid-1d"], 30, false, 1, 1).unwrap();
+        assert_eq!(t["grid"], "32^3");
+        let rows = t["rows"].as_array().unwrap();
+        assert_eq!(rows.len(), 1);
+        assert_eq!(rows[0]["problem"], "gyroid-1d");
+        assert!(rows[0]["paper"]["CMA-ES-SDF"].is_object());
+        let ours = rows[0]["ours"].as_array().unwrap();
+        let kinds: Vec<(String, bool)> = ours
+            .iter()
+            .map(|o| {
+                (
+                    o["optimizer"].as_str().unwrap().to_string(),
+                    o["coarse_to_fine"].as_bool().unwrap(),
+                )
+            })
+            .collect();
+        assert_eq!(kinds.len(), 6, "{kinds:?}");
+        for c2f in [false, true] {
+            for opt in ["cmaes", "nelder-mead", "powell"] {
+                assert!(
+                    kinds.contains(&(opt.to_string(), c2f)),
+                    "{opt} {c2f}: {kinds:?}"
+                );
+            }
+        }
+        for o in ours {
+            assert_eq!(o["budget"], 30);
+            let evals = o["median_evaluations"].as_f64().unwrap();
+            assert!(evals > 0.0 && evals <= 30.0, "{o}");
+            assert!(o["median_validation"].as_f64().unwrap().is_finite());
+            assert_eq!(o["runs"].as_array().unwrap().len(), 1);
         }
     }
 }
