@@ -30,13 +30,16 @@ export function applyDelta(base, d) {
   };
   const nRings = B.rings.length + A.rings.length;
   const rings = new Uint32Array(nRings);
-  let nPts = bpts.length + apts.length;
+  const nPts = bpts.length + apts.length;
   const oldOf = new Int32Array(n).fill(-1);
   const added = new Int32Array(A.count);
   const removed = new Int32Array(gone.length);
   // The shapes in key order: the base's (bar the removed) and the added, merged.
   let at = 0, ring = 0, pt = 0, g = 0, a = 0;
   const pts = new Float32Array(nPts);
+  // Points are copied a run at a time: consecutive shapes of one answer lie end to end.
+  let run = null; // {src, a, b, at}: src[a, b) goes to pts[at]
+  const flush = () => { if (run) pts.set(run.src.subarray(run.a, run.b), run.at); run = null; };
   const copy = (C, cp, j) => {
     S.key[at] = C.key[j]; S.tag[at] = C.tag[j]; S.group[at] = C.group[j]; S.id[at] = C.id[j];
     S.fill[at] = C.fill[j]; S.flags[at] = C.flags[j];
@@ -44,7 +47,9 @@ export function applyDelta(base, d) {
     let len = 0;
     for (let q = C.ringFirst[j]; q < C.ringFirst[j + 1]; q++) { rings[ring++] = C.rings[q]; len += C.rings[q]; }
     S.first[at] = pt / 2;
-    pts.set(cp.subarray(2 * C.first[j], 2 * (C.first[j] + len)), pt);
+    const from = 2 * C.first[j];
+    if (run && run.src === cp && run.b === from) run.b += 2 * len;
+    else { flush(); run = { src: cp, a: from, b: from + 2 * len, at: pt }; }
     pt += 2 * len;
     at++;
   };
@@ -57,6 +62,7 @@ export function applyDelta(base, d) {
     oldOf[at] = j;
     copy(B, bpts, j);
   }
+  flush();
   if (at !== n || g !== gone.length) throw new Error('a delta that does not fit its base');
   S.ringFirst[n] = ring;
   S.rings = ring === nRings ? rings : rings.subarray(0, ring);
