@@ -161,7 +161,9 @@ fn edit_row(
         }
         let (_, again, _) = timed(edited.clone())?;
         // The same edit answered as the page asks for it: a delta against the
-        // answer it shows (the unedited tangle, kept again first).
+        // answer it shows (the unedited tangle, kept again first; the edited
+        // snapshots forgotten, so the edit regrows its subtree as above).
+        forget_kept_edits();
         timed(doc.clone())?;
         let (d, delta, _) = timed(TangleRequest {
             base: Some(answer_id(&doc)),
