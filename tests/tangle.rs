@@ -647,3 +647,266 @@ fn an_edit_with_a_nan_value_says_so() {
         "{e}"
     );
 }
+
+/// `base` with delta `d` applied as the page applies it
+/// (`www/tangle/delta.js`): the base's shapes without the removed keys,
+/// plus the added shapes, in key order; points laid out again; every
+/// shape's `born`/`died` read from the steps.
+fn apply_delta(base: &TangleResponse, d: &TangleResponse) -> TangleResponse {
+    assert_eq!(
+        d.base.as_deref(),
+        Some(base.answer.as_str()),
+        "a delta of this base"
+    );
+    let gone: std::collections::HashSet<u32> = d.removed.iter().copied().collect();
+    assert_eq!(gone.len(), d.removed.len(), "each key removed once");
+    let points_of = |r: &TangleResponse, i: usize| {
+        let s = &r.shapes[i];
+        let n: u32 = s.rings.iter().sum();
+        r.points[2 * s.first as usize..2 * (s.first + n) as usize].to_vec()
+    };
+    let mut all: Vec<(filigree::tangle::api::ShapeOut, Vec<f32>)> = vec![];
+    for (i, s) in base.shapes.iter().enumerate() {
+        if !gone.contains(&s.key) {
+            all.push((s.clone(), points_of(base, i)));
+        }
+    }
+    for (i, s) in d.shapes.iter().enumerate() {
+        all.push((s.clone(), points_of(d, i)));
+    }
+    all.sort_by_key(|(s, _)| s.key);
+    assert!(
+        all.windows(2).all(|w| w[0].0.key < w[1].0.key),
+        "keys are unique"
+    );
+    let mut points = vec![];
+    let mut shapes = vec![];
+    for (mut s, p) in all {
+        s.first = (points.len() / 2) as u32;
+        (s.born, s.died) = (-1, -1);
+        points.extend(p);
+        shapes.push(s);
+    }
+    for (k, st) in d.steps.iter().enumerate() {
+        for &o in &st.outputs {
+            shapes[o as usize].born = k as i64;
+        }
+        for &i in &st.inputs {
+            shapes[i as usize].died = k as i64;
+        }
+    }
+    TangleResponse {
+        base: None,
+        removed: vec![],
+        dirty: None,
+        shapes,
+        points,
+        ..d.clone()
+    }
+}
+
+/// Answers that name the answer the page holds (`base`): where the
+/// instance kept that answer's expansion, the answer is a delta, and the
+/// base with the delta applied is exactly the full answer a fresh replay
+/// gives (shapes column by column, points, steps, exports), over several
+/// grammars and edit sessions (new edits, a drag replacing the last edit,
+/// re-draws, undo and redo, the same request again); where it did not (a
+/// fresh instance, an unknown id, another document), the answer is in full
+/// and equal to the fresh one. An edit's delta is a small part of the
+/// answer, and its dirty box holds every removed and added shape.
+#[test]
+fn a_delta_applied_to_its_base_is_the_full_answer() {
+    use filigree::tangle::api::{answer_id, forget_kept};
+    for name in ["leaf", "checkerboard", "pebbles", "streamlines"] {
+        forget_kept();
+        let g = example(name).unwrap().grammar;
+        let doc = req(g);
+        let first = run(TangleRequest {
+            keep: true,
+            ..doc.clone()
+        });
+        assert_eq!(first.base, None, "{name}: nothing held yet: in full");
+        assert_eq!(first.answer, answer_id(&doc));
+        let with: Vec<usize> = (0..first.steps.len())
+            .filter(|&k| !first.steps[k].params.is_empty())
+            .collect();
+        assert!(with.len() >= 2, "{name}: steps with parameters");
+        let p = |k: usize, f: f64| {
+            let q = &first.steps[k].params[0];
+            let v = (q.value * f).clamp(q.min, q.max);
+            let v = if q.integer { v.round() } else { v };
+            Edit {
+                step: k,
+                params: BTreeMap::from([(q.name.to_string(), v)]),
+            }
+        };
+        let reroll = |k: usize| Edit {
+            step: k,
+            params: BTreeMap::new(),
+        };
+        let (a, b) = (with[with.len() - 1], with[with.len() / 2]);
+        // Each document of the session after the one before (the page's base).
+        let session: Vec<Vec<Edit>> = vec![
+            vec![p(a, 0.7)],                        // an edit
+            vec![p(a, 0.75)],                       // dragged: the last edit replaced
+            vec![p(a, 0.75), p(b, 1.2)],            // another edit
+            vec![p(a, 0.75)],                       // undo
+            vec![p(a, 0.75), p(b, 1.2)],            // redo
+            vec![p(a, 0.75), p(b, 1.2)],            // the same again (an export)
+            vec![p(a, 0.75), p(b, 1.2), reroll(a)], // a re-draw
+            vec![],                                 // undo to the start
+        ];
+        let mut held = first.clone();
+        let mut deltas = 0;
+        for (round, edits) in session.into_iter().enumerate() {
+            let r = TangleRequest {
+                edits,
+                export: if round == 5 {
+                    ExportFormat::Svg
+                } else {
+                    ExportFormat::None
+                },
+                ..doc.clone()
+            };
+            let full = run(r.clone());
+            let got = run(TangleRequest {
+                keep: true,
+                base: Some(held.answer.clone()),
+                ..r.clone()
+            });
+            assert_eq!(got.answer, full.answer, "{name} round {round}");
+            let Some(_) = got.base else {
+                panic!("{name} round {round}: the instance holds the base, yet answered in full");
+            };
+            deltas += 1;
+            let applied = apply_delta(&held, &got);
+            assert_eq!(applied, full, "{name} round {round}");
+            if round == 5 {
+                assert!(
+                    got.shapes.is_empty() && got.removed.is_empty(),
+                    "{name}: nothing changed"
+                );
+                assert_eq!(got.dirty, None);
+            } else if round < 5 {
+                assert!(
+                    got.shapes.len() < full.shapes.len(),
+                    "{name} round {round}: the delta adds {} of {} shapes",
+                    got.shapes.len(),
+                    full.shapes.len()
+                );
+            }
+            // The dirty box holds every removed and added shape.
+            if let Some([x0, y0, x1, y1]) = got.dirty {
+                let inside = |q: &Polygon| {
+                    let (lo, hi) = q.bbox();
+                    let e = 1e-3;
+                    lo.x >= x0 - e && lo.y >= y0 - e && hi.x <= x1 + e && hi.y <= y1 + e
+                };
+                for i in 0..got.shapes.len() {
+                    assert!(
+                        inside(&poly(&got, i)),
+                        "{name} round {round}: added shape {i}"
+                    );
+                }
+                for (i, s) in held.shapes.iter().enumerate() {
+                    if got.removed.contains(&s.key) {
+                        assert!(
+                            inside(&poly(&held, i)),
+                            "{name} round {round}: removed key {}",
+                            s.key
+                        );
+                    }
+                }
+            } else {
+                assert!(got.shapes.is_empty() && got.removed.is_empty());
+            }
+            held = applied;
+        }
+        assert_eq!(deltas, 8);
+        // An instance that does not hold the base (a fresh worker) answers in full.
+        let edits = vec![p(a, 0.6)];
+        let full = run(TangleRequest {
+            edits: edits.clone(),
+            ..doc.clone()
+        });
+        forget_kept();
+        let got = run(TangleRequest {
+            keep: true,
+            base: Some(held.answer.clone()),
+            edits: edits.clone(),
+            ..doc.clone()
+        });
+        assert_eq!(got.base, None, "{name}: base not held: in full");
+        assert_eq!(got, full, "{name}: the full answer is the fresh one");
+        // An id no answer has, and another document's answer: in full.
+        for base in ["0123".to_string(), first_answer_of_seed(g, 7)] {
+            let got = run(TangleRequest {
+                keep: true,
+                base: Some(base),
+                edits: edits.clone(),
+                ..doc.clone()
+            });
+            assert_eq!(got.base, None, "{name}");
+            assert_eq!(got, full, "{name}");
+        }
+        // Without `keep` a base is not read.
+        let got = run(TangleRequest {
+            base: Some(full.answer.clone()),
+            edits,
+            ..doc.clone()
+        });
+        assert_eq!(got.base, None);
+    }
+    forget_kept();
+}
+
+fn first_answer_of_seed(g: &str, seed: u64) -> String {
+    filigree::tangle::api::answer_id(&TangleRequest { seed, ..req(g) })
+}
+
+/// The grammar is parsed once per text: an edit of a kept expansion and a
+/// new seed or wobble of the same grammar parse nothing; another grammar
+/// text is parsed.
+#[test]
+fn a_kept_grammar_is_not_parsed_again() {
+    use filigree::tangle::api::{forget_kept, grammar_parses};
+    forget_kept();
+    let g = example("leaf").unwrap().grammar;
+    let doc = TangleRequest {
+        keep: true,
+        ..req(g)
+    };
+    let r = run(doc.clone());
+    let parses = grammar_parses();
+    let k = (0..r.steps.len())
+        .find(|&k| r.steps[k].operator == "outline")
+        .unwrap();
+    for d in [3.0, 4.0, 5.0] {
+        run(TangleRequest {
+            edits: vec![Edit {
+                step: k,
+                params: BTreeMap::from([("distance".to_string(), d)]),
+            }],
+            ..doc.clone()
+        });
+    }
+    run(TangleRequest {
+        seed: 5,
+        ..doc.clone()
+    });
+    run(TangleRequest {
+        wobble: 2.0,
+        ..doc.clone()
+    });
+    assert_eq!(
+        grammar_parses(),
+        parses,
+        "the same text is not parsed again"
+    );
+    run(TangleRequest {
+        keep: true,
+        ..req(example("pebbles").unwrap().grammar)
+    });
+    assert_eq!(grammar_parses(), parses + 1, "another text is parsed");
+    forget_kept();
+}

@@ -4,7 +4,9 @@
 //! splits and outlines done with shapely/GEOS in the same run as a
 //! baseline (`scripts/tangle_shapely_baseline.py`).
 use filigree::core::job::{run_to_end, Cancel};
-use filigree::tangle::api::{forget_kept_edits, start_tangle, Edit, TangleRequest, TangleResponse};
+use filigree::tangle::api::{
+    answer_id, forget_kept_edits, start_tangle, Edit, TangleRequest, TangleResponse,
+};
 use filigree::tangle::examples::EXAMPLES;
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -59,6 +61,20 @@ fn subtree(r: &TangleResponse, s: usize) -> usize {
     made.len()
 }
 
+/// Bytes of an answer's typed arrays as the worker sends them (shape
+/// columns, points, removed keys, the steps' indices), as the latency
+/// bench's `answerBytes` counts them in the page.
+fn answer_bytes(r: &TangleResponse) -> usize {
+    let rings: usize = r.shapes.iter().map(|s| s.rings.len()).sum();
+    let columns = r.shapes.len() * (4 * 8 + 1) + 4 * (r.shapes.len() + 1) + 4 * rings;
+    let steps: usize = r
+        .steps
+        .iter()
+        .map(|s| 4 * (s.inputs.len() + s.outputs.len()))
+        .sum();
+    columns + 4 * r.points.len() + 4 * r.removed.len() + steps
+}
+
 /// Seconds of wall clock and of this thread's CPU time.
 #[derive(Clone, Copy)]
 struct Secs {
@@ -109,6 +125,8 @@ fn edit_row(
     let p = &base.steps[step].params[0];
     let mut secs = (vec![], vec![], vec![]);
     let mut drags = (vec![], vec![]);
+    let mut deltas = vec![];
+    let mut bytes = (0, 0, 0, 0);
     for rep in 0..repeats.max(1) {
         let value = (p.value * (0.8 + 0.05 * rep as f64)).clamp(p.min, p.max);
         let edit = Edit {
@@ -142,6 +160,25 @@ fn edit_row(
             drags.1.push(timed(second(1.14))?.1);
         }
         let (_, again, _) = timed(edited.clone())?;
+        // The same edit answered as the page asks for it: a delta against the
+        // answer it shows (the unedited tangle, kept again first; the edited
+        // snapshots forgotten, so the edit regrows its subtree as above).
+        forget_kept_edits();
+        timed(doc.clone())?;
+        let (d, delta, _) = timed(TangleRequest {
+            base: Some(answer_id(&doc)),
+            ..edited.clone()
+        })?;
+        if d.base.is_none() {
+            return Err(format!("{name}: the edit was not answered with a delta"));
+        }
+        deltas.push(delta);
+        bytes = (
+            answer_bytes(&r1),
+            answer_bytes(&d),
+            d.shapes.len(),
+            d.removed.len(),
+        );
         let (_, scratch, _) = timed(TangleRequest {
             keep: false,
             ..edited
@@ -169,6 +206,9 @@ fn edit_row(
         "subtree_shapes": size,
         "shapes_in_answer": base.shapes.len(),
         "kept_edit_seconds": mm(secs.0),
+        "kept_edit_delta_seconds": mm(deltas),
+        "answer_bytes": {"full": bytes.0, "delta": bytes.1},
+        "delta_shapes": {"added": bytes.2, "removed": bytes.3},
         "answer_only_seconds": mm(secs.1),
         "scratch_edit_seconds": mm(secs.2),
         "speedup_kept_vs_scratch": scratch_min / kept_min,

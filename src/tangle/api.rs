@@ -7,8 +7,17 @@
 //! and the user's edits in order (re-expand step N; set step N's
 //! parameters). The core replays them, so the page keeps no tangle state of
 //! its own and the same request gives the same bytes anywhere.
+//!
+//! Every answer has an id (`answer`: a hash of the document and its edits,
+//! so equal requests give equal ids anywhere). A `keep` request may name
+//! the answer the page holds (`base`); an instance that kept the expansion
+//! of exactly that answer sends only what changed against it (the answer's
+//! `base` is then set): the keys of the base's shapes that are gone, the
+//! shapes that are new, and the box around both. Any other instance
+//! answers in full (`base: null`). Applied to the base, a delta gives
+//! exactly the full answer (`tests/tangle.rs`, `www/tangle/delta.js`).
 use super::ast::{CurveDef, Def, DefKind, Grammar, Param, StartShape};
-use super::expand::{Ending, Expansion, Progress as Advance, Settings};
+use super::expand::{Ending, Expansion, Progress as Advance, Record, Settings};
 use super::{export, grammar, Shape, MAX_START_SIDE};
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
@@ -17,6 +26,7 @@ use crate::tangle::geom::polygon::Polygon;
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
 
 /// Start shapes given by the request instead of the grammar's `start`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -95,6 +105,10 @@ pub struct TangleRequest {
     /// replays its new edits: editing a step redoes that step's subtree,
     /// not the whole tangle. The answer is the same either way.
     pub keep: bool,
+    /// With `keep`: the id (`TangleResponse::answer`) of the answer the
+    /// sender holds. An instance that kept that answer's expansion answers
+    /// with what changed against it; any other answers in full.
+    pub base: Option<String>,
 }
 
 impl Default for TangleRequest {
@@ -113,6 +127,7 @@ impl Default for TangleRequest {
             stroke_width: 1.0,
             png_width: 1600,
             keep: false,
+            base: None,
         }
     }
 }
@@ -127,6 +142,10 @@ pub const MAX_START_POINTS: usize = 200_000;
 /// this shape's rings follow each other from point `first`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ShapeOut {
+    /// Its key: the same shape has the same key in every answer of the
+    /// same document (its record's index in the expansion); a delta names
+    /// the shapes it removes by key, and the shapes are in key order.
+    pub key: u32,
     pub tag: u32,
     pub group: u32,
     pub id: u32,
@@ -174,15 +193,35 @@ pub struct TangleStats {
 }
 
 /// The answer of `tangle`: every shape ever made (with the steps that made
-/// and consumed it, so any step can be shown) and the history.
+/// and consumed it, so any step can be shown) and the history; or, when
+/// `base` is set, what changed against the answer `base`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TangleResponse {
+    /// This answer's id: a hash of the document and its edits (equal
+    /// requests, equal ids, anywhere). A later request names it as `base`.
+    pub answer: String,
+    /// `None`: a full answer. `Some(id)`: a delta against the answer `id`:
+    /// `shapes` and `points` hold only the shapes added (or changed), and
+    /// `removed` the keys of the base's shapes that are gone (or changed).
+    /// Everything else (tags, steps, bounds, stats, exports) is in full;
+    /// the steps' indices are into the full answer's shapes (the base's
+    /// kept shapes and the added ones, in key order), and the kept shapes'
+    /// `born`/`died` are read from the steps (a step's outputs were born at
+    /// it, its inputs died at it).
+    pub base: Option<String>,
+    /// Keys of the base's shapes that are gone (a delta; empty in full),
+    /// sent as the little-endian bytes of the u32s.
+    #[serde(serialize_with = "u32_bytes")]
+    pub removed: Vec<u32>,
+    /// `[x0, y0, x1, y1]` around the removed and added shapes (a delta;
+    /// `None` in full, or when nothing changed): where the picture may differ.
+    pub dirty: Option<[f64; 4]>,
     pub tags: Vec<String>,
     /// Sent as columns of little-endian bytes (see [`shape_columns`]): a
     /// village's 36k shapes as 36k JS objects cost the browser ~0.5 s.
     #[serde(serialize_with = "shape_columns")]
     pub shapes: Vec<ShapeOut>,
-    /// x, y of every shape's rings, in order. Sent as the bytes of the
+    /// x, y of every shape's rings (a delta: the added ones'), in order. Sent as the bytes of the
     /// f32s, little-endian (the browser gets a `Uint8Array` it views as a
     /// `Float32Array`, transferred, not a 300k-element JS array).
     #[serde(serialize_with = "f32_bytes")]
@@ -200,7 +239,7 @@ pub struct TangleResponse {
 }
 
 /// The shapes as columns, each the little-endian bytes of one typed
-/// array: `count`; `tag`, `group`, `id`, `first` (u32); `born`, `died`
+/// array: `count`; `key`, `tag`, `group`, `id`, `first` (u32); `born`, `died`
 /// (i32); `fill` (f32); `flags` (u8: 1 white lines, 2 mark);
 /// `ring_first` (u32, count + 1 entries: shape i's ring lengths are
 /// `rings[ring_first[i]..ring_first[i + 1]]`) and `rings` (u32).
@@ -231,8 +270,9 @@ fn shape_columns<S: serde::Serializer>(
         }
     }
     ring_first.extend(at.to_le_bytes());
-    let mut m = s.serialize_map(Some(11))?;
+    let mut m = s.serialize_map(Some(12))?;
     m.serialize_entry("count", &v.len())?;
+    m.serialize_entry("key", &col(v, |x| x.key))?;
     m.serialize_entry("tag", &col(v, |x| x.tag))?;
     m.serialize_entry("group", &col(v, |x| x.group))?;
     m.serialize_entry("id", &col(v, |x| x.id))?;
@@ -297,8 +337,8 @@ mod opt_bytes {
 pub const WOBBLE: (f64, f64) = (0.0, 50.0);
 pub const STROKE_WIDTH: (f64, f64) = (0.0, 100.0);
 
-/// Check the request's settings and parse its grammar.
-fn check(req: &TangleRequest) -> Result<(Grammar, Settings)> {
+/// Check the request's settings.
+fn check(req: &TangleRequest) -> Result<Settings> {
     lim::int_in("max_steps", req.max_steps, (1, MAX_STEPS))?;
     lim::int_in("max_shapes", req.max_shapes, (1, MAX_SHAPES))?;
     lim::finite_in("resolution", req.resolution, (0.25, 100.0))?;
@@ -313,18 +353,52 @@ fn check(req: &TangleRequest) -> Result<(Grammar, Settings)> {
         ))
         .at("edits"));
     }
-    let g = grammar::parse(&req.grammar).map_err(|e| e.at("grammar"))?;
-    Ok((
-        g,
-        Settings {
-            seed: req.seed,
-            max_steps: req.max_steps,
-            max_shapes: req.max_shapes,
-            resolution: req.resolution,
-            wobble: req.wobble,
-            wavelength: req.wavelength,
-        },
-    ))
+    Ok(Settings {
+        seed: req.seed,
+        max_steps: req.max_steps,
+        max_shapes: req.max_shapes,
+        resolution: req.resolution,
+        wobble: req.wobble,
+        wavelength: req.wavelength,
+    })
+}
+
+thread_local! {
+    /// The grammar text of the last `keep` request and its parse (SVG
+    /// curves flattened): a new seed or wobble of the same grammar does
+    /// not parse it again.
+    static PARSED: std::cell::RefCell<Option<(String, Grammar)>> = const { std::cell::RefCell::new(None) };
+    /// Grammars parsed by this instance (tests).
+    static PARSES: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// The request's grammar, parsed and its SVG curves flattened; with
+/// `cache` (a `keep` request), the last one is reused when the text is
+/// the same and kept for the next one.
+fn parse_grammar(text: &str, cache: bool) -> Result<Grammar> {
+    if cache {
+        let hit = PARSED.with_borrow(|p| {
+            p.as_ref()
+                .filter(|(t, _)| t == text)
+                .map(|(_, g)| g.clone())
+        });
+        if let Some(g) = hit {
+            return Ok(g);
+        }
+    }
+    PARSES.set(PARSES.get() + 1);
+    let mut g = grammar::parse(text).map_err(|e| e.at("grammar"))?;
+    flatten_svg_defs(&mut g)?;
+    if cache {
+        PARSED.with_borrow_mut(|p| *p = Some((text.to_string(), g.clone())));
+    }
+    Ok(g)
+}
+
+/// How many grammar texts this instance (thread) has parsed (tests: an
+/// edit, or a new seed of the same grammar, parses none).
+pub fn grammar_parses() -> u64 {
+    PARSES.get()
 }
 
 /// Refuses start shapes of more than [`MAX_START_POINTS`] points.
@@ -526,9 +600,23 @@ fn motifs(g: &Grammar) -> HashMap<String, Polygon> {
 struct Kept {
     /// The request, with what does not change the expansion cleared.
     document: TangleRequest,
-    /// `(edits, expansion after them)`, least recently used first; the one
-    /// without edits is never dropped.
-    snapshots: Vec<(Vec<Edit>, Expansion)>,
+    /// Least recently used first; the one without edits is never dropped.
+    snapshots: Vec<Snapshot>,
+}
+
+/// An expansion after some of a document's edits.
+struct Snapshot {
+    edits: Vec<Edit>,
+    x: Expansion,
+    /// The id of its answer ([`answer_id`]).
+    id: String,
+}
+
+impl Snapshot {
+    fn new(document: &TangleRequest, edits: Vec<Edit>, x: Expansion) -> Snapshot {
+        let id = id_of(document, &edits);
+        Snapshot { edits, x, id }
+    }
 }
 
 /// Snapshots kept besides the unedited expansion.
@@ -546,8 +634,28 @@ fn document_of(req: &TangleRequest) -> TangleRequest {
         stroke_width: 0.0,
         png_width: 1,
         keep: false,
+        base: None,
         ..req.clone()
     }
+}
+
+/// The id of the answer of `document` (from [`document_of`]) after
+/// `edits`: FNV-1a (128 bits) of their `Debug` text, which is the same on
+/// every platform.
+fn id_of(document: &TangleRequest, edits: &[Edit]) -> String {
+    let text = format!("{:?}", (document, edits));
+    let mut h: u128 = 0x6c62_272e_07bb_0142_62b8_2175_6295_c58d;
+    for b in text.bytes() {
+        h ^= u128::from(b);
+        h = h.wrapping_mul(0x0000_0000_0100_0000_0000_0000_0000_013b);
+    }
+    format!("{h:032x}")
+}
+
+/// The id of `req`'s answer (`TangleResponse::answer`): equal for requests
+/// that grow the same tangle, whatever they export.
+pub fn answer_id(req: &TangleRequest) -> String {
+    id_of(&document_of(req), &req.edits)
 }
 
 /// A kept expansion for `req` and how many of its edits it has done, if
@@ -558,13 +666,13 @@ fn take_kept(req: &TangleRequest) -> Option<(Expansion, usize)> {
     KEPT.with_borrow_mut(|kept| {
         let k = kept.as_mut().filter(|k| k.document == document_of(req))?;
         let best = (0..k.snapshots.len())
-            .filter(|&i| req.edits.starts_with(&k.snapshots[i].0))
-            .max_by_key(|&i| k.snapshots[i].0.len())?;
-        let done = k.snapshots[best].0.len();
+            .filter(|&i| req.edits.starts_with(&k.snapshots[i].edits))
+            .max_by_key(|&i| k.snapshots[i].edits.len())?;
+        let done = k.snapshots[best].edits.len();
         if done == req.edits.len() {
-            return Some((k.snapshots.remove(best).1, done));
+            return Some((k.snapshots.remove(best).x, done));
         }
-        Some((k.snapshots[best].1.clone(), done))
+        Some((k.snapshots[best].x.clone(), done))
     })
 }
 
@@ -579,7 +687,7 @@ pub fn forget_kept() {
 pub fn forget_kept_edits() {
     KEPT.with_borrow_mut(|k| {
         if let Some(k) = k.as_mut() {
-            k.snapshots.retain(|(e, _)| e.is_empty());
+            k.snapshots.retain(|s| s.edits.is_empty());
         }
     });
 }
@@ -602,12 +710,13 @@ pub struct TangleJob {
 
 /// Check a `tangle` request and set its expansion up.
 pub fn start_tangle(req: TangleRequest) -> Result<TangleJob> {
-    let (mut g, settings) = check(&req)?;
+    let settings = check(&req)?;
     let kept = if req.keep { take_kept(&req) } else { None };
     let (x, done, reused) = match kept {
+        // The kept expansion holds its grammar: nothing is parsed.
         Some((x, done)) => (x, done, true),
         None => {
-            flatten_svg_defs(&mut g)?;
+            let g = parse_grammar(&req.grammar, req.keep)?;
             let start = start_shapes(&req, &g)?;
             let m = motifs(&g);
             (Expansion::new(g, start, m, settings)?, 0, false)
@@ -695,6 +804,26 @@ impl TangleJob {
         Ok(true)
     }
 
+    /// The answer for the grown expansion `x`: a delta against the
+    /// request's `base` when this instance holds that answer's expansion
+    /// (or `x` is it), else in full.
+    fn answer(&self, x: &Expansion) -> Result<TangleResponse> {
+        let id = answer_id(&self.req);
+        let Some(base) = self.req.base.as_deref().filter(|_| self.req.keep) else {
+            return answer(x, &self.req, id, None);
+        };
+        if base == id {
+            return answer(x, &self.req, id, Some((x, base)));
+        }
+        KEPT.with_borrow(|kept| {
+            let held = kept
+                .as_ref()
+                .filter(|k| k.document == document_of(&self.req))
+                .and_then(|k| k.snapshots.iter().find(|s| s.id == base));
+            answer(x, &self.req, id, held.map(|s| (&s.x, base)))
+        })
+    }
+
     /// Leave the expansion `x` (and the snapshots saved on the way) in the
     /// instance for the next `keep` request.
     fn keep(&mut self, x: Expansion) {
@@ -716,11 +845,11 @@ impl TangleJob {
             }
             let Some(k) = kept.as_mut() else { return };
             for (edits, x) in add {
-                k.snapshots.retain(|(e, _)| *e != edits);
-                k.snapshots.push((edits, x));
+                k.snapshots.retain(|s| s.edits != edits);
+                k.snapshots.push(Snapshot::new(&k.document, edits, x));
             }
             while k.snapshots.len() > EDITED_SNAPSHOTS + 1 {
-                let Some(i) = k.snapshots.iter().position(|(e, _)| !e.is_empty()) else {
+                let Some(i) = k.snapshots.iter().position(|s| !s.edits.is_empty()) else {
                     break;
                 };
                 k.snapshots.remove(i);
@@ -743,7 +872,7 @@ impl Job for TangleJob {
                     if self.next_edit(&mut x)? {
                         continue;
                     }
-                    let r = respond(&x, &self.req)?;
+                    let r = self.answer(&x)?;
                     if self.req.keep {
                         self.keep(x);
                     }
@@ -760,21 +889,81 @@ impl Job for TangleJob {
     }
 }
 
-/// The answer for an expansion.
+/// The full answer for an expansion grown for `req`.
 pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
+    answer(x, req, answer_id(req), None)
+}
+
+/// Whether record `r` of `x` is shown exactly as record `b` of `xb`: the
+/// same polygon (shared, not equal: records after the expansions parted
+/// never share one), tag, group, id and ink, and both consumed or neither
+/// (so the final picture differs only where a delta says).
+fn same_shape(xb: &Expansion, b: &Record, x: &Expansion, r: &Record) -> bool {
+    let (p, q) = (&b.shape, &r.shape);
+    Arc::ptr_eq(&p.poly, &q.poly)
+        && p.tag == q.tag
+        && xb.tags.get(p.tag as usize) == x.tags.get(q.tag as usize)
+        && p.group == q.group
+        && p.id == q.id
+        && p.ink == q.ink
+        && b.died.is_some() == r.died.is_some()
+}
+
+/// The answer `id` for an expansion: in full, or with `base` (the base
+/// answer's expansion and id) what changed against it.
+fn answer(
+    x: &Expansion,
+    req: &TangleRequest,
+    id: String,
+    base: Option<(&Expansion, &str)>,
+) -> Result<TangleResponse> {
     let pos: HashMap<u32, usize> = x.steps.iter().enumerate().map(|(k, s)| (s.id, k)).collect();
     let step_pos = |id: Option<u32>| id.and_then(|i| pos.get(&i)).map_or(-1, |&k| k as i64);
     let mut index = vec![u32::MAX; x.records.len()];
-    let mut shapes = Vec::with_capacity(x.records.len());
-    let total: usize = x.records.iter().map(|r| r.shape.poly.vertices()).sum();
-    let mut points = Vec::with_capacity(2 * total);
+    let mut shapes = Vec::with_capacity(if base.is_some() { 64 } else { x.records.len() });
+    let mut points = vec![];
+    if base.is_none() {
+        let total: usize = x.records.iter().map(|r| r.shape.poly.vertices()).sum();
+        points.reserve(2 * total);
+    }
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    for (i, r) in x.records.iter().enumerate() {
-        if x.is_removed(i) {
+    let mut removed = vec![];
+    let (mut dlo, mut dhi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    let mut dirty = |p: &Polygon| {
+        let (a, b) = p.bbox();
+        dlo = dlo.min(a);
+        dhi = dhi.max(b);
+    };
+    let base_len = base.map_or(0, |(b, _)| b.records.len());
+    let mut shown = 0u32;
+    // `i` reads the records of both expansions, which may differ in length.
+    #[allow(clippy::needless_range_loop)]
+    for i in 0..x.records.len().max(base_len) {
+        let here = (i < x.records.len() && !x.is_removed(i)).then(|| &x.records[i]);
+        let before = base
+            .filter(|(b, _)| i < b.records.len() && !b.is_removed(i))
+            .map(|(b, _)| (b, &b.records[i]));
+        let kept = match (here, before) {
+            (Some(r), Some((xb, b))) => same_shape(xb, b, x, r),
+            _ => false,
+        };
+        if let (Some((_, b)), false) = (before, kept) {
+            removed.push(i as u32);
+            dirty(&b.shape.poly);
+        }
+        let Some(r) = here else { continue };
+        index[i] = shown;
+        shown += 1;
+        let s = &r.shape;
+        if kept {
+            let (a, b) = s.poly.bbox();
+            lo = lo.min(a);
+            hi = hi.max(b);
             continue;
         }
-        index[i] = shapes.len() as u32;
-        let s = &r.shape;
+        if base.is_some() {
+            dirty(&s.poly);
+        }
         let first = (points.len() / 2) as u32;
         for ring in &s.poly.rings {
             let at = points.len();
@@ -789,6 +978,7 @@ pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
             }
         }
         shapes.push(ShapeOut {
+            key: i as u32,
             tag: s.tag,
             group: s.group,
             id: s.id,
@@ -837,6 +1027,10 @@ pub fn respond(x: &Expansion, req: &TangleRequest) -> Result<TangleResponse> {
         (lo, hi) = (DVec2::ZERO, DVec2::ZERO);
     }
     Ok(TangleResponse {
+        answer: id,
+        base: base.map(|(_, b)| b.to_string()),
+        removed,
+        dirty: (base.is_some() && dlo.is_finite()).then_some([dlo.x, dlo.y, dhi.x, dhi.y]),
         tags: x.tags.clone(),
         shapes,
         points,

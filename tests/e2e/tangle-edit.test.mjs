@@ -1,7 +1,8 @@
-// Tangle edits on the fast path (issue 10 item 9): while an edit's answer is
-// due the canvas is left as it is; an answer keeps the last answer's
-// unchanged shapes (their Path2Ds, www/tangle/draw.js `prepareTangle(r, prev)`)
-// and the panel repaints only the tiles where the picture changed.
+// Tangle edits on the fast path (issue 10 item 9, issue 33 item 4): while an
+// edit's answer is due the canvas is left as it is; the worker answers with
+// a delta against the answer shown (www/tangle/delta.js applies it; the kept
+// shapes keep their Path2Ds, draw.js `prepareTangle(r, link)`) and the panel
+// repaints only the tiles where the picture changed.
 // Both must give exactly what a fresh answer painted in full gives:
 // - the shapes the panel holds equal a fresh, full expansion's (not kept
 //   by the worker, nothing reused), column by column and point by point;
@@ -79,7 +80,7 @@ const compare = (page) => page.evaluate(async () => {
   const fresh = await window.filigree.doc.current.ctx.run('tangle', requestOf(doc));
   const F = prepareTangle(fresh);
   const mine = t.result();
-  const cols = ['tag', 'group', 'id', 'first', 'born', 'died', 'fill', 'flags', 'ringFirst', 'rings'];
+  const cols = ['key', 'tag', 'group', 'id', 'first', 'born', 'died', 'fill', 'flags', 'ringFirst', 'rings'];
   const sameShapes = mine.shapes.count === F.r.shapes.count
     && cols.every((k) => mine.shapes[k].length === F.r.shapes[k].length && mine.shapes[k].every((x, i) => Object.is(x, F.r.shapes[k][i])))
     && F.pts.length === window.filigree.testHooks.tangle.points().length && F.pts.every((x, i) => Object.is(x, window.filigree.testHooks.tangle.points()[i]))
@@ -103,7 +104,7 @@ const compare = (page) => page.evaluate(async () => {
     return n;
   };
   return {
-    region: timing.region, reused: t.reused(), shapes: mine.shapes.count, sameShapes,
+    answer: timing.answer, region: timing.region, reused: t.reused(), shapes: mine.shapes.count, sameShapes,
     patchedVsFull: diff(patched, full, 100), fullVsFresh: diff(plain, freshPixels, 100),
     antialiasing: [diff(patched, full, 2), diff(plain, freshPixels, 2)],
     pixels: c.width * c.height,
@@ -155,6 +156,7 @@ test('tangle: an edit keeps the unchanged shapes and repaints only where it chan
   assert.equal(st.edits.length, before + 1, 'a drag is one edit');
   assert.notEqual(st.edits.at(-1).params.distance, first, 'the drag changed the value');
   let c = await compare(page);
+  assert.ok(c.answer.delta, 'a drag is answered with a delta');
   assert.ok(c.reused < c.shapes, 'the regrown shapes did not keep their Path2Ds');
   console.log(`drag: repainted ${Math.round(c.region * 100)}% of the canvas, ${c.reused}/${c.shapes} shapes kept; anti-aliasing differences ${c.antialiasing}`);
   assert.ok(c.sameShapes, 'after a drag: the shapes equal a fresh full expansion\'s');
@@ -183,7 +185,27 @@ test('tangle: an edit keeps the unchanged shapes and repaints only where it chan
   await page.click('[data-act=undo]');
   await waitForResult(page, n);
   c = await compare(page);
+  assert.ok(c.answer.delta, 'an undo is answered with a delta');
   assert.ok(c.sameShapes, 'after an undo: the shapes equal a fresh full expansion\'s');
   assert.equal(c.patchedVsFull, 0, 'after an undo: what the panel painted equals a full repaint');
   assert.equal(c.fullVsFresh, 0, 'after an undo: the full repaint equals a fresh answer painted in full');
+});
+
+test('tangle: an edit is answered with a delta, which the page applies: its shapes and canvas equal a fresh full answer\'s', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const first = await page.evaluate(() => window.filigree.testHooks.tangle.timing().answer);
+  assert.equal(first.delta, false, 'the first answer is in full (nothing shown to apply a delta to)');
+  const [, size] = await editDistance(page, 4, 120, 11);
+  const c = await compare(page);
+  console.log(`delta: ${c.answer.added} shapes added, ${c.answer.removed} removed of ${c.shapes}, ${c.answer.bytes} bytes (the full answer: ${first.bytes}); subtree ${size}`);
+  assert.ok(c.answer.delta, 'the edit was answered with a delta');
+  assert.ok(c.answer.added > 0 && c.answer.added < c.shapes / 4, `it adds few of the shapes (${c.answer.added} of ${c.shapes})`);
+  assert.ok(c.answer.removed > 0, 'and removes the old subtree');
+  assert.ok(c.answer.bytes < first.bytes / 2, `it is a small part of a full answer (${c.answer.bytes} of ${first.bytes} bytes)`);
+  assert.ok(Array.isArray(c.answer.dirty) && c.answer.dirty.length === 4, 'it names its dirty box');
+  assert.ok(c.sameShapes, 'the shapes after the delta equal a fresh full answer\'s, column by column and point by point');
+  assert.equal(c.patchedVsFull, 0, 'the partial repaint equals a full repaint');
+  assert.equal(c.fullVsFresh, 0, 'the canvas equals a fresh full answer painted in full');
 });

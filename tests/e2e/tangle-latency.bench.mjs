@@ -15,23 +15,21 @@
 //   step with the largest subtree of ≤ 2,000 shapes): from the slider's
 //   change to the regrown tangle painted (round trip; a released slider runs
 //   at once, no debounce), and the worker's part (`run`: the kept expansion
-//   regrows the subtree, then the whole answer is sent).
+//   regrows the subtree, then the delta against the answer shown is sent).
+//   Each edit's `full` twin, measured in the same run right after it: the
+//   full answer of the same document from the same worker (what the page
+//   gets from a worker that does not hold its answer, and must handle
+//   anyway): its worker round trip, its bytes and the page's preparation of it.
 // - baseline: bench/tangle-baseline.tangle (the grid + outlines `filigree
 //   bench tangle` runs beside shapely/GEOS) grown in the worker, min/median.
 // The floor line is an empty animation frame measured in the same run.
-// Every figure has a `before` twin measured in the same run with the panel's
-// old path switched on (`testHooks.tangle.options.incremental = false`: every
-// repaint redraws the whole canvas, every heavy part gets a bitmap, an edit
-// repaints at once and shows "growing" at once, and an answer keeps nothing
-// of the last one); the worker's side
-// (the core and its answer's format) is the same in both. Round trips are timed in the
+// Round trips are timed in the
 // page (the input event to the end of the frame that paints the answer), not
 // through the test driver. `pan_work_ms` is our JS per pan frame (the
 // handler's bitmap copy), `pan_frame_ms` the frame interval around it.
 // "to frame" figures end with a one-pixel read of the canvas in the frame
 // callback after the panel's paint, so the browser's rasterisation of what
-// the panel drew is inside them (the new path leaves it to the browser; the
-// old one forced it in `paint` by copying the canvas): compare those.
+// the panel drew is inside them.
 import { launch } from './harness.mjs';
 
 const root = process.argv[2];
@@ -96,10 +94,9 @@ const t0 = Date.now();
 await page.click('[data-example=village]');
 await waitForResult(n);
 const growMs = Date.now() - t0;
-async function sliderAndPan(incremental) {
-  return page.evaluate(async (incremental) => {
+async function sliderAndPan() {
+  return page.evaluate(async () => {
   const t = window.filigree.testHooks.tangle;
-  t.options.incremental = incremental;
   t.clearLayers(); // each pass starts with no bitmap kept
   const r = t.result();
   const slider = document.querySelector('[data-testid=tangle-step]');
@@ -184,16 +181,14 @@ async function sliderAndPan(incremental) {
     steps, shapes: r.stats.shapes, vertices: r.stats.vertices, all_shapes: r.shapes.count,
     worker_ms: Math.round(t.timing().run), moves, settledMoves, flushes, waits, paints, batches, drags, dragPaints, pans, panWork, sharp_paint: t.timing().paint,
   };
-  }, incremental);
+  });
 }
-const villageBefore = await sliderAndPan(false);
-const village = await sliderAndPan(true);
-// Back-to-back jumps again, each path alone between two CPU readings: CPU ms per jump.
-async function jumpCpu(incremental) {
+const village = await sliderAndPan();
+// Back-to-back jumps again, alone between two CPU readings: CPU ms per jump.
+async function jumpCpu() {
   const n = 24;
-  const { cpu } = await cpuOf(() => page.evaluate(async ({ incremental, n }) => {
+  const { cpu } = await cpuOf(() => page.evaluate(async ({ n }) => {
     const t = window.filigree.testHooks.tangle;
-    t.options.incremental = incremental;
     const slider = document.querySelector('[data-testid=tangle-step]');
     const steps = t.result().steps.length;
     const c = document.querySelector('[data-testid=tangle-canvas]');
@@ -204,59 +199,27 @@ async function jumpCpu(incremental) {
       slider.dispatchEvent(new Event('input', { bubbles: true }));
       await frame();
     }
-    t.options.incremental = true;
-  }, { incremental, n }));
+  }, { n }));
   return { process: round(cpu.process / n), main: round(cpu.main / n) };
 }
-const jumpCpuBefore = await jumpCpu(false);
-const jumpCpuAfter = await jumpCpu(true);
-// The same drags and jumps with the two paths taking turns move by move (the load of
-// the machine then weighs on both alike; the bitmaps kept are shared).
-const interleaved = await page.evaluate(async () => {
-  const t = window.filigree.testHooks.tangle;
-  const slider = document.querySelector('[data-testid=tangle-step]');
-  const steps = t.result().steps.length;
-  const c = document.querySelector('[data-testid=tangle-canvas]');
-  const frame = () => new Promise((res) => requestAnimationFrame(() => { c.getContext('2d').getImageData(0, 0, 1, 1); res(); }));
-  const out = { drag: [[], []], jump: [[], []] };
-  const move = async (k, n, kind) => {
-    t.options.incremental = n % 2 === 1;
-    const start = performance.now();
-    slider.value = String(k);
-    slider.dispatchEvent(new Event('input', { bubbles: true }));
-    await frame();
-    out[kind][n % 2].push(performance.now() - start);
-  };
-  t.clearLayers();
-  t.paintNow();
-  await frame();
-  let n = 0;
-  for (const from of [0.95, 0.6, 0.3]) for (let i = 1; i < 13; i++) await move(Math.round(steps * from) - i * 2, n++, 'drag');
-  for (let i = 0; i < 24; i++) await move(Math.round(steps * (i % 2 ? 0.52 + i / 70 : 0.98 - i / 70)), n++, 'jump');
-  t.options.incremental = true;
-  return out;
-});
-
+const jumpCpuAfter = await jumpCpu();
 
 return {
     grow_ms: growMs, worker_ms: village.worker_ms, steps: village.steps, final_shapes: village.shapes, vertices: village.vertices,
     shapes_in_history: village.all_shapes,
-    slider_drag_to_frame_ms: both(village.drags, villageBefore.drags), slider_drag_paint_ms: both(village.dragPaints, villageBefore.dragPaints),
-    slider_jump_to_frame_ms: both(village.moves, villageBefore.moves), slider_jump_paint_ms: both(village.paints, villageBefore.paints),
-    slider_jump_batches_ms: both(village.batches, villageBefore.batches),
+    slider_drag_to_frame_ms: summary(village.drags), slider_drag_paint_ms: summary(village.dragPaints),
+    slider_jump_to_frame_ms: summary(village.moves), slider_jump_paint_ms: summary(village.paints),
+    slider_jump_batches_ms: summary(village.batches),
     // From the input event to the panel's paint (the frame's start), and the raster of what
     // it drew (the pixel read in the frame callback after it).
-    slider_jump_input_to_paint_ms: both(village.waits, villageBefore.waits),
-    slider_jump_raster_ms: both(village.flushes, villageBefore.flushes),
-    slider_jump_cpu_ms_per_jump: { ...jumpCpuAfter, before: jumpCpuBefore },
-    slider_drag_interleaved_to_frame_ms: both(interleaved.drag[1], interleaved.drag[0]),
-    slider_jump_interleaved_to_frame_ms: both(interleaved.jump[1], interleaved.jump[0]),
-    slider_jump_after_idle_to_frame_ms: both(village.settledMoves, villageBefore.settledMoves),
-    pan_work_ms: both(village.panWork, villageBefore.panWork), pan_frame_ms: both(village.pans, villageBefore.pans),
+    slider_jump_input_to_paint_ms: summary(village.waits),
+    slider_jump_raster_ms: summary(village.flushes),
+    slider_jump_cpu_ms_per_jump: jumpCpuAfter,
+    slider_jump_after_idle_to_frame_ms: summary(village.settledMoves),
+    pan_work_ms: summary(village.panWork), pan_frame_ms: summary(village.pans),
     sharp_repaint_ms: round(village.sharp_paint),
   };
 }
-const both = (after, before) => ({ ...summary(after), before: summary(before) });
 if (only === '' || only === 'village') villageOut = await villageBench();
 let leafOut = null;
 // ---- leaf: a parameter edit round trip. `op` 'outline': the outline step with the
@@ -267,10 +230,9 @@ async function leafBench(op) {
 n = await runs();
 await page.click('[data-example=leaf]');
 await waitForResult(n);
-const edits = { before: [], after: [] };
+const edits = [];
 const subtreeSizes = [];
 for (let i = 0; i < 12; i++) {
-  const incremental = i % 2 === 1;
   const target = await page.evaluate((op) => {
     const r = window.filigree.testHooks.tangle.result();
     const subtree = (k) => {
@@ -302,9 +264,8 @@ for (let i = 0; i < 12; i++) {
   }, { k: target, i });
   // Settle: the selection painted, nothing running.
   await page.waitForFunction(() => !window.filigree.testHooks.tangle.pending());
-  const { out: r, cpu } = await cpuOf(() => page.evaluate(async ({ v, incremental, param }) => {
+  const { out: r, cpu } = await cpuOf(() => page.evaluate(async ({ v, param }) => {
     const t = window.filigree.testHooks.tangle;
-    t.options.incremental = incremental;
     await new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));
     const status = document.querySelector('[data-testid=tangle-status]');
     const n = Number(status.dataset.runs || 0);
@@ -334,17 +295,33 @@ for (let i = 0; i < 12; i++) {
       total: end - start, run: tm.run, prepare: tm.prepare, paint: tm.paint, region: tm.region, reused: t.reused(),
       toPaint: tm.paintAt - tm.answeredAt, raster: end - beforeFlush,
       toRun: tm.runAt - start, toFrame: beforeFlush - tm.paintEndAt,
+      delta: tm.answer.delta, bytes: tm.answer.bytes, added: tm.answer.added, removed: tm.answer.removed,
     };
-  }, { v, incremental, param }));
+  }, { v, param }));
   r.cpuProcess = cpu.process;
   r.cpuMain = cpu.main;
   await page.waitForFunction(() => !window.filigree.testHooks.tangle.pending());
-  edits[incremental ? 'after' : 'before'].push(r);
+  // The full answer of the same document from the same worker (no base named), and the
+  // page's preparation of it: what a worker that does not hold the answer shown sends.
+  r.full = await page.evaluate(async () => {
+    const { prepareTangle } = await import('/www/tangle/draw.js');
+    const { answerBytes } = await import('/www/tangle/hooks.js');
+    const { requestOf, KEEP_AFFINITY } = await import('/www/tangle/state.js');
+    const ctx = window.filigree.doc.current.ctx;
+    const t0 = performance.now();
+    const full = await ctx.run('tangle', { ...requestOf(window.filigree.testHooks.tangle.state()), keep: true }, { affinity: KEEP_AFFINITY });
+    const t1 = performance.now();
+    const bytes = answerBytes(full);
+    prepareTangle(full);
+    return { run: t1 - t0, prepare: performance.now() - t1, bytes, delta: full.base != null };
+  });
+  edits.push(r);
 }
 const leafShapes = await page.evaluate(() => window.filigree.testHooks.tangle.result().stats.shapes);
 const editedStep = await page.evaluate(() => { const s = window.filigree.testHooks.tangle.state(); const st = window.filigree.testHooks.tangle.result().steps[s.selected]; return st ? `${st.operator}, line ${st.line}` : null; });
 
-const editFigure = (key) => both(edits.after.map((e) => e[key]), edits.before.map((e) => e[key]));
+const editFigure = (key) => summary(edits.map((e) => e[key]));
+const fullFigure = (key) => summary(edits.map((e) => e.full[key]));
 return {
     final_shapes: leafShapes, edited_subtree_shapes: subtreeSizes, edited_step: editedStep,
     param_edit_round_trip_ms: editFigure('total'),
@@ -353,6 +330,9 @@ return {
     input_to_request_ms: editFigure('toRun'), painted_to_frame_ms: editFigure('toFrame'),
     round_trip_cpu_ms: { renderer_process: editFigure('cpuProcess'), main_thread: editFigure('cpuMain') },
     repainted_fraction: editFigure('region'), shapes_kept_from_last_answer: editFigure('reused'),
+    answers_that_were_deltas: edits.filter((e) => e.delta).length, of_edits: edits.length,
+    delta_answer_bytes: editFigure('bytes'), delta_added_shapes: editFigure('added'), delta_removed_shapes: editFigure('removed'),
+    full_answer: { bytes: fullFigure('bytes'), worker_round_trip_ms: fullFigure('run'), prepare_ms: fullFigure('prepare'), deltas: edits.filter((e) => e.full.delta).length },
   };
 }
 let leafLargestOut = null;

@@ -98,7 +98,7 @@ export function createPainter(ctx, { canvas, viewport, live, timing, options, ov
   /** The canvas now shows the current step, view and highlight. */
   function recordShown() {
     const { T, k } = live;
-    if (T) T.from = null; // linked answers are compared once, then dropped
+    if (T) T.from = null; // a delta's base is compared once, then dropped
     shown = { T, k, key: viewKey(), w: canvas.width, h: canvas.height, hl: T && T.n ? currentHl() : null, drawing: overlay.active() };
   }
 
@@ -111,7 +111,7 @@ export function createPainter(ctx, { canvas, viewport, live, timing, options, ov
   function changedRegion() {
     const { T, k } = live;
     timing.why = 'state';
-    if (!options.incremental || !shown || !T || !T.n || overlay.active() || shown.drawing || !shown.T) return false;
+    if (!shown || !T || !T.n || overlay.active() || shown.drawing || !shown.T) return false;
     timing.why = 'view';
     if (shown.key !== viewKey() || shown.w !== canvas.width || shown.h !== canvas.height) return false;
     // A slider move repaints in full: its heavy parts come from bitmaps, which beats
@@ -213,10 +213,9 @@ export function createPainter(ctx, { canvas, viewport, live, timing, options, ov
       // other steps are likely to show it too (a part of the step tree shown by at least a
       // sixteenth of the steps) or the last paint showed it too (a drag), and is drawn
       // directly otherwise: a far jump shows a few deep parts no other step shows, and a
-      // bitmap of one (a canvas made, drawn and copied) costs more than drawing it (the
-      // old path: always a bitmap).
+      // bitmap of one (a canvas made, drawn and copied) costs more than drawing it.
       const last = lastParts;
-      const shared = (part) => !options.incremental || part.span * 16 >= T.steps || last.has(part);
+      const shared = (part) => part.span * 16 >= T.steps || last.has(part);
       paintBatches(g, b, lineWidth(), layers, key, (part) => (newBitmaps ? shared(part) : layers.has(part, key, w, h)));
       lastParts = new Set(b.parts);
       paintHighlight();
@@ -226,7 +225,6 @@ export function createPainter(ctx, { canvas, viewport, live, timing, options, ov
     // Kept for quick pans and zooms (copied when one starts).
     sharpView = { ...view };
     snapStale = true;
-    if (!options.incremental) takeSnap(); // the old path: a copy at every paint
     recordShown();
     schedulePrebuild();
     timing.region = 1;
@@ -250,7 +248,7 @@ export function createPainter(ctx, { canvas, viewport, live, timing, options, ov
     ctx.clearTimeout(prebuildTimer);
     prebuildTimer = null;
     timing.prebuilt = 0;
-    if (!options.incremental || !live.T || !live.T.n || !ctx.alive()) return;
+    if (!live.T || !live.T.n || !ctx.alive()) return;
     const key = viewKey(), w = canvas.width, h = canvas.height, from = live.T;
     const m = new DOMMatrix([dpr * view.s, 0, 0, dpr * view.s, dpr * view.tx, dpr * view.ty]);
     let todo = null;

@@ -2,10 +2,11 @@
 // canvas, pen-and-ink: black strokes on paper white, grey fills for `fill`,
 // black with white lines for `white_lines`, filled marks for `mark`.
 //
-//   const t = prepareTangle(response, prev?)  per-shape bounding boxes, styles, lazily built Path2Ds
+//   const t = prepareTangle(response, link?)  per-shape bounding boxes, styles, lazily built Path2Ds
 //                                       (the byte columns of shapes and steps viewed as typed arrays);
-//                                       with `prev` (the last answer), its shapes that are unchanged
-//                                       (same group, id, ink and points) keep their Path2Ds
+//                                       with `link` (delta.js applyDelta: the answer was a delta of
+//                                       the prepared answer `link.T`), the shapes the delta kept
+//                                       keep their Path2Ds
 //   t.visible(i, k)                     shape i shown after k steps (k = steps.length: final)
 //   t.batches(k) → {k, parts, count}    what step k shows: a few Path2D batches per ink style
 //                                       (a segment tree over steps, nodes built lazily, kept;
@@ -13,7 +14,7 @@
 //   paintBatches(g, batches, lineWidth, layers?, key?)  draws them (g already transformed);
 //                                       with createLayers(), heavy parts come from bitmaps
 //   t.changes(k, from, kFrom)           shapes shown at step k of t and not at step kFrom of `from`
-//                                       (t itself or the answer t was prepared from), and back
+//                                       (t itself, or the base of t's delta: what the delta says)
 //   t.regionParts(k, keep) → {parts}    batches(k) cut down to the shapes passing keep(i)
 //   t.pick(x, y, k, g) → shape index    the smallest shape shown at step k containing (x, y)
 //   t.subtree(s) → Set of shape indices made by step s or by steps that depend on it
@@ -39,7 +40,7 @@ export function pointsOf(bytes) {
 }
 
 /** A column of little-endian bytes as a typed array of `Type`. */
-function column(bytes, Type) {
+export function column(bytes, Type) {
   if (bytes instanceof Type) return bytes;
   const u8 = bytes.byteOffset % Type.BYTES_PER_ELEMENT === 0 ? bytes : bytes.slice();
   const n = u8.byteLength / Type.BYTES_PER_ELEMENT;
@@ -52,20 +53,24 @@ function column(bytes, Type) {
 /**
  * The answer's shapes (columns of bytes, src/tangle/api.rs `shape_columns`)
  * as typed arrays, plus `at(i)`: shape i as an object
- * {tag, group, id, born, died, first, rings, fill, white_lines, mark}.
+ * {key, tag, group, id, born, died, first, rings, fill, white_lines, mark}.
  */
 export function shapeColumns(c) {
   if (c.born instanceof Int32Array) return c;
-  const S = {
-    count: c.count,
+  return withAccessors({
+    count: c.count, key: column(c.key, Uint32Array),
     tag: column(c.tag, Uint32Array), group: column(c.group, Uint32Array), id: column(c.id, Uint32Array),
     first: column(c.first, Uint32Array), born: column(c.born, Int32Array), died: column(c.died, Int32Array),
     fill: column(c.fill, Float32Array), flags: column(c.flags, Uint8Array),
     ringFirst: column(c.ring_first, Uint32Array), rings: column(c.rings, Uint32Array),
-  };
+  });
+}
+
+/** Typed shape columns `S` with `ringsOf(i)` and `at(i)` added. */
+export function withAccessors(S) {
   S.ringsOf = (i) => S.rings.subarray(S.ringFirst[i], S.ringFirst[i + 1]);
   S.at = (i) => ({
-    tag: S.tag[i], group: S.group[i], id: S.id[i], born: S.born[i], died: S.died[i], first: S.first[i],
+    key: S.key[i], tag: S.tag[i], group: S.group[i], id: S.id[i], born: S.born[i], died: S.died[i], first: S.first[i],
     rings: [...S.ringsOf(i)], fill: S.fill[i], white_lines: (S.flags[i] & 1) !== 0, mark: (S.flags[i] & 2) !== 0,
   });
   return S;
@@ -80,59 +85,7 @@ export function stepsOf(steps) {
   return steps;
 }
 
-/**
- * Which shapes of the answer (columns S, points pts) are shapes of the
- * previous prepared answer P: the same group and id, tag, ink, rings and
- * points (every coordinate compared, so a reused Path2D is exactly what
- * tracing the shape again would give). `oldOf[i]`: P's index of shape i or
- * -1; `newOf[j]`: the inverse.
- */
-function link(S, pts, P) {
-  const PS = P.r.shapes, ppts = P.pts, m = PS.count, n = S.count;
-  // An open-addressing table of P's shapes by (group, id): integer work only,
-  // fast even before the JIT has warmed up (this runs once per answer).
-  let bits = 4;
-  while ((1 << bits) < 2 * m && bits < 30) bits++;
-  const mask = (1 << bits) - 1;
-  const table = new Int32Array(mask + 1).fill(-1);
-  const slot = (g, id) => (Math.imul(g, 0x9e3779b1) ^ Math.imul(id + 1, 0x85ebca77)) >>> (32 - bits);
-  for (let j = 0; j < m; j++) {
-    let h = slot(PS.group[j], PS.id[j]);
-    while (table[h] >= 0) h = (h + 1) & mask;
-    table[h] = j;
-  }
-  const oldOf = new Int32Array(n).fill(-1), newOf = new Int32Array(m).fill(-1);
-  for (let i = 0; i < n; i++) {
-    const g = S.group[i], id = S.id[i];
-    for (let h = slot(g, id); table[h] >= 0; h = (h + 1) & mask) {
-      const j = table[h];
-      if (PS.group[j] !== g || PS.id[j] !== id || newOf[j] >= 0) continue;
-      if (sameShape(S, pts, i, PS, ppts, j)) { oldOf[i] = j; newOf[j] = i; }
-      break;
-    }
-  }
-  return { oldOf, newOf };
-}
-
-/** Shape i of (S, pts) and shape j of (PS, ppts): the same tag, ink, rings and every coordinate. */
-function sameShape(S, pts, i, PS, ppts, j) {
-  if (S.tag[i] !== PS.tag[j] || S.fill[i] !== PS.fill[j] || S.flags[i] !== PS.flags[j]) return false;
-  const r0 = S.ringFirst[i], r1 = S.ringFirst[i + 1], q0 = PS.ringFirst[j];
-  if (r1 - r0 !== PS.ringFirst[j + 1] - q0) return false;
-  let len = 0;
-  for (let q = 0; q < r1 - r0; q++) {
-    if (S.rings[r0 + q] !== PS.rings[q0 + q]) return false;
-    len += S.rings[r0 + q];
-  }
-  return sameRange(pts, 2 * S.first[i], ppts, 2 * PS.first[j], 2 * len);
-}
-
-function sameRange(a, ao, b, bo, len) {
-  for (let k = 0; k < len; k++) if (a[ao + k] !== b[bo + k]) return false;
-  return true;
-}
-
-export function prepareTangle(r, prev = null) {
+export function prepareTangle(r, link = null) {
   const S = r.shapes = shapeColumns(r.shapes);
   stepsOf(r.steps);
   const n = S.count;
@@ -140,9 +93,8 @@ export function prepareTangle(r, prev = null) {
   const { born, died, first } = S;
   const box = new Float32Array(4 * n);
   const paths = new Array(n);
-  // After an edit most shapes are the last answer's: they keep their Path2Ds.
-  const linked = prev && prev.n ? link(S, pts, prev) : null;
-  if (linked) for (let i = 0; i < n; i++) if (linked.oldOf[i] >= 0) paths[i] = prev.paths[linked.oldOf[i]];
+  // After an edit most shapes are the base's (the delta kept them): they keep their Path2Ds.
+  if (link) for (let i = 0; i < n; i++) if (link.oldOf[i] >= 0) paths[i] = link.T.paths[link.oldOf[i]];
   for (let i = 0; i < n; i++) {
     let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
     const outer = S.rings[S.ringFirst[i]] || 0; // the outer ring bounds the shape
@@ -252,8 +204,10 @@ export function prepareTangle(r, prev = null) {
   let heavy = null;
   const t = {
     r, n, pts, born, died, box, paths,
-    /** The answer this one was linked to (until the panel drops it, once painted). */
-    from: linked ? prev : null,
+    /** The base of the delta this answer was made from (until the panel drops it, once painted). */
+    from: link ? link.T : null,
+    /** Whether this answer was made from a delta. */
+    delta: !!link,
     steps: nSteps,
     visible: (i, k) => shownAt(born[i], died[i], k),
     count(k) {
@@ -296,10 +250,11 @@ export function prepareTangle(r, prev = null) {
     },
     /**
      * What differs between step `k` of this answer and step `kFrom` of
-     * `from`: `from` is this answer (a slider move) or the one it was
-     * prepared from (`prepareTangle(r, prev)`; an edit). `{added, removed}`:
-     * shapes of this answer shown now and not then, and shapes of `from`
-     * shown then and not now; false when `from` is unrelated.
+     * `from`: `from` is this answer (a slider move) or the base of the
+     * delta it was made from (an edit; then only between the final steps,
+     * where the delta says it: its added and removed shapes, as shown
+     * there). `{added, removed}`: shapes of this answer shown now and not
+     * then, and shapes of `from` shown then and not now; false when not known.
      */
     changes(k, from, kFrom) {
       const added = [], removed = [];
@@ -308,14 +263,11 @@ export function prepareTangle(r, prev = null) {
           const now = shownAt(born[i], died[i], k), then = shownAt(born[i], died[i], kFrom);
           if (now && !then) added.push(i); else if (then && !now) removed.push(i);
         }
-      } else if (linked && from === t.from) {
-        const { oldOf, newOf } = linked;
-        for (let i = 0; i < n; i++) {
-          if (shownAt(born[i], died[i], k) && (oldOf[i] < 0 || !from.visible(oldOf[i], kFrom))) added.push(i);
-        }
-        for (let j = 0; j < from.n; j++) {
-          if (from.visible(j, kFrom) && (newOf[j] < 0 || !shownAt(born[newOf[j]], died[newOf[j]], k))) removed.push(j);
-        }
+      } else if (link && from === t.from && k === nSteps && kFrom === from.steps) {
+        // A kept shape is consumed in both answers or in neither (src/tangle/api.rs
+        // `same_shape`), so at the final steps it is shown in both or in neither.
+        for (const i of link.added) if (shownAt(born[i], died[i], k)) added.push(i);
+        for (const j of link.removed) if (from.visible(j, kFrom)) removed.push(j);
       } else return false;
       return { added, removed };
     },
@@ -335,8 +287,8 @@ export function prepareTangle(r, prev = null) {
       heavy = { min, out: out.sort((a, b) => b.vertices - a.vertices) };
       return heavy.out;
     },
-    /** Shapes kept from the previous answer (`prepareTangle(r, prev)`), for tests. */
-    get reused() { return linked ? linked.oldOf.reduce((a, j) => a + (j >= 0), 0) : 0; },
+    /** Shapes kept from the delta's base (`prepareTangle(r, link)`), for tests. */
+    get reused() { return link ? link.oldOf.reduce((a, j) => a + (j >= 0), 0) : 0; },
     /** The smallest shape shown at step k whose outline contains (x, y), or -1. */
     pick(x, y, k, g) {
       let best = -1, bestArea = Infinity;

@@ -1,14 +1,24 @@
 // What the e2e tests and the latency bench read and switch: the figures of
-// the last paint and answer (`timing`), the switches of the old paths
-// (`options`), and the hooks the panel hands to `ctx.expose` (published
-// only in a page a test opened, app/document.js).
+// the last paint and answer (`timing`), the highlight switch (`options`),
+// and the hooks the panel hands to `ctx.expose` (published only in a page a
+// test opened, app/document.js).
 
 /**
  * Figures of the last paint/answer for tests and the latency bench: ms,
  * `region` (the repainted fraction of the canvas), `why` (why the last
- * repaint could not be partial), `paints` (when the canvas was last drawn).
+ * repaint could not be partial), `paints` (when the canvas was last drawn),
+ * `answer` (the last answer as it came: `{delta, added, removed, dirty, bytes}`,
+ * delta: whether it was a delta of the answer shown).
  */
-export const createTiming = () => ({ paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '', paints: [] });
+export const createTiming = () => ({ paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '', paints: [], answer: null });
+
+/** Bytes of an answer's typed arrays as it came from the worker (columns, points, removed keys, step indices). */
+export function answerBytes(r) {
+  let n = (r.points?.byteLength ?? 0) + (r.removed?.byteLength ?? 0);
+  for (const v of Object.values(r.shapes)) n += v?.byteLength ?? 0;
+  for (const st of r.steps) n += (st.inputs?.byteLength ?? 0) + (st.outputs?.byteLength ?? 0);
+  return n;
+}
 
 /** The canvas was drawn at `at` (a few times kept, for the tests). */
 export function noteDrawn(timing, at) {
@@ -16,13 +26,10 @@ export function noteDrawn(timing, at) {
 }
 
 /**
- * `incremental: false` is the old path (a full repaint each time, a bitmap
- * for every heavy part, an edit repainted and shown busy at once, no shape
- * kept from the last answer): the latency bench measures both in one run.
  * `highlight: false` leaves the selected step's highlight out of a paint
  * (tests compare the picture with a fresh answer's).
  */
-export const createOptions = () => ({ incremental: true, highlight: true });
+export const createOptions = () => ({ highlight: true });
 
 /**
  * The hooks of a mounted panel: `live` (state.js), `painter` (canvas.js),
@@ -39,9 +46,9 @@ export function tangleHooks(ctx, { live, painter, timing, options, pending, expo
     points: () => live.T?.pts ?? null,
     pending,
     timing: () => ({ ...timing }),
-    /** `{incremental}`: false switches the old path on (full repaints, nothing kept from the last answer). */
+    /** `{highlight}`: false leaves the selected step's highlight out. */
     options,
-    /** Shapes the shown answer kept from the one before (their Path2Ds). */
+    /** Shapes the shown answer kept from its delta's base (their Path2Ds). */
     reused: () => live.T?.reused ?? 0,
     /** Forget every kept bitmap (the latency bench starts each pass from none). */
     clearLayers: () => painter.layers.clear(),

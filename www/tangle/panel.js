@@ -24,13 +24,14 @@
 //   export.js, drop.js  files out and in
 //   hooks.js         what tests and benches read (`testHooks.tangle`)
 // While an edit's answer is due, the canvas keeps the last picture (and its
-// highlight) until the answer repaints it. An answer after an edit keeps the
-// last answer's unchanged shapes (same group, id and points: their
-// Path2Ds); `testHooks.tangle.options.incremental = false` turns all of that
-// off (the latency bench's "before").
+// highlight) until the answer repaints it. A request names the answer shown
+// (`base`); the worker that kept its expansion answers with what changed
+// (delta.js applies it: the kept shapes keep their Path2Ds, and the repaint
+// covers only the changed shapes' tiles); any other worker answers in full.
 import { preloadCodeEditor } from '../ui/code-editor.js';
 import { prepareTangle } from './draw.js';
-import { tangleState, createLive, sameRequest, onlyEditsDiffer } from './state.js';
+import { applyDelta } from './delta.js';
+import { tangleState, createLive, sameRequest } from './state.js';
 import { html } from './layout.js';
 import { createGrammarEditor } from './grammar-editor.js';
 import { createStartForm } from './start.js';
@@ -43,7 +44,7 @@ import { createSelection } from './selection.js';
 import { createExamplePicker } from './thumbnails.js';
 import { createExport } from './export.js';
 import { createDrop } from './drop.js';
-import { createTiming, createOptions, tangleHooks } from './hooks.js';
+import { createTiming, createOptions, tangleHooks, answerBytes } from './hooks.js';
 
 export { requestOf } from './state.js';
 
@@ -67,7 +68,7 @@ function mount(el, ctx) {
     overlay: { active: () => drawer.active(), paint: (g) => drawer.paintOn(g) },
   });
   const runner = createRunner(ctx, {
-    cancel: q('[data-act=cancel]'), status, timing, options, onAnswer: showAnswer, onFailed: () => painter.paint(),
+    cancel: q('[data-act=cancel]'), status, timing, base: () => live.T, onAnswer: showAnswer, onFailed: () => painter.paint(),
   });
   const timeline = createTimeline({
     slider: q('[name=step]'), playBtn: q('[data-act=play]'), out: q('[data-testid=tangle-count]'), live, paint: painter.paint,
@@ -85,14 +86,23 @@ function mount(el, ctx) {
     if (!editor.apply()) runner.run();
   }
 
-  /** Show answer `r` of document `doc` (its run started at t0). */
-  function showAnswer(r, doc, t0) {
+  /**
+   * Show answer `r` of document `doc` (its run started at t0); `baseT`: the prepared answer
+   * its request named as its base (a delta answer is applied to it).
+   */
+  function showAnswer(r, doc, t0, baseT) {
     const t1 = performance.now();
     timing.answeredAt = t1;
-    // Only the edits differ from the last answer: its unchanged shapes keep their Path2Ds,
-    // and the repaint covers only where the picture changed.
-    const related = options.incremental && live.T && live.shownFor && onlyEditsDiffer(live.shownFor, doc);
-    live.T = prepareTangle(r, related ? live.T : null);
+    timing.answer = {
+      delta: r.base != null, added: r.shapes.count, removed: r.removed.byteLength / 4, dirty: r.dirty ?? null, bytes: answerBytes(r),
+    };
+    let link = null;
+    if (r.base != null) {
+      const d = applyDelta(baseT.r, r);
+      link = { T: baseT, oldOf: d.oldOf, added: d.added, removed: d.removed };
+      r = d.r;
+    }
+    live.T = prepareTangle(r, link);
     painter.layers.clear();
     live.shownFor = doc;
     painter.dropHighlight();
@@ -113,8 +123,7 @@ function mount(el, ctx) {
     // at its next frame either way). An answer's full repaint draws heavy parts directly
     // instead of first making their bitmaps (a second pass: the layers were just cleared,
     // and which parts a later slider move needs is unknown); idle time makes them afterwards.
-    if (options.incremental) painter.paintChangedNow({ newBitmaps: false });
-    else painter.paint();
+    painter.paintChangedNow({ newBitmaps: false });
     timing.paintEndAt = performance.now();
     picker.loadThumbnails();
   }
@@ -189,7 +198,7 @@ function mount(el, ctx) {
         // last picture and its highlight. Repainting now would only take the highlight off,
         // and its raster would take the CPU from the worker growing the answer. (A new
         // document without a selection drops the highlight at once.)
-        if (!(options.incremental && s.selected != null && awaitingAnswer(s))) painter.paint();
+        if (!(s.selected != null && awaitingAnswer(s))) painter.paint();
       }
     },
     markError: editor.markError,

@@ -5,18 +5,22 @@
 // tool, the tool bar shows it once it takes a while, and coming back takes
 // its answer (or waits for it) instead of growing it again. Its requests
 // carry `keep` and go to one worker (affinity), which keeps the expansion:
-// an edit then regrows only its step's subtree there.
+// an edit then regrows only its step's subtree there. They name the answer
+// shown as their `base`; the job keeps that answer, so a delta is applied to
+// it whenever (and wherever) its answer is taken.
 import { requestOf, sameRequest, KEEP_AFFINITY } from './state.js';
 
 const RUN_DELAY_MS = 120;
 const BUSY_DELAY_MS = 150; // a run shows it is busy after this long
 
 /**
- * The runs of a mounted panel: `onAnswer(response, doc, t0)` shows an
- * answer (t0: when its run started), `onFailed()` repaints what the canvas
- * showed; `cancel` is the Cancel button; `timing`, `options`: hooks.js.
+ * The runs of a mounted panel: `base()` is the prepared answer shown (or
+ * null), `onAnswer(response, doc, t0, baseT)` shows an answer (t0: when its
+ * run started; baseT: the answer its request named as its base),
+ * `onFailed()` repaints what the canvas showed; `cancel` is the Cancel
+ * button; `timing`: hooks.js.
  */
-export function createRunner(ctx, { cancel, status, timing, options, onAnswer, onFailed }) {
+export function createRunner(ctx, { cancel, status, timing, base, onAnswer, onFailed }) {
   let running = null; // the AbortController of the run under way
   let runTimer = null;
 
@@ -46,13 +50,14 @@ export function createRunner(ctx, { cancel, status, timing, options, onAnswer, o
       cancel.disabled = false;
       status('growing…');
     };
-    const busyTimer = options.incremental ? ctx.setTimeout(showBusy, BUSY_DELAY_MS) : (showBusy(), null);
+    const busyTimer = ctx.setTimeout(showBusy, BUSY_DELAY_MS);
     const t0 = performance.now();
     timing.runAt = t0;
     try {
       let job = ctx.job('grow');
       if (!(job?.data.doc && sameRequest(job.data.doc, doc) && (job.running || job.status === 'done'))) {
-        const request = { ...requestOf(doc), keep: true };
+        const baseT = base();
+        const request = { ...requestOf(doc), keep: true, base: baseT?.r.answer ?? null };
         job = ctx.startJob('grow', { label: 'Tangle', quietMs: BUSY_DELAY_MS }, (j) => j.run('tangle', request, {
           affinity: KEEP_AFFINITY,
           onProgress: (p) => j.report({
@@ -61,6 +66,7 @@ export function createRunner(ctx, { cancel, status, timing, options, onAnswer, o
           }),
         }));
         job.data.doc = doc;
+        job.data.baseT = baseT;
       }
       // Cancel, or a newer edit, ends it; leaving the panel does not.
       const stop = () => job.stop('cancelled');
@@ -71,7 +77,7 @@ export function createRunner(ctx, { cancel, status, timing, options, onAnswer, o
       ctrl.signal.removeEventListener('abort', stop);
       if (running !== ctrl || !ctx.alive()) return;
       if (ended.status !== 'done') throw ended.error ?? Object.assign(new Error('cancelled'), { kind: 'cancelled' });
-      onAnswer(ended.result, doc, t0);
+      onAnswer(ended.result, doc, t0, job.data.baseT);
     } catch (err) {
       if (running !== ctrl) return;
       onFailed();

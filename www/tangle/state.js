@@ -24,10 +24,6 @@ export const requestOf = (s) => ({
 export const sameRequest = (a, b) => a.grammar === b.grammar && a.start === b.start && a.seed === b.seed
   && a.wobble === b.wobble && a.edits === b.edits;
 
-/** Whether only the edits (or the pen width) differ: the same growth before the first edit. */
-export const onlyEditsDiffer = (a, b) => a.grammar === b.grammar && a.start === b.start && a.seed === b.seed
-  && a.wobble === b.wobble;
-
 export const tangleState = {
   version: 1,
   async defaults(ctx) {
