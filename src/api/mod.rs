@@ -21,6 +21,7 @@
 pub mod inspect;
 pub mod project;
 
+use crate::core::check;
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Step};
 use crate::micro::api as micro;
@@ -492,7 +493,7 @@ pub fn request<'de, T: Deserialize<'de>, D: Deserializer<'de>>(
     payload: D,
 ) -> Result<T> {
     serde_path_to_error::deserialize(payload).map_err(|e| {
-        let field = dotted(e.path());
+        let field = check::dotted(e.path());
         let mut err = humanise(kind, &field, &e.inner().to_string());
         if !field.is_empty() {
             err = err.at(field);
@@ -505,108 +506,14 @@ fn serde_error(kind: &str, e: impl std::fmt::Display) -> Error {
     humanise(kind, "", &e.to_string())
 }
 
-/// `params.d_max`, `points.3` (no leading dot; empty at the root).
-fn dotted(path: &serde_path_to_error::Path) -> String {
-    use serde_path_to_error::Segment;
-    path.iter()
-        .filter_map(|s| match s {
-            Segment::Seq { index } => Some(index.to_string()),
-            Segment::Map { key } | Segment::Enum { variant: key } => Some(key.clone()),
-            Segment::Unknown => None,
-        })
-        .collect::<Vec<_>>()
-        .join(".")
-}
-
-/// What a serde "expected" clause asks for, in words.
-fn wanted(expected: &str) -> String {
-    let e = expected.trim();
-    let words = match e {
-        "a string" | "a borrowed string" | "a character" => "text",
-        "f64" | "f32" => "a number",
-        "u8" | "u16" | "u32" | "u64" | "usize" => "a whole number ≥ 0",
-        "i8" | "i16" | "i32" | "i64" | "isize" => "a whole number",
-        "a boolean" => "true or false",
-        "a sequence" => "a list",
-        "a map" => "an object",
-        "byte array" | "a byte array" | "a byte buf" | "bytes" => "bytes (a Uint8Array)",
-        _ if e.starts_with("struct ") => "an object",
-        _ if e.starts_with("a tuple of size ") || e.starts_with("an array of length ") => {
-            return format!("a list of {}", e.rsplit(' ').next().unwrap_or("?"));
-        }
-        _ => return e.to_string(),
-    };
-    words.to_string()
-}
-
-/// What serde says it got, in words.
-fn got(what: &str) -> String {
-    match what.trim() {
-        "unit value" | "null" => "null".into(),
-        "floating point `NaN`" => "NaN".into(),
-        w => w.replace('`', "'"),
-    }
-}
-
-/// Rewrite serde's message ("invalid type: unit value, expected a
-/// string") as "pattern-info: `program` must be text (got null)".
+/// Serde's message about `field` in words ([`check::describe`]), as a
+/// `bad-request` naming the kind: "pattern-info: `program` must be text
+/// (got null)".
 fn humanise(kind: &str, field: &str, msg: &str) -> Error {
-    let name = if field.is_empty() {
-        "the request".to_string()
-    } else {
-        format!("`{field}`")
-    };
-    // serde_wasm_bindgen's errors are JS `Error`s: "Error: invalid type: ...".
-    let msg = msg.strip_prefix("Error: ").unwrap_or(msg);
-    let msg = msg
-        .split(" at line ")
-        .next()
-        .unwrap_or(msg)
-        .trim()
-        .to_string();
-    let text = if let Some(rest) = msg
-        .strip_prefix("invalid type: ")
-        .or_else(|| msg.strip_prefix("invalid value: "))
-    {
-        match rest.split_once(", expected ") {
-            Some((g, e)) => format!("{name} must be {} (got {})", wanted(e), got(g)),
-            None => format!("{name}: {msg}"),
-        }
-    } else if let Some(rest) = msg.strip_prefix("missing field ") {
-        let f = rest.trim_matches('`');
-        let full = if field.is_empty() {
-            f.to_string()
-        } else {
-            format!("{field}.{f}")
-        };
-        format!("`{full}` is missing")
-    } else if let Some(rest) = msg.strip_prefix("unknown variant ") {
-        match rest.split_once(", expected ") {
-            Some((v, e)) => format!(
-                "{name} is {}; expected {}",
-                v.replace('`', "'"),
-                e.replace('`', "'")
-            ),
-            None => format!("{name}: {msg}"),
-        }
-    } else if let Some(rest) = msg.strip_prefix("unknown field ") {
-        match rest.split_once(", expected ") {
-            Some((f, e)) => format!(
-                "{name} has no field {}; expected {}",
-                f.replace('`', "'"),
-                e.replace('`', "'")
-            ),
-            None => format!("{name} has no field {rest}"),
-        }
-    } else if let Some(rest) = msg.strip_prefix("invalid length ") {
-        match rest.split_once(", expected ") {
-            Some((n, e)) => format!("{name} must be {} (got {n} items)", wanted(e)),
-            None => format!("{name}: {msg}"),
-        }
-    } else {
-        format!("{name}: {msg}")
-    };
-    Error::BadRequest(format!("{kind}: {text}"))
+    Error::BadRequest(format!(
+        "{kind}: {}",
+        check::describe(check::Style::Request, field, msg)
+    ))
 }
 
 /// Run a request natively from its JSON payload, as the worker would

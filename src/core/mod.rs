@@ -1,5 +1,6 @@
 //! Pieces every tool shares: errors, limits, long-running jobs and their
 //! parallel driver, seeded randomness.
+pub mod check;
 pub mod error;
 pub mod job;
 pub mod limits;

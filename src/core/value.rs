@@ -660,3 +660,170 @@ mod value_ser {
         }
     }
 }
+
+// ------------------------------------------------------- typed reading --
+
+/// A [`Value`] read as a serde type (`T::deserialize(&value)`), so a
+/// document is described once, by its type. Strict where JS data is loose:
+/// a struct or map must be an object (never a list read by position), a
+/// list must be a list, bytes must be bytes (never a list of numbers), a
+/// whole number within ±[`MAX_SAFE_INTEGER`] is an integer (so it fits
+/// `u32`, `u64` ...) and any other number a float (so `2.5` or `1e300` does
+/// not), and `null` is `None` of an `Option`.
+impl<'de> Deserializer<'de> for &'de Value {
+    type Error = de::value::Error;
+
+    fn deserialize_any<V: Visitor<'de>>(self, v: V) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            Value::Null => v.visit_unit(),
+            Value::Bool(b) => v.visit_bool(*b),
+            Value::Number(n) if n.fract() == 0.0 && n.abs() <= MAX_SAFE_INTEGER => {
+                if *n >= 0.0 {
+                    v.visit_u64(*n as u64)
+                } else {
+                    v.visit_i64(*n as i64)
+                }
+            }
+            Value::Number(n) => v.visit_f64(*n),
+            Value::Text(t) => v.visit_borrowed_str(t),
+            Value::Bytes(b) => v.visit_borrowed_bytes(b),
+            Value::List(l) => v.visit_seq(de::value::SeqDeserializer::new(l.iter())),
+            Value::Object(kv) => v.visit_map(de::value::MapDeserializer::new(
+                kv.iter().map(|(k, v)| (k.as_str(), v)),
+            )),
+        }
+    }
+
+    fn deserialize_option<V: Visitor<'de>>(
+        self,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            Value::Null => v.visit_none(),
+            _ => v.visit_some(self),
+        }
+    }
+
+    fn deserialize_f64<V: Visitor<'de>>(self, v: V) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            // NaN and ±∞ (a page's numbers) reach the type's own check.
+            Value::Number(n) => v.visit_f64(*n),
+            _ => self.deserialize_any(v),
+        }
+    }
+
+    fn deserialize_f32<V: Visitor<'de>>(self, v: V) -> std::result::Result<V::Value, Self::Error> {
+        self.deserialize_f64(v)
+    }
+
+    fn deserialize_bytes<V: Visitor<'de>>(
+        self,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            Value::Bytes(b) => v.visit_borrowed_bytes(b),
+            other => Err(de::Error::invalid_type(other.unexpected(), &v)),
+        }
+    }
+
+    fn deserialize_byte_buf<V: Visitor<'de>>(
+        self,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        self.deserialize_bytes(v)
+    }
+
+    fn deserialize_seq<V: Visitor<'de>>(self, v: V) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            Value::List(_) => self.deserialize_any(v),
+            other => Err(de::Error::invalid_type(other.unexpected(), &v)),
+        }
+    }
+
+    fn deserialize_tuple<V: Visitor<'de>>(
+        self,
+        _len: usize,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        self.deserialize_seq(v)
+    }
+
+    fn deserialize_tuple_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _len: usize,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        self.deserialize_seq(v)
+    }
+
+    fn deserialize_map<V: Visitor<'de>>(self, v: V) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            Value::Object(_) => self.deserialize_any(v),
+            other => Err(de::Error::invalid_type(other.unexpected(), &v)),
+        }
+    }
+
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _fields: &'static [&'static str],
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        self.deserialize_map(v)
+    }
+
+    fn deserialize_enum<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        _variants: &'static [&'static str],
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            Value::Text(t) => v.visit_enum(de::value::BorrowedStrDeserializer::new(t)),
+            other => Err(de::Error::invalid_type(other.unexpected(), &v)),
+        }
+    }
+
+    fn deserialize_newtype_struct<V: Visitor<'de>>(
+        self,
+        _name: &'static str,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        v.visit_newtype_struct(self)
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 char str string
+        unit unit_struct identifier ignored_any
+    }
+}
+
+impl<'de> de::IntoDeserializer<'de, de::value::Error> for &'de Value {
+    type Deserializer = Self;
+    fn into_deserializer(self) -> Self {
+        self
+    }
+}
+
+impl Value {
+    /// What serde's messages call this value.
+    fn unexpected(&self) -> de::Unexpected<'_> {
+        match self {
+            Value::Null => de::Unexpected::Unit,
+            Value::Bool(b) => de::Unexpected::Bool(*b),
+            Value::Number(n) if n.fract() == 0.0 && n.abs() <= MAX_SAFE_INTEGER => {
+                if *n >= 0.0 {
+                    de::Unexpected::Unsigned(*n as u64)
+                } else {
+                    de::Unexpected::Signed(*n as i64)
+                }
+            }
+            Value::Number(n) => de::Unexpected::Float(*n),
+            Value::Text(t) => de::Unexpected::Str(t),
+            Value::Bytes(b) => de::Unexpected::Bytes(b),
+            Value::List(_) => de::Unexpected::Seq,
+            Value::Object(_) => de::Unexpected::Map,
+        }
+    }
+}

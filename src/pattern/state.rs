@@ -17,11 +17,11 @@
 //! uploads kept their aspect hold 256 × 256 targets, which still check.
 use super::fit::Budget;
 use super::loss::LossKind;
+use crate::core::check::{null_as_default, read_document, Check, Path};
 use crate::core::error::Result;
 use crate::core::limits::MAX_PROGRAM_BYTES;
-use crate::core::value::{invalid, js_len, js_text, Value, MAX_SAFE_INTEGER};
-use serde::de::value::{Error as DeError, StrDeserializer};
-use serde::{Deserialize, Serialize};
+use crate::core::value::{js_text, Value, MAX_SAFE_INTEGER};
+use serde::{Deserialize, Deserializer, Serialize};
 
 /// Schema version of the Fit state (the page's `state.version`).
 pub const STATE_VERSION: u32 = 1;
@@ -32,24 +32,25 @@ pub const TARGET_SIDE: u32 = 256;
 pub const MAX_VALUES: usize = 1000;
 /// Longest generator name, in characters.
 pub const MAX_GENERATOR_NAME: usize = 100;
-/// The budgets and losses, as the `fit` request names them.
-pub const BUDGETS: &[&str] = &["quick", "paper"];
-pub const LOSSES: &[&str] = &["sdf", "l1", "pyramid", "image"];
 
-/// A checked Fit document.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A Fit document (unknown fields are dropped, as they always were).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FitState {
+    #[serde(default)]
     pub generator: Option<String>,
     pub program: String,
     pub values: Vec<f64>,
+    #[serde(default)]
     pub target: Option<Target>,
+    #[serde(default)]
     pub truth: Option<Vec<f64>>,
+    #[serde(default)]
     pub result: Option<FitResultState>,
     pub settings: Settings,
 }
 
 /// The drawn (or rendered) target: straight RGBA.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Target {
     pub width: u32,
     pub height: u32,
@@ -58,190 +59,277 @@ pub struct Target {
 }
 
 /// The last fit's answer, as the page shows it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FitResultState {
     pub params: Vec<f64>,
     pub loss: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Each name as the page's `String(name)` writes it.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "js_texts"
+    )]
     pub names: Option<Vec<String>>,
+    /// Missing or `null` in older documents: 0.
+    #[serde(default, deserialize_with = "null_as_default")]
     pub evaluations: u64,
 }
 
-/// The fit settings the panel offers.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// The fit settings the panel offers: the `fit` request's own fields and
+/// names ([`super::api::FitRequest`]'s `budget`, `loss`, `seed`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Settings {
     pub budget: Budget,
     pub loss: LossKind,
     pub seed: u64,
 }
 
-fn finite_list(v: Option<&Value>, field: &str) -> Result<Vec<f64>> {
-    v.and_then(Value::as_list)
-        .filter(|l| l.len() <= MAX_VALUES)
-        .and_then(|l| l.iter().map(Value::finite).collect())
-        .ok_or_else(|| {
-            invalid(
-                field,
-                format!("must be a list of at most {MAX_VALUES} finite numbers"),
-            )
-        })
+/// A list of anything, each item as text (`String(x)`); `null` is `None`.
+fn js_texts<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Option<Vec<String>>, D::Error> {
+    let list: Option<Vec<Value>> = Option::deserialize(d)?;
+    Ok(list.map(|l| l.iter().map(|x| js_text(Some(x))).collect()))
 }
 
-fn choice<'a, T: Deserialize<'a>>(v: Option<&'a Value>, field: &str, names: &[&str]) -> Result<T> {
-    v.and_then(Value::as_text)
-        .filter(|s| names.contains(s))
-        .and_then(|s| T::deserialize(StrDeserializer::<DeError>::new(s)).ok())
-        .ok_or_else(|| invalid(field, format!("must be one of {}", names.join(", "))))
-}
-
-fn seed(v: Option<&Value>, field: &str) -> Result<u64> {
-    v.and_then(Value::whole)
-        .filter(|x| (0.0..=MAX_SAFE_INTEGER).contains(x))
-        .map(|x| x as u64)
-        .ok_or_else(|| invalid(field, "must be a whole number ≥ 0"))
-}
-
-/// Check a Fit document field by field; the error names the field at fault.
-pub fn check(raw: &Value) -> Result<FitState> {
-    if !raw.is_plain_object() {
-        return Err(invalid("state", "is not a Fit document"));
+/// At most [`MAX_VALUES`] finite numbers.
+fn finite_list(at: &Path, list: &[f64]) -> Result<()> {
+    if list.len() <= MAX_VALUES && list.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(at.invalid(format!(
+            "must be a list of at most {MAX_VALUES} finite numbers"
+        )))
     }
-    let generator = match raw.get("generator") {
-        None | Some(Value::Null) => None,
-        Some(Value::Text(g)) if js_len(g) <= MAX_GENERATOR_NAME => Some(g.clone()),
-        Some(_) => return Err(invalid("generator", "must be a generator name")),
-    };
-    let program = raw
-        .get("program")
-        .and_then(Value::as_text)
-        .filter(|p| !p.trim().is_empty() && p.len() <= MAX_PROGRAM_BYTES)
-        .ok_or_else(|| {
-            invalid(
-                "program",
-                format!("must be the text of a program (at most {MAX_PROGRAM_BYTES} bytes)"),
-            )
-        })?
-        .to_string();
-    let values = finite_list(raw.get("values"), "values")?;
+}
 
-    let target = match raw.get("target") {
-        None | Some(Value::Null) => None,
-        Some(t) => {
-            let side = |k: &str| {
-                t.get(k)
-                    .and_then(Value::as_f64)
-                    .filter(|v| v.fract() == 0.0 && (1.0..=TARGET_SIDE as f64).contains(v))
-                    .map(|v| v as u32)
-            };
-            let (width, height) = match (side("width"), side("height")) {
-                (Some(w), Some(h)) if w.max(h) == TARGET_SIDE => (w, h),
-                _ => {
-                    return Err(invalid(
-                        "target",
-                        format!(
-                            "must be {TARGET_SIDE} pixels along its longer side \
-                             (and at least 1 along the other)"
-                        ),
-                    ))
-                }
-            };
-            let n = width as usize * height as usize * 4;
-            match t.get("rgba") {
-                Some(Value::Bytes(b)) if b.len() == n => Some(Target {
-                    width,
-                    height,
-                    rgba: b.clone(),
-                }),
-                _ => return Err(invalid("target.rgba", format!("must hold {n} bytes"))),
+fn safe_whole(at: &Path, v: u64) -> Result<()> {
+    at.whole_in(v, (0, MAX_SAFE_INTEGER as u64))
+}
+
+impl Check for FitState {
+    fn check(&self, at: &Path) -> Result<()> {
+        if let Some(g) = &self.generator {
+            at.key("generator").js_len_at_most(
+                g,
+                MAX_GENERATOR_NAME,
+                format!("must be a generator name (at most {MAX_GENERATOR_NAME} characters)"),
+            )?;
+        }
+        if self.program.trim().is_empty() || self.program.len() > MAX_PROGRAM_BYTES {
+            return Err(at.key("program").invalid(format!(
+                "must be the text of a program (at most {MAX_PROGRAM_BYTES} bytes)"
+            )));
+        }
+        finite_list(&at.key("values"), &self.values)?;
+        self.target.check(&at.key("target"))?;
+        if let Some(t) = &self.truth {
+            finite_list(&at.key("truth"), t)?;
+            if t.len() != self.values.len() {
+                return Err(at.key("truth").invalid(format!(
+                    "must have one value per parameter ({})",
+                    self.values.len()
+                )));
             }
         }
-    };
-
-    let truth = match raw.get("truth") {
-        None | Some(Value::Null) => None,
-        t => Some(finite_list(t, "truth")?),
-    };
-    if let Some(t) = &truth {
-        if t.len() != values.len() {
-            return Err(invalid(
-                "truth",
-                format!("must have one value per parameter ({})", values.len()),
-            ));
-        }
+        self.result.check(&at.key("result"))?;
+        safe_whole(&at.key("settings").key("seed"), self.settings.seed)
     }
+}
 
-    let result = match raw.get("result") {
-        None | Some(Value::Null) => None,
-        Some(r) if !r.is_object_like() => return Err(invalid("result", "is not a fit result")),
-        Some(r) => {
-            let params = finite_list(r.get("params"), "result.params")?;
-            let loss = r
-                .get("loss")
-                .and_then(Value::finite)
-                .filter(|l| *l >= 0.0)
-                .ok_or_else(|| invalid("result.loss", "must be a finite number ≥ 0"))?;
-            let evaluations = match r.get("evaluations") {
-                None | Some(Value::Null) => 0,
-                e => seed(e, "result.evaluations")?,
-            };
-            let names = match r.get("names") {
-                None | Some(Value::Null) => None,
-                Some(n) => Some(
-                    n.as_list()
-                        .filter(|l| l.len() <= MAX_VALUES)
-                        .ok_or_else(|| {
-                            invalid(
-                                "result.names",
-                                format!("must be a list of at most {MAX_VALUES} parameter names"),
-                            )
-                        })?
-                        .iter()
-                        .map(|x| js_text(Some(x)))
-                        .collect(),
-                ),
-            };
-            Some(FitResultState {
-                params,
-                loss,
-                names,
-                evaluations,
-            })
+impl Check for Target {
+    fn check(&self, at: &Path) -> Result<()> {
+        let (w, h) = (self.width, self.height);
+        if w.min(h) < 1 || w.max(h) != TARGET_SIDE {
+            return Err(at.invalid(format!(
+                "must be {TARGET_SIDE} pixels along its longer side \
+                 (and at least 1 along the other)"
+            )));
         }
-    };
+        let n = w as usize * h as usize * 4;
+        if self.rgba.len() != n {
+            return Err(at.key("rgba").invalid(format!("must hold {n} bytes")));
+        }
+        Ok(())
+    }
+}
 
-    let s = raw
-        .get("settings")
-        .filter(|s| s.is_object_like())
-        .ok_or_else(|| invalid("settings", "are missing"))?;
-    let settings = Settings {
-        budget: choice(s.get("budget"), "settings.budget", BUDGETS)?,
-        loss: choice(s.get("loss"), "settings.loss", LOSSES)?,
-        seed: seed(s.get("seed"), "settings.seed")?,
-    };
-    Ok(FitState {
-        generator,
-        program,
-        values,
-        target,
-        truth,
-        result,
-        settings,
-    })
+impl Check for FitResultState {
+    fn check(&self, at: &Path) -> Result<()> {
+        finite_list(&at.key("params"), &self.params)?;
+        if !(self.loss.is_finite() && self.loss >= 0.0) {
+            return Err(at.key("loss").invalid("must be a finite number ≥ 0"));
+        }
+        safe_whole(&at.key("evaluations"), self.evaluations)?;
+        if self.names.as_ref().is_some_and(|n| n.len() > MAX_VALUES) {
+            return Err(at.key("names").invalid(format!(
+                "must be a list of at most {MAX_VALUES} parameter names"
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Read and check a Fit document; the error names the field at fault.
+pub fn check(raw: &Value) -> Result<FitState> {
+    read_document(raw, "Fit")
 }
 
 #[cfg(test)]
 mod tests {
+    //! The document and the `fit` request agree: each range just inside is
+    //! accepted, just outside refused naming the field.
     use super::*;
+    use crate::core::error::Error;
+    use serde_json::{json, Value as Json};
+
+    fn doc() -> Json {
+        json!({
+            "generator": "stripes", "program": "param r in [0, 1] = 0.5;\ncircle(0.5, 0.5, r);\n",
+            "values": [0.5], "target": null, "truth": [0.25],
+            "result": {"params": [0.3], "loss": 0.0, "names": ["r"], "evaluations": 0},
+            "settings": {"budget": "quick", "loss": "sdf", "seed": 0}
+        })
+    }
+
+    fn read(j: &Json) -> Result<FitState> {
+        check(&Value::read(j, false).unwrap())
+    }
+
+    fn with(edit: impl Fn(&mut Json)) -> Json {
+        let mut d = doc();
+        edit(&mut d);
+        d
+    }
+
+    #[track_caller]
+    fn refused(d: &Json, field: &str) -> Error {
+        let e = read(d).unwrap_err();
+        assert_eq!(e.field(), Some(field), "{e}");
+        assert!(e.to_string().starts_with(field), "{e} names {field}");
+        e
+    }
 
     #[test]
-    fn budgets_and_losses_are_the_core_names() {
-        for b in BUDGETS {
-            let v: Budget = Budget::deserialize(StrDeserializer::<DeError>::new(b)).unwrap();
-            assert_eq!(serde_json::to_value(v).unwrap(), *b);
+    fn every_range_is_inside_or_out_by_one() {
+        let n = |k: usize| json!(vec![0.5; k]);
+        // (inside, outside, field)
+        let cases: Vec<(Json, Json, &str)> = vec![
+            (
+                with(|d| d["generator"] = json!("g".repeat(MAX_GENERATOR_NAME))),
+                with(|d| d["generator"] = json!("g".repeat(MAX_GENERATOR_NAME + 1))),
+                "generator",
+            ),
+            (
+                with(|d| d["program"] = json!("c".repeat(MAX_PROGRAM_BYTES))),
+                with(|d| d["program"] = json!("c".repeat(MAX_PROGRAM_BYTES + 1))),
+                "program",
+            ),
+            (
+                with(|d| {
+                    d["values"] = n(MAX_VALUES);
+                    d["truth"] = n(MAX_VALUES);
+                }),
+                with(|d| {
+                    d["values"] = n(MAX_VALUES + 1);
+                    d["truth"] = Json::Null;
+                }),
+                "values",
+            ),
+            (
+                with(|d| d["result"]["params"] = n(MAX_VALUES)),
+                with(|d| d["result"]["params"] = n(MAX_VALUES + 1)),
+                "result.params",
+            ),
+            (
+                with(|d| d["result"]["names"] = json!(vec!["r"; MAX_VALUES])),
+                with(|d| d["result"]["names"] = json!(vec!["r"; MAX_VALUES + 1])),
+                "result.names",
+            ),
+            (
+                with(|d| d["truth"] = n(1)),
+                with(|d| d["truth"] = n(2)),
+                "truth",
+            ),
+            (
+                with(|d| d["result"]["loss"] = json!(0.0)),
+                with(|d| d["result"]["loss"] = json!(-1e-9)),
+                "result.loss",
+            ),
+            (
+                with(|d| d["settings"]["seed"] = json!(MAX_SAFE_INTEGER)),
+                with(|d| d["settings"]["seed"] = json!(-1)),
+                "settings.seed",
+            ),
+            (
+                with(|d| {
+                    d["target"] = json!({"width": TARGET_SIDE, "height": 1,
+                        "rgba": vec![0u8; TARGET_SIDE as usize * 4]})
+                }),
+                with(|d| {
+                    d["target"] = json!({"width": TARGET_SIDE + 1, "height": 1,
+                        "rgba": vec![0u8; (TARGET_SIDE as usize + 1) * 4]})
+                }),
+                "target",
+            ),
+        ];
+        for (inside, outside, field) in cases {
+            // serde_json has no bytes: a target's rgba goes in as bytes.
+            let bytes = |j: &Json| {
+                let mut v = Value::read(j, false).unwrap();
+                if let Value::Object(kv) = &mut v {
+                    for (k, t) in kv.iter_mut() {
+                        if let (true, Value::Object(t)) = (k == "target", t) {
+                            for (k, r) in t.iter_mut() {
+                                if let (true, Value::List(l)) = (k == "rgba", &*r) {
+                                    let b = l.iter().map(|x| x.as_f64().unwrap() as u8).collect();
+                                    *r = Value::Bytes(b);
+                                }
+                            }
+                        }
+                    }
+                }
+                v
+            };
+            check(&bytes(&inside)).unwrap_or_else(|e| panic!("{field} inside: {e}"));
+            let e = check(&bytes(&outside)).unwrap_err();
+            assert_eq!(e.field(), Some(field), "{e}");
+            assert!(e.to_string().starts_with(field), "{e}");
         }
-        for l in LOSSES {
-            let v = LossKind::deserialize(StrDeserializer::<DeError>::new(l)).unwrap();
-            assert_eq!(serde_json::to_value(v).unwrap(), *l);
+        // NaN, which a page's number can be, is not a value.
+        let mut v = Value::read(doc(), false).unwrap();
+        if let Value::Object(kv) = &mut v {
+            for (_, v) in kv.iter_mut().filter(|(k, _)| k == "values") {
+                *v = Value::List(vec![Value::Number(f64::NAN)]);
+            }
         }
+        assert_eq!(check(&v).unwrap_err().field(), Some("values"));
+    }
+
+    #[test]
+    fn the_settings_are_the_fit_requests() {
+        // Every budget and loss the `fit` request reads is a document's,
+        // and no other name.
+        let req = crate::pattern::api::FitRequest::default();
+        let d = with(|d| {
+            d["settings"]["budget"] = serde_json::to_value(req.budget).unwrap();
+            d["settings"]["loss"] = serde_json::to_value(req.loss).unwrap();
+            d["settings"]["seed"] = json!(req.seed);
+        });
+        let s = read(&d).unwrap().settings;
+        assert_eq!((s.budget, s.loss, s.seed), (req.budget, req.loss, req.seed));
+        for name in ["paper", "quick"] {
+            read(&with(|d| d["settings"]["budget"] = json!(name))).unwrap();
+        }
+        for name in ["sdf", "l1", "pyramid", "image"] {
+            read(&with(|d| d["settings"]["loss"] = json!(name))).unwrap();
+        }
+        let e = refused(
+            &with(|d| d["settings"]["budget"] = json!("slow")),
+            "settings.budget",
+        );
+        assert_eq!(e.to_string(), "settings.budget must be one of quick, paper");
+        refused(&with(|d| d["settings"]["loss"] = json!(3)), "settings.loss");
+        // Unknown fields are dropped, as they always were.
+        let s = read(&with(|d| d["extra"] = json!(1))).unwrap();
+        assert_eq!(s, read(&doc()).unwrap());
     }
 }
