@@ -269,6 +269,28 @@ test('tangle: a grammar error is marked in the editor at its line; a typed word 
   assert.ok(await count(page) > 50);
 });
 
+test('tangle: an example picked right after typing replaces the typed grammar, in the document and the editor', async () => {
+  const page = await env.newPage({ path: '#tool=tangle' });
+  await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });
+  let n = await runs(page);
+  const before = await page.evaluate(() => window.filigree.testHooks.tangle.state());
+  const other = before.example === 'checkerboard' ? 'pebbles' : 'checkerboard';
+  const want = fs.readFileSync(new URL(`../../assets/tangle/${other}.tangle`, import.meta.url), 'utf8');
+  // Typed text waits 0.6 s before it is committed; the example is picked within that pause.
+  await page.fill('[data-testid=tangle-grammar]', `${before.grammar}\n// typed, then an example picked`);
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.tangle.pending()), true, 'the typed text waits for its pause');
+  await page.click(`[data-example=${other}]`);
+  n = await waitForResult(page, n);
+  // Longer than the typing pause: nothing typed is committed afterwards.
+  await page.waitForTimeout(1200);
+  const after = await page.evaluate(() => window.filigree.testHooks.tangle.state());
+  assert.equal(after.example, other);
+  assert.equal(after.grammar, want);
+  const shown = await page.$eval('[data-testid=tangle-grammar]', (el) => el.value ?? el.innerText);
+  assert.equal(shown.replace(/\s+/g, ' ').trim(), want.replace(/\s+/g, ' ').trim());
+  assert.equal(await page.evaluate(() => window.filigree.testHooks.tangle.pending()), false);
+});
+
 test('tangle: an uploaded SVG icon starts the tangle as it looks, fitted to the grammar\'s frame', async () => {
   const page = await env.newPage({ path: '#tool=tangle' });
   await page.waitForFunction(() => window.filigree?.testHooks?.tangle && Number(document.querySelector('[data-testid=tangle-status]').dataset.runs || 0) > 0, null, { timeout: 60000 });

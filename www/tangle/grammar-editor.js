@@ -53,11 +53,6 @@ export function createGrammarEditor(ctx, parent, { details, live, generate }) {
       ctx.clearTimeout(typingTimer);
       typingTimer = null;
     },
-    /**
-     * Stop the pending commit's timer only: `typing()` stays true, so `render`
-     * leaves the editor's text as it is (what a picked example does, panel.js).
-     */
-    pauseTyping: () => ctx.clearTimeout(typingTimer),
     /** Show document `s`'s grammar (not over typed text) and clear a mark of an older grammar. */
     render(s, prev) {
       if (editor && editor.getValue() !== s.grammar && typingTimer === null) editor.setValue(s.grammar);

@@ -136,9 +136,9 @@ function mount(el, ctx) {
     if (!doc) return;
     live.refit = true;
     live.lastPick = -1;
-    // TODO(issue 33): this leaves a pending typed grammar counted as typing (as the panel
-    // always did), so the editor keeps the typed text and the `pending` hook stays true.
-    editor.pauseTyping();
+    // A grammar typed less than a pause ago is dropped: the example replaces it, in the
+    // document and in the editor.
+    editor.dropTyping();
     ctx.commit({ ...doc, example: ex.name, grammar: ex.grammar, start: null, edits: [], selected: null });
   }
 
