@@ -3,7 +3,8 @@
 //! (file, pixel size, line and column, limit, request field).
 //!
 //! Errors cross the wasm boundary as [`ErrorInfo`], a plain object
-//! `{kind, message, line?, column?, field?}` (see `www/app/protocol.js`).
+//! `{kind, message, line?, column?, field?}`: `line` and `column`
+//! whenever the error has a place, so a page never reads them from the text (see `www/app/protocol.js`).
 use serde::Serialize;
 use std::fmt;
 
@@ -21,11 +22,24 @@ pub enum Error {
     BadRequest(String),
     /// An explicit limit was exceeded (image size, shape count, operations ...).
     Limit(String),
+    /// The input is valid, but this way of computing it cannot take it
+    /// (e.g. a number beyond the GPU's 32-bit floats); another way (the
+    /// CPU) can, and the message says which.
+    Unsupported(String),
     /// A text input (script, grammar, JSON) failed to parse at a place.
     Syntax {
         line: usize,
         column: usize,
         message: String,
+    },
+    /// `error` (a limit or a rule, not a parse failure) was met at a place
+    /// in a text input: a program's statement, a grammar's rule. Its kind
+    /// stays `error`'s; the place travels as `line` and `column` beside
+    /// the message, as a syntax error's does. Built with [`Error::placed`].
+    Placed {
+        line: usize,
+        column: usize,
+        error: Box<Error>,
     },
     /// The job was cancelled through its cancel flag.
     Cancelled,
@@ -69,23 +83,43 @@ impl Error {
             },
         }
     }
-    /// The error without its field, if any.
+    /// This error was met at `line`, `column` (1-based) of a text input.
+    /// A syntax error keeps its own place.
+    pub fn placed(self, line: usize, column: usize) -> Self {
+        match self {
+            Error::Syntax { .. } | Error::Placed { .. } | Error::Cancelled => self,
+            Error::Field { field, error } => Error::Field {
+                field,
+                error: Box::new(error.placed(line, column)),
+            },
+            e => Error::Placed {
+                line,
+                column,
+                error: Box::new(e),
+            },
+        }
+    }
+    /// The error without its field and place, if any.
     pub fn inner(&self) -> &Error {
         match self {
-            Error::Field { error, .. } => error.inner(),
+            Error::Field { error, .. } | Error::Placed { error, .. } => error.inner(),
             e => e,
         }
     }
     /// A short machine-readable category, used by the worker protocol:
-    /// `invalid-input`, `limit`, `syntax` or `cancelled`.
+    /// `invalid-input`, `bad-request`, `limit`, `unsupported`, `syntax` or
+    /// `cancelled`.
     pub fn kind(&self) -> &'static str {
         match self.inner() {
             Error::InvalidInput(_) => "invalid-input",
             Error::BadRequest(_) => "bad-request",
             Error::Limit(_) => "limit",
+            Error::Unsupported(_) => "unsupported",
             Error::Syntax { .. } => "syntax",
             Error::Cancelled => "cancelled",
-            Error::Field { .. } => unreachable!("inner() unwraps fields"),
+            Error::Field { .. } | Error::Placed { .. } => {
+                unreachable!("inner() unwraps fields and places")
+            }
         }
     }
     /// The dotted request field at fault, if known.
@@ -95,10 +129,13 @@ impl Error {
             _ => None,
         }
     }
-    /// Line and column (1-based) of a syntax error.
+    /// Line and column (1-based) of a syntax error or a placed one.
     pub fn position(&self) -> Option<(usize, usize)> {
-        match self.inner() {
-            Error::Syntax { line, column, .. } => Some((*line, *column)),
+        match self {
+            Error::Syntax { line, column, .. } | Error::Placed { line, column, .. } => {
+                Some((*line, *column))
+            }
+            Error::Field { error, .. } => error.position(),
             _ => None,
         }
     }
@@ -118,7 +155,10 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::InvalidInput(m) | Error::BadRequest(m) | Error::Limit(m) => f.write_str(m),
+            Error::InvalidInput(m)
+            | Error::BadRequest(m)
+            | Error::Limit(m)
+            | Error::Unsupported(m) => f.write_str(m),
             Error::Syntax {
                 line,
                 column,
@@ -126,6 +166,11 @@ impl fmt::Display for Error {
             } => {
                 write!(f, "line {line}, column {column}: {message}")
             }
+            Error::Placed {
+                line,
+                column,
+                error,
+            } => write!(f, "line {line}, column {column}: {error}"),
             Error::Cancelled => f.write_str("cancelled"),
             Error::Field { error, .. } => error.fmt(f),
         }
@@ -154,6 +199,20 @@ mod tests {
                 message: "line 3, column 7: expected ')'".into(),
                 line: Some(3),
                 column: Some(7),
+                field: Some("program".into()),
+            }
+        );
+        // A limit met at a place keeps its kind, and its place is data.
+        let p = Error::limit("more than 9 shapes")
+            .placed(4, 2)
+            .at("program");
+        assert_eq!(
+            p.info(),
+            ErrorInfo {
+                kind: "limit",
+                message: "line 4, column 2: more than 9 shapes".into(),
+                line: Some(4),
+                column: Some(2),
                 field: Some("program".into()),
             }
         );

@@ -68,7 +68,7 @@ void main() {
 fn lit(x: f64) -> Result<String> {
     let f = x as f32;
     if !f.is_finite() || (x != 0.0 && f.abs() < f32::MIN_POSITIVE) {
-        return Err(Error::input(format!(
+        return Err(Error::Unsupported(format!(
             "the scene has the number {x}, outside the GPU's 32-bit float range; \
              the CPU renderer can still draw it"
         ))
@@ -925,6 +925,8 @@ mod tests {
         .unwrap();
         let e = program(&s, &settings()).unwrap_err();
         assert_eq!(e.field(), Some("scene"));
+        // The page tells "the GPU cannot, the CPU can" by this kind, not the text.
+        assert_eq!(e.kind(), "unsupported");
         assert!(e.to_string().contains("32-bit"), "{e}");
         assert_eq!(lit(-2.5).unwrap(), "(-2.5)");
         assert_eq!(lit(1e-7).unwrap(), "1e-7");

@@ -46,6 +46,10 @@ impl Pos {
             message: message.into(),
         }
     }
+    /// A limit met at this place (its line and column travel as data).
+    pub fn limit(self, message: impl Into<String>) -> Error {
+        Error::limit(message).placed(self.line, self.column)
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]

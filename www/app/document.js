@@ -853,7 +853,7 @@ export class DocumentController {
       full = await this.check(tool, raw, version ?? tool.state.version);
     } catch (err) {
       const why = String(plainError(err) ?? 'it was cancelled').replace(/([^.])$/, '$1.');
-      throw new Error(`This ${source} could not be opened: ${why} Your own work is unchanged.`);
+      throw Object.assign(new Error(`This ${source} could not be opened: ${why} Your own work is unchanged.`), { workUnchanged: true });
     }
     if (readOnly) this.persist = false;
     await this.show(tool.id, { state: full, source }, { readOnly });
@@ -951,7 +951,7 @@ export class DocumentController {
       return true;
     } catch (err) {
       const cur = await this.show(decoded?.tool || fallbackTool);
-      const msg = /Your own work is unchanged/.test(err.message) ? err.message : `${err.message} Your own work is unchanged.`;
+      const msg = err.workUnchanged ? err.message : `${err.message} Your own work is unchanged.`;
       cur.ctx.error(new Error(msg));
       return false;
     }
@@ -1011,8 +1011,8 @@ export class DocumentController {
       await cur.view.drop(file);
     } catch (err) {
       if (this.current !== cur || err?.kind === 'cancelled') return false;
-      const line = Number.isInteger(err?.line) && !/\bline \d/.test(err.message || '') ? `line ${err.line}: ` : '';
-      const why = `${line}${plainError(err) ?? 'it was cancelled'}`.replace(/\.$/, '');
+      // A core error with a place says it in its message ("line L, column C: ...").
+      const why = `${plainError(err) ?? 'it was cancelled'}`.replace(/\.$/, '');
       cur.ctx.error(new Error(`${file.name} was not opened — ${why}. Your work is unchanged.`), { source: 'drop' });
       return false;
     }

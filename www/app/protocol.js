@@ -36,10 +36,13 @@
 //                                      the job failed. The core's typed error,
 //                                      passed on untouched:
 //                                        kind    'invalid-input' | 'bad-request' | 'limit' |
+//                                                'unsupported' (valid, but not this
+//                                                way: the GPU, where the CPU can) |
 //                                                'syntax' | 'cancelled'
 //                                        message the whole text, for people
-//                                        line, column  1-based place of a
-//                                                syntax error (in `field`)
+//                                        line, column  1-based place in a text
+//                                                (in `field`) of a syntax error, or
+//                                                of a limit met there
 //                                        field   dotted path of the request
 //                                                field at fault, e.g.
 //                                                'program', 'tolerance',
@@ -103,8 +106,8 @@ export const moduleUrl = (name, ext = '_bg.wasm') => new URL(`../../pkg/filigree
 // Wall-clock budget of one run of slices before the worker yields.
 export const SLICE_MS = 15;
 
-/** An error reported by a job; `kind` is 'invalid-input', 'bad-request' (the request could not be read: the page's fault), 'limit', 'syntax', 'cancelled', 'crash' or 'protocol'.
- * `line`/`column` place a syntax error, `field` names the request field at fault (undefined when unknown). */
+/** An error reported by a job; `kind` is 'invalid-input', 'bad-request' (the request could not be read: the page's fault), 'limit', 'unsupported', 'syntax', 'cancelled', 'crash' or 'protocol'.
+ * `line`/`column` place an error in a text (a syntax error, or a limit a program met at a statement), `field` names the request field at fault (undefined when unknown). */
 export class JobError extends Error {
   constructor(message, kind = 'invalid-input', { line, column, field } = {}) {
     super(message);

@@ -50,7 +50,15 @@ export class ShareTooBig extends Error {
 /** `bytes` in whole KB, rounded up, as words ('70 KB'). */
 export const kb = (bytes) => `${Math.ceil(bytes / 1024)} KB`;
 
-const bad = (why) => new Error(`This link is damaged or not a Filigree link: ${why}.`);
+/** A link that cannot be read; the message says why, for people. */
+export class LinkError extends Error {
+  constructor(message) {
+    super(message);
+    this.name = 'LinkError';
+  }
+}
+
+const bad = (why) => new LinkError(`This link is damaged or not a Filigree link: ${why}.`);
 
 // ---- base64url ---------------------------------------------------------------
 
@@ -98,7 +106,7 @@ async function inflate(bytes, limit) {
       chunks.push(value);
     }
   } catch (err) {
-    if (err.message?.startsWith('This link')) throw err;
+    if (err instanceof LinkError) throw err;
     throw bad('its compressed data is corrupt');
   }
   const out = new Uint8Array(total);
@@ -190,7 +198,7 @@ export async function decodeShare(fragment) {
   if (!doc || typeof doc !== 'object' || Array.isArray(doc)) throw bad('its contents are not a shared state');
   if (doc.format !== SHARE_FORMAT) {
     if (Number.isInteger(doc.format) && doc.format > SHARE_FORMAT) {
-      throw new Error('This link was made by a newer Filigree; update Filigree (reload the page) to open it.');
+      throw new LinkError('This link was made by a newer Filigree; update Filigree (reload the page) to open it.');
     }
     throw bad('it has no known format');
   }

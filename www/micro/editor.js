@@ -37,8 +37,7 @@ export function createSceneEditor(ctx, { q }) {
 
   function markSceneError(err) {
     if (err?.field !== 'scene' && err?.kind !== 'syntax') return false;
-    const m = /line (\d+), column (\d+)/.exec(err.message || '');
-    const at = Number.isInteger(err.line) ? [err.line, err.column ?? 1] : m && [Number(m[1]), Number(m[2])];
+    const at = Number.isInteger(err.line) && [err.line, err.column ?? 1];
     q('details.micro-program').open = true;
     editorReady.then((ed) => ctx.alive() && ed.markError(at ? at[0] : 1, at ? at[1] : 1, err.message));
     return true;

@@ -111,8 +111,9 @@ export function createGpuView(ctx, { q, live, picture, editor, statusEl, status,
   /** The GPU could not draw: say why (a compile failure) and draw on the CPU. */
   function gpuFallback(doc, err) {
     stopGpu();
-    // A compile failure, or numbers beyond 32-bit floats (the CPU still draws those).
-    if (err && (!err.kind || /32-bit/.test(err.message || ''))) {
+    // A compile failure (not a job's error), or a scene the GPU cannot
+    // draw that the CPU can (numbers beyond 32-bit floats).
+    if (err && (!err.kind || err.kind === 'unsupported')) {
       gpuFailed.set(shaderKey(doc), err.message);
       noteGpu(`GPU view off for this scene: ${err.message}; drawing on the CPU.`);
     }

@@ -62,8 +62,7 @@ export function createGrammarEditor(ctx, parent, { details, live, generate }) {
     markError(err) {
       if (err.field !== 'grammar' && err.kind !== 'syntax') return;
       details.open = true;
-      const m = /line (\d+), column (\d+)/.exec(err.message || '');
-      const at = Number.isInteger(err.line) ? [err.line, err.column ?? 1] : m && [Number(m[1]), Number(m[2])];
+      const at = Number.isInteger(err.line) && [err.line, err.column ?? 1];
       if (at) ready.then((ed) => ctx.alive() && ed.markError(at[0], at[1], err.message));
     },
   };

@@ -119,9 +119,9 @@ impl<'a> Rec<'a> {
     pub(super) fn tick(&mut self, pos: Pos) -> Result<()> {
         self.ops += 1;
         if self.ops > self.limits.max_ops {
-            return Err(Error::limit(format!(
-                "line {}, column {}: the program ran more than {} operations; does a loop or a recursion never end?",
-                pos.line, pos.column, self.limits.max_ops
+            return Err(pos.limit(format!(
+                "the program ran more than {} operations; does a loop or a recursion never end?",
+                self.limits.max_ops
             )));
         }
         Ok(())
@@ -140,10 +140,9 @@ impl<'a> Rec<'a> {
                 ),
                 None => String::new(),
             };
-            return Err(Error::limit(format!(
-                "line {}, column {}: blocks, expressions and function calls nested deeper than {max}{inside}; \
-                 does a recursion never end?",
-                pos.line, pos.column
+            return Err(pos.limit(format!(
+                "blocks, expressions and function calls nested deeper than {max}{inside}; \
+                 does a recursion never end?"
             )));
         }
         self.depth += 1;

@@ -15,11 +15,10 @@ impl Rec<'_> {
     pub(super) fn push_prim(&mut self, kind: PrimKind, vals: &[V]) -> Result<u32> {
         let pos = self.at;
         if self.prims.len() >= self.limits.max_shapes {
-            return Err(Error::limit(format!(
-                "line {}, column {}: more than {} shapes (every primitive counts: single shapes, \
-                 path pieces and the parts of boolean blocks; a cubic is 8 pieces); \
-                 reduce the counts or the loop sizes",
-                pos.line, pos.column, self.limits.max_shapes
+            return Err(pos.limit(format!(
+                "more than {} shapes (every primitive counts: single shapes, path pieces and the \
+                 parts of boolean blocks; a cubic is 8 pieces); reduce the counts or the loop sizes",
+                self.limits.max_shapes
             )));
         }
         let mut fields = [0u32; 6];
@@ -161,9 +160,9 @@ impl Rec<'_> {
         self.finite(w, c.pos, "the stroke width")?;
         let width = self.node(w);
         if self.shapes.len() >= self.limits.max_shapes {
-            return Err(Error::limit(format!(
-                "line {}, column {}: more than {} shapes; reduce the counts or the loop sizes",
-                c.pos.line, c.pos.column, self.limits.max_shapes
+            return Err(c.pos.limit(format!(
+                "more than {} shapes; reduce the counts or the loop sizes",
+                self.limits.max_shapes
             )));
         }
         self.shapes.push(Shape {

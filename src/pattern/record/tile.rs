@@ -201,11 +201,11 @@ impl Rec<'_> {
         let (xe, ye) = self.tile_extent(c)?;
         let limit = self.limits.max_shapes;
         let too_many = |count: f64| {
-            Error::limit(format!(
-                "line {}, column {}: this tile needs {count} or more copies to cover the canvas for \
-                 every parameter value in range (pitches as small as {:.4} × {:.4}); at most {limit} \
-                 are allowed: narrow the parameter ranges or enlarge the pitches",
-                c.pos.line, c.pos.column, pxb.0, pyb.0
+            c.pos.limit(format!(
+                "this tile needs {count} or more copies to cover the canvas for every parameter \
+                 value in range (pitches as small as {:.4} × {:.4}); at most {limit} are allowed: \
+                 narrow the parameter ranges or enlarge the pitches",
+                pxb.0, pyb.0
             ))
         };
         // Candidate index range for offsets k·[lo, hi] + s with the box [e0, e1]
