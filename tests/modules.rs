@@ -91,12 +91,28 @@ fn a_module_refuses_another_modules_kinds_and_documents() {
     let de = |s: &'static str| serde_json::Deserializer::from_str(s);
     let e = refused(start_pixel("render-pattern", &mut de("{}")));
     assert!(e.to_string().contains("served by the fit module"), "{e}");
-    // Tangle reads no images: its module has no decoders.
-    let e = refused(filigree::api::start_tangle("decode-image", &mut de("{}")));
-    assert!(
-        e.to_string().contains("served by the inspect module"),
-        "{e}"
-    );
+    // Tangle reads no images, and Fit, Micro and Texture read the PNGs
+    // their pages make: their modules serve no Inspect kinds (and in wasm
+    // link no JPEG, WebP, GIF or BMP decoder).
+    let inspect_kind = |e: filigree::Error| {
+        assert!(
+            e.to_string().contains("served by the inspect module"),
+            "{e}"
+        )
+    };
+    inspect_kind(refused(filigree::api::start_tangle(
+        "decode-image",
+        &mut de("{}"),
+    )));
+    inspect_kind(refused(filigree::api::start_fit(
+        "decode-image",
+        &mut de("{}"),
+    )));
+    inspect_kind(refused(filigree::api::start_micro(
+        "decode-image",
+        &mut de("{}"),
+    )));
+    inspect_kind(refused(start_texture("decode-image", &mut de("{}"))));
     assert!(start_pixel("decode-image", &mut de(r#"{"bytes": []}"#)).is_ok());
     // The Texture module checks Texture documents, not Fit ones.
     let e = refused(

@@ -287,10 +287,14 @@ impl Module {
         }
     }
 
-    /// Whether it also serves [`IMAGE_KINDS`] (every tool that reads
-    /// images; Tangle does not, so its module has no image decoders).
-    pub fn images(self) -> bool {
-        self != Module::Tangle
+    /// Whether it also serves [`IMAGE_KINDS`]: the tools whose panels
+    /// hand the user's image files to the core as they are (Pixel's source
+    /// and elements). Fit, Micro and Texture turn a user's file into PNG in
+    /// the page (the browser decodes it), so in wasm their modules read PNG
+    /// only ([`crate::raster::decode_sent`]) and have no other decoder;
+    /// Tangle reads no images.
+    pub const fn images(self) -> bool {
+        matches!(self, Module::Inspect | Module::Pixel)
     }
 }
 
@@ -323,7 +327,12 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
 
 /// The Inspect module's kinds: the shared ones, checking Inspect documents.
 pub fn start_inspect<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<RequestJob>> {
-    start_shared(kind, payload, project::check_inspect, true)
+    start_shared(
+        kind,
+        payload,
+        project::check_inspect,
+        Module::Inspect.images(),
+    )
 }
 
 /// The Pixel module's kinds.
@@ -333,7 +342,7 @@ pub fn start_pixel<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<
             Response::Pixel(Box::new(r.into()))
         }),
         "pixel-mask" => boxed(pixel::start_mask(request(kind, payload)?), Response::Mask),
-        _ => return start_shared(kind, payload, project::check_pixel, true),
+        _ => return start_shared(kind, payload, project::check_pixel, Module::Pixel.images()),
     })
 }
 
@@ -363,7 +372,7 @@ pub fn start_fit<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Bo
             pattern::start_snap(request(kind, payload)?)?,
             Response::Snap,
         ),
-        _ => return start_shared(kind, payload, project::check_fit, true),
+        _ => return start_shared(kind, payload, project::check_fit, Module::Fit.images()),
     })
 }
 
@@ -376,7 +385,14 @@ pub fn start_tangle<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result
         "tangle-examples" => listing(kind, payload, || {
             Response::TangleExamples(crate::tangle::examples::EXAMPLES)
         })?,
-        _ => return start_shared(kind, payload, project::check_tangle, false),
+        _ => {
+            return start_shared(
+                kind,
+                payload,
+                project::check_tangle,
+                Module::Tangle.images(),
+            )
+        }
     })
 }
 
@@ -398,7 +414,7 @@ pub fn start_micro<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<
         "micro-examples" => listing(kind, payload, || {
             Response::MicroExamples(crate::micro::examples::EXAMPLES)
         })?,
-        _ => return start_shared(kind, payload, project::check_micro, true),
+        _ => return start_shared(kind, payload, project::check_micro, Module::Micro.images()),
     })
 }
 
@@ -420,7 +436,14 @@ pub fn start_texture<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Resul
         "texture-retrieve" => boxed(texture::start_retrieve(request(kind, payload)?)?, |r| {
             Response::TextureRetrieval(Box::new(r))
         }),
-        _ => return start_shared(kind, payload, project::check_texture, true),
+        _ => {
+            return start_shared(
+                kind,
+                payload,
+                project::check_texture,
+                Module::Texture.images(),
+            )
+        }
     })
 }
 

@@ -48,7 +48,7 @@ use crate::core::job::{Job, Progress, Step};
 use crate::core::request_limits as lim;
 use crate::core::rng::Rng;
 use crate::optim::{AskTell, Cmaes, CmaesOptions, NelderMead, Powell, Scored};
-use crate::raster::{decode, Limits};
+use crate::raster::{decode_png, decode_sent, Limits};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use serde_bytes::ByteBuf;
@@ -545,7 +545,7 @@ impl Work {
             Work::Render(job) => match job.step()? {
                 Step::Running(_) => Ok((budget, None)),
                 Step::Done(out) => {
-                    let img = decode(
+                    let img = decode_png(
                         &out.png,
                         Limits {
                             max_side: MAX_FIT_IMAGE_SIDE,
@@ -676,7 +676,7 @@ fn volume_sampler(dims: [usize; 3], req: &MicroFitRequest, clamp: Option<f64>) -
 }
 
 fn decode_grey(bytes: &[u8], field: &str) -> Result<(u32, u32, Vec<f64>)> {
-    let img = decode(
+    let img = decode_sent(
         bytes,
         Limits {
             max_side: MAX_FIT_IMAGE_SIDE,

@@ -20,7 +20,7 @@ use crate::core::error::{Error, Result};
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::request_limits as lim;
 use crate::raster::RawImage;
-use crate::raster::{decode, Limits, Rgba8Image};
+use crate::raster::{decode_sent, Limits, Rgba8Image};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -334,7 +334,7 @@ pub struct SnapResponse {
 pub fn snap_target(req: &PatternSnapRequest) -> Result<SnapResponse> {
     let size = lim::int_in("size", req.size, lim::SNAP_SIZE)?;
     let tolerance = lim::finite_in("tolerance", req.tolerance, lim::TOLERANCE)?;
-    let img = decode(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
+    let img = decode_sent(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
     let (_, scene, _) = scene_of(&req.program, &req.params)?;
     let colours = &scene.rec.colours;
     let (w, h) = super::fit::image_canvas(&img).grid(size);
@@ -684,7 +684,7 @@ impl<X> FitRequestOf<X> {
     ) -> Result<TargetSource<'a>> {
         let tol = lim::finite_in("tolerance", self.tolerance, lim::TOLERANCE)?;
         if let Some(bytes) = &self.target_png {
-            *img = Some(decode(bytes, Limits::default()).map_err(|e| e.at("target_png"))?);
+            *img = Some(decode_sent(bytes, Limits::default()).map_err(|e| e.at("target_png"))?);
         } else if let Some(r) = &self.target_rgba {
             *img = Some(
                 Rgba8Image::from_raw(r.width, r.height, r.rgba.clone())

@@ -232,17 +232,58 @@ impl Rgba8Image {
 /// Decode PNG, JPEG, WebP, GIF (first frame) or BMP bytes into RGBA, checking
 /// the declared size against `limits` before allocating pixels.
 pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
+    let format = sniff(bytes)?;
+    let name = format_name(format);
+    let reader = ImageReader::with_format(Cursor::new(bytes), format);
+    let decoder = reader.into_decoder().map_err(|e| header_error(e, name))?;
+    finish(decoder, name, limits)
+}
+
+/// [`decode`] for PNG bytes only: any other format is refused as
+/// `unsupported`. It links the PNG decoder alone.
+pub fn decode_png(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
+    let format = sniff(bytes)?;
+    if format != ImageFormat::Png {
+        return Err(Error::Unsupported(format!(
+            "this is a {} file, and only PNG is read here: the page turns an image \
+             into PNG before sending it (an internal error)",
+            format_name(format)
+        )));
+    }
+    let decoder = image::codecs::png::PngDecoder::new(Cursor::new(bytes))
+        .map_err(|e| header_error(e, "PNG"))?;
+    finish(decoder, "PNG", limits)
+}
+
+/// An image a request of Fit, Micro or Texture carries. Natively that is
+/// the user's file (the CLI reads it): any format, [`decode`]. In the
+/// browser the page has already decoded the user's file and sends PNG
+/// (Texture's example, Micro's slice, Fit's uploaded target), so the wasm
+/// build reads PNG only ([`decode_png`]) and those tools' modules link no
+/// JPEG, WebP, GIF or BMP decoder. The same PNG gives the same pixels in
+/// both.
+pub fn decode_sent(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
+    #[cfg(target_arch = "wasm32")]
+    return decode_png(bytes, limits);
+    #[cfg(not(target_arch = "wasm32"))]
+    decode(bytes, limits)
+}
+
+/// The format of `bytes`, from their first bytes.
+fn sniff(bytes: &[u8]) -> Result<ImageFormat> {
     if bytes.is_empty() {
         return Err(Error::input("the file is empty (0 bytes)"));
     }
-    let format = image::guess_format(bytes).map_err(|_| {
+    image::guess_format(bytes).map_err(|_| {
         Error::input(
             "this is not an image Filigree can read (expected PNG, JPEG, WebP, GIF or BMP)",
         )
-    })?;
-    let name = format_name(format);
-    let reader = ImageReader::with_format(Cursor::new(bytes), format);
-    let decoder = reader.into_decoder().map_err(|e| match e {
+    })
+}
+
+/// A decoder's refusal of a file's header, said plainly.
+fn header_error(e: image::ImageError, name: &str) -> Error {
+    match e {
         image::ImageError::Limits(_) => over_memory(name),
         e => match plain_reason(&e) {
             Reason::Limit => over_memory(name),
@@ -250,8 +291,11 @@ pub fn decode(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
                 Error::input(format!("the {name} header could not be read: {why}"))
             }
         },
-    })?;
-    let mut decoder = decoder;
+    }
+}
+
+/// Check a decoder's size against `limits`, bound its memory, and decode.
+fn finish<D: ImageDecoder>(mut decoder: D, name: &str, limits: Limits) -> Result<Rgba8Image> {
     let (w, h) = decoder.dimensions();
     if w == 0 || h == 0 {
         return Err(Error::input(format!(
@@ -537,6 +581,60 @@ mod tests {
     /// decoder's internals ("while decoding ChunkType { type: IHDR,
     /// critical: true, … } chunk"); a decoder's bare "Memory limit
     /// exceeded" now names the decode memory limit.
+    /// The PNG-only reader the Fit, Micro and Texture modules use in the
+    /// browser gives `decode`'s pixels and errors for PNG, and refuses any
+    /// other format by its kind (the page sends PNG; this would catch a
+    /// page that sends the user's JPEG as it is).
+    #[test]
+    fn decode_png_reads_what_decode_reads_and_refuses_other_formats() {
+        use image::codecs::png::PngEncoder;
+        use image::{ExtendedColorType, ImageEncoder};
+        let (w, h) = (7u32, 5u32);
+        let n = (w * h) as usize;
+        let px: Vec<u8> = (0..n * 4).map(|i| (i * 37 % 251) as u8).collect();
+        let mut pngs = vec![];
+        for (data, ty) in [
+            (px.clone(), ExtendedColorType::Rgba8),
+            (px[..n * 2].to_vec(), ExtendedColorType::La8),
+            (px[..n * 2].to_vec(), ExtendedColorType::L16),
+            (px[..n * 3].to_vec(), ExtendedColorType::Rgb8),
+        ] {
+            let mut out = vec![];
+            PngEncoder::new(&mut out)
+                .write_image(&data, w, h, ty)
+                .unwrap();
+            pngs.push(out);
+        }
+        for png in &pngs {
+            let a = decode(png, Limits::default()).unwrap();
+            let b = decode_png(png, Limits::default()).unwrap();
+            assert_eq!((a.width, a.height, &a.data), (b.width, b.height, &b.data));
+        }
+        let cut = &pngs[0][..pngs[0].len() - 20];
+        assert_eq!(
+            decode(cut, Limits::default()).unwrap_err(),
+            decode_png(cut, Limits::default()).unwrap_err()
+        );
+        let small = Limits {
+            max_side: 4,
+            max_pixels: 16,
+        };
+        assert_eq!(
+            decode(&pngs[0], small).unwrap_err(),
+            decode_png(&pngs[0], small).unwrap_err()
+        );
+        let mut jpeg = vec![];
+        image::codecs::jpeg::JpegEncoder::new(&mut jpeg)
+            .write_image(&px[..n * 3], w, h, ExtendedColorType::Rgb8)
+            .unwrap();
+        assert!(decode(&jpeg, Limits::default()).is_ok());
+        let e = decode_png(&jpeg, Limits::default()).unwrap_err();
+        assert_eq!(e.kind(), "unsupported", "{e}");
+        assert!(e.to_string().contains("JPEG"), "{e}");
+        // Natively a request's image is the user's file: any format.
+        assert!(decode_sent(&jpeg, Limits::default()).is_ok());
+    }
+
     #[test]
     fn decoder_errors_are_said_plainly() {
         let mut png = encode_png(&Rgba8Image::new(4, 4)).unwrap();

@@ -4,7 +4,10 @@ mod palette;
 
 use serde::{Deserialize, Serialize};
 
-pub use image_buf::{decode, encode_png, Decoding, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP};
+pub use image_buf::{
+    decode, decode_png, decode_sent, encode_png, Decoding, Limits, Rgba8Image,
+    DECODE_PIXELS_PER_STEP,
+};
 pub use palette::{
     check_tolerance, cluster_counts, cluster_order, cluster_palette, colour_counts, count_colours,
     exact_palette, Cluster, ColourCounter, Leaders, PaletteEntry, RadixSteps,

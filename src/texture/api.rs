@@ -19,7 +19,7 @@ use super::models::{self, Model, MODELS};
 use super::Gray;
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, OneShot};
-use crate::raster::{decode, Limits};
+use crate::raster::{decode_sent, Limits};
 use serde::{Deserialize, Serialize};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -257,7 +257,7 @@ pub struct ModelChance {
 
 /// An encoded image as grey levels (Rec. 709 luma over white for alpha).
 pub fn decode_gray(bytes: &[u8]) -> Result<Gray> {
-    let img = decode(bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
+    let img = decode_sent(bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
     let mut g = Gray::new(img.width as usize, img.height as usize);
     for (o, px) in g.data.iter_mut().zip(img.pixels()) {
         let a = px[3] as f32 / 255.0;

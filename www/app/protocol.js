@@ -73,9 +73,11 @@ export const MODULE_KINDS = Object.freeze({
   texture: ['texture-models', 'texture-render', 'texture-index', 'texture-analyse', 'texture-retrieve'],
 });
 export const SHARED_KINDS = Object.freeze(['defaults', 'check-state', 'open-project']);
-// The modules that also serve the Inspect module's kinds (they read images;
-// src/api/mod.rs `Module::images`).
-export const IMAGE_MODULES = Object.freeze(['inspect', 'pixel', 'fit', 'micro', 'texture']);
+// The modules that also serve the Inspect module's kinds (they read the
+// user's image files as they are; src/api/mod.rs `Module::images`). Fit,
+// Micro and Texture send PNG the page made (the browser decodes the user's
+// file), so their modules have the PNG decoder only.
+export const IMAGE_MODULES = Object.freeze(['inspect', 'pixel']);
 
 /** The module of a request kind; null for a shared (or unknown) kind. */
 export function moduleOfKind(kind) {

@@ -95,3 +95,30 @@ export function hex([r, g, b, a]) {
   const h = (v) => v.toString(16).padStart(2, '0');
   return `#${h(r)}${h(g)}${h(b)}${a === 255 ? '' : h(a)}`;
 }
+
+const PNG_MAGIC = [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a];
+
+/**
+ * A user's image file as PNG bytes: a PNG as it is, any other image the
+ * browser reads (JPEG, WebP, GIF, BMP, ...) decoded by the browser and
+ * encoded as PNG at its own size. The Fit, Micro and Texture modules read
+ * PNG only (src/raster/image_buf.rs `decode_sent`), so their panels send this.
+ */
+export async function asPng(file) {
+  const bytes = new Uint8Array(await file.arrayBuffer());
+  if (!bytes.length) throw new Error(`${file.name || 'the file'} is empty (0 bytes): there is no picture in it`);
+  if (PNG_MAGIC.every((b, i) => bytes[i] === b)) return bytes;
+  let bmp;
+  try {
+    bmp = await createImageBitmap(new Blob([bytes]), { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
+  } catch {
+    throw new Error(`${file.name || 'the file'} is not an image this browser can read (PNG, JPEG, WebP, GIF, BMP): it may be damaged`);
+  }
+  try {
+    const c = new OffscreenCanvas(bmp.width, bmp.height);
+    c.getContext('2d').drawImage(bmp, 0, 0);
+    return new Uint8Array(await (await c.convertToBlob({ type: 'image/png' })).arrayBuffer());
+  } finally {
+    bmp.close?.();
+  }
+}

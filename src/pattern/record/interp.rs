@@ -5,7 +5,7 @@
 use super::super::lang::{BinOp, Call, Expr, FnDecl, Pos, Stmt, MAX_DEPTH};
 use super::super::tape::{apply, Op, StepFn, Tape};
 use super::{Geom, Prim, RecordLimits, Rgb, Shape};
-use crate::core::error::{Error, Result};
+use crate::core::error::Result;
 use crate::pattern::lang::Ast;
 use std::collections::HashMap;
 use std::rc::Rc;

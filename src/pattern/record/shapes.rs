@@ -5,7 +5,7 @@ use super::super::sdf::PrimKind;
 use super::interp::PathB;
 use super::interp::{Named, Rec, Val, V};
 use super::{colour_error, parse_colour, BoolOp, Geom, Prim, Shape};
-use crate::core::error::{Error, Result};
+use crate::core::error::Result;
 use std::collections::HashMap;
 use std::rc::Rc;
 

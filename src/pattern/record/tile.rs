@@ -38,7 +38,7 @@ use super::super::lang::Call;
 use super::super::sdf::PrimKind;
 use super::interp::Xf;
 use super::interp::{Flow, Rec, Val, V};
-use crate::core::error::{Error, Result};
+use crate::core::error::Result;
 use std::collections::HashMap;
 
 /// An interval `(lo, hi)`.

@@ -1,0 +1,49 @@
+// Fit, Micro and Texture send the core PNG that the page made (the browser
+// decodes the user's JPEG, WebP or GIF), so their wasm modules carry the PNG
+// decoder only (src/raster/image_buf.rs `decode_sent`). A JPEG or WebP
+// uploaded as a Fit target is still read, and nothing but the Fit module is
+// fetched for it.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { launch, pickGenerator } from './harness.mjs';
+
+let env;
+before(async () => { env = await launch(); });
+after(async () => { await env?.close(); });
+
+/** A 200 × 160 picture of red stripes on cream, encoded by the browser as `type`. */
+const encoded = (page, type) => page.evaluate(async (type) => {
+  const c = new OffscreenCanvas(200, 160);
+  const g = c.getContext('2d');
+  g.fillStyle = '#fdf2e9';
+  g.fillRect(0, 0, 200, 160);
+  g.fillStyle = '#c0392b';
+  for (let x = 0; x < 200; x += 40) g.fillRect(x, 0, 16, 160);
+  const blob = await c.convertToBlob({ type, quality: 0.95 });
+  return { type: blob.type, bytes: [...new Uint8Array(await blob.arrayBuffer())] };
+}, type);
+
+for (const [type, name] of [['image/jpeg', 'stripes.jpg'], ['image/webp', 'stripes.webp']]) {
+  test(`fit: a ${type.slice(6).toUpperCase()} target is read through the page, with the Fit module only`, async () => {
+    const page = await env.newPage({ path: '#tool=fit' });
+    const modules = new Set();
+    page.on('request', (r) => { const m = /filigree_(\w+)_bg\.wasm/.exec(r.url()); if (m) modules.add(m[1]); });
+    await pickGenerator(page, 'dots'); // its colours: #c0392b on #fdf2e9
+    const file = await encoded(page, type);
+    assert.equal(file.type, type, `this browser encodes ${type}`);
+    const [chooser] = await Promise.all([page.waitForEvent('filechooser'), page.click('.fit-target button.pick')]);
+    await chooser.setFiles({ name, mimeType: type, buffer: Buffer.from(file.bytes) });
+    await page.waitForFunction(() => /snapped/.test(document.querySelector('[data-testid=fit-status]').textContent)
+      || !document.querySelector('[data-testid=doc-error]').hidden, null, { timeout: 30000 });
+    assert.equal(await page.isHidden('[data-testid=doc-error]'), true, await page.textContent('[data-testid=doc-error]'));
+    // The target holds the stripes: both colours, in about their shares (16 of every 40 px red).
+    const red = await page.$eval('[data-testid=fit-target]', (c) => {
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let n = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i] > 150 && d[i + 1] < 110) n++;
+      return n / (d.length / 4);
+    });
+    assert.ok(red > 0.3 && red < 0.5, `red covers ${(red * 100).toFixed(1)}% of the target`);
+    assert.deepEqual([...modules], ['fit'], `modules fetched: ${[...modules].join(', ')}`);
+  });
+}
