@@ -1,5 +1,5 @@
 // Projects (MISSION S8): storage, project files and undo history used by
-// the document controller (document.js): every tool's state is autosaved to
+// the document controller (document.js, through storage.js and open.js): every tool's state is autosaved to
 // IndexedDB, saved to / loaded from a project file, and undone/redone.
 //
 // State is plain data; byte inputs (images) are Uint8Arrays. IndexedDB stores
