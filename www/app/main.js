@@ -122,7 +122,7 @@ for (const tool of TOOLS) {
 
 // A document's long job (a fit, a reconstruction, a tangle's growth) in the
 // tool bar: its progress while it runs, wherever the user is; how it ended
-// until its tool is shown again (document.js, DocJob).
+// until its tool is shown again (jobs.js, DocJob).
 const JOB_ENDS = { done: 'done', stopped: 'stopped', cancelled: 'cancelled', failed: 'failed' };
 function showJob(job) {
   const b = document.querySelector(`#tools button[data-tool="${job.tool.id}"]`);

@@ -1,6 +1,7 @@
 // Projects (MISSION S8): storage, project files and undo history used by
-// the document controller (document.js): every tool's state is autosaved to
-// IndexedDB, saved to / loaded from a project file, and undone/redone.
+// the document controller (document.js, its storage.js and open.js): every
+// tool's state is autosaved to IndexedDB, saved to / loaded from a project
+// file, and undone/redone.
 //
 // State is plain data; byte inputs (images) are Uint8Arrays. IndexedDB stores
 // them as they are; project files encode them as {"$bytes": base64}.

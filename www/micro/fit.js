@@ -17,7 +17,7 @@
 // core (`defaults` for `micro-fit`), never from here. Its markup is
 // fit-layout.js; the scene's numbers (JSON pointers, ranges) scene-numbers.js.
 import { LossPlot } from '../ui/loss-plot.js';
-import { coreDefaults } from '../app/document.js';
+import { coreDefaults } from '../app/core-state.js';
 import { html } from './fit-layout.js';
 import { numbersOf, setPointer, rangeOf } from './scene-numbers.js';
 
