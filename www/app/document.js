@@ -57,9 +57,9 @@
 //   ctx.expose(parts, name = id) the panel's raw parts for tests, only in a page opened
 //                                by a test (globalThis.__filigreeTestHooks === true): the
 //                                test layer's hooks of `name` (tests/e2e/hooks/<tool>.js,
-//                                not shipped: globalThis.__filigreeHookBuilders[name](parts))
-//                                or, for a tool without them, `parts` as they are; set as
-//                                controller.testHooks[name], removed when the panel is left
+//                                not shipped: globalThis.__filigreeHookBuilders[name](parts);
+//                                none without a builder), set as controller.testHooks[name],
+//                                removed when the panel is left
 //   ctx.readOnly                 a read-only embed: the reader explores (commits, undo and
 //                                Reset work, nothing persists); the panel locks the author's
 //                                inputs (drawing on them, replacing their files)
@@ -726,8 +726,10 @@ export class DocumentController {
       },
       expose(parts, name = tool.id) {
         if (!ctl.testHooks || life.dead) return;
+        // The hooks are the test layer's (a panel without a builder has none).
         const build = globalThis.__filigreeHookBuilders?.[name];
-        const hooks = typeof build === 'function' ? build(parts) : parts;
+        if (typeof build !== 'function') return;
+        const hooks = build(parts);
         ctl.testHooks[name] = hooks;
         life.hooks.set(name, hooks);
       },
