@@ -31,8 +31,8 @@ const COMPRESSIBLE = new Set(['.html', '.js', '.mjs', '.css', '.json', '.webmani
 const gzip = promisify(zlib.gzip);
 const GZIP_OPTIONS = { level: 9 };
 // Forbidden: anything under a dot-name (.git, .cargo, .gitignore, ...),
-// dependencies and build output.
-const FORBIDDEN = /(^|[\\/])\.|node_modules|target/;
+// dependencies and build output: whole path parts, so www/fit/target.js is served.
+const FORBIDDEN = /(^|[\\/])(\.|(node_modules|target)([\\/]|$))/;
 
 /**
  * Whether `header` (an Accept-Encoding value) accepts gzip: a `gzip` (or

@@ -610,16 +610,45 @@ test('what the tests compute from a panel is test-only code: not precached, not 
   const manifest = fs.readFileSync(path.join(ROOT, 'pkg/precache-manifest.js'), 'utf8');
   const urls = [...manifest.matchAll(/"url": "\.\/([^"]+)"/g)].map((m) => m[1]);
   assert.ok(urls.includes('www/app/document.js') && urls.includes('www/micro/panel.js'), 'the list names what ships');
-  assert.ok(HOOK_SCRIPTS.length >= 3, 'the test layer has its hook files');
+  assert.deepEqual(HOOK_SCRIPTS.map((f) => path.basename(f)), ['fit.js', 'micro.js', 'pixel.js', 'tangle.js', 'texture.js'],
+    'the test layer has a hook file a tool');
   assert.deepEqual(urls.filter((u) => u.startsWith('tests/')), [], 'nothing of tests/ ships');
+  const scripts = urls.filter((u) => /\.m?js$/.test(u) && fs.existsSync(path.join(ROOT, u)))
+    .map((u) => [u, fs.readFileSync(path.join(ROOT, u), 'utf8')]);
   // Only the controller names the test layer's builders; no shipped script makes one.
-  const naming = urls.filter((u) => /\.m?js$/.test(u) && fs.existsSync(path.join(ROOT, u))
-    && fs.readFileSync(path.join(ROOT, u), 'utf8').includes('__filigreeHookBuilders'));
+  const naming = scripts.filter(([, text]) => text.includes('__filigreeHookBuilders')).map(([u]) => u);
   assert.deepEqual(naming, ['www/app/document.js']);
-  // A test page's hooks are the test layer's, built from the panel's raw parts.
+  // A panel hands over raw parts, never hooks it built: the argument of each
+  // `ctx.expose` is an object of names (`live`, `plot: run.plot`) or getters
+  // of one (`job: () => job`), no call and no code that computes.
+  const exposing = [];
+  for (const [u, text] of scripts) {
+    for (const m of text.matchAll(/ctx\.expose\(/g)) {
+      if (/\/\/|^\s*\*/.test(text.slice(text.lastIndexOf('\n', m.index) + 1, m.index))) continue; // a comment
+      const rest = text.slice(m.index + m[0].length);
+      const arg = /^\{([^{}()]*(?:\(\)[^{}()]*)*)\}\s*(?:,\s*'[\w-]+'\s*)?\)/.exec(rest);
+      const entries = arg?.[1].split(',').map((e) => e.trim()).filter(Boolean) ?? [];
+      const raw = arg && entries.every((e) => /^\w+(\s*:\s*(\(\)\s*=>\s*)?[\w.]+)?$/.test(e));
+      assert.ok(raw, `${u}: ctx.expose(${rest.slice(0, 80)}…) hands over hooks it built, not raw parts`);
+      exposing.push(u);
+    }
+  }
+  for (const tool of ['fit', 'micro', 'pixel', 'tangle', 'texture']) {
+    assert.ok(exposing.includes(`www/${tool}/panel.js`), `${tool}'s panel hands its parts to ctx.expose`);
+  }
+  // A test page's hooks are the test layer's, built from the panel's raw parts
+  // (a panel without a builder publishes nothing: app/document.js).
   const page = await env.newPage({ path: '#tool=pixel' });
   await page.waitForFunction(() => window.filigree.testHooks.pixel?.state());
+  assert.deepEqual(await page.evaluate(() => Object.keys(window.__filigreeHookBuilders).sort()),
+    ['fit', 'micro', 'micro-fit', 'pixel', 'tangle', 'texture']);
   assert.deepEqual(await page.evaluate(() => Object.keys(window.filigree.testHooks.pixel).sort()), ['pending', 'result', 'state']);
+  for (const [tool, keys] of [['fit', ['info', 'job', 'plot', 'running', 'state']], ['tangle', ['pending', 'result', 'selectedMask', 'state', 'timing']]]) {
+    await page.click(`#tools button[data-tool=${tool}]`);
+    await page.waitForFunction((t) => window.filigree.testHooks[t]?.state(), tool, { timeout: 30000 });
+    const got = await page.evaluate((t) => Object.keys(window.filigree.testHooks[t]), tool);
+    for (const k of keys) assert.ok(got.includes(k), `${tool}'s hooks (tests/e2e/hooks/${tool}.js) have ${k}: ${got}`);
+  }
 });
 
 test('the app in an about:blank host loads and works', async () => {

@@ -132,6 +132,8 @@ test('forbidden: build output, dependencies, dot-files at any depth, and paths o
     '/.cargo/config.toml', '/www/.hidden', '/..%2f..%2fetc/passwd']) {
     assert.equal((await get(rel)).status, 403, rel);
   }
+  // Only whole path parts: a file named like them is served.
+  assert.equal((await get('/www/fit/target.js')).status, 200);
 });
 
 test('404 for a missing file and for a directory', async () => {

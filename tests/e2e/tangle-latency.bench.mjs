@@ -305,7 +305,7 @@ for (let i = 0; i < 12; i++) {
   // page's preparation of it: what a worker that does not hold the answer shown sends.
   r.full = await page.evaluate(async () => {
     const { prepareTangle } = await import('/www/tangle/draw.js');
-    const { answerBytes } = await import('/www/tangle/hooks.js');
+    const { answerBytes } = await import('/www/tangle/timing.js');
     const { requestOf, KEEP_AFFINITY } = await import('/www/tangle/state.js');
     const ctx = window.filigree.doc.current.ctx;
     const t0 = performance.now();

@@ -148,7 +148,9 @@ export function panelContext(ctl, cur) {
     },
     expose(parts, name = tool.id) {
       if (!ctl.testHooks || life.dead) return;
+      // The hooks are the test layer's (a panel without a builder has none).
       const hooks = ctl.testHooksOf(parts, name);
+      if (!hooks) return;
       ctl.testHooks[name] = hooks;
       life.hooks.set(name, hooks);
     },

@@ -50,7 +50,7 @@
 // test (globalThis.__filigreeTestHooks === true): the test layer's hooks of
 // `name` (tests/e2e/hooks/<tool>.js, not shipped:
 // globalThis.__filigreeHookBuilders[name](parts)) or, for a tool without
-// them, `parts` as they are; set as controller.testHooks[name].
+// them, none; set as controller.testHooks[name].
 import { History } from './project.js';
 import { DocJobs } from './jobs.js';
 import { DocStorage } from './storage.js';
@@ -102,10 +102,10 @@ export class DocumentController {
     return this.jobs.of(id);
   }
 
-  /** The test layer's hooks `name` built from a panel's raw `parts` (or `parts` as they are). */
+  /** The test layer's hooks `name` built from a panel's raw `parts`; null without a builder (none are published). */
   testHooksOf(parts, name) {
     const build = globalThis.__filigreeHookBuilders?.[name];
-    return typeof build === 'function' ? build(parts) : parts;
+    return typeof build === 'function' ? build(parts) : null;
   }
 
   // ---- project files and links (open.js) ---------------------------------------------------

@@ -11,7 +11,7 @@
 // (polygon-draw.js) is painted over the rest by `overlay`.
 import { paintBatches, createLayers, prebuildLayer, LAYER_VERTICES } from './draw.js';
 import { changedTiles, tileClip, touchesTiles } from './tiles.js';
-import { noteDrawn } from './hooks.js';
+import { noteDrawn } from './timing.js';
 
 const SHARP_DELAY_MS = 120;
 const PREBUILD_DELAY_MS = 250; // after the last paint: not while a slider or a pan is moving
@@ -21,7 +21,7 @@ export const HIGHLIGHT_LINE = '#e06000';
 /**
  * The painter of `canvas` in `viewport`, showing `live.T` at step `live.k`
  * (state.js createLive). `overlay`: `{active(), paint(g)}`, the polyline
- * being drawn; `timing`, `options`: hooks.js.
+ * being drawn; `timing`, `options`: timing.js.
  */
 export function createPainter(ctx, { canvas, viewport, live, timing, options, overlay }) {
   const g = canvas.getContext('2d');

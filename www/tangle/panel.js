@@ -22,7 +22,8 @@
 //   selection.js     the selected step, its parameters and edits (step-list.js: the list)
 //   thumbnails.js    the shipped grammars' cards
 //   export.js, drop.js  files out and in
-//   hooks.js         what tests and benches read (`testHooks.tangle`)
+//   timing.js        figures of the last paint and answer, the highlight switch
+// Tests read the panel through `ctx.expose` (tests/e2e/hooks/tangle.js).
 // While an edit's answer is due, the canvas keeps the last picture (and its
 // highlight) until the answer repaints it. A request names the answer shown
 // (`base`); the worker that kept its expansion answers with what changed
@@ -44,7 +45,7 @@ import { createSelection } from './selection.js';
 import { createExamplePicker } from './thumbnails.js';
 import { createExport } from './export.js';
 import { createDrop } from './drop.js';
-import { createTiming, createOptions, tangleHooks, answerBytes } from './hooks.js';
+import { createTiming, createOptions, answerBytes } from './timing.js';
 
 export { requestOf } from './state.js';
 
@@ -169,10 +170,8 @@ function mount(el, ctx) {
 
   const exportAs = createExport(ctx, { q, status });
 
-  ctx.expose(tangleHooks(ctx, {
-    live, painter, timing, options, exportAs,
-    pending: () => runner.busy() || editor.typing() || startForm.typing(),
-  }));
+  // For the e2e tests and the latency bench: the raw parts (tests/e2e/hooks/tangle.js reads them).
+  ctx.expose({ state, live, painter, timing, options, runner, editor, startForm, exportAs });
 
   return {
     drop: createDrop(ctx, { live, editor, status }),

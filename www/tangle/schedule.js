@@ -18,7 +18,7 @@ const BUSY_DELAY_MS = 150; // a run shows it is busy after this long
  * null), `onAnswer(response, doc, t0, baseT)` shows an answer (t0: when its
  * run started; baseT: the answer its request named as its base),
  * `onFailed()` repaints what the canvas showed; `cancel` is the Cancel
- * button; `timing`: hooks.js.
+ * button; `timing`: timing.js.
  */
 export function createRunner(ctx, { cancel, status, timing, base, onAnswer, onFailed }) {
   let running = null; // the AbortController of the run under way

@@ -1,50 +1,17 @@
-// What the e2e tests and the latency bench read and switch: the figures of
-// the last paint and answer (`timing`), the highlight switch (`options`),
-// and the hooks the panel hands to `ctx.expose` (published only in a page a
-// test opened, app/document.js).
-
-/**
- * Figures of the last paint/answer for tests and the latency bench: ms,
- * `region` (the repainted fraction of the canvas), `why` (why the last
- * repaint could not be partial), `paints` (when the canvas was last drawn),
- * `answer` (the last answer as it came: `{delta, added, removed, dirty, bytes}`,
- * delta: whether it was a delta of the answer shown).
- */
-export const createTiming = () => ({ paint: 0, batches: 0, run: 0, prepare: 0, pan: 0, region: 1, why: '', paints: [], answer: null });
-
-/** Bytes of an answer's typed arrays as it came from the worker (columns, points, removed keys, step indices). */
-export function answerBytes(r) {
-  let n = (r.points?.byteLength ?? 0) + (r.removed?.byteLength ?? 0);
-  for (const v of Object.values(r.shapes)) n += v?.byteLength ?? 0;
-  for (const st of r.steps) n += (st.inputs?.byteLength ?? 0) + (st.outputs?.byteLength ?? 0);
-  return n;
-}
-
-/** The canvas was drawn at `at` (a few times kept, for the tests). */
-export function noteDrawn(timing, at) {
-  timing.paints = [...timing.paints.slice(-15), at];
-}
-
-/**
- * `highlight: false` leaves the selected step's highlight out of a paint
- * (tests compare the picture with a fresh answer's).
- */
-export const createOptions = () => ({ highlight: true });
-
-/**
- * The hooks of a mounted panel: `live` (state.js), `painter` (canvas.js),
- * `pending()` (a run or a typed change is due or under way), `exportAs`
- * (export.js).
- */
-export function tangleHooks(ctx, { live, painter, timing, options, pending, exportAs }) {
-  const state = () => ctx.state();
+// Tangle's test hooks (a test page's init script, harness.mjs; never
+// shipped). From the panel's raw parts (www/tangle/panel.js: ctx.expose):
+// the document getter `state`, `live` (state.js), `painter` (canvas.js),
+// `timing` and `options` (timing.js), `runner` (schedule.js), `editor`
+// (grammar-editor.js), `startForm` (start.js), `exportAs` (export.js).
+(globalThis.__filigreeHookBuilders ??= {}).tangle = ({ state, live, painter, timing, options, runner, editor, startForm, exportAs }) => {
   const { canvas, viewport, g, view } = painter;
   return {
     state,
     result: () => live.T?.r ?? null,
     /** The shown answer's points (a Float32Array). */
     points: () => live.T?.pts ?? null,
-    pending,
+    /** A run or a typed change is due or under way. */
+    pending: () => runner.busy() || editor.typing() || startForm.typing(),
     timing: () => ({ ...timing }),
     /** `{highlight}`: false leaves the selected step's highlight out. */
     options,
@@ -114,4 +81,4 @@ export function tangleHooks(ctx, { live, painter, timing, options, pending, expo
     exportSvg: async () => (await exportAs('svg'))?.svg ?? null,
     paintNow: painter.paintNow,
   };
-}
+};
