@@ -2,23 +2,14 @@
 mod image_buf;
 mod palette;
 
-use serde::{Deserialize, Serialize};
-
 pub use image_buf::{decode, encode_png, Decoding, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP};
 pub use palette::{
     check_tolerance, cluster_counts, cluster_order, cluster_palette, colour_counts, count_colours,
     exact_palette, Cluster, ColourCounter, Leaders, PaletteEntry, RadixSteps,
 };
 
-/// An image as it crosses the boundary undecoded: straight RGBA bytes
-/// (a `Uint8Array` in the browser).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RawImage {
-    pub width: u32,
-    pub height: u32,
-    #[serde(with = "serde_bytes")]
-    pub rgba: Vec<u8>,
-}
+/// Plain pixels (defined in core, so a job's progress can carry them).
+pub use crate::core::image::RawImage;
 
 impl From<Rgba8Image> for RawImage {
     fn from(img: Rgba8Image) -> Self {
