@@ -12,6 +12,7 @@
 //! slices. Both paths execute the same slices in the same order, which is what
 //! keeps native and wasm results identical.
 use crate::core::error::{Error, Result};
+use crate::core::image::RawImage;
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -28,6 +29,11 @@ pub struct Progress {
     /// parameters of the best fit so far), so a view can show it live.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub values: Option<Vec<f64>>,
+    /// A picture of those values, if the job draws them and this step
+    /// drew one (e.g. a fit asked for `preview`), so a view can show it
+    /// without a second job.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub picture: Option<RawImage>,
 }
 
 impl Progress {
@@ -37,6 +43,7 @@ impl Progress {
             stage: stage.into(),
             figure: None,
             values: None,
+            picture: None,
         }
     }
     pub fn with_figure(mut self, figure: f64) -> Self {
@@ -45,6 +52,10 @@ impl Progress {
     }
     pub fn with_values(mut self, values: Vec<f64>) -> Self {
         self.values = Some(values);
+        self
+    }
+    pub fn with_picture(mut self, picture: RawImage) -> Self {
+        self.picture = Some(picture);
         self
     }
 }

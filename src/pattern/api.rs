@@ -474,6 +474,16 @@ pub struct FitRequestOf<X> {
     /// not the clock, so a fit stays the same on every machine and in every
     /// shard; a slower machine (or the browser) takes longer than the bound.
     pub max_seconds: f64,
+    /// `fit` only: draw the best values so far as the fit goes
+    /// (`progress.picture`, at most every [`PREVIEW_EVERY_STEPS`] steps and
+    /// only when the best changed) and the fitted values in the answer
+    /// (`picture`), each exactly the `render-pattern` of those values at the
+    /// answer's `width × height` (the target's size) with `supersample` 1,
+    /// so the page needs no second job to show them (false). Of a sharded
+    /// fit, every shard draws its own best so far; only shard 0's answer
+    /// has the picture.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub preview: bool,
     #[serde(flatten)]
     pub extra: X,
 }
@@ -505,6 +515,7 @@ impl<X: Default> Default for FitRequestOf<X> {
             polish: None,
             shards: None,
             max_seconds: 30.0,
+            preview: false,
             extra: X::default(),
         }
     }
@@ -719,6 +730,10 @@ pub struct FitOutput {
     pub height: u32,
     /// The fitted pattern as SVG, `width × height` px.
     pub svg: String,
+    /// With `preview`: the fitted pattern's pixels, `width × height`, as
+    /// `render-pattern` draws the fitted values at that size.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub picture: Option<RawImage>,
 }
 
 /// Longest side of a fit's output pictures (the `render-pattern` limit).
@@ -766,7 +781,34 @@ pub fn fit_output(
         width: size.0,
         height: size.1,
         svg,
+        picture: None,
     })
+}
+
+/// Steps of a fit (each about [`super::fit::FitOptions::work_per_step`]
+/// work units, a few milliseconds) from one `preview` picture to the next
+/// at least: a 256² picture costs about as much as one to four steps, so
+/// previews add at most a few percent to a fit's work.
+pub const PREVIEW_EVERY_STEPS: u32 = 40;
+
+/// `scene` drawn with float values `params` at `size` (width, height)
+/// pixels, supersample 1: what `render-pattern` gives for the same values
+/// at that size when `scene` was recorded on that size's canvas
+/// ([`Canvas::of_pixels`]).
+pub fn picture(scene: &Scene, params: &[f64], size: (u32, u32)) -> Result<RawImage> {
+    let mut raster =
+        render::Raster::with_size(scene, params, (size.0 as usize, size.1 as usize), 1)?;
+    while !raster.run(scene, RENDER_WORK_PER_STEP) {}
+    Ok(RawImage::from(raster.into_image()))
+}
+
+/// What a `fit` with `preview` has drawn: the values of its last picture
+/// and the steps since; whether its answer has a picture (shard 0 only:
+/// every shard ends with the same result, and the pool answers shard 0's).
+struct Previews {
+    last: Option<Vec<f64>>,
+    steps: u32,
+    answer: bool,
 }
 
 /// A running `fit`: the core [`FitJob`] whose result comes with its SVG.
@@ -776,6 +818,8 @@ pub struct FitRequestJob {
     /// The output pictures' size ([`output_size`]).
     size: (u32, u32),
     loss: LossKind,
+    /// With `preview`: what has been drawn so far.
+    previews: Option<Previews>,
 }
 
 impl FitRequestJob {
@@ -789,12 +833,43 @@ impl FitRequestJob {
     }
 }
 
+impl FitRequestJob {
+    /// `p` with a picture of its best values when previews are on, the
+    /// best changed since the last picture, and [`PREVIEW_EVERY_STEPS`]
+    /// steps have passed since it (the first picture as soon as there is
+    /// a best).
+    fn with_preview(&mut self, p: Progress) -> Result<Progress> {
+        let Some(pv) = self.previews.as_mut() else {
+            return Ok(p);
+        };
+        pv.steps = pv.steps.saturating_add(1);
+        let due = pv.last.is_none() || pv.steps >= PREVIEW_EVERY_STEPS;
+        match &p.values {
+            Some(v) if due && pv.last.as_ref() != Some(v) => {
+                let pic = picture(&self.scene, v, self.size)?;
+                pv.last = Some(v.clone());
+                pv.steps = 0;
+                Ok(p.with_picture(pic))
+            }
+            _ => Ok(p),
+        }
+    }
+}
+
 impl Job for FitRequestJob {
     type Output = FitOutput;
     fn step(&mut self) -> Result<Step<FitOutput>> {
         Ok(match self.job.step()? {
-            Step::Running(p) => Step::Running(p),
-            Step::Done(r) => Step::Done(fit_output(&self.scene, r, self.loss, self.size)?),
+            Step::Running(p) => Step::Running(self.with_preview(p)?),
+            Step::Done(r) => {
+                let picture = match &self.previews {
+                    Some(pv) if pv.answer => Some(picture(&self.scene, &r.params, self.size)?),
+                    _ => None,
+                };
+                let mut out = fit_output(&self.scene, r, self.loss, self.size)?;
+                out.picture = picture;
+                Step::Done(out)
+            }
         })
     }
     fn outbox(&mut self) -> Option<Vec<f64>> {
@@ -845,6 +920,11 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
         scene,
         size,
         loss: opts.loss.kind,
+        previews: req.preview.then_some(Previews {
+            last: None,
+            steps: 0,
+            answer: req.shards.is_none_or(|(k, _)| k == 0),
+        }),
     })
 }
 
@@ -1005,6 +1085,134 @@ mod tests {
 
     fn named(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
         pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    }
+
+    /// Named values (every parameter) of a fit's float values: the
+    /// program's integer values from `ints`, its floats from `floats`.
+    fn all_named(src: &str, ints: &BTreeMap<String, f64>, floats: &[f64]) -> BTreeMap<String, f64> {
+        let p = parse(src).unwrap();
+        let all = named_values(&p, ints).unwrap();
+        let mut fl = floats.iter();
+        p.params()
+            .iter()
+            .zip(all)
+            .map(|(d, v)| {
+                (
+                    d.name.clone(),
+                    if d.integer { v } else { *fl.next().unwrap() },
+                )
+            })
+            .collect()
+    }
+
+    /// A fit with `preview` draws its best values so far in its progress
+    /// and its fitted values in its answer, each byte for byte what
+    /// `render-pattern` gives for those values at the target's size (the
+    /// panel's preview request: `size`, `height`, supersample 1), on a
+    /// target that is not square; a picture only when the best changed and
+    /// at most every PREVIEW_EVERY_STEPS steps. Without `preview`, none.
+    #[test]
+    fn a_fits_pictures_are_render_patterns_of_its_values() {
+        let (w, h) = (90usize, 60usize);
+        for name in ["circles-grid", "honeycomb", "waves", "crosses"] {
+            let src = generator(name).unwrap().source;
+            // The target: the program at its defaults, anti-aliased (Make target).
+            let target = run_quietly(
+                start_render(RenderPatternRequest {
+                    program: src.into(),
+                    size: w,
+                    height: Some(h),
+                    supersample: 4,
+                    ..Default::default()
+                })
+                .unwrap(),
+            )
+            .unwrap()
+            .image;
+            let req = FitRequest {
+                program: src.into(),
+                target_rgba: Some(RawRgba {
+                    width: target.width,
+                    height: target.height,
+                    rgba: target.rgba,
+                }),
+                // Small: a GA of 2 × 12 on a 24² grid, 2 × 30 Adam steps.
+                init: Init::Genetic,
+                grid: Some(24),
+                population: Some(12),
+                generations: Some(2),
+                candidates: Some(2),
+                iterations: Some(30),
+                polish: Some(5),
+                preview: true,
+                ..Default::default()
+            };
+            let render = |floats: &[f64]| {
+                run_quietly(
+                    start_render(RenderPatternRequest {
+                        program: src.into(),
+                        params: all_named(src, &req.params, floats),
+                        size: w,
+                        height: Some(h),
+                        ..Default::default()
+                    })
+                    .unwrap(),
+                )
+                .unwrap()
+                .image
+            };
+            let mut job = start_fit(&req).unwrap();
+            let (mut pictures, mut steps, mut last_at, mut last_values) = (0, 0u32, None, None);
+            let out = loop {
+                steps += 1;
+                match job.step().unwrap() {
+                    Step::Running(p) => {
+                        if let Some(pic) = p.picture {
+                            let v = p.values.clone().expect("a picture comes with its values");
+                            assert_eq!(pic, render(&v), "{name}: the picture at step {steps}");
+                            assert_ne!(
+                                last_values.as_ref(),
+                                Some(&v),
+                                "{name}: a picture of the same best again"
+                            );
+                            if let Some(at) = last_at {
+                                assert!(
+                                    steps - at >= PREVIEW_EVERY_STEPS,
+                                    "{name}: pictures {} steps apart",
+                                    steps - at
+                                );
+                            }
+                            (pictures, last_at, last_values) = (pictures + 1, Some(steps), Some(v));
+                        }
+                    }
+                    Step::Done(out) => break out,
+                }
+            };
+            assert!(
+                pictures >= 1,
+                "{name}: the fit drew its best values as it went"
+            );
+            assert_eq!((out.width, out.height), (w as u32, h as u32));
+            assert_eq!(
+                out.picture.as_ref(),
+                Some(&render(&out.result.params)),
+                "{name}: the answer's picture"
+            );
+            // Without `preview` (the CLI's and the default request): no pictures.
+            let plain = FitRequest {
+                preview: false,
+                ..req.clone()
+            };
+            let mut job = start_fit(&plain).unwrap();
+            let out = loop {
+                match job.step().unwrap() {
+                    Step::Running(p) => assert!(p.picture.is_none(), "{name}: a picture unasked"),
+                    Step::Done(out) => break out,
+                }
+            };
+            assert!(out.picture.is_none());
+            assert!(!serde_json::to_string(&plain).unwrap().contains("preview"));
+        }
     }
 
     /// A picture that is not square: `render-pattern` with `height` draws

@@ -2,8 +2,6 @@
 mod image_buf;
 mod palette;
 
-use serde::{Deserialize, Serialize};
-
 pub use image_buf::{
     decode, decode_png, decode_sent, encode_png, Decoding, Limits, Rgba8Image,
     DECODE_PIXELS_PER_STEP,
@@ -13,15 +11,8 @@ pub use palette::{
     exact_palette, Cluster, ColourCounter, Leaders, PaletteEntry, RadixSteps,
 };
 
-/// An image as it crosses the boundary undecoded: straight RGBA bytes
-/// (a `Uint8Array` in the browser).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RawImage {
-    pub width: u32,
-    pub height: u32,
-    #[serde(with = "serde_bytes")]
-    pub rgba: Vec<u8>,
-}
+/// Plain pixels (defined in core, so a job's progress can carry them).
+pub use crate::core::image::RawImage;
 
 impl From<Rgba8Image> for RawImage {
     fn from(img: Rgba8Image) -> Self {

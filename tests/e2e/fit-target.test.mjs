@@ -89,6 +89,13 @@ test('fit: after Cancel the overlay shows the kept values, not the abandoned can
     h0 = h;
   }
   await page.selectOption('select[name=budget]', 'paper');
+  // Every job the page posts from here on, by kind.
+  await page.evaluate(() => {
+    const pool = window.filigree.pool;
+    const run = pool.run.bind(pool);
+    window.jobKinds = [];
+    pool.run = (kind, ...rest) => { window.jobKinds.push(kind); return run(kind, ...rest); };
+  });
   await page.click('button[data-act=fit]');
   // A candidate is drawn over the target while the fit runs (the first
   // ones come after the global stage, late in the fit), and Stop is
@@ -116,6 +123,10 @@ test('fit: after Cancel the overlay shows the kept values, not the abandoned can
     for (let i = 0; i < d.length; i++) { x ^= d[i]; x = Math.imul(x, 16777619) >>> 0; }
     return x === h;
   }, h0, { timeout: 5000, polling: 100 }).catch(() => assert.fail('the overlay still shows the abandoned candidate'));
+  // The candidates were the fit's own pictures, and the kept values' one
+  // was kept: no `render-pattern` during the fit or after its Stop.
+  await page.waitForTimeout(500);
+  assert.deepEqual(await page.evaluate(() => window.jobKinds.filter((k) => k !== 'fit')), [], 'only the fit ran');
 });
 
 test('fit: the program editor is as wide as the view; a broken program\'s error is printed under its line', async () => {

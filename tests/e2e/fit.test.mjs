@@ -183,9 +183,43 @@ test('a non-square upload keeps its aspect: the target, the fitted overlay and t
   const over = await page.locator('[data-testid=fit-overlay]').boundingBox();
   assert.ok(Math.abs(over.width - shown.width) < 1 && Math.abs(over.height - shown.height) < 1, 'the overlay covers the target exactly');
 
+  // Every job the page posts from here on, by kind.
+  await page.evaluate(() => {
+    const pool = window.filigree.pool;
+    const run = pool.run.bind(pool);
+    window.jobKinds = [];
+    pool.run = (kind, ...rest) => { window.jobKinds.push(kind); return run(kind, ...rest); };
+  });
   await runFit(page);
+  // The fit drew its own pictures (each best so far, then the fitted
+  // values): during and after it the page asked for no `render-pattern`.
+  await page.waitForTimeout(1000);
+  const kinds = await page.evaluate(() => window.jobKinds);
+  assert.ok(kinds.includes('fit'), `the fit ran: ${kinds}`);
+  assert.deepEqual(kinds.filter((k) => k !== 'fit'), [], 'no other job during or after the fit');
   // The fitted pattern over the target: the canvas is the target's, its dots round.
   await page.waitForFunction(() => document.querySelector('[data-testid=fit-overlay]').height === 205);
+  // ...and it is the overlay of `render-pattern` of the fitted values, pixel for pixel.
+  const same = await page.evaluate(async () => {
+    const { overlayLook } = await import('/www/fit/preview.js');
+    const { named, rgbOf } = await import('/www/fit/program.js');
+    const { putRgba } = await import('/www/ui/file-input.js');
+    const hooks = window.filigree.testHooks.fit;
+    const d = hooks.state();
+    const c = document.querySelector('[data-testid=fit-overlay]');
+    const r = await window.filigree.pool.run('render-pattern', { program: d.program, params: named(hooks.info(), d.values), size: d.target.width, height: d.target.height }, { module: 'fit' });
+    overlayLook(r.rgba, r.width, r.height, rgbOf(hooks.info().colours[0]));
+    const want = document.createElement('canvas');
+    putRgba(want, r.width, r.height, r.rgba);
+    const a = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const b = want.getContext('2d').getImageData(0, 0, want.width, want.height).data;
+    const ink = a.reduce((n, v, i) => n + (i % 4 === 3 && v > 0), 0);
+    return { size: [r.width, r.height], shown: JSON.parse(c.dataset.values), values: d.values, ink, same: a.length === b.length && a.every((v, i) => v === b[i]) };
+  });
+  assert.deepEqual(same.size, [256, 205]);
+  assert.deepEqual(same.shown, same.values, 'the overlay shows the document\'s (fitted) values');
+  assert.ok(same.ink > 1000, `the overlay has the dots (${same.ink} pixels)`);
+  assert.ok(same.same, 'the overlay is the render-pattern of the fitted values');
   const overlay = await page.evaluate(() => {
     const c = document.querySelector('[data-testid=fit-overlay]');
     return { width: c.width, height: c.height, rgba: Array.from(c.getContext('2d').getImageData(0, 0, c.width, c.height).data) };

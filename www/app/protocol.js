@@ -25,8 +25,12 @@
 //
 // Worker → page
 //   {type: 'ready', version, module}   a tool's wasm module is loaded.
-//   {type: 'progress', id, progress: {fraction, stage, figure}}
-//                                      at most every ~15 ms while a job runs.
+//   {type: 'progress', id, progress: {fraction, stage, figure, values?, picture?}}
+//                                      at most every ~15 ms while a job runs, and
+//                                      whenever it carries a `picture` (of `values`:
+//                                      {width, height, rgba}, its buffer transferred;
+//                                      a `fit` with `preview` draws one at most every
+//                                      PREVIEW_EVERY_STEPS steps, src/pattern/api.rs).
 //   {type: 'need', id, need}           the job must exchange data with sibling
 //                                      jobs (e.g. one fit sharded over the pool)
 //                                      and pauses until an 'input' arrives.

@@ -75,7 +75,7 @@ async function run({ id, kind, payload, module, wasm }) {
       }
       const r = job.step();
       if (r.need) {
-        self.postMessage({ type: MSG.PROGRESS, id, progress: r.progress });
+        self.postMessage({ type: MSG.PROGRESS, id, progress: r.progress }, transferables(r.progress));
         self.postMessage({ type: MSG.NEED, id, need: r.need });
         const data = await new Promise((resolve) => waiting.set(id, resolve));
         // A cancel wakes the job with no data (read at the top of the loop);
@@ -88,8 +88,13 @@ async function run({ id, kind, payload, module, wasm }) {
         self.postMessage({ type: MSG.RESULT, id, result: r.result }, transferables(r.result));
         return;
       }
-      if (performance.now() - sliceStart >= SLICE_MS) {
-        self.postMessage({ type: MSG.PROGRESS, id, progress: r.progress });
+      // A progress with a picture is posted whatever the time (the job
+      // bounds how often it draws one); any other at the slice's end.
+      const sliceEnd = performance.now() - sliceStart >= SLICE_MS;
+      if (sliceEnd || r.progress.picture) {
+        self.postMessage({ type: MSG.PROGRESS, id, progress: r.progress }, transferables(r.progress));
+      }
+      if (sliceEnd) {
         await yieldToEventLoop();
         sliceStart = performance.now();
       }

@@ -1,7 +1,9 @@
 // The overlay: the pattern of the document's values (or, while a fit runs,
 // of its best values so far) drawn over the target, so it cannot pass for
-// it: `render-pattern` at most every PREVIEW_EVERY_MS, the last one asked
-// for winning.
+// it. A fit's own pictures come with its answers (the `fit` request's
+// `preview`: src/pattern/api.rs), so a fit runs no `render-pattern`; the
+// document's values otherwise are drawn by `render-pattern`, at most every
+// PREVIEW_EVERY_MS, the last one asked for winning.
 import { putRgba } from '../ui/file-input.js';
 import { named, rgbOf } from './program.js';
 import { sizeOf } from './state.js';
@@ -25,17 +27,56 @@ export function overlayLook(rgba, w, h, [br, bg, bb]) {
   }
 }
 
-/** The overlay of the panel (`live`: state.js): `show(values)` draws `values` of the document's program. */
+/**
+ * The overlay of the panel (`live`: state.js): `show(values)` draws the
+ * document's values (from a picture it has, else by `render-pattern`, unless
+ * a fit runs: the overlay is then the fit's), `showPicture(program, values,
+ * picture)` draws a picture a fit answered.
+ */
 export function createPreview(ctx, { q, live }) {
   const overlay = q('canvas.overlay');
   const doc = () => ctx.state();
   let busy = false;
   let wanted = null;
   let lastAt = 0;
+  let shown = null; // the key of what the overlay shows
+  // The last picture of a document's values (`render-pattern`'s, or a fit's
+  // answer), by key: drawn again when a stopped fit hands the overlay back.
+  let kept = null;
+  const keyOf = (program, values, t) => JSON.stringify([program, values, t?.width, t?.height]);
+
+  function draw(key, values, pic) {
+    // Only the shapes, outlined: background pixels become transparent, so
+    // the target shows through wherever the pattern has nothing.
+    const rgba = pic.rgba.slice();
+    overlayLook(rgba, pic.width, pic.height, rgbOf(live.info.colours[0]));
+    putRgba(overlay, pic.width, pic.height, rgba);
+    overlay.dataset.values = JSON.stringify(values);
+    shown = key;
+  }
+
+  /** Draw `picture` of `values` (all of them) of `program`, a fit's answer (a best so far, or the fitted values). */
+  function showPicture(program, values, picture, { documentValues = false } = {}) {
+    const d = doc();
+    if (!ctx.alive() || !picture || program !== d?.program) return;
+    const key = keyOf(program, values, d.target);
+    if (documentValues) kept = { key, values, picture };
+    if (live.info && key !== shown) draw(key, values, picture);
+  }
 
   function show(values) {
+    const { job } = live;
+    if (job?.running) {
+      // While a fit runs, the overlay is its best so far.
+      if (job.best?.picture) showPicture(job.data.program, job.best.values, job.best.picture);
+      return;
+    }
     wanted = values;
     if (busy || !live.info) return;
+    const d = doc();
+    const key = keyOf(d.program, values, d.target);
+    if (key === shown) { wanted = null; return; }
+    if (kept?.key === key) { wanted = null; draw(key, values, kept.picture); return; }
     const wait = Math.max(0, PREVIEW_EVERY_MS - (performance.now() - lastAt));
     busy = true;
     ctx.setTimeout(async () => {
@@ -43,14 +84,13 @@ export function createPreview(ctx, { q, live }) {
       wanted = null;
       lastAt = performance.now();
       try {
-        if (vals.length !== live.info.params.length) return;
+        if (!vals || vals.length !== live.info.params.length || live.job?.running) return;
+        const cur = doc();
         // On the target's canvas, at its size: the overlay is not stretched.
-        const r = await ctx.run('render-pattern', { program: doc().program, params: named(live.info, vals), ...sizeOf(doc().target) });
-        // Only the shapes, outlined: background pixels become transparent, so
-        // the target shows through wherever the pattern has nothing.
-        overlayLook(r.rgba, r.width, r.height, rgbOf(live.info.colours[0]));
-        putRgba(overlay, r.width, r.height, r.rgba);
-        overlay.dataset.values = JSON.stringify(vals);
+        const r = await ctx.run('render-pattern', { program: cur.program, params: named(live.info, vals), ...sizeOf(cur.target) });
+        const k = keyOf(cur.program, vals, cur.target);
+        kept = { key: k, values: vals, picture: r };
+        if (!live.job?.running) draw(k, vals, r);
       } catch (err) {
         ctx.error(err);
       } finally {
@@ -62,5 +102,5 @@ export function createPreview(ctx, { q, live }) {
 
   overlay.style.opacity = q('[name=overlay]').value;
   q('[name=overlay]').oninput = (e) => { overlay.style.opacity = e.target.value; };
-  return { show };
+  return { show, showPicture };
 }

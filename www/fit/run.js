@@ -6,11 +6,14 @@
 // when it comes back: its plot, its status, its best so far. Stop keeps
 // the best values so far for "Apply fitted values"; a fit that ends goes
 // into the document it started from (program unchanged), mounted or not.
+// The fit draws its own pictures (`preview`): each new best so far and the
+// fitted values come with their pixels, which the overlay shows.
 import { LossPlot } from '../ui/loss-plot.js';
 import { named } from './program.js';
 import { isBlank } from './state.js';
 
 const fmt = (v) => (Math.abs(v) >= 100 ? v.toFixed(1) : v.toFixed(3));
+const same = (a, b) => a && b && a.length === b.length && a.every((v, i) => v === b[i]);
 
 /** The fit part of the panel (`live`: state.js; `preview`: preview.js). */
 export function createFitRun(ctx, { q, live, preview, status }) {
@@ -18,7 +21,7 @@ export function createFitRun(ctx, { q, live, preview, status }) {
   const plot = new LossPlot(q('canvas.plot'));
   let unfollow = null;
   let plotted = 0; // job.points already on the plot
-  let previewedLoss = Infinity;
+  let pictured = null; // the job's best picture the overlay has
 
   const running = () => !!live.job?.running;
   const applicable = () => {
@@ -58,14 +61,16 @@ export function createFitRun(ctx, { q, live, preview, status }) {
       return values;
     };
     // A fresh payload per request: its pixel buffer is transferred to a worker.
+    // `preview`: the fit draws its best values so far and its answer at the
+    // target's size, as the overlay's `render-pattern` would.
     const payload = () => ({
       program: d.program, params: named(fitInfo, d.values, { integersOnly: true }),
       target_rgba: { ...d.target, rgba: d.target.rgba.slice() },
-      budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed,
+      budget: d.settings.budget, loss: d.settings.loss, seed: d.settings.seed, preview: true,
     });
     const started = ctx.startJob('fit', { label: 'Fit' }, async (j) => {
       // One fit sharded across the worker pool (all workers but one, which
-      // stays free for previews). The pool relays the shards' exchanges and
+      // stays free for other jobs). The pool relays the shards' exchanges and
       // the core merges them, so the result is exactly that of one fit
       // (tests/fit.rs checks this with the native driver).
       const n = Math.max(1, ctx.pool.slots.length - 1);
@@ -81,13 +86,24 @@ export function createFitRun(ctx, { q, live, preview, status }) {
           // The global stage (spectra, then the phase sweep) has no loss to
           // plot until its sweep: the plot shades how far it has come.
           if (/^global search/.test(p.stage)) j.data.global = Math.max(j.data.global ?? 0, fraction);
-          const better = p.values && losses[k] === loss && loss < (j.best?.loss ?? Infinity);
+          const holds = p.values && losses[k] === loss;
+          const better = holds && loss < (j.best?.loss ?? Infinity);
+          // A picture of the best comes with it, or (at most every few
+          // hundred ms of the fit's work: PREVIEW_EVERY_STEPS) a little later.
+          const picture = holds && p.picture && (better || same(p.values, j.best?.params)) ? p.picture : null;
+          let best;
+          if (better) best = { values: full(p.values), params: [...p.values], loss, picture };
+          else if (picture) best = { ...j.best, picture };
           j.report({ fraction, stage: n > 1 ? `${p.stage} (${n} workers)` : p.stage, figure: loss }, {
             point: Number.isFinite(loss) ? [fraction, loss] : null,
-            ...(better ? { best: { values: full(p.values), params: [...p.values], loss } } : {}),
+            ...(best ? { best } : {}),
           });
         },
       });
+      // The fitted values' picture, before they reach the document (whose
+      // overlay then needs no `render-pattern`).
+      j.data.fitted = { values: full(r.params), picture: r.picture };
+      preview.showPicture(d.program, j.data.fitted.values, r.picture, { documentValues: true });
       // A fit finishes into the document it started from, or not at all.
       j.data.applied = j.commit((cur) => (cur.program !== d.program ? null : {
         ...cur, values: full(r.params).map((v, i) => (floatIdx.includes(i) ? v : cur.values[i])),
@@ -106,7 +122,7 @@ export function createFitRun(ctx, { q, live, preview, status }) {
     live.job = j;
     plot.clear();
     plotted = 0;
-    previewedLoss = Infinity;
+    pictured = null;
     unfollow = ctx.follow(j, show);
     show(j);
   }
@@ -120,13 +136,17 @@ export function createFitRun(ctx, { q, live, preview, status }) {
     const loss = j.progress.figure;
     if (j.running) {
       status(`${j.progress.stage} ${pct}% — loss ${Number.isFinite(loss) ? loss.toPrecision(4) : '…'}`);
-      // The best candidate so far over the target.
-      if (j.best && j.best.loss < previewedLoss) { previewedLoss = j.best.loss; preview.show(j.best.values); }
+      // The best candidate so far over the target, as the fit drew it.
+      if (j.best?.picture && j.best.picture !== pictured) {
+        pictured = j.best.picture;
+        preview.showPicture(j.data.program, j.best.values, j.best.picture);
+      }
     } else if (j.status === 'done') {
       const r = j.result;
       const secs = ((j.endedAt - j.startedAt) / 1000).toFixed(1);
       // One loss, named (the polish's image-space loss is a different one).
       status(`fitted in ${secs} s — loss ${r.loss.toPrecision(4)} (${r.loss_name}) after ${r.evaluations} evaluations${j.data.applied ? '' : ' (not applied: the program changed meanwhile)'}`);
+      if (j.data.fitted) preview.showPicture(j.data.program, j.data.fitted.values, j.data.fitted.picture, { documentValues: true });
     } else if (j.status === 'stopped') {
       status(j.best
         ? `stopped at ${pct}% — the values from before the fit are kept; Apply fitted values puts in the best so far (loss ${j.best.loss.toPrecision(4)})`
@@ -139,7 +159,7 @@ export function createFitRun(ctx, { q, live, preview, status }) {
     }
     if (!j.running) {
       // The overlay showed the fit's candidates: back to the document's values.
-      if (j.status !== 'done' && doc()) preview.show(doc().values);
+      if (doc()) preview.show(doc().values);
       renderResults(doc());
     }
     setRunning(j.running);
@@ -149,6 +169,7 @@ export function createFitRun(ctx, { q, live, preview, status }) {
     if (!applicable()) return;
     const { job } = live;
     const { best } = job;
+    if (best.picture) preview.showPicture(job.data.program, best.values, best.picture, { documentValues: true });
     if (ctx.commit({ ...doc(), values: best.values, result: { params: best.params, loss: best.loss, names: null, evaluations: null } })) {
       status(`applied: the stopped fit's best values (loss ${best.loss.toPrecision(4)}); Undo puts the earlier ones back`);
       job.data.appliedBest = true;
