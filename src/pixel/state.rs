@@ -535,7 +535,7 @@ mod tests {
             assert_eq!(refused(&d, field).to_string(), message);
         }
         // NaN, which a page's number can be, is not a point.
-        let mut v = Value::read(&doc(), true).unwrap();
+        let mut v = Value::read(doc(), true).unwrap();
         if let Value::Object(kv) = &mut v {
             for (_, s) in kv.iter_mut().filter(|(k, _)| k == "strokes") {
                 let p = Value::List(vec![Value::Number(f64::NAN), Value::Number(1.0)]);
@@ -574,7 +574,8 @@ mod tests {
             .map(String::as_str)
             .collect();
         let mut sorted = names.to_vec();
-        (keys.sort(), sorted.sort());
+        keys.sort();
+        sorted.sort();
         assert_eq!(sorted, keys, "every field of PixelParams");
         for name in names {
             let d = with(|d| {
