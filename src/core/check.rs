@@ -280,6 +280,38 @@ where
     Ok(Option::<T>::deserialize(d)?.unwrap_or_default())
 }
 
+// ----------------------------------------- Pixel and Texture documents --
+
+/// `deserialize_with` for a fixed-size list (`[T; N]`): exactly `N` items.
+/// (A [`Value`] list read as an array stops after `N` items and would drop
+/// the rest: `[1, 2, 3]` is not a point `[x, y]`.)
+pub fn exactly<'de, D, T, const N: usize>(d: D) -> std::result::Result<[T; N], D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    let list = Vec::<T>::deserialize(d)?;
+    let n = list.len();
+    list.try_into().map_err(|_| {
+        serde::de::Error::invalid_length(n, &format!("an array of length {N}").as_str())
+    })
+}
+
+/// [`exactly`] for an optional list (`null` or missing: `None`, with
+/// `#[serde(default)]`).
+pub fn exactly_or_null<'de, D, T, const N: usize>(
+    d: D,
+) -> std::result::Result<Option<[T; N]>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    #[derive(Deserialize)]
+    #[serde(transparent, bound(deserialize = "T: Deserialize<'de>"))]
+    struct Exactly<T, const N: usize>(#[serde(deserialize_with = "exactly")] [T; N]);
+    Ok(Option::<Exactly<T, N>>::deserialize(d)?.map(|e| e.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -40,13 +40,15 @@ pub const EVAL_POINTS: usize = 10_000;
 pub const PARAM_MAGNITUDE: f64 = 1e9;
 /// Native threads of a CLI fit: one shard each, so at most [`SHARDS`].
 pub const THREADS: (usize, usize) = (1, SHARDS);
-/// Pixel: annotation scale K, margins (pixels, either sign), HSV shift,
-/// CIELAB distance d_max.
+/// Pixel: annotation scale K, density ρ, margins (pixels, either sign),
+/// HSV shift, CIELAB distance d_max, most excluded colours.
 pub const ANNOTATION_SCALE: (u32, u32) = (1, super::limits::MAX_ANNOTATION_SCALE);
+pub const DENSITY: (f64, f64) = (0.0, 1.0);
 pub const MARGIN: i32 = super::limits::MAX_MARGIN;
 pub const HUE_SHIFT: f64 = 360.0;
 pub const SV_SHIFT: f64 = 100.0;
 pub const D_MAX: (f64, f64) = (0.0, 1000.0);
+pub const EXCLUDED: usize = 256;
 
 /// `v` must be finite and within `lo..=hi`.
 pub fn finite_in(field: &str, v: f64, (lo, hi): (f64, f64)) -> Result<f64> {

@@ -97,25 +97,53 @@ pub struct PixelRequest {
     pub params: PixelParams,
 }
 
+/// The range of one setting: a number, or a whole number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Range {
+    Number(f64, (f64, f64)),
+    Whole(i64, (i64, i64)),
+}
+
+/// Every ranged setting of `p` with its field (`<name>`, an item of a list
+/// `<name>.<i>`, within `params`), its value and its range: the one list that
+/// the request's check ([`check_params`]) and the document's
+/// ([`super::state`]) read, each in its own words.
+pub fn ranges(p: &PixelParams) -> [(&'static str, Range); 8] {
+    use Range::{Number, Whole};
+    let (m, hue, sv) = (lim::MARGIN as i64, lim::HUE_SHIFT, lim::SV_SHIFT);
+    let k = lim::ANNOTATION_SCALE;
+    [
+        (
+            "annotation_scale",
+            Whole(p.annotation_scale.into(), (k.0.into(), k.1.into())),
+        ),
+        ("density", Number(p.density, lim::DENSITY)),
+        ("margins.0", Whole(p.margins[0].into(), (-m, m))),
+        ("margins.1", Whole(p.margins[1].into(), (-m, m))),
+        ("hsv.0", Number(p.hsv[0], (-hue, hue))),
+        ("hsv.1", Number(p.hsv[1], (-sv, sv))),
+        ("hsv.2", Number(p.hsv[2], (-sv, sv))),
+        ("d_max", Number(p.d_max, lim::D_MAX)),
+    ]
+}
+
 /// Check every numeric setting where it enters; errors name `params.<field>`.
 pub fn check_params(p: &PixelParams) -> Result<()> {
-    lim::int_in(
-        "params.annotation_scale",
-        p.annotation_scale,
-        lim::ANNOTATION_SCALE,
-    )?;
-    lim::finite_in("params.density", p.density, (0.0, 1.0))?;
-    for (i, m) in p.margins.iter().enumerate() {
-        lim::int_in(
-            &format!("params.margins.{i}"),
-            *m,
-            (-lim::MARGIN, lim::MARGIN),
-        )?;
+    for (field, range) in ranges(p) {
+        let field = format!("params.{field}");
+        match range {
+            Range::Number(v, r) => lim::finite_in(&field, v, r).map(drop)?,
+            Range::Whole(v, r) => lim::int_in(&field, v, r).map(drop)?,
+        }
     }
-    lim::finite_in("params.hsv.0", p.hsv[0], (-lim::HUE_SHIFT, lim::HUE_SHIFT))?;
-    lim::finite_in("params.hsv.1", p.hsv[1], (-lim::SV_SHIFT, lim::SV_SHIFT))?;
-    lim::finite_in("params.hsv.2", p.hsv[2], (-lim::SV_SHIFT, lim::SV_SHIFT))?;
-    lim::finite_in("params.d_max", p.d_max, lim::D_MAX)?;
+    if p.exclude.len() > lim::EXCLUDED {
+        return Err(Error::input(format!(
+            "`params.exclude` must hold at most {} colours (got {})",
+            lim::EXCLUDED,
+            p.exclude.len()
+        ))
+        .at("params.exclude"));
+    }
     Ok(())
 }
 

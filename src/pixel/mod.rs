@@ -31,7 +31,8 @@ pub use position::PositionStrategy;
 use crate::core::error::{Error, Result};
 use crate::core::job::{run_quietly, Job, Progress, Step};
 use crate::raster::{ColourCounter, Rgba8Image};
-use serde::{Deserialize, Serialize};
+use serde::de::{self, IgnoredAny, MapAccess, SeqAccess, Unexpected, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
 
 pub use crate::core::limits::MAX_PALETTE;
 
@@ -48,6 +49,7 @@ pub struct PixelParams {
     /// Density ρ in `0..=1` (1 = 100%).
     pub density: f64,
     /// Margins `[mx, my]` in pixels, may be negative ([0, 0]).
+    #[serde(deserialize_with = "crate::core::check::exactly")]
     pub margins: [i32; 2],
     /// Allow elements only partly inside the mask (false).
     pub partial: bool,
@@ -55,8 +57,10 @@ pub struct PixelParams {
     pub colour: ColourStrategy,
     /// HSV displacement: hue in degrees, saturation and value in percentage
     /// points ([0, 0, -30], the thesis' Fig. 5b).
+    #[serde(deserialize_with = "crate::core::check::exactly")]
     pub hsv: [f64; 3],
     /// RGB colours never used for elements ([[0, 0, 0]]: black outlines).
+    #[serde(deserialize_with = "colours")]
     pub exclude: Vec<[u8; 3]>,
     /// Maximum CIELAB distance for the automatic choice (50).
     pub d_max: f64,
@@ -69,6 +73,127 @@ pub struct PixelParams {
     pub sprite_direction: Direction8,
     /// Seed of every random choice.
     pub seed: u64,
+}
+
+/// A number, or what else a list item is (read whole, so an item of the
+/// wrong kind is refused by the list's own rule, naming the list).
+pub(crate) struct AnyNumber(pub std::result::Result<f64, &'static str>);
+
+impl<'de> Deserialize<'de> for AnyNumber {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        type R<E> = std::result::Result<AnyNumber, E>;
+        impl<'de> Visitor<'de> for V {
+            type Value = AnyNumber;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("any value")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> R<E> {
+                Ok(AnyNumber(Ok(v)))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> R<E> {
+                Ok(AnyNumber(Ok(v as f64)))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> R<E> {
+                Ok(AnyNumber(Ok(v as f64)))
+            }
+            fn visit_bool<E: de::Error>(self, _: bool) -> R<E> {
+                Ok(AnyNumber(Err("true or false")))
+            }
+            fn visit_str<E: de::Error>(self, _: &str) -> R<E> {
+                Ok(AnyNumber(Err("text")))
+            }
+            fn visit_bytes<E: de::Error>(self, _: &[u8]) -> R<E> {
+                Ok(AnyNumber(Err("bytes")))
+            }
+            fn visit_unit<E: de::Error>(self) -> R<E> {
+                Ok(AnyNumber(Err("null")))
+            }
+            fn visit_none<E: de::Error>(self) -> R<E> {
+                self.visit_unit()
+            }
+            fn visit_some<D: Deserializer<'de>>(self, d: D) -> R<D::Error> {
+                AnyNumber::deserialize(d)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut a: A) -> R<A::Error> {
+                while a.next_element::<IgnoredAny>()?.is_some() {}
+                Ok(AnyNumber(Err("a list")))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut a: A) -> R<A::Error> {
+                while a.next_entry::<IgnoredAny, IgnoredAny>()?.is_some() {}
+                Ok(AnyNumber(Err("an object")))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// A list of `N` numbers, each `ok`; anything else is refused as a whole,
+/// in the words of `what` ("must be `what` (got [3, text])").
+pub(crate) fn numbers<'de, D, const N: usize>(
+    d: D,
+    what: &'static str,
+    ok: fn(f64) -> bool,
+) -> std::result::Result<[f64; N], D::Error>
+where
+    D: Deserializer<'de>,
+{
+    struct V<const N: usize>(&'static str, fn(f64) -> bool);
+    impl<'de, const N: usize> Visitor<'de> for V<N> {
+        type Value = [f64; N];
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str(self.0)
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut a: A) -> std::result::Result<[f64; N], A::Error> {
+            let mut items = Vec::with_capacity(N);
+            while let Some(AnyNumber(x)) = a.next_element()? {
+                items.push(x);
+            }
+            let fine = items.len() == N && items.iter().all(|x| x.is_ok_and(self.1));
+            if fine {
+                let xs: Vec<f64> = items.into_iter().map(|x| x.unwrap_or(0.0)).collect();
+                return Ok(xs.try_into().unwrap_or([0.0; N]));
+            }
+            if items.len() != N {
+                let n = items.len();
+                return Err(de::Error::invalid_value(
+                    Unexpected::Other(&format!("a list of {n} items")),
+                    &self,
+                ));
+            }
+            let words: Vec<String> = items
+                .iter()
+                .map(|x| match x {
+                    Ok(v) => crate::core::value::js_number(*v),
+                    Err(what) => what.to_string(),
+                })
+                .collect();
+            Err(de::Error::invalid_value(
+                Unexpected::Other(&format!("[{}]", words.join(", "))),
+                &self,
+            ))
+        }
+    }
+    d.deserialize_seq(V::<N>(what, ok))
+}
+
+/// `exclude`: each colour a list `[r, g, b]` of whole numbers 0–255.
+fn colours<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Vec<[u8; 3]>, D::Error> {
+    struct Rgb([u8; 3]);
+    impl<'de> Deserialize<'de> for Rgb {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+            let c = numbers::<D, 3>(
+                d,
+                "an [r, g, b] colour (whole numbers from 0 to 255)",
+                |v| v.fract() == 0.0 && (0.0..=255.0).contains(&v),
+            )?;
+            Ok(Rgb(c.map(|v| v as u8)))
+        }
+    }
+    Ok(Vec::<Rgb>::deserialize(d)?
+        .into_iter()
+        .map(|c| c.0)
+        .collect())
 }
 
 impl Default for PixelParams {

@@ -1,6 +1,7 @@
 //! The Pixel tool's document (what the page keeps, autosaves, saves in a
-//! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::core::value`]). Field names are the page's:
+//! project file and shares), its schema version and its checks: a serde
+//! type read from the page's [`Value`] ([`read_document`]) and its
+//! [`Check`]. Field names are the page's:
 //!
 //! ```text
 //! { example: "fish" | "trunk" | null, source: bytes, sheet: bytes | null,
@@ -8,19 +9,24 @@
 //!   strokes: [[[x, y], ...], ...], params: PixelParams, names: {source?, sheet?} }
 //! ```
 //!
-//! The ranges of the parameters are the core's request limits
-//! ([`crate::core::request_limits`], the same ones `pixel` applies), the
-//! image side and stroke points the core's limits ([`crate::core::limits`]).
-use super::api::MaskBits;
-use super::{ColourStrategy, Direction8, ElementColour, PixelParams, PositionStrategy};
+//! `params` and `mask` are the `pixel` request's own types
+//! ([`PixelParams`], [`MaskBits`]) and their ranges the request's
+//! ([`super::api::ranges`]); a document holds every parameter but
+//! `sprite_direction` (the page has a control for each), whole HSV shifts
+//! (its sliders step by one) and a seed a page's number holds. The image
+//! side and stroke points are the core's limits ([`crate::core::limits`]).
+//! Unknown fields are dropped, as they always were, but not in `params`
+//! (the request refuses them: a typo is seen).
+use super::api::{ranges, MaskBits, Range};
+use super::{numbers, PixelParams};
+use crate::core::check::{read_document, Check, Path};
 use crate::core::error::{Error, Result};
 use crate::core::limits::{MAX_IMAGE_SIDE, MAX_STROKE_POINTS};
 use crate::core::request_limits as lim;
-use crate::core::value::{
-    first_chars, invalid, js_len, js_number, js_text, nullish, Value, MAX_SAFE_INTEGER,
-};
-use serde::de::value::{Error as DeError, StrDeserializer};
-use serde::{Deserialize, Serialize};
+use crate::core::value::{first_chars, js_text, nullish, Value, MAX_SAFE_INTEGER};
+use serde::de::{self, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
+use std::cell::Cell;
 
 /// Schema version of the Pixel state (the page's `state.version`).
 pub const STATE_VERSION: u32 = 1;
@@ -30,27 +36,42 @@ pub const EXAMPLES: &[&str] = &["fish", "trunk"];
 pub const MAX_STROKES: usize = 10_000;
 /// Most points in one stroke.
 pub const MAX_STROKE_LEN: usize = 100_000;
-/// Most excluded colours.
-pub const MAX_EXCLUDED: usize = 256;
 /// File names are kept to this many characters.
 pub const MAX_NAME_CHARS: usize = 200;
+/// The parameters a document may leave out (the request's default): the
+/// page has no control for them.
+pub const OPTIONAL_PARAMS: &[&str] = &["sprite_direction"];
 
-/// A checked Pixel document.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A Pixel document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PixelState {
+    #[serde(default)]
     pub example: Option<String>,
-    #[serde(with = "serde_bytes")]
+    #[serde(
+        serialize_with = "serde_bytes::serialize",
+        deserialize_with = "image_file"
+    )]
     pub source: Vec<u8>,
-    #[serde(with = "serde_bytes")]
+    #[serde(
+        default,
+        serialize_with = "serde_bytes::serialize",
+        deserialize_with = "image_file_or_null"
+    )]
     pub sheet: Option<Vec<u8>>,
-    #[serde(with = "serde_bytes")]
+    #[serde(
+        default,
+        serialize_with = "serde_bytes::serialize",
+        deserialize_with = "image_file_or_null"
+    )]
     pub sprite: Option<Vec<u8>>,
-    /// One byte per pixel, 0 or 1.
+    /// One byte per pixel, 0 or 1 (any other byte is read as 1).
     pub mask: MaskBits,
     /// In source pixels.
+    #[serde(deserialize_with = "strokes")]
     pub strokes: Vec<Vec<[f64; 2]>>,
     /// Exactly the `pixel` request's parameters.
     pub params: PixelParams,
+    #[serde(default, deserialize_with = "page_names")]
     pub names: Names,
 }
 
@@ -63,420 +84,513 @@ pub struct Names {
     pub sheet: Option<String>,
 }
 
-/// How a parameter is checked (the kinds of the page's controls).
-enum Rule {
-    /// One of these names, read as the core's enum.
-    Choice(&'static [&'static str], fn(&str) -> bool),
-    /// A finite number in the range.
-    Number(f64, f64),
-    /// A whole number in the range.
-    Whole(f64, f64),
-    Flag,
-    /// Whole numbers, one range each.
-    Wholes(&'static [(f64, f64)], &'static str),
-    Colours,
-    Seed,
-}
+/// What an image field must be.
+const IMAGE_FILE: &str = "the bytes of an image file";
 
-fn parses<T: for<'a> Deserialize<'a>>(s: &str) -> bool {
-    T::deserialize(StrDeserializer::<DeError>::new(s)).is_ok()
-}
+/// Bytes (a `Uint8Array`), refused as "must be the bytes of an image file".
+struct ImageFile(Vec<u8>);
 
-const POSITIONS: &[&str] = &["random", "packed"];
-const COLOURS: &[&str] = &["auto", "border", "difference", "hsv"];
-const ELEMENT_COLOURS: &[&str] = &["region", "pixel"];
-/// The eight directions, as the core names them.
-pub const DIRECTIONS: &[&str] = &[
-    "up",
-    "up-right",
-    "right",
-    "down-right",
-    "down",
-    "down-left",
-    "left",
-    "up-left",
-];
-const MARGINS: &[(f64, f64)] = &[
-    (-(lim::MARGIN as f64), lim::MARGIN as f64),
-    (-(lim::MARGIN as f64), lim::MARGIN as f64),
-];
-const HSV: &[(f64, f64)] = &[
-    (-lim::HUE_SHIFT, lim::HUE_SHIFT),
-    (-lim::SV_SHIFT, lim::SV_SHIFT),
-    (-lim::SV_SHIFT, lim::SV_SHIFT),
-];
-
-/// Every parameter: name (the core's `PixelParams` field), whether a
-/// document must have it, and its rule.
-fn params_schema() -> [(&'static str, bool, Rule); 13] {
-    use Rule::*;
-    [
-        (
-            "positions",
-            true,
-            Choice(POSITIONS, parses::<PositionStrategy>),
-        ),
-        ("density", true, Number(0.0, 1.0)),
-        ("margins", true, Wholes(MARGINS, "")),
-        ("partial", true, Flag),
-        ("colour", true, Choice(COLOURS, parses::<ColourStrategy>)),
-        ("d_max", true, Number(lim::D_MAX.0, lim::D_MAX.1)),
-        (
-            "hsv",
-            true,
-            Wholes(HSV, ": a hue shift, then saturation and value shifts"),
-        ),
-        ("exclude", true, Colours),
-        (
-            "element_colour",
-            true,
-            Choice(ELEMENT_COLOURS, parses::<ElementColour>),
-        ),
-        (
-            "annotation_scale",
-            true,
-            Whole(
-                lim::ANNOTATION_SCALE.0 as f64,
-                lim::ANNOTATION_SCALE.1 as f64,
-            ),
-        ),
-        (
-            "default_direction",
-            true,
-            Choice(DIRECTIONS, parses::<Direction8>),
-        ),
-        (
-            "sprite_direction",
-            false,
-            Choice(DIRECTIONS, parses::<Direction8>),
-        ),
-        ("seed", true, Seed),
-    ]
-}
-
-fn range_words(lo: f64, hi: f64) -> String {
-    format!("from {} to {}", js_number(lo), js_number(hi))
-}
-
-/// Check one parameter; sets it in `out`.
-fn check_param(name: &str, rule: &Rule, v: &Value, out: &mut PixelParams) -> Result<()> {
-    let field = format!("params.{name}");
-    match rule {
-        Rule::Choice(options, ok) => {
-            let s = v
-                .as_text()
-                .filter(|s| options.contains(s) && ok(s))
-                .ok_or_else(|| invalid(&field, format!("must be one of {}", options.join(", "))))?;
-            let sd = || StrDeserializer::<DeError>::new(s);
-            let bad = |_| invalid(&field, format!("must be one of {}", options.join(", ")));
-            match name {
-                "positions" => out.positions = PositionStrategy::deserialize(sd()).map_err(bad)?,
-                "colour" => out.colour = ColourStrategy::deserialize(sd()).map_err(bad)?,
-                "element_colour" => {
-                    out.element_colour = ElementColour::deserialize(sd()).map_err(bad)?
-                }
-                "default_direction" => {
-                    out.default_direction = Direction8::deserialize(sd()).map_err(bad)?
-                }
-                _ => out.sprite_direction = Direction8::deserialize(sd()).map_err(bad)?,
+impl<'de> Deserialize<'de> for ImageFile {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = ImageFile;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(IMAGE_FILE)
+            }
+            fn visit_bytes<E: de::Error>(self, b: &[u8]) -> std::result::Result<ImageFile, E> {
+                Ok(ImageFile(b.to_vec()))
+            }
+            fn visit_byte_buf<E: de::Error>(self, b: Vec<u8>) -> std::result::Result<ImageFile, E> {
+                Ok(ImageFile(b))
             }
         }
-        Rule::Number(lo, hi) | Rule::Whole(lo, hi) => {
-            let whole = matches!(rule, Rule::Whole(..));
-            let x = if whole { v.whole() } else { v.finite() }
-                .filter(|x| (*lo..=*hi).contains(x))
-                .ok_or_else(|| {
-                    let what = if whole { "a whole number" } else { "a number" };
-                    invalid(&field, format!("must be {what} {}", range_words(*lo, *hi)))
-                })?;
-            match name {
-                "density" => out.density = x,
-                "d_max" => out.d_max = x,
-                _ => out.annotation_scale = x as u32,
-            }
-        }
-        Rule::Flag => {
-            out.partial = match v {
-                Value::Bool(b) => *b,
-                _ => return Err(invalid(&field, "must be true or false")),
-            }
-        }
-        Rule::Wholes(ranges, parts) => {
-            let words = if ranges.iter().all(|r| *r == ranges[0]) {
-                format!(
-                    "must be {} whole numbers {}",
-                    ranges.len(),
-                    range_words(ranges[0].0, ranges[0].1)
-                )
-            } else {
-                let each: Vec<String> = ranges.iter().map(|r| range_words(r.0, r.1)).collect();
-                format!(
-                    "must be {} whole numbers{parts} ({})",
-                    ranges.len(),
-                    each.join(", ")
-                )
-            };
-            let xs: Vec<f64> = v
-                .as_list()
-                .filter(|l| l.len() == ranges.len())
-                .and_then(|l| {
-                    l.iter()
-                        .zip(ranges.iter())
-                        .map(|(x, (lo, hi))| x.whole().filter(|x| (*lo..=*hi).contains(x)))
-                        .collect()
-                })
-                .ok_or_else(|| invalid(&field, words))?;
-            if name == "margins" {
-                out.margins = [xs[0] as i32, xs[1] as i32];
-            } else {
-                out.hsv = [xs[0], xs[1], xs[2]];
-            }
-        }
-        Rule::Colours => {
-            let bad = || invalid(&field, "must be a list of [r, g, b] colours (0 to 255)");
-            let l = v
-                .as_list()
-                .filter(|l| l.len() <= MAX_EXCLUDED)
-                .ok_or_else(bad)?;
-            out.exclude = l
-                .iter()
-                .map(|rgb| {
-                    let c = rgb.as_list().filter(|c| c.len() == 3)?;
-                    let ch = |x: &Value| x.whole().filter(|x| (0.0..=255.0).contains(x));
-                    Some([ch(&c[0])? as u8, ch(&c[1])? as u8, ch(&c[2])? as u8])
-                })
-                .collect::<Option<Vec<_>>>()
-                .ok_or_else(bad)?;
-        }
-        Rule::Seed => {
-            out.seed = v
-                .whole()
-                .filter(|x| (0.0..=MAX_SAFE_INTEGER).contains(x))
-                .ok_or_else(|| invalid(&field, "must be a whole number ≥ 0"))?
-                as u64;
+        d.deserialize_byte_buf(V)
+    }
+}
+
+fn image_file<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Vec<u8>, D::Error> {
+    Ok(ImageFile::deserialize(d)?.0)
+}
+
+fn image_file_or_null<'de, D: Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<Vec<u8>>, D::Error> {
+    Ok(Option::<ImageFile>::deserialize(d)?.map(|f| f.0))
+}
+
+/// Strokes: lists of points `[x, y]`, each a pair of finite numbers.
+fn strokes<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Vec<Vec<[f64; 2]>>, D::Error> {
+    struct Point([f64; 2]);
+    impl<'de> Deserialize<'de> for Point {
+        fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+            numbers(d, "a point [x, y] of finite numbers", f64::is_finite).map(Point)
         }
     }
-    Ok(())
+    let list = Vec::<Vec<Point>>::deserialize(d)?;
+    Ok(list
+        .into_iter()
+        .map(|s| s.into_iter().map(|p| p.0).collect())
+        .collect())
 }
 
-fn bytes_of(v: Option<&Value>, field: &str, optional: bool) -> Result<Option<Vec<u8>>> {
-    match v {
-        None | Some(Value::Null) if optional => Ok(None),
-        Some(Value::Bytes(b)) if !b.is_empty() => {
-            image_header(b).map_err(|why| invalid(field, why))?;
-            Ok(Some(b.clone()))
-        }
-        _ => Err(invalid(field, "must be the bytes of an image file")),
-    }
+/// The names as the page's `String(name)` writes them, cut to
+/// [`MAX_NAME_CHARS`]; anything but an object is no names.
+fn page_names<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Names, D::Error> {
+    let v = Value::deserialize(d)?;
+    let name = |k: &str| {
+        let n = v.get(k);
+        (!nullish(n)).then(|| first_chars(&js_text(n), MAX_NAME_CHARS))
+    };
+    Ok(Names {
+        source: name("source"),
+        sheet: name("sheet"),
+    })
 }
 
 /// The bytes start like an image file the core reads, with a size within
 /// the image limit: read from the header alone, nothing decoded (a project
 /// whose `source` was 3 bytes that are not a PNG used to open).
-fn image_header(bytes: &[u8]) -> std::result::Result<(), String> {
+fn image_header(at: &Path, bytes: &[u8]) -> Result<()> {
+    if bytes.is_empty() {
+        return Err(at.invalid(format!("must be {IMAGE_FILE}")));
+    }
     let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|e| format!("cannot be read ({e})"))?;
+        .map_err(|e| at.invalid(format!("cannot be read ({e})")))?;
     if reader.format().is_none() {
-        return Err("is not an image file (PNG, JPEG, WebP, GIF or BMP)".into());
+        return Err(at.invalid("is not an image file (PNG, JPEG, WebP, GIF or BMP)"));
     }
     let (w, h) = reader.into_dimensions().map_err(|_| {
-        "is not a readable image file (its header is damaged or cut short)".to_string()
+        at.invalid("is not a readable image file (its header is damaged or cut short)")
     })?;
     if w == 0 || h == 0 || w.max(h) > MAX_IMAGE_SIDE {
-        return Err(format!(
+        return Err(at.invalid(format!(
             "is an image of {w}×{h} pixels; images are 1 to {MAX_IMAGE_SIDE} pixels a side"
-        ));
+        )));
     }
     Ok(())
 }
 
-/// Check a Pixel document field by field; the error names the field at fault.
-pub fn check(raw: &Value) -> Result<PixelState> {
-    if !raw.is_object_like() || raw.as_list().is_some() {
-        return Err(invalid("state", "is not a Pixel document"));
+impl Check for PixelState {
+    fn check(&self, at: &Path) -> Result<()> {
+        image_header(&at.key("source"), &self.source)?;
+        for (k, b) in [("sheet", &self.sheet), ("sprite", &self.sprite)] {
+            if let Some(b) = b {
+                image_header(&at.key(k), b)?;
+            }
+        }
+        self.mask.check(&at.key("mask"))?;
+        check_strokes(&at.key("strokes"), &self.strokes, &self.mask)?;
+        self.params.check(&at.key("params"))?;
+        if let Some(e) = &self.example {
+            if !EXAMPLES.contains(&e.as_str()) {
+                return Err(at
+                    .key("example")
+                    .invalid(format!("must be one of {} or none", EXAMPLES.join(", "))));
+            }
+        }
+        Ok(())
     }
-    let source = bytes_of(raw.get("source"), "source", false)?.unwrap_or_default();
-    let sheet = bytes_of(raw.get("sheet"), "sheet", true)?;
-    let sprite = bytes_of(raw.get("sprite"), "sprite", true)?;
+}
 
-    // The mask.
-    let m = raw
-        .get("mask")
-        .filter(|m| m.is_object_like())
-        .ok_or_else(|| invalid("mask", "is missing"))?;
-    let side = |v: Option<&Value>| {
-        v.and_then(Value::whole)
-            .filter(|s| (1.0..=MAX_IMAGE_SIDE as f64).contains(s))
-    };
-    let (width, height) = match (side(m.get("width")), side(m.get("height"))) {
-        (Some(w), Some(h)) => (w as u32, h as u32),
-        _ => {
-            return Err(invalid(
-                "mask",
-                format!(
-                    "must be 1 to {MAX_IMAGE_SIDE} pixels on each side (found {}×{})",
-                    js_text(m.get("width")),
-                    js_text(m.get("height"))
-                ),
-            ))
+impl Check for MaskBits {
+    fn check(&self, at: &Path) -> Result<()> {
+        let (w, h) = (self.width, self.height);
+        if !(1..=MAX_IMAGE_SIDE).contains(&w) || !(1..=MAX_IMAGE_SIDE).contains(&h) {
+            return Err(at.invalid(format!(
+                "must be 1 to {MAX_IMAGE_SIDE} pixels on each side (found {w}×{h})"
+            )));
         }
-    };
-    let n = width as usize * height as usize;
-    let bits = match m.get("bits") {
-        Some(Value::Bytes(b)) if b.len() == n => b.iter().map(|&b| u8::from(b != 0)).collect(),
-        other => {
-            let found = match other {
-                Some(Value::Bytes(b)) => b.len().to_string(),
-                Some(Value::List(l)) => l.len().to_string(),
-                Some(Value::Text(t)) => js_len(t).to_string(),
-                _ => "none".into(),
-            };
-            return Err(invalid(
-                "mask.bits",
-                format!("must hold {n} values ({width}×{height}), found {found}"),
-            ));
+        let n = w as usize * h as usize;
+        if self.bits.len() != n {
+            return Err(at.key("bits").invalid(format!(
+                "must hold {n} values ({w}×{h}), found {}",
+                self.bits.len()
+            )));
         }
-    };
-    let mask = MaskBits {
-        width,
-        height,
-        bits,
-    };
+        Ok(())
+    }
+}
 
-    // The strokes.
-    let list = raw
-        .get("strokes")
-        .and_then(Value::as_list)
-        .filter(|l| l.len() <= MAX_STROKES)
-        .ok_or_else(|| {
-            invalid(
-                "strokes",
-                format!("must be a list of at most {MAX_STROKES} strokes"),
-            )
-        })?;
-    let total: usize = list.iter().filter_map(Value::as_list).map(<[_]>::len).sum();
+/// At most [`MAX_STROKES`] strokes and [`MAX_STROKE_POINTS`] points in
+/// all, each stroke 2 to [`MAX_STROKE_LEN`] points within a pixel of the
+/// mask's image.
+fn check_strokes(at: &Path, strokes: &[Vec<[f64; 2]>], mask: &MaskBits) -> Result<()> {
+    if strokes.len() > MAX_STROKES {
+        return Err(at.invalid(format!("must be a list of at most {MAX_STROKES} strokes")));
+    }
+    let total: usize = strokes.iter().map(Vec::len).sum();
     if total > MAX_STROKE_POINTS {
         return Err(Error::limit(format!(
             "strokes have {total} points in all; the stroke point limit is {MAX_STROKE_POINTS}"
         ))
-        .at("strokes"));
+        .at(at.as_str()));
     }
-    let (w, h) = (width as f64, height as f64);
-    let mut strokes = Vec::with_capacity(list.len());
-    for (i, s) in list.iter().enumerate() {
-        let s = s
-            .as_list()
-            .filter(|s| (2..=MAX_STROKE_LEN).contains(&s.len()))
-            .ok_or_else(|| {
-                invalid(
-                    &format!("strokes.{i}"),
-                    "must be a list of at least 2 points",
-                )
-            })?;
-        let mut stroke = Vec::with_capacity(s.len());
-        for (j, p) in s.iter().enumerate() {
-            let field = || format!("strokes.{i}.{j}");
-            let [x, y] = p
-                .as_list()
-                .and_then(|l| match l {
-                    [x, y] => Some([x.finite()?, y.finite()?]),
-                    _ => None,
-                })
-                .ok_or_else(|| invalid(&field(), "must be a point [x, y] of finite numbers"))?;
+    let (w, h) = (mask.width as f64, mask.height as f64);
+    for (i, s) in strokes.iter().enumerate() {
+        if s.len() < 2 {
+            return Err(at.index(i).invalid("must be a list of at least 2 points"));
+        }
+        if s.len() > MAX_STROKE_LEN {
+            return Err(at
+                .index(i)
+                .invalid(format!("must be a list of at most {MAX_STROKE_LEN} points")));
+        }
+        for (j, &[x, y]) in s.iter().enumerate() {
             if x < -1.0 || y < -1.0 || x > w + 1.0 || y > h + 1.0 {
-                return Err(invalid(
-                    &field(),
-                    format!("lies outside the {width}×{height} image"),
-                ));
+                return Err(at.index(i).index(j).invalid(format!(
+                    "lies outside the {}×{} image",
+                    mask.width, mask.height
+                )));
             }
-            stroke.push([x, y]);
         }
-        strokes.push(stroke);
     }
+    Ok(())
+}
 
-    // The parameters: every one the page has a control for, none unknown.
-    let p = raw
-        .get("params")
-        .filter(|p| p.is_object_like() && p.as_list().is_none())
-        .ok_or_else(|| invalid("params", "are missing"))?;
-    let schema = params_schema();
-    let mut params = PixelParams::default();
-    if let Value::Object(kv) = p {
-        for (k, v) in kv {
-            let (name, _, rule) = schema.iter().find(|(n, _, _)| n == k).ok_or_else(|| {
-                let known: Vec<&str> = schema.iter().map(|(n, _, _)| *n).collect();
-                invalid(
-                    &format!("params.{k}"),
-                    format!("is not a Pixel parameter (they are {})", known.join(", ")),
-                )
-            })?;
-            check_param(name, rule, v, &mut params)?;
+impl Check for PixelParams {
+    /// The request's ranges ([`ranges`]) in a document's words; a document
+    /// also holds whole HSV shifts, at most [`lim::EXCLUDED`] excluded
+    /// colours and a seed a page's number holds.
+    fn check(&self, at: &Path) -> Result<()> {
+        for (field, range) in ranges(self) {
+            let at = at.key(field);
+            match range {
+                // The page's HSV sliders step by one: a document's shifts
+                // have always been whole.
+                Range::Number(v, (lo, hi)) if field.starts_with("hsv.") && v.fract() != 0.0 => {
+                    return Err(at.invalid(format!("must be a whole number from {lo} to {hi}")))
+                }
+                Range::Number(v, r) => at.number_in(v, r)?,
+                Range::Whole(v, r) => at.whole_in(v, r)?,
+            }
         }
-    }
-    for (name, required, _) in &schema {
-        if *required && p.get(name).is_none() {
-            return Err(invalid(&format!("params.{name}"), "is missing"));
+        if self.exclude.len() > lim::EXCLUDED {
+            return Err(at.key("exclude").invalid(format!(
+                "must be a list of at most {} [r, g, b] colours",
+                lim::EXCLUDED
+            )));
         }
+        at.key("seed")
+            .whole_in(self.seed, (0, MAX_SAFE_INTEGER as u64))
     }
+}
 
-    let example = match raw.get("example") {
-        None | Some(Value::Null) => None,
-        Some(v) => Some(
-            v.as_text()
-                .filter(|e| EXAMPLES.contains(e))
-                .ok_or_else(|| {
-                    invalid(
-                        "example",
-                        format!("must be one of {} or none", EXAMPLES.join(", ")),
-                    )
-                })?
-                .to_string(),
-        ),
-    };
-    let name = |k: &str| {
-        let n = raw.get("names").and_then(|names| names.get(k));
-        (!nullish(n)).then(|| first_chars(&js_text(n), MAX_NAME_CHARS))
-    };
-    let names = Names {
-        source: name("source"),
-        sheet: name("sheet"),
-    };
-    Ok(PixelState {
-        example,
-        source,
-        sheet,
-        sprite,
-        mask,
-        strokes,
-        params,
-        names,
-    })
+/// The fields of `T` as serde names them (what its derived `Deserialize`
+/// asks a deserializer for).
+fn fields_of<T: for<'de> Deserialize<'de>>() -> &'static [&'static str] {
+    struct Fields(Cell<&'static [&'static str]>);
+    impl<'de> Deserializer<'de> for &Fields {
+        type Error = de::value::Error;
+        fn deserialize_any<V: Visitor<'de>>(
+            self,
+            _: V,
+        ) -> std::result::Result<V::Value, Self::Error> {
+            Err(de::Error::custom("not a struct"))
+        }
+        fn deserialize_struct<V: Visitor<'de>>(
+            self,
+            _: &'static str,
+            fields: &'static [&'static str],
+            _: V,
+        ) -> std::result::Result<V::Value, Self::Error> {
+            self.0.set(fields);
+            Err(de::Error::custom("fields read"))
+        }
+        serde::forward_to_deserialize_any! {
+            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string
+            bytes byte_buf option unit unit_struct newtype_struct seq tuple
+            tuple_struct map enum identifier ignored_any
+        }
+    }
+    let f = Fields(Cell::new(&[]));
+    let _ = T::deserialize(&f);
+    f.0.get()
+}
+
+/// Read and check a Pixel document; the error names the field at fault.
+pub fn check(raw: &Value) -> Result<PixelState> {
+    let mut doc: PixelState = read_document(raw, "Pixel")?;
+    // A request may leave any parameter out (its default); a document
+    // holds every one the page has a control for.
+    if let Some(p) = raw.get("params") {
+        for name in fields_of::<PixelParams>() {
+            if !OPTIONAL_PARAMS.contains(name) && p.get(name).is_none() {
+                return Err(Path::root().key("params").key(name).invalid("is missing"));
+            }
+        }
+    }
+    for b in &mut doc.mask.bits {
+        *b = u8::from(*b != 0);
+    }
+    Ok(doc)
 }
 
 #[cfg(test)]
 mod tests {
+    //! The document and the `pixel` request agree: each range just inside
+    //! is accepted, just outside refused naming the field, by both.
     use super::*;
+    use crate::core::value::base64_encode;
+    use crate::pixel::api::check_params;
+    use serde_json::{json, Value as Json};
+
+    fn png(w: u32, h: u32) -> Json {
+        let img = crate::raster::Rgba8Image::from_raw(w, h, vec![255; (w * h * 4) as usize]);
+        let bytes = crate::raster::encode_png(&img.unwrap()).unwrap();
+        json!({ "$bytes": base64_encode(&bytes) })
+    }
+
+    fn doc() -> Json {
+        json!({
+            "example": null, "source": png(3, 2), "sheet": png(3, 3), "sprite": null,
+            "mask": {"width": 3, "height": 2, "bits": {"$bytes": base64_encode(&[1; 6])}},
+            "strokes": [[[0, 0], [3, 2]]],
+            "params": serde_json::to_value(PixelParams::default()).unwrap(),
+            "names": {"source": "a.png"}
+        })
+    }
+
+    fn with(edit: impl FnOnce(&mut Json)) -> Json {
+        let mut d = doc();
+        edit(&mut d);
+        d
+    }
+
+    /// `{"$bytes": …}` decoded, as in a project file.
+    fn read(j: &Json) -> Result<PixelState> {
+        check(&Value::read(j, true).unwrap())
+    }
+
+    #[track_caller]
+    fn refused(j: &Json, field: &str) -> Error {
+        let e = read(j).unwrap_err();
+        assert_eq!(e.field(), Some(field), "{e}");
+        assert!(e.to_string().starts_with(field), "{e} names {field} first");
+        e
+    }
+
+    /// The request with `params.<field>` (dotted) set to `v`, checked.
+    fn request(field: &str, v: &Json) -> Result<()> {
+        let mut p = serde_json::to_value(PixelParams::default()).unwrap();
+        *p.pointer_mut(&format!("/{}", field.replace('.', "/")))
+            .unwrap() = v.clone();
+        check_params(&serde_json::from_value(p).unwrap())
+    }
 
     #[test]
-    fn every_choice_is_a_core_name_and_every_default_is_a_choice() {
-        for (name, _, rule) in params_schema() {
-            if let Rule::Choice(options, ok) = rule {
-                for o in options {
-                    assert!(ok(o), "{name}: '{o}' is not a core name");
+    fn every_range_is_inside_or_out_by_one() {
+        read(&doc()).unwrap();
+        let mut rows = 0;
+        for (field, range) in ranges(&PixelParams::default()) {
+            // (inside, outside) at each end.
+            let ends: Vec<(Json, Json)> = match range {
+                Range::Whole(_, (lo, hi)) => {
+                    vec![(json!(lo), json!(lo - 1)), (json!(hi), json!(hi + 1))]
                 }
-                let d = serde_json::to_value(PixelParams::default()).unwrap();
-                let d = d[name].as_str().unwrap().to_string();
-                assert!(options.contains(&d.as_str()), "{name}: default {d}");
+                // A document's HSV shifts are whole: one past is a whole step.
+                Range::Number(_, (lo, hi)) if field.starts_with("hsv.") => {
+                    vec![(json!(lo), json!(lo - 1.0)), (json!(hi), json!(hi + 1.0))]
+                }
+                Range::Number(_, (lo, hi)) => {
+                    let e = 1e-9 * hi.abs().max(1.0);
+                    vec![(json!(lo), json!(lo - e)), (json!(hi), json!(hi + e))]
+                }
+            };
+            let pointer = format!("/params/{}", field.replace('.', "/"));
+            let named = format!("params.{field}");
+            for (inside, outside) in ends {
+                let set = |v: &Json| with(|d| *d.pointer_mut(&pointer).unwrap() = v.clone());
+                read(&set(&inside)).unwrap_or_else(|e| panic!("{named} = {inside}: {e}"));
+                request(field, &inside).unwrap_or_else(|e| panic!("{named} = {inside}: {e}"));
+                let e = refused(&set(&outside), &named);
+                assert!(e.to_string().contains(" from "), "{e} says the range");
+                let e = request(field, &outside).unwrap_err();
+                assert_eq!(e.field(), Some(named.as_str()), "{e}");
+                rows += 1;
             }
         }
-        // And every core field has a rule.
-        let d = serde_json::to_value(PixelParams::default()).unwrap();
-        for k in d.as_object().unwrap().keys() {
-            assert!(
-                params_schema().iter().any(|(n, _, _)| n == k),
-                "no rule for {k}"
-            );
+        assert_eq!(rows, 16, "eight ranges, two ends each");
+
+        // Ranges the document adds, and the document's own sizes.
+        let colours = |n: usize| json!(vec![[0, 0, 0]; n]);
+        let strokes = |n: usize, len: usize| json!(vec![vec![[1, 1]; len]; n]);
+        let cases: Vec<(Json, Json, &str)> = vec![
+            (
+                with(|d| d["params"]["exclude"] = colours(lim::EXCLUDED)),
+                with(|d| d["params"]["exclude"] = colours(lim::EXCLUDED + 1)),
+                "params.exclude",
+            ),
+            (
+                with(|d| d["params"]["exclude"] = json!([[0, 0, 255]])),
+                with(|d| d["params"]["exclude"] = json!([[0, 0, 256]])),
+                "params.exclude.0",
+            ),
+            (
+                with(|d| d["params"]["seed"] = json!(MAX_SAFE_INTEGER)),
+                with(|d| d["params"]["seed"] = json!(MAX_SAFE_INTEGER + 1.0)),
+                "params.seed",
+            ),
+            (
+                with(|d| d["params"]["hsv"] = json!([1, 0, 0])),
+                with(|d| d["params"]["hsv"] = json!([0.5, 0, 0])),
+                "params.hsv.0",
+            ),
+            (
+                with(|d| d["strokes"] = strokes(MAX_STROKES, 2)),
+                with(|d| d["strokes"] = strokes(MAX_STROKES + 1, 2)),
+                "strokes",
+            ),
+            (
+                with(|d| d["strokes"] = strokes(1, MAX_STROKE_LEN)),
+                with(|d| d["strokes"] = strokes(1, MAX_STROKE_LEN + 1)),
+                "strokes.0",
+            ),
+            (
+                with(|d| d["strokes"] = strokes(2, MAX_STROKE_POINTS / 2)),
+                with(|d| {
+                    d["strokes"] = json!([
+                        vec![[1, 1]; MAX_STROKE_POINTS / 2],
+                        vec![[1, 1]; MAX_STROKE_POINTS / 2 + 1]
+                    ])
+                }),
+                "strokes",
+            ),
+            (
+                with(|d| d["strokes"] = json!([[[-1, -1], [4, 3]]])),
+                with(|d| d["strokes"] = json!([[[-1, -1], [4.001, 3]]])),
+                "strokes.0.1",
+            ),
+            (
+                with(|d| d["example"] = json!("trunk")),
+                with(|d| d["example"] = json!("trunks")),
+                "example",
+            ),
+        ];
+        for (inside, outside, field) in cases {
+            read(&inside).unwrap_or_else(|e| panic!("{field} inside: {e}"));
+            refused(&outside, field);
+        }
+        // The request refuses as many colours too; its seed is any u64 (the
+        // CLI's), a document's one a page's number holds.
+        let mut p = PixelParams {
+            exclude: vec![[0, 0, 0]; lim::EXCLUDED + 1],
+            ..Default::default()
+        };
+        assert_eq!(
+            check_params(&p).unwrap_err().field(),
+            Some("params.exclude")
+        );
+        p.exclude.clear();
+        p.seed = u64::MAX;
+        check_params(&p).unwrap();
+        // The mask's side is the image limit.
+        let side = |w: u32| {
+            with(|d| {
+                d["mask"] = json!({"width": w, "height": 1,
+                    "bits": {"$bytes": base64_encode(&vec![1; w as usize])}});
+                d["strokes"] = json!([]);
+            })
+        };
+        read(&side(MAX_IMAGE_SIDE)).unwrap();
+        let e = refused(&side(MAX_IMAGE_SIDE + 1), "mask");
+        assert_eq!(
+            e.to_string(),
+            "mask must be 1 to 4096 pixels on each side (found 4097×1)"
+        );
+    }
+
+    #[test]
+    fn lists_hold_exactly_their_items() {
+        // A list read as an array must not drop what is past its end.
+        let cases: Vec<(Json, &str, &str)> = vec![
+            (
+                with(|d| d["params"]["margins"] = json!([0, 0, 7])),
+                "params.margins",
+                "params.margins must be a list of 2 (got 3 items)",
+            ),
+            (
+                with(|d| d["params"]["hsv"] = json!([0, 0])),
+                "params.hsv",
+                "params.hsv must be a list of 3 (got 2 items)",
+            ),
+            (
+                with(|d| d["params"]["exclude"] = json!([[0, 0, 0, 0]])),
+                "params.exclude.0",
+                "params.exclude.0 must be an [r, g, b] colour (whole numbers from 0 to 255) (got a list of 4 items)",
+            ),
+            (
+                with(|d| d["strokes"] = json!([[[1, 2], [1, 2, 3]]])),
+                "strokes.0.1",
+                "strokes.0.1 must be a point [x, y] of finite numbers (got a list of 3 items)",
+            ),
+            (
+                with(|d| d["strokes"] = json!([[[1, 2], [3, "x"]]])),
+                "strokes.0.1",
+                "strokes.0.1 must be a point [x, y] of finite numbers (got [3, text])",
+            ),
+        ];
+        for (d, field, message) in cases {
+            assert_eq!(refused(&d, field).to_string(), message);
+        }
+        // NaN, which a page's number can be, is not a point.
+        let mut v = Value::read(doc(), true).unwrap();
+        if let Value::Object(kv) = &mut v {
+            for (_, s) in kv.iter_mut().filter(|(k, _)| k == "strokes") {
+                let p = Value::List(vec![Value::Number(f64::NAN), Value::Number(1.0)]);
+                *s = Value::List(vec![Value::List(vec![p.clone(), p])]);
+            }
+        }
+        assert_eq!(check(&v).unwrap_err().field(), Some("strokes.0.0"));
+    }
+
+    #[test]
+    fn unknown_fields_are_refused_in_params_only() {
+        let e = refused(&with(|d| d["params"]["dmax"] = json!(3)), "params");
+        assert!(
+            e.to_string()
+                .starts_with("params has no field 'dmax'; expected one of"),
+            "{e}"
+        );
+        // Elsewhere they are dropped, as they always were.
+        let plain = read(&doc()).unwrap();
+        let extra = with(|d| {
+            d["extra"] = json!(1);
+            d["mask"]["extra"] = json!(2);
+            d["names"]["extra"] = json!(3);
+        });
+        assert_eq!(read(&extra).unwrap(), plain);
+    }
+
+    #[test]
+    fn a_document_holds_every_parameter_the_page_has_a_control_for() {
+        let names = fields_of::<PixelParams>();
+        let all = serde_json::to_value(PixelParams::default()).unwrap();
+        let mut keys: Vec<&str> = all
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        let mut sorted = names.to_vec();
+        keys.sort();
+        sorted.sort();
+        assert_eq!(sorted, keys, "every field of PixelParams");
+        for name in names {
+            let d = with(|d| {
+                d["params"].as_object_mut().unwrap().remove(*name);
+            });
+            if OPTIONAL_PARAMS.contains(name) {
+                let s = read(&d).unwrap();
+                assert_eq!(
+                    s.params.sprite_direction,
+                    PixelParams::default().sprite_direction
+                );
+            } else {
+                let e = refused(&d, &format!("params.{name}"));
+                assert_eq!(e.to_string(), format!("params.{name} is missing"));
+            }
         }
     }
 }

@@ -31,7 +31,7 @@ use super::globals::{self, GLOBALS};
 use super::learn::isomap::{isomap, pearson};
 use super::learn::svm::{chi2_map, Linear, OneVsRest, Svr, CHI2_MAP_DIMS};
 use super::pcn::{Pcn, PcnConfig};
-use super::scales::ScaleQuantiles;
+use super::scales::{ScaleQuantiles, SCALE_RANGE};
 use super::Gray;
 use crate::core::error::{Error, Result};
 use crate::core::parallel::par_map;
@@ -822,12 +822,7 @@ impl Index {
         model: Option<u16>,
         shortlist: usize,
     ) -> Result<Retrieval> {
-        if scales
-            .iter()
-            .any(|s| !s.is_finite() || !(1.0..=9.0).contains(s))
-        {
-            return Err(Error::input("scales run from 1 to 9").at("scales"));
-        }
+        check_requested(scales)?;
         let point = self.locate(scales);
         let d2 = |c: &[f32; 3]| {
             (0..3)
@@ -1256,6 +1251,19 @@ impl Index {
             samples,
         })
     }
+}
+
+/// The requested scales of a `texture-retrieve` (and of a Texture
+/// document): each finite and within [`SCALE_RANGE`].
+pub fn check_requested(scales: &[f32; 12]) -> Result<()> {
+    let (lo, hi) = SCALE_RANGE;
+    if scales
+        .iter()
+        .any(|&s| !s.is_finite() || !(lo..=hi).contains(&(s as f64)))
+    {
+        return Err(Error::input(format!("scales run from {lo} to {hi}")).at("scales"));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

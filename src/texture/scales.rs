@@ -34,6 +34,10 @@ use serde::{Deserialize, Serialize};
 /// The number of perceptual scales.
 pub const N_SCALES: usize = 12;
 
+/// The range of a scale: the ratings' Likert scale, 1 to 9 (a requested
+/// scale may be a fraction; a rating or an estimate is whole).
+pub const SCALE_RANGE: (f64, f64) = (1.0, 9.0);
+
 /// The scales' names in the paper's order (also the CSV column names).
 pub const SCALE_NAMES: [&str; N_SCALES] = [
     "contrast",
@@ -918,7 +922,7 @@ pub fn parse_ratings(text: &str) -> Result<Vec<Rating>> {
                     format!("`{}` is not a number ({})", f.trim(), SCALE_NAMES[order[k]]),
                 )
             })?;
-            if !(1.0..=9.0).contains(&v) {
+            if !(SCALE_RANGE.0..=SCALE_RANGE.1).contains(&v) {
                 return Err(syntax(
                     ln,
                     *c,

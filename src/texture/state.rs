@@ -1,6 +1,8 @@
 //! The Texture tool's document (what the page keeps, autosaves, saves in a
-//! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::core::value`]). Field names are the page's:
+//! project file and shares), its schema version and its checks: a serde
+//! type read from the page's [`Value`] ([`read_document`]) and its
+//! [`Check`]. Field names are the page's (unknown ones are dropped, as
+//! they always were):
 //!
 //! ```text
 //! { source: null
@@ -24,10 +26,12 @@
 //!   the model and the twelve scale **estimates** (see
 //!   [`super::scales`]: computational estimates, not human ratings), the
 //!   most likely models with their probabilities (`top`, most likely
-//!   first; missing in older documents) and whether any model is close
-//!   (`close`, true when missing).
-//! - `scales` are the twelve requested scales (the sliders), 1–9,
-//!   fractions allowed, in [`super::index::SCALES`] order.
+//!   first, at most the analysis' [`TOP_MODELS`]; missing in older
+//!   documents) and whether any model is close (`close`, true when
+//!   missing).
+//! - `scales` are the twelve requested scales (the sliders), 1–9
+//!   ([`SCALE_RANGE`], the `texture-retrieve` request's), fractions
+//!   allowed, in [`super::index::SCALES`] order.
 //! - `sameModel`: retrieve within the predicted model only.
 //! - `retrieved` is the texture shown: the retrieved sample's model,
 //!   parameters and seed (`texture-retrieve`), with the parameters as the
@@ -39,11 +43,14 @@
 //! clamped and integers rounded, as `texture-render` does
 //! ([`super::models::Model::check`]). Seeds are whole numbers up to
 //! 2^53 − 1 (a page's number holds them exactly).
+use super::api::TOP_MODELS;
 use super::index::SCALES;
 use super::models::{self, Model};
+pub use super::scales::SCALE_RANGE;
+use crate::core::check::{exactly, exactly_or_null, null_as_default, read_document, Check, Path};
 use crate::core::error::Result;
-use crate::core::value::{invalid, Value, MAX_SAFE_INTEGER};
-use serde::Serialize;
+use crate::core::value::{Value, MAX_SAFE_INTEGER};
+use serde::{Deserialize, Deserializer, Serialize};
 
 /// Schema version of the Texture state (the page's `state.version`).
 pub const STATE_VERSION: u32 = 1;
@@ -51,8 +58,9 @@ pub const STATE_VERSION: u32 = 1;
 pub const MAX_SOURCE_PNG: usize = 256 * 1024;
 /// Longest example file name, characters.
 pub const MAX_NAME: usize = 200;
-/// The range of a scale.
-pub const SCALE_RANGE: (f64, f64) = (1.0, 9.0);
+/// The range of an analysed or retrieved sample's scale: the whole
+/// numbers of [`SCALE_RANGE`] (the ratings' Likert scale).
+pub const LIKERT: (u8, u8) = (SCALE_RANGE.0 as u8, SCALE_RANGE.1 as u8);
 
 const PNG_MAGIC: &[u8] = b"\x89PNG\r\n\x1a\n";
 
@@ -74,16 +82,67 @@ pub enum Source {
     },
 }
 
+/// A source as the page writes it: `kind`, then that kind's fields (read
+/// flat, so an error names its field: `source.seed`).
+#[derive(Deserialize)]
+struct SourceFields {
+    kind: SourceKind,
+    #[serde(default)]
+    model: Option<String>,
+    #[serde(default)]
+    params: Option<Vec<f64>>,
+    #[serde(default)]
+    seed: Option<u64>,
+    #[serde(default)]
+    name: Option<String>,
+    #[serde(default, with = "serde_bytes")]
+    png: Option<Vec<u8>>,
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum SourceKind {
+    Model,
+    Image,
+}
+
+impl<'de> Deserialize<'de> for Source {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error;
+        let f = SourceFields::deserialize(d)?;
+        Ok(match f.kind {
+            SourceKind::Model => Source::Model {
+                model: f.model.ok_or_else(|| D::Error::missing_field("model"))?,
+                params: f.params.ok_or_else(|| D::Error::missing_field("params"))?,
+                seed: f.seed.ok_or_else(|| D::Error::missing_field("seed"))?,
+            },
+            SourceKind::Image => Source::Image {
+                name: f.name.ok_or_else(|| D::Error::missing_field("name"))?,
+                png: f.png.ok_or_else(|| D::Error::missing_field("png"))?,
+            },
+        })
+    }
+}
+
 /// The core's analysis of the example.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Predicted {
     pub model: String,
+    #[serde(deserialize_with = "exactly")]
     pub scales: [u8; 12],
     /// Left out when empty and `close` when true, so a document written
     /// before them opens and saves unchanged.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        deserialize_with = "null_as_default"
+    )]
     pub top: Vec<Chance>,
-    #[serde(skip_serializing_if = "is_true")]
+    #[serde(
+        default = "yes",
+        skip_serializing_if = "is_true",
+        deserialize_with = "null_as_true"
+    )]
     pub close: bool,
 }
 
@@ -91,335 +150,221 @@ fn is_true(b: &bool) -> bool {
     *b
 }
 
+fn yes() -> bool {
+    true
+}
+
+/// `null` (or missing, with `default = "yes"`) is true.
+fn null_as_true<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<bool, D::Error> {
+    Ok(Option::<bool>::deserialize(d)?.unwrap_or(true))
+}
+
 /// A model the analysis found likely, with its probability.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Chance {
     pub model: String,
     pub probability: f64,
 }
 
 /// The texture shown: a retrieved sample, its parameters perhaps edited.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Retrieved {
     pub model: String,
     pub params: Vec<f64>,
     pub seed: u64,
+    #[serde(default)]
     pub sample: Option<u64>,
+    #[serde(default, deserialize_with = "exactly_or_null")]
     pub scales: Option<[u8; 12]>,
+    #[serde(default)]
     pub cosine: Option<f64>,
+    #[serde(default, deserialize_with = "null_as_default")]
     pub edited: bool,
 }
 
-/// A checked Texture document.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A Texture document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TextureState {
+    #[serde(default)]
     pub source: Option<Source>,
+    #[serde(default)]
     pub predicted: Option<Predicted>,
+    #[serde(deserialize_with = "exactly")]
     pub scales: [f64; 12],
-    #[serde(rename = "sameModel")]
+    #[serde(rename = "sameModel", default, deserialize_with = "null_as_default")]
     pub same_model: bool,
+    #[serde(default)]
     pub retrieved: Option<Retrieved>,
 }
 
-fn object<'a>(v: &'a Value, field: &str, what: &str) -> Result<&'a Value> {
-    if v.is_plain_object() {
-        Ok(v)
-    } else {
-        Err(invalid(field, format!("must be {what}")))
-    }
-}
-
-fn model_of(v: Option<&Value>, field: &str) -> Result<&'static Model> {
-    let id = v
-        .and_then(Value::as_text)
-        .ok_or_else(|| invalid(field, "must be a texture model id"))?;
+/// The model of id `id`.
+fn model_of(at: &Path, id: &str) -> Result<&'static Model> {
     models::MODELS.iter().find(|m| m.id == id).ok_or_else(|| {
-        invalid(
-            field,
-            format!(
-                "must be one of the texture models ({})",
-                models::MODELS
-                    .iter()
-                    .map(|m| m.id)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        )
+        at.invalid(format!(
+            "must be one of the texture models ({})",
+            models::MODELS
+                .iter()
+                .map(|m| m.id)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
     })
 }
 
-/// A model's parameters: one finite number each, clamped to the ranges.
-fn params_of(model: &Model, v: Option<&Value>, field: &str) -> Result<Vec<f64>> {
-    let list = v.and_then(Value::as_list).ok_or_else(|| {
-        invalid(
-            field,
-            format!(
-                "must be the {} parameters of model '{}'",
-                model.params.len(),
-                model.id
-            ),
-        )
-    })?;
-    if list.len() != model.params.len() {
-        return Err(invalid(
-            field,
-            format!(
-                "must hold {} numbers ({}) for model '{}', not {}",
-                model.params.len(),
-                model
-                    .params
-                    .iter()
-                    .map(|p| p.name)
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                model.id,
-                list.len()
-            ),
-        ));
+/// A model's parameters: one finite number each (out of range is clamped
+/// and integers rounded, as `texture-render` does: see [`normalised`]).
+fn check_params(at: &Path, model: &Model, params: &[f64]) -> Result<()> {
+    if params.len() != model.params.len() {
+        return Err(at.invalid(format!(
+            "must hold {} numbers ({}) for model '{}', not {}",
+            model.params.len(),
+            model
+                .params
+                .iter()
+                .map(|p| p.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+            model.id,
+            params.len()
+        )));
     }
-    let mut values = Vec::with_capacity(list.len());
-    for (i, (x, p)) in list.iter().zip(model.params).enumerate() {
-        let x = x.finite().ok_or_else(|| {
-            invalid(
-                &format!("{field}.{i}"),
-                format!("({}) must be a number from {} to {}", p.name, p.lo, p.hi),
-            )
-        })?;
-        values.push(x);
-    }
-    // In range, integers whole: the render request's own rule.
-    model.check(&values).map_err(|e| invalid(field, e.inner()))
-}
-
-fn seed_of(v: Option<&Value>, field: &str) -> Result<u64> {
-    v.and_then(Value::whole)
-        .filter(|s| (0.0..=MAX_SAFE_INTEGER).contains(s))
-        .map(|s| s as u64)
-        .ok_or_else(|| invalid(field, "must be a whole number from 0 to 2^53 − 1"))
-}
-
-fn likert(v: Option<&Value>, field: &str) -> Result<[u8; 12]> {
-    let list = v
-        .and_then(Value::as_list)
-        .filter(|l| l.len() == 12)
-        .ok_or_else(|| {
-            invalid(
-                field,
-                "must be the 12 scales, each a whole number from 1 to 9",
-            )
-        })?;
-    let mut out = [0u8; 12];
-    for (i, (o, x)) in out.iter_mut().zip(list).enumerate() {
-        *o = x
-            .whole()
-            .filter(|x| (1.0..=9.0).contains(x))
-            .ok_or_else(|| {
-                invalid(
-                    &format!("{field}.{i}"),
-                    format!("({}) must be a whole number from 1 to 9", SCALES[i]),
-                )
-            })? as u8;
-    }
-    Ok(out)
-}
-
-fn requested(v: Option<&Value>) -> Result<[f64; 12]> {
-    let list = v
-        .and_then(Value::as_list)
-        .filter(|l| l.len() == 12)
-        .ok_or_else(|| {
-            invalid(
-                "scales",
-                "must be the 12 requested scales, numbers from 1 to 9",
-            )
-        })?;
-    let mut out = [0.0; 12];
-    for (i, (o, x)) in out.iter_mut().zip(list).enumerate() {
-        *o = x
-            .finite()
-            .filter(|x| (SCALE_RANGE.0..=SCALE_RANGE.1).contains(x))
-            .ok_or_else(|| {
-                invalid(
-                    &format!("scales.{i}"),
-                    format!("({}) must be a number from 1 to 9", SCALES[i]),
-                )
-            })?;
-    }
-    Ok(out)
-}
-
-fn source(v: &Value) -> Result<Source> {
-    let s = object(
-        v,
-        "source",
-        "null or an example {kind: \"model\" | \"image\", ...}",
-    )?;
-    match s.get("kind").and_then(Value::as_text) {
-        Some("model") => {
-            let model = model_of(s.get("model"), "source.model")?;
-            Ok(Source::Model {
-                model: model.id.to_string(),
-                params: params_of(model, s.get("params"), "source.params")?,
-                seed: seed_of(s.get("seed"), "source.seed")?,
-            })
+    for (i, (x, p)) in params.iter().zip(model.params).enumerate() {
+        if !x.is_finite() {
+            return Err(at.index(i).invalid(format!(
+                "({}) must be a number from {} to {}",
+                p.name, p.lo, p.hi
+            )));
         }
-        Some("image") => {
-            let name = s
-                .get("name")
-                .and_then(Value::as_text)
-                .filter(|n| n.chars().count() <= MAX_NAME)
-                .ok_or_else(|| {
-                    invalid(
-                        "source.name",
-                        format!("must be a file name of at most {MAX_NAME} characters"),
-                    )
-                })?;
-            let png = match s.get("png") {
-                Some(Value::Bytes(b)) if b.len() > MAX_SOURCE_PNG => {
-                    return Err(invalid(
-                        "source.png",
-                        format!(
-                            "is {} bytes; a kept example is at most {MAX_SOURCE_PNG} bytes of PNG",
-                            b.len()
-                        ),
-                    ))
+    }
+    Ok(())
+}
+
+/// Seeds and sample numbers: what a page's number holds exactly.
+fn check_seed(at: &Path, seed: u64) -> Result<()> {
+    at.whole_in(seed, (0, MAX_SAFE_INTEGER as u64))
+}
+
+/// Twelve analysed (or retrieved) scales, each [`LIKERT`].
+fn check_likert(at: &Path, scales: &[u8; 12]) -> Result<()> {
+    let (lo, hi) = LIKERT;
+    for (i, s) in scales.iter().enumerate() {
+        if !(lo..=hi).contains(s) {
+            return Err(at.index(i).invalid(format!(
+                "({}) must be a whole number from {lo} to {hi}",
+                SCALES[i]
+            )));
+        }
+    }
+    Ok(())
+}
+
+impl Check for Source {
+    fn check(&self, at: &Path) -> Result<()> {
+        match self {
+            Source::Model {
+                model,
+                params,
+                seed,
+            } => {
+                let m = model_of(&at.key("model"), model)?;
+                check_params(&at.key("params"), m, params)?;
+                check_seed(&at.key("seed"), *seed)
+            }
+            Source::Image { name, png } => {
+                if name.chars().count() > MAX_NAME {
+                    return Err(at.key("name").invalid(format!(
+                        "must be a file name of at most {MAX_NAME} characters"
+                    )));
                 }
-                Some(Value::Bytes(b)) if b.starts_with(PNG_MAGIC) => b.clone(),
-                _ => return Err(invalid("source.png", "must be the bytes of a PNG image")),
-            };
-            Ok(Source::Image {
-                name: name.to_string(),
-                png,
-            })
+                if png.len() > MAX_SOURCE_PNG {
+                    return Err(at.key("png").invalid(format!(
+                        "is {} bytes; a kept example is at most {MAX_SOURCE_PNG} bytes of PNG",
+                        png.len()
+                    )));
+                }
+                if !png.starts_with(PNG_MAGIC) {
+                    return Err(at.key("png").invalid("must be the bytes of a PNG image"));
+                }
+                Ok(())
+            }
         }
-        _ => Err(invalid("source.kind", "must be model or image")),
     }
 }
 
-fn predicted(v: &Value) -> Result<Predicted> {
-    let p = object(v, "predicted", "null or {model, scales, top, close}")?;
-    let top = match p.get("top") {
-        None | Some(Value::Null) => Vec::new(),
-        Some(t) => {
-            let list = t
-                .as_list()
-                .filter(|l| l.len() <= crate::texture::api::TOP_MODELS)
-                .ok_or_else(|| {
-                    invalid(
-                        "predicted.top",
-                        format!(
-                            "must be a list of at most {} models",
-                            crate::texture::api::TOP_MODELS
-                        ),
-                    )
-                })?;
-            list.iter()
-                .enumerate()
-                .map(|(i, c)| {
-                    let field = format!("predicted.top.{i}");
-                    let c = object(c, &field, "{model, probability}")?;
-                    Ok(Chance {
-                        model: model_of(c.get("model"), &format!("{field}.model"))?
-                            .id
-                            .to_string(),
-                        probability: c
-                            .get("probability")
-                            .and_then(Value::finite)
-                            .filter(|p| (0.0..=1.0).contains(p))
-                            .ok_or_else(|| {
-                                invalid(
-                                    &format!("{field}.probability"),
-                                    "must be a number from 0 to 1",
-                                )
-                            })?,
-                    })
-                })
-                .collect::<Result<Vec<_>>>()?
+impl Check for Predicted {
+    fn check(&self, at: &Path) -> Result<()> {
+        model_of(&at.key("model"), &self.model)?;
+        check_likert(&at.key("scales"), &self.scales)?;
+        if self.top.len() > TOP_MODELS {
+            return Err(at
+                .key("top")
+                .invalid(format!("must be a list of at most {TOP_MODELS} models")));
         }
-    };
-    let close = match p.get("close") {
-        None | Some(Value::Null) => true,
-        Some(Value::Bool(b)) => *b,
-        Some(_) => return Err(invalid("predicted.close", "must be true or false")),
-    };
-    Ok(Predicted {
-        model: model_of(p.get("model"), "predicted.model")?.id.to_string(),
-        scales: likert(p.get("scales"), "predicted.scales")?,
-        top,
-        close,
-    })
-}
-
-fn retrieved(v: &Value) -> Result<Retrieved> {
-    let r = object(
-        v,
-        "retrieved",
-        "null or {model, params, seed, sample, scales, cosine, edited}",
-    )?;
-    let model = model_of(r.get("model"), "retrieved.model")?;
-    let sample = match r.get("sample") {
-        None | Some(Value::Null) => None,
-        s => Some(
-            s.and_then(Value::whole)
-                .filter(|s| (0.0..=MAX_SAFE_INTEGER).contains(s))
-                .ok_or_else(|| invalid("retrieved.sample", "must be null or a sample number"))?
-                as u64,
-        ),
-    };
-    let scales = match r.get("scales") {
-        None | Some(Value::Null) => None,
-        s => Some(likert(s, "retrieved.scales")?),
-    };
-    let cosine = match r.get("cosine") {
-        None | Some(Value::Null) => None,
-        c => Some(
-            c.and_then(Value::finite)
-                .filter(|c| (-1.0..=1.0).contains(c))
-                .ok_or_else(|| {
-                    invalid("retrieved.cosine", "must be null or a number from -1 to 1")
-                })?,
-        ),
-    };
-    let edited = match r.get("edited") {
-        None | Some(Value::Null) => false,
-        Some(Value::Bool(b)) => *b,
-        Some(_) => return Err(invalid("retrieved.edited", "must be true or false")),
-    };
-    Ok(Retrieved {
-        model: model.id.to_string(),
-        params: params_of(model, r.get("params"), "retrieved.params")?,
-        seed: seed_of(r.get("seed"), "retrieved.seed")?,
-        sample,
-        scales,
-        cosine,
-        edited,
-    })
-}
-
-fn optional<T>(v: Option<&Value>, f: impl FnOnce(&Value) -> Result<T>) -> Result<Option<T>> {
-    match v {
-        None | Some(Value::Null) => Ok(None),
-        Some(v) => f(v).map(Some),
+        self.top.check(&at.key("top"))
     }
 }
 
-/// Check a Texture document field by field; the error names the field at fault.
+impl Check for Chance {
+    fn check(&self, at: &Path) -> Result<()> {
+        model_of(&at.key("model"), &self.model)?;
+        at.key("probability")
+            .number_in(self.probability, (0.0, 1.0))
+    }
+}
+
+impl Check for Retrieved {
+    fn check(&self, at: &Path) -> Result<()> {
+        let m = model_of(&at.key("model"), &self.model)?;
+        check_params(&at.key("params"), m, &self.params)?;
+        check_seed(&at.key("seed"), self.seed)?;
+        if let Some(s) = self.sample {
+            check_seed(&at.key("sample"), s)?;
+        }
+        if let Some(s) = &self.scales {
+            check_likert(&at.key("scales"), s)?;
+        }
+        if let Some(c) = self.cosine {
+            at.key("cosine").number_in(c, (-1.0, 1.0))?;
+        }
+        Ok(())
+    }
+}
+
+impl Check for TextureState {
+    fn check(&self, at: &Path) -> Result<()> {
+        self.source.check(&at.key("source"))?;
+        self.predicted.check(&at.key("predicted"))?;
+        let (lo, hi) = SCALE_RANGE;
+        for (i, s) in self.scales.iter().enumerate() {
+            if !(s.is_finite() && (lo..=hi).contains(s)) {
+                return Err(at.key("scales").index(i).invalid(format!(
+                    "({}) must be a number from {lo} to {hi}",
+                    SCALES[i]
+                )));
+            }
+        }
+        self.retrieved.check(&at.key("retrieved"))
+    }
+}
+
+/// A checked model's parameters as `texture-render` uses them: clamped to
+/// their ranges, integers rounded ([`Model::check`]).
+fn normalised(model: &str, params: &mut Vec<f64>) -> Result<()> {
+    let m = models::lookup(model)?;
+    *params = m.check(params)?;
+    Ok(())
+}
+
+/// Read and check a Texture document; the error names the field at fault.
 pub fn check(raw: &Value) -> Result<TextureState> {
-    if !raw.is_plain_object() {
-        return Err(invalid("state", "is not a Texture document"));
+    let mut doc: TextureState = read_document(raw, "Texture")?;
+    if let Some(Source::Model { model, params, .. }) = &mut doc.source {
+        normalised(model, params)?;
     }
-    let same_model = match raw.get("sameModel") {
-        None | Some(Value::Null) => false,
-        Some(Value::Bool(b)) => *b,
-        Some(_) => return Err(invalid("sameModel", "must be true or false")),
-    };
-    Ok(TextureState {
-        source: optional(raw.get("source"), source)?,
-        predicted: optional(raw.get("predicted"), predicted)?,
-        scales: requested(raw.get("scales"))?,
-        same_model,
-        retrieved: optional(raw.get("retrieved"), retrieved)?,
-    })
+    if let Some(r) = &mut doc.retrieved {
+        normalised(&r.model, &mut r.params)?;
+    }
+    Ok(doc)
 }
 
 #[cfg(test)]
@@ -651,5 +596,135 @@ mod tests {
         }))
         .unwrap();
         assert_eq!(req.scales[11], 8.5);
+    }
+
+    #[test]
+    fn every_range_is_inside_or_out_by_one() {
+        use crate::texture::index::check_requested;
+        let (lo, hi) = SCALE_RANGE;
+        // The requested scales: the document's and `texture-retrieve`'s.
+        for (inside, outside) in [(lo, lo - 1e-6), (hi, hi + 1e-6)] {
+            let mut d = doc();
+            d["scales"][4] = json!(inside);
+            check(&value(&d)).unwrap_or_else(|e| panic!("scales {inside}: {e}"));
+            let mut req = [5.0f32; 12];
+            req[4] = inside as f32;
+            check_requested(&req).unwrap();
+            assert_eq!(field_of("/scales/4", json!(outside)), "scales.4");
+            req[4] = outside as f32;
+            assert_eq!(check_requested(&req).unwrap_err().field(), Some("scales"));
+        }
+        let p = |path: &str| path.trim_start_matches('/').replace('/', ".");
+        let safe = MAX_SAFE_INTEGER as u64;
+        let chances = |n: usize| json!(vec![json!({"model": "perlin", "probability": 0.1}); n]);
+        let cases: Vec<(&str, Json, Json)> = vec![
+            ("/predicted/scales/0", json!(LIKERT.0), json!(LIKERT.0 - 1)),
+            ("/predicted/scales/11", json!(LIKERT.1), json!(LIKERT.1 + 1)),
+            ("/retrieved/scales/3", json!(LIKERT.1), json!(LIKERT.1 + 1)),
+            (
+                "/predicted/top/0/probability",
+                json!(1.0),
+                json!(1.0 + 1e-9),
+            ),
+            ("/predicted/top/1/probability", json!(0.0), json!(-1e-9)),
+            (
+                "/predicted/top",
+                chances(TOP_MODELS),
+                chances(TOP_MODELS + 1),
+            ),
+            ("/retrieved/cosine", json!(-1.0), json!(-1.0 - 1e-9)),
+            ("/retrieved/cosine", json!(1.0), json!(1.0 + 1e-9)),
+            ("/source/seed", json!(safe), json!(safe + 1)),
+            ("/retrieved/seed", json!(0), json!(-1)),
+            ("/retrieved/sample", json!(safe), json!(safe + 1)),
+        ];
+        for (path, inside, outside) in cases {
+            let mut d = doc();
+            *d.pointer_mut(path).unwrap() = inside.clone();
+            check(&value(&d)).unwrap_or_else(|e| panic!("{path} = {inside}: {e}"));
+            assert_eq!(
+                field_of(path, outside.clone()),
+                p(path),
+                "{path} = {outside}"
+            );
+        }
+        // A dropped example's name and PNG.
+        let image = |name: usize, png: usize| {
+            let mut v = value(&json!({"scales": vec![5; 12],
+                "source": {"kind": "image", "name": "n".repeat(name), "png": null}}));
+            if let Value::Object(kv) = &mut v {
+                if let Value::Object(s) = &mut kv[1].1 {
+                    let mut b = PNG_MAGIC.to_vec();
+                    b.resize(png, 0);
+                    s[2].1 = Value::Bytes(b);
+                }
+            }
+            check(&v)
+        };
+        image(MAX_NAME, MAX_SOURCE_PNG).unwrap();
+        assert_eq!(
+            image(MAX_NAME + 1, 100).unwrap_err().field(),
+            Some("source.name")
+        );
+        assert_eq!(
+            image(10, MAX_SOURCE_PNG + 1).unwrap_err().field(),
+            Some("source.png")
+        );
+    }
+
+    #[test]
+    fn lists_hold_exactly_their_items() {
+        // A list read as an array must not drop what is past its end.
+        let mut d = doc();
+        d["scales"] = json!(vec![5; 13]);
+        let e = check(&value(&d)).unwrap_err();
+        assert_eq!(e.field(), Some("scales"));
+        assert_eq!(e.to_string(), "scales must be a list of 12 (got 13 items)");
+        assert_eq!(
+            field_of("/predicted/scales", json!(vec![5; 13])),
+            "predicted.scales"
+        );
+        assert_eq!(
+            field_of("/retrieved/scales", json!(vec![5; 11])),
+            "retrieved.scales"
+        );
+        // null is no scales.
+        let mut d = doc();
+        d["retrieved"]["scales"] = Json::Null;
+        assert_eq!(check(&value(&d)).unwrap().retrieved.unwrap().scales, None);
+    }
+
+    #[test]
+    fn unknown_fields_are_dropped_and_missing_ones_named() {
+        let plain = check(&value(&doc())).unwrap();
+        let mut d = doc();
+        d["extra"] = json!(1);
+        d["source"]["name"] = json!("a model source has no name");
+        d["predicted"]["extra"] = json!(2);
+        d["predicted"]["top"][0]["extra"] = json!(3);
+        d["retrieved"]["extra"] = json!(4);
+        assert_eq!(check(&value(&d)).unwrap(), plain);
+        for (part, key) in [
+            ("source", "seed"),
+            ("source", "kind"),
+            ("retrieved", "params"),
+            ("predicted", "model"),
+        ] {
+            let mut d = doc();
+            d[part].as_object_mut().unwrap().remove(key);
+            let e = check(&value(&d)).unwrap_err();
+            assert_eq!(e.field(), Some(format!("{part}.{key}").as_str()), "{e}");
+            assert_eq!(e.to_string(), format!("{part}.{key} is missing"));
+        }
+        let mut d = doc();
+        d["source"] = json!({"kind": "image", "png": null});
+        assert_eq!(check(&value(&d)).unwrap_err().field(), Some("source.name"));
+        assert_eq!(field_of("/source/kind", json!("video")), "source.kind");
+        let mut d = doc();
+        d["source"]["kind"] = json!("video");
+        assert_eq!(
+            check(&value(&d)).unwrap_err().to_string(),
+            "source.kind must be one of model, image"
+        );
     }
 }

@@ -124,13 +124,21 @@ fn pixel_images_and_mask_rules() {
     let e = pixel_err(|d| {
         d.as_object_mut().unwrap().remove("source");
     });
-    says(&e, "source", "source must be the bytes of an image file");
+    says(&e, "source", "source is missing");
     let e = pixel_err(|d| d["sheet"] = json!("sheet.png"));
-    says(&e, "sheet", "sheet must be the bytes of an image file");
+    says(
+        &e,
+        "sheet",
+        "sheet must be the bytes of an image file (got string \"sheet.png\")",
+    );
     let e = pixel_err(|d| d["sprite"] = json!([1, 2]));
-    says(&e, "sprite", "sprite must be the bytes of an image file");
+    says(
+        &e,
+        "sprite",
+        "sprite must be the bytes of an image file (got sequence)",
+    );
     let e = pixel_err(|d| d["mask"] = Json::Null);
-    says(&e, "mask", "mask is missing");
+    says(&e, "mask", "mask must be an object (got null)");
     let e = pixel_err(|d| d["mask"]["width"] = json!(0));
     says(
         &e,
@@ -144,14 +152,19 @@ fn pixel_images_and_mask_rules() {
         "mask must be 1 to 4096 pixels on each side (found 3×4097)",
     );
     let e = pixel_err(|d| d["mask"]["width"] = json!(2.5));
-    assert_eq!(e.field(), Some("mask"));
+    says(
+        &e,
+        "mask.width",
+        "mask.width must be a whole number ≥ 0 (got floating point '2.5')",
+    );
+    // The `pixel` request's mask: a missing side is 0.
     let e = pixel_err(|d| {
         d["mask"].as_object_mut().unwrap().remove("height");
     });
     says(
         &e,
         "mask",
-        "mask must be 1 to 4096 pixels on each side (found 3×undefined)",
+        "mask must be 1 to 4096 pixels on each side (found 3×0)",
     );
     let e = pixel_err(|d| d["mask"]["bits"] = b64(&[1, 0, 1]));
     says(
@@ -165,24 +178,20 @@ fn pixel_images_and_mask_rules() {
     says(
         &e,
         "mask.bits",
-        "mask.bits must hold 6 values (3×2), found none",
+        "mask.bits must hold 6 values (3×2), found 0",
     );
     let e = pixel_err(|d| d["mask"]["bits"] = json!([1, 1, 1, 1, 1, 1]));
     says(
         &e,
         "mask.bits",
-        "mask.bits must hold 6 values (3×2), found 6",
+        "mask.bits must be bytes (a Uint8Array) (got sequence)",
     );
 }
 
 #[test]
 fn pixel_stroke_rules() {
     let e = pixel_err(|d| d["strokes"] = json!({}));
-    says(
-        &e,
-        "strokes",
-        "strokes must be a list of at most 10000 strokes",
-    );
+    says(&e, "strokes", "strokes must be a list (got map)");
     let e = pixel_err(|d| d["strokes"] = json!(vec![[[0, 0], [1, 1]]; 10_001]));
     says(
         &e,
@@ -199,7 +208,7 @@ fn pixel_stroke_rules() {
     says(
         &e,
         "strokes.0.1",
-        "strokes.0.1 must be a point [x, y] of finite numbers",
+        "strokes.0.1 must be a point [x, y] of finite numbers (got [3, text])",
     );
     let e = pixel_err(|d| d["strokes"] = json!([[[1, 2], [1, 2, 3]]]));
     assert_eq!(e.field(), Some("strokes.0.1"));
@@ -222,92 +231,164 @@ fn pixel_stroke_rules() {
 #[test]
 fn pixel_parameter_rules_use_the_core_limits() {
     let e = pixel_err(|d| d["params"] = json!([]));
-    says(&e, "params", "params are missing");
+    says(&e, "params", "params must be an object (got sequence)");
     let e = pixel_err(|d| d["params"]["dmax"] = json!(3));
-    assert_eq!(e.field(), Some("params.dmax"));
+    assert_eq!(e.field(), Some("params"));
     assert!(
-        e.to_string()
-            .starts_with("params.dmax is not a Pixel parameter (they are positions, density"),
+        e.to_string().starts_with(
+            "params has no field 'dmax'; expected one of 'annotation_scale', 'positions', 'density'"
+        ),
         "{e}"
     );
     let e = pixel_err(|d| {
         d["params"].as_object_mut().unwrap().remove("seed");
     });
     says(&e, "params.seed", "params.seed is missing");
-    let cases: &[(&str, Json, &str)] = &[
-        ("positions", json!("grid"), "must be one of random, packed"),
+    let directions =
+        "must be one of right, down-right, down, down-left, left, up-left, up, up-right";
+    let cases: &[(&str, Json, &str, String)] = &[
+        (
+            "positions",
+            json!("grid"),
+            "params.positions",
+            "must be one of random, packed".into(),
+        ),
         (
             "colour",
             json!(1),
-            "must be one of auto, border, difference, hsv",
+            "params.colour",
+            "must be a name (text) (got integer '1')".into(),
         ),
-        ("element_colour", json!("Region"), "must be one of region, pixel"),
+        (
+            "colour",
+            json!("rgb"),
+            "params.colour",
+            "must be one of auto, hsv, difference, border".into(),
+        ),
+        (
+            "element_colour",
+            json!("Region"),
+            "params.element_colour",
+            "must be one of pixel, region".into(),
+        ),
         (
             "default_direction",
             json!("north"),
-            "must be one of up, up-right, right, down-right, down, down-left, left, up-left",
+            "params.default_direction",
+            directions.into(),
         ),
         (
             "sprite_direction",
             json!(null),
-            "must be one of up, up-right, right, down-right, down, down-left, left, up-left",
+            "params.sprite_direction",
+            "must be a name (text) (got null)".into(),
         ),
-        ("density", json!(1.5), "must be a number from 0 to 1"),
-        ("density", json!("1"), "must be a number from 0 to 1"),
-        ("d_max", json!(1000.5), "must be a number from 0 to 1000"),
-        ("d_max", json!(-1), "must be a number from 0 to 1000"),
-        ("partial", json!(1), "must be true or false"),
+        (
+            "density",
+            json!(1.5),
+            "params.density",
+            "must be a number from 0 to 1".into(),
+        ),
+        (
+            "density",
+            json!("1"),
+            "params.density",
+            "must be a number (got string \"1\")".into(),
+        ),
+        (
+            "d_max",
+            json!(1000.5),
+            "params.d_max",
+            "must be a number from 0 to 1000".into(),
+        ),
+        (
+            "d_max",
+            json!(-1),
+            "params.d_max",
+            "must be a number from 0 to 1000".into(),
+        ),
+        (
+            "partial",
+            json!(1),
+            "params.partial",
+            "must be true or false (got integer '1')".into(),
+        ),
         (
             "margins",
             json!([0, 4097]),
-            "must be 2 whole numbers from -4096 to 4096",
+            "params.margins.1",
+            "must be a whole number from -4096 to 4096".into(),
         ),
         (
             "margins",
             json!([0.5, 0]),
-            "must be 2 whole numbers from -4096 to 4096",
+            "params.margins.0",
+            "must be a whole number (got floating point '0.5')".into(),
         ),
         (
             "margins",
             json!([0]),
-            "must be 2 whole numbers from -4096 to 4096",
+            "params.margins",
+            "must be a list of 2 (got 1 items)".into(),
         ),
         (
             "hsv",
             json!([361, 0, 0]),
-            "must be 3 whole numbers: a hue shift, then saturation and value shifts (from -360 to 360, from -100 to 100, from -100 to 100)",
+            "params.hsv.0",
+            "must be a number from -360 to 360".into(),
         ),
         (
             "hsv",
             json!([0, -101, 0]),
-            "must be 3 whole numbers: a hue shift, then saturation and value shifts (from -360 to 360, from -100 to 100, from -100 to 100)",
+            "params.hsv.1",
+            "must be a number from -100 to 100".into(),
+        ),
+        (
+            "hsv",
+            json!([0, 0, 0.5]),
+            "params.hsv.2",
+            "must be a whole number from -100 to 100".into(),
         ),
         (
             "exclude",
             json!([[0, 0, 256]]),
-            "must be a list of [r, g, b] colours (0 to 255)",
+            "params.exclude.0",
+            "must be an [r, g, b] colour (whole numbers from 0 to 255) (got [0, 0, 256])".into(),
         ),
         (
             "exclude",
             json!(vec![[0, 0, 0]; 257]),
-            "must be a list of [r, g, b] colours (0 to 255)",
+            "params.exclude",
+            "must be a list of at most 256 [r, g, b] colours".into(),
         ),
         (
             "annotation_scale",
             json!(33),
-            "must be a whole number from 1 to 32",
+            "params.annotation_scale",
+            "must be a whole number from 1 to 32".into(),
         ),
         (
             "annotation_scale",
             json!(2.5),
-            "must be a whole number from 1 to 32",
+            "params.annotation_scale",
+            "must be a whole number ≥ 0 (got floating point '2.5')".into(),
         ),
-        ("seed", json!(-1), "must be a whole number ≥ 0"),
-        ("seed", json!(9007199254740992u64), "must be a whole number ≥ 0"),
+        (
+            "seed",
+            json!(-1),
+            "params.seed",
+            "must be a whole number ≥ 0 (got integer '-1')".into(),
+        ),
+        (
+            "seed",
+            json!(9007199254740992u64),
+            "params.seed",
+            "must be a whole number ≥ 0 (got floating point '9007199254740992.0')".into(),
+        ),
     ];
-    for (k, v, why) in cases {
+    for (k, v, field, why) in cases {
         let e = pixel_err(|d| d["params"][*k] = v.clone());
-        says(&e, &format!("params.{k}"), &format!("params.{k} {why}"));
+        says(&e, field, &format!("{field} {why}"));
     }
     // Inside the core's limits (wider than the page's sliders) is fine.
     let mut d = pixel_doc();

@@ -136,8 +136,9 @@ pub fn run_query(a: QueryArgs) -> Result<(), String> {
             .trim()
             .parse()
             .map_err(|_| format!("--set {s}: '{v}' is not a number"))?;
-        if !(1.0..=9.0).contains(&v) {
-            return Err(format!("--set {s}: scales run from 1 to 9"));
+        let (lo, hi) = filigree::texture::scales::SCALE_RANGE;
+        if !(lo..=hi).contains(&(v as f64)) {
+            return Err(format!("--set {s}: scales run from {lo} to {hi}"));
         }
         scales[i] = v;
     }
