@@ -280,6 +280,74 @@ where
     Ok(Option::<T>::deserialize(d)?.unwrap_or_default())
 }
 
+// ------------------------------------------- Tangle and Micro documents --
+// Helpers the Tangle and Micro documents need (added with them; the lead
+// may fold them into `core::value`'s deserializer): `&Value` reads UTF-8
+// bytes as text and drops the rest of a list longer than a fixed array.
+
+/// [`read_part`] of a part found at `at` (its fields' paths start there).
+pub fn read_part_at<'a, T: Deserialize<'a>>(raw: &'a Value, at: &Path) -> Result<T> {
+    serde_path_to_error::deserialize(raw).map_err(|e| {
+        let inner = dotted(e.path());
+        let mut field = match inner.is_empty() {
+            true => at.0.clone(),
+            false => at.key(&inner).0,
+        };
+        let msg = e.inner().to_string();
+        if msg.starts_with("unknown field ") {
+            field = field.rsplit_once('.').map_or("", |(p, _)| p).to_string();
+        }
+        let text = describe(Style::Document, &field, &msg);
+        let at = match msg.strip_prefix("missing field ") {
+            Some(f) => Path(field).key(f.trim_matches('`')),
+            None => Path(field),
+        };
+        Error::input(text).at(at.as_str())
+    })
+}
+
+/// `deserialize_with`: text, and nothing else (not bytes).
+pub fn text<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<String, D::Error> {
+    struct Text;
+    impl serde::de::Visitor<'_> for Text {
+        type Value = String;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a string")
+        }
+        fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<String, E> {
+            Ok(v.to_string())
+        }
+    }
+    d.deserialize_str(Text)
+}
+
+/// `deserialize_with`: [`text`] or `null` (`None`).
+pub fn opt_text<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<String>, D::Error> {
+    #[derive(Deserialize)]
+    struct Text(#[serde(deserialize_with = "text")] String);
+    Ok(Option::<Text>::deserialize(d)?.map(|t| t.0))
+}
+
+/// `deserialize_with`: a list of exactly `N` items (not more, not fewer).
+pub fn exactly<'de, D, T, const N: usize>(d: D) -> std::result::Result<[T; N], D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    struct Len(usize);
+    impl serde::de::Expected for Len {
+        fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            write!(f, "an array of length {}", self.0)
+        }
+    }
+    let list = Vec::<T>::deserialize(d)?;
+    let n = list.len();
+    list.try_into()
+        .map_err(|_| serde::de::Error::invalid_length(n, &Len(N)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
