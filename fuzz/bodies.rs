@@ -358,7 +358,7 @@ pub fn project(data: &[u8]) {
             assert!(s.wobble.is_finite() && s.stroke_width.is_finite());
         }
         ToolState::Micro(s) => {
-            use filigree::micro::state::{DISTANCE, PITCH};
+            use filigree::micro::api::{DISTANCE, PITCH};
             assert!(s.scene.len() <= filigree::core::limits::MAX_MICRO_SCENE_BYTES);
             let c = &s.camera;
             assert!(c.yaw.is_finite() && (PITCH.0..=PITCH.1).contains(&c.pitch));

@@ -280,7 +280,54 @@ where
     Ok(Option::<T>::deserialize(d)?.unwrap_or_default())
 }
 
-// ----------------------------------------- Pixel and Texture documents --
+// ------------------------------------------------- document helpers --
+// `&Value` reads UTF-8 bytes as text and stops a fixed-size array after its
+// `N` items: these read text as text only and a list as exactly `N` items.
+
+/// [`read_part`] of a part found at `at` (its fields' paths start there).
+pub fn read_part_at<'a, T: Deserialize<'a>>(raw: &'a Value, at: &Path) -> Result<T> {
+    serde_path_to_error::deserialize(raw).map_err(|e| {
+        let inner = dotted(e.path());
+        let mut field = match inner.is_empty() {
+            true => at.0.clone(),
+            false => at.key(&inner).0,
+        };
+        let msg = e.inner().to_string();
+        if msg.starts_with("unknown field ") {
+            field = field.rsplit_once('.').map_or("", |(p, _)| p).to_string();
+        }
+        let text = describe(Style::Document, &field, &msg);
+        let at = match msg.strip_prefix("missing field ") {
+            Some(f) => Path(field).key(f.trim_matches('`')),
+            None => Path(field),
+        };
+        Error::input(text).at(at.as_str())
+    })
+}
+
+/// `deserialize_with`: text, and nothing else (not bytes).
+pub fn text<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<String, D::Error> {
+    struct Text;
+    impl serde::de::Visitor<'_> for Text {
+        type Value = String;
+        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            f.write_str("a string")
+        }
+        fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<String, E> {
+            Ok(v.to_string())
+        }
+    }
+    d.deserialize_str(Text)
+}
+
+/// `deserialize_with`: [`text`] or `null` (`None`).
+pub fn opt_text<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Option<String>, D::Error> {
+    #[derive(Deserialize)]
+    struct Text(#[serde(deserialize_with = "text")] String);
+    Ok(Option::<Text>::deserialize(d)?.map(|t| t.0))
+}
 
 /// `deserialize_with` for a fixed-size list (`[T; N]`): exactly `N` items.
 /// (A [`Value`] list read as an array stops after `N` items and would drop

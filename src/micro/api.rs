@@ -263,16 +263,30 @@ struct Checked {
     shade: Shade,
 }
 
+/// Ranges of the camera (`micro-render`, `micro-glsl`) and of the slice
+/// plane (`micro-slice`), checked here and in a document (`state.rs`).
+pub const YAW: (f64, f64) = (-1e5, 1e5);
+pub const PITCH: (f64, f64) = (-89.9, 89.9);
+pub const DISTANCE: (f64, f64) = (1e-9, 1e6);
+pub const TARGET: (f64, f64) = (-1e6, 1e6);
+pub const Z: (f64, f64) = (-1e6, 1e6);
+/// Ranges of the shading fields, checked here and in a document.
+pub const ROUGHNESS: (f64, f64) = (0.02, 1.0);
+pub const SPECULAR: (f64, f64) = (0.0, 1.0);
+pub const ABSORPTION: (f64, f64) = (0.0, 1e6);
+pub const SPP: (u32, u32) = (0, MAX_MICRO_SPP);
+pub const MAX_DEPTH: (u32, u32) = (1, 64);
+
 /// Check every field of a render request (no tracing yet).
 fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
     check_size(req.width, req.height)?;
     let c = &req.camera;
     for (i, v) in c.target.iter().enumerate() {
-        lim::finite_in(&format!("camera.target.{i}"), *v, (-1e6, 1e6))?;
+        lim::finite_in(&format!("camera.target.{i}"), *v, TARGET)?;
     }
-    lim::finite_in("camera.distance", c.distance, (1e-9, 1e6))?;
-    lim::finite_in("camera.yaw", c.yaw, (-1e5, 1e5))?;
-    lim::finite_in("camera.pitch", c.pitch, (-89.9, 89.9))?;
+    lim::finite_in("camera.distance", c.distance, DISTANCE)?;
+    lim::finite_in("camera.yaw", c.yaw, YAW)?;
+    lim::finite_in("camera.pitch", c.pitch, PITCH)?;
     lim::finite_in("camera.fov", c.fov, (0.001, 170.0))?;
     lim::int_in("check_every", req.check_every, (1, MAX_MICRO_STEPS))?;
     lim::finite_in("check_cell", req.check_cell, (0.0, 1e6))?;
@@ -282,11 +296,11 @@ fn check_render(req: &MicroRenderRequest) -> Result<Checked> {
     lim::int_in("max_steps", req.max_steps, (1, MAX_MICRO_STEPS))?;
     lim::finite_in("pixel_fraction", req.pixel_fraction, (1e-6, 10.0))?;
     lim::finite_in("bounds", req.bounds, (1e-9, 1e6))?;
-    lim::finite_in("absorption", req.absorption, (0.0, 1e6))?;
-    lim::finite_in("roughness", req.roughness, (0.02, 1.0))?;
-    lim::finite_in("specular", req.specular, (0.0, 1.0))?;
-    lim::int_in("spp", req.spp, (0, MAX_MICRO_SPP))?;
-    lim::int_in("max_depth", req.max_depth, (1, 64))?;
+    lim::finite_in("absorption", req.absorption, ABSORPTION)?;
+    lim::finite_in("roughness", req.roughness, ROUGHNESS)?;
+    lim::finite_in("specular", req.specular, SPECULAR)?;
+    lim::int_in("spp", req.spp, SPP)?;
+    lim::int_in("max_depth", req.max_depth, MAX_DEPTH)?;
     lim::int_in(
         "sample_start",
         req.sample_start,
@@ -660,7 +674,7 @@ pub struct SliceJob {
 
 pub fn start_slice(req: MicroSliceRequest) -> Result<SliceJob> {
     check_size(req.width, req.height)?;
-    lim::finite_in("z", req.z, (-1e6, 1e6))?;
+    lim::finite_in("z", req.z, Z)?;
     lim::finite_in("center.0", req.center[0], (-1e6, 1e6))?;
     lim::finite_in("center.1", req.center[1], (-1e6, 1e6))?;
     lim::finite_in("half", req.half, (1e-12, 1e6))?;

@@ -1,6 +1,7 @@
 //! The Micro tool's document (what the page keeps, autosaves, saves in a
-//! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::core::value`]). Field names are the page's:
+//! project file and shares), its schema version and its checks: a serde
+//! type read by [`crate::core::check::read_document`] (type errors name the
+//! field) and a [`Check`] impl for its ranges. Field names are the page's:
 //!
 //! ```text
 //! { example: name | null, scene: text,
@@ -14,54 +15,54 @@
 //! Version 2 added the shading fields and `spp` (0: direct shading; N:
 //! path tracing, N samples in progressive passes) and `max_depth`; the page
 //! migrates version 1 documents by adding the request's defaults, and a
-//! document without them is read with those defaults here too.
+//! document without them (or with `null`) is read with those defaults here
+//! too (as are a missing `view` and `z`).
 //!
 //! `camera`, `steps` and the shading fields are the `micro-render` request's fields
 //! ([`super::api::MicroRenderRequest`]) and `z` the `micro-slice` one's:
-//! the ranges here are the requests' own. The scene text is kept as typed,
-//! even when it does not parse (the page marks the error in the editor).
-use super::api::{MicroRenderRequest, MAX_MICRO_SPP};
+//! their types ([`StepMode`], [`Shading`]), defaults (the requests'
+//! `Default`) and ranges ([`YAW`], [`ROUGHNESS`], ...) are the requests'
+//! own. The scene text is kept as typed, even when it does not parse (the
+//! page marks the error in the editor). Unknown fields are dropped, as they
+//! always were (a camera's `fov` too: the page's camera has none).
+use super::api::{
+    MicroRenderRequest, MicroSliceRequest, ABSORPTION, DISTANCE, MAX_DEPTH, PITCH, ROUGHNESS,
+    SPECULAR, SPP, TARGET, YAW, Z,
+};
 use super::examples::EXAMPLES;
 use super::render::{Shading, StepMode};
+use crate::core::check::{exactly, opt_text, read_document, text, Check, Path};
 use crate::core::error::Result;
 use crate::core::limits::MAX_MICRO_SCENE_BYTES;
-use crate::core::value::{invalid, nullish, Value};
-use serde::Serialize;
+use crate::core::value::Value;
+use serde::{Deserialize, Serialize};
 
 /// Schema version of the Micro state (the page's `state.version`).
 pub const STATE_VERSION: u32 = 2;
-/// Ranges of the camera (`micro-render` checks the same).
-pub const YAW: (f64, f64) = (-1e5, 1e5);
-pub const PITCH: (f64, f64) = (-89.9, 89.9);
-pub const DISTANCE: (f64, f64) = (1e-9, 1e6);
-pub const TARGET: (f64, f64) = (-1e6, 1e6);
-/// Range of the slice plane (`micro-slice` checks the same).
-pub const Z: (f64, f64) = (-1e6, 1e6);
-/// Ranges of the shading fields (`micro-render` checks the same).
-pub const ROUGHNESS: (f64, f64) = (0.02, 1.0);
-pub const SPECULAR: (f64, f64) = (0.0, 1.0);
-pub const ABSORPTION: (f64, f64) = (0.0, 1e6);
-pub const MAX_DEPTH: (u32, u32) = (1, 64);
 
-/// The view's camera, as the page orbits and zooms it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// The view's camera, as the page orbits and zooms it (the request's
+/// [`super::render::Camera`] without the field of view).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CameraState {
     pub yaw: f64,
     pub pitch: f64,
     pub distance: f64,
+    #[serde(deserialize_with = "exactly")]
     pub target: [f64; 3],
 }
 
 /// What the canvas shows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum View {
+    #[default]
     Render,
     Slice,
 }
 
-/// A checked Micro document.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A Micro document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(from = "MicroFields")]
 pub struct MicroState {
     pub example: Option<String>,
     pub scene: String,
@@ -78,153 +79,104 @@ pub struct MicroState {
     pub max_depth: u32,
 }
 
-/// A number field that may be left out (then `default`).
-fn number_or(raw: &Value, field: &str, range: (f64, f64), default: f64) -> Result<f64> {
-    if nullish(raw.get(field)) {
-        Ok(default)
-    } else {
-        number_in(raw.get(field), field, range)
+/// A Micro document as it is read: the fields older documents lack may be
+/// missing or `null` (then the requests' defaults, in [`MicroState`]'s
+/// `From`).
+#[derive(Deserialize)]
+struct MicroFields {
+    #[serde(default, deserialize_with = "opt_text")]
+    example: Option<String>,
+    #[serde(deserialize_with = "text")]
+    scene: String,
+    camera: CameraState,
+    steps: StepMode,
+    view: Option<View>,
+    z: Option<f64>,
+    shading: Option<Shading>,
+    roughness: Option<f64>,
+    specular: Option<f64>,
+    absorption: Option<f64>,
+    spp: Option<u64>,
+    max_depth: Option<u64>,
+}
+
+impl From<MicroFields> for MicroState {
+    fn from(f: MicroFields) -> MicroState {
+        let r = MicroRenderRequest::default();
+        // Beyond u32: out of range, refused by the check.
+        let count =
+            |v: Option<u64>, default: u32| v.map_or(default, |v| v.try_into().unwrap_or(u32::MAX));
+        MicroState {
+            example: f.example,
+            scene: f.scene,
+            camera: f.camera,
+            steps: f.steps,
+            view: f.view.unwrap_or_default(),
+            z: f.z.unwrap_or(MicroSliceRequest::default().z),
+            shading: f.shading.unwrap_or(r.shading),
+            roughness: f.roughness.unwrap_or(r.roughness),
+            specular: f.specular.unwrap_or(r.specular),
+            absorption: f.absorption.unwrap_or(r.absorption),
+            spp: count(f.spp, r.spp),
+            max_depth: count(f.max_depth, r.max_depth),
+        }
     }
 }
 
-/// A whole-number field that may be left out (then `default`).
-fn count_or(raw: &Value, field: &str, (lo, hi): (u32, u32), default: u32) -> Result<u32> {
-    if nullish(raw.get(field)) {
-        return Ok(default);
+impl Check for MicroState {
+    fn check(&self, at: &Path) -> Result<()> {
+        if let Some(e) = &self.example {
+            if !EXAMPLES.iter().any(|x| x.name == e) {
+                let names: Vec<_> = EXAMPLES.iter().map(|e| e.name).collect();
+                return Err(at
+                    .key("example")
+                    .invalid(format!("must be null or one of {}", names.join(", "))));
+            }
+        }
+        if self.scene.len() > MAX_MICRO_SCENE_BYTES {
+            return Err(at.key("scene").invalid(format!(
+                "must be the text of a scene (at most {MAX_MICRO_SCENE_BYTES} bytes)"
+            )));
+        }
+        self.camera.check(&at.key("camera"))?;
+        at.key("z").number_in(self.z, Z)?;
+        at.key("roughness").number_in(self.roughness, ROUGHNESS)?;
+        at.key("specular").number_in(self.specular, SPECULAR)?;
+        at.key("absorption")
+            .number_in(self.absorption, ABSORPTION)?;
+        at.key("spp").whole_in(self.spp, SPP)?;
+        at.key("max_depth").whole_in(self.max_depth, MAX_DEPTH)
     }
-    raw.get(field)
-        .and_then(Value::finite)
-        .filter(|x| x.fract() == 0.0 && *x >= lo as f64 && *x <= hi as f64)
-        .map(|x| x as u32)
-        .ok_or_else(|| invalid(field, format!("must be a whole number from {lo} to {hi}")))
 }
 
-fn number_in(v: Option<&Value>, field: &str, (lo, hi): (f64, f64)) -> Result<f64> {
-    v.and_then(Value::finite)
-        .filter(|x| (lo..=hi).contains(x))
-        .ok_or_else(|| invalid(field, format!("must be a number from {lo} to {hi}")))
-}
-
-fn camera(raw: Option<&Value>) -> Result<CameraState> {
-    let c = raw.filter(|c| c.is_plain_object()).ok_or_else(|| {
-        invalid(
-            "camera",
-            "must be a camera {yaw, pitch, distance, target: [x, y, z]}",
-        )
-    })?;
-    let distance = c
-        .get("distance")
-        .and_then(Value::finite)
-        .filter(|d| *d >= DISTANCE.0 && *d <= DISTANCE.1)
-        .ok_or_else(|| {
-            invalid(
-                "camera.distance",
-                format!("must be a number above 0 and at most {}", DISTANCE.1),
-            )
-        })?;
-    let target = c
-        .get("target")
-        .and_then(Value::as_list)
-        .filter(|t| t.len() == 3)
-        .and_then(|t| Some([t[0].finite()?, t[1].finite()?, t[2].finite()?]))
-        .filter(|t| t.iter().all(|v| (TARGET.0..=TARGET.1).contains(v)))
-        .ok_or_else(|| {
-            invalid(
-                "camera.target",
-                format!("must be a point [x, y, z] of numbers within ±{}", TARGET.1),
-            )
-        })?;
-    Ok(CameraState {
-        yaw: number_in(c.get("yaw"), "camera.yaw", YAW)?,
-        pitch: number_in(c.get("pitch"), "camera.pitch", PITCH)?,
-        distance,
-        target,
-    })
-}
-
-/// Check a Micro document field by field; the error names the field at fault.
-pub fn check(raw: &Value) -> Result<MicroState> {
-    if !raw.is_plain_object() {
-        return Err(invalid("state", "is not a Micro document"));
-    }
-    let names = || {
-        EXAMPLES
+impl Check for CameraState {
+    fn check(&self, at: &Path) -> Result<()> {
+        at.key("yaw").number_in(self.yaw, YAW)?;
+        at.key("pitch").number_in(self.pitch, PITCH)?;
+        let d = self.distance;
+        if !(d.is_finite() && (DISTANCE.0..=DISTANCE.1).contains(&d)) {
+            return Err(at.key("distance").invalid(format!(
+                "must be a number above 0 and at most {}",
+                DISTANCE.1
+            )));
+        }
+        let target = at.key("target");
+        self.target
             .iter()
-            .map(|e| e.name)
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let example = match raw.get("example") {
-        None | Some(Value::Null) => None,
-        Some(Value::Text(e)) if EXAMPLES.iter().any(|x| x.name == e) => Some(e.clone()),
-        Some(_) => {
-            return Err(invalid(
-                "example",
-                format!("must be null or one of {}", names()),
-            ))
-        }
-    };
-    let scene = raw
-        .get("scene")
-        .and_then(Value::as_text)
-        .filter(|s| s.len() <= MAX_MICRO_SCENE_BYTES)
-        .ok_or_else(|| {
-            invalid(
-                "scene",
-                format!("must be the text of a scene (at most {MAX_MICRO_SCENE_BYTES} bytes)"),
-            )
-        })?
-        .to_string();
-    let camera = camera(raw.get("camera"))?;
-    let steps = match raw.get("steps").and_then(Value::as_text) {
-        Some("fixed") => StepMode::Fixed,
-        Some("bisection") => StepMode::Bisection,
-        Some("adaptive") => StepMode::Adaptive,
-        _ => {
-            return Err(invalid(
-                "steps",
-                "must be one of fixed, bisection, adaptive",
-            ))
-        }
-    };
-    let view = match raw.get("view") {
-        None | Some(Value::Null) => View::Render,
-        Some(Value::Text(v)) if v == "render" => View::Render,
-        Some(Value::Text(v)) if v == "slice" => View::Slice,
-        Some(_) => return Err(invalid("view", "must be render or slice")),
-    };
-    let z = if nullish(raw.get("z")) {
-        0.0
-    } else {
-        number_in(raw.get("z"), "z", Z)?
-    };
-    let d = MicroRenderRequest::default();
-    let shading = match raw.get("shading") {
-        None | Some(Value::Null) => d.shading,
-        Some(Value::Text(v)) if v == "lambert" => Shading::Lambert,
-        Some(Value::Text(v)) if v == "ggx" => Shading::Ggx,
-        Some(_) => return Err(invalid("shading", "must be lambert or ggx")),
-    };
-    Ok(MicroState {
-        example,
-        scene,
-        camera,
-        steps,
-        view,
-        z,
-        shading,
-        roughness: number_or(raw, "roughness", ROUGHNESS, d.roughness)?,
-        specular: number_or(raw, "specular", SPECULAR, d.specular)?,
-        absorption: number_or(raw, "absorption", ABSORPTION, d.absorption)?,
-        spp: count_or(raw, "spp", (0, MAX_MICRO_SPP), d.spp)?,
-        max_depth: count_or(raw, "max_depth", MAX_DEPTH, d.max_depth)?,
-    })
+            .enumerate()
+            .try_for_each(|(i, v)| target.index(i).number_in(*v, TARGET))
+    }
+}
+
+/// Read and check a Micro document; the error names the field at fault.
+pub fn check(raw: &Value) -> Result<MicroState> {
+    read_document(raw, "Micro")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::micro::api::{start_render, start_slice, MicroRenderRequest, MicroSliceRequest};
+    use crate::micro::api::{start_render, start_slice, MAX_MICRO_SPP};
     use serde_json::{json, Value as Json};
 
     fn value(j: &Json) -> Value {
@@ -329,7 +281,18 @@ mod tests {
         assert_eq!(cam("distance", json!(0)), "camera.distance");
         assert_eq!(cam("distance", json!(2e6)), "camera.distance");
         assert_eq!(cam("target", json!([0, 0])), "camera.target");
-        assert_eq!(cam("target", json!([0, 0, "1"])), "camera.target");
+        assert_eq!(cam("target", json!([0, 0, "1"])), "camera.target.2");
+        assert_eq!(cam("target", json!([0, 0, 2e6])), "camera.target.2");
+        assert_eq!(cam("target", json!([0, 0, 0, 0])), "camera.target");
+        // Text is text, not bytes (a page's Uint8Array).
+        let mut v = value(&doc());
+        if let Value::Object(kv) = &mut v {
+            for (_, x) in kv.iter_mut().filter(|(k, _)| k == "scene") {
+                *x = Value::Bytes(b"{}".to_vec());
+            }
+        }
+        assert_eq!(check(&v).unwrap_err().field(), Some("scene"));
+        assert_eq!(field_of("camera", json!({"yaw": 1})), "camera.pitch");
         assert_eq!(field_of("steps", json!("random")), "steps");
         assert_eq!(field_of("steps", json!(null)), "steps");
         assert_eq!(field_of("view", json!("both")), "view");
@@ -343,44 +306,135 @@ mod tests {
         assert_eq!(field_of("max_depth", json!(0)), "max_depth");
     }
 
-    #[test]
-    fn the_limits_are_the_requests() {
-        // A document at every range's edge makes requests the core accepts.
-        for (yaw, pitch, distance, t) in [
-            (YAW.0, PITCH.0, DISTANCE.0, TARGET.0),
-            (YAW.1, PITCH.1, DISTANCE.1, TARGET.1),
-        ] {
-            let mut d = doc();
-            d["camera"] =
-                json!({"yaw": yaw, "pitch": pitch, "distance": distance, "target": [t, t, t]});
-            d["z"] = json!(t);
-            let lo = yaw == YAW.0;
-            d["roughness"] = json!(if lo { ROUGHNESS.0 } else { ROUGHNESS.1 });
-            d["specular"] = json!(if lo { SPECULAR.0 } else { SPECULAR.1 });
-            d["absorption"] = json!(if lo { ABSORPTION.0 } else { ABSORPTION.1 });
-            d["spp"] = json!(if lo { 0 } else { MAX_MICRO_SPP });
-            d["max_depth"] = json!(if lo { MAX_DEPTH.0 } else { MAX_DEPTH.1 });
-            let s = check(&value(&d)).unwrap();
-            let req: MicroRenderRequest = serde_json::from_value(json!({
-                "scene": s.scene, "width": 2, "height": 2, "steps": s.steps,
-                "shading": s.shading, "roughness": s.roughness, "specular": s.specular,
-                "absorption": s.absorption, "spp": s.spp, "max_depth": s.max_depth,
-                "camera": {"yaw": s.camera.yaw, "pitch": s.camera.pitch,
-                           "distance": s.camera.distance, "target": s.camera.target},
-            }))
-            .unwrap();
-            assert!(
-                start_render(req).is_ok(),
-                "camera at {yaw}, {pitch}, {distance}, {t}"
-            );
-            let req = MicroSliceRequest {
-                scene: s.scene.clone(),
-                z: s.z,
-                width: 2,
-                height: 2,
-                ..Default::default()
-            };
-            assert!(start_slice(req).is_ok());
+    /// `doc()` with `edit` applied.
+    fn with(edit: impl Fn(&mut Json)) -> Json {
+        let mut d = doc();
+        edit(&mut d);
+        d
+    }
+
+    /// The `micro-render` (or, for `z`, `micro-slice`) request the page
+    /// sends for document `d`, checked by the core; `Err(field)` when refused.
+    fn request(d: &Json, slice: bool) -> std::result::Result<(), String> {
+        // A value the request's type cannot hold (`spp: -1`) is refused
+        // as it is read.
+        fn read<T: serde::de::DeserializeOwned>(j: Json) -> std::result::Result<T, String> {
+            serde_path_to_error::deserialize(j).map_err(|e| crate::core::check::dotted(e.path()))
         }
+        let started = if slice {
+            let req = json!({"scene": d["scene"], "z": d["z"], "width": 2, "height": 2});
+            start_slice(read(req)?).map(drop)
+        } else {
+            let mut req =
+                json!({"scene": d["scene"], "width": 2, "height": 2, "camera": d["camera"]});
+            for k in [
+                "steps",
+                "shading",
+                "roughness",
+                "specular",
+                "absorption",
+                "spp",
+                "max_depth",
+            ] {
+                req[k] = d[k].clone();
+            }
+            start_render(read(req)?).map(drop)
+        };
+        started.map_err(|e| e.field().unwrap_or("?").to_string())
+    }
+
+    #[test]
+    fn every_range_is_inside_or_out_by_one() {
+        let num = |v: f64| json!(v);
+        let up = |v: f64| json!(v.next_up());
+        let down = |v: f64| json!(v.next_down());
+        // (field, the range's end just inside, just outside)
+        let mut cases: Vec<(&str, Json, Json)> = vec![];
+        for (field, (lo, hi)) in [
+            ("camera.yaw", YAW),
+            ("camera.pitch", PITCH),
+            ("camera.distance", DISTANCE),
+            ("camera.target.0", TARGET),
+            ("camera.target.2", TARGET),
+            ("z", Z),
+            ("roughness", ROUGHNESS),
+            ("specular", SPECULAR),
+            ("absorption", ABSORPTION),
+        ] {
+            cases.push((field, num(lo), down(lo)));
+            cases.push((field, num(hi), up(hi)));
+        }
+        for (field, (lo, hi)) in [("spp", SPP), ("max_depth", MAX_DEPTH)] {
+            if lo > 0 {
+                cases.push((field, json!(lo), json!(lo - 1)));
+            } else {
+                cases.push((field, json!(lo), json!(-1)));
+            }
+            cases.push((field, json!(hi), json!(hi + 1)));
+        }
+        assert_eq!(SPP.1, MAX_MICRO_SPP);
+        for (field, inside, outside) in cases {
+            let set = |v: &Json| {
+                with(|d| {
+                    let mut at = &mut *d;
+                    for k in field.split('.') {
+                        at = match k.parse::<usize>() {
+                            Ok(i) => &mut at[i],
+                            Err(_) => &mut at[k],
+                        };
+                    }
+                    *at = v.clone();
+                })
+            };
+            let (inside, outside) = (set(&inside), set(&outside));
+            check(&value(&inside)).unwrap_or_else(|e| panic!("{field} inside: {e}"));
+            let e = check(&value(&outside)).unwrap_err();
+            assert_eq!(e.field(), Some(field), "{e}");
+            assert!(e.to_string().starts_with(field), "{e}");
+            // The request the page sends for the same document agrees,
+            // naming the same field.
+            let slice = field == "z";
+            request(&inside, slice).unwrap_or_else(|f| panic!("{field} inside, as a request: {f}"));
+            assert_eq!(request(&outside, slice), Err(field.to_string()));
+        }
+        // The scene's size is the core's limit.
+        let scene = |n: usize| with(|d| d["scene"] = json!(" ".repeat(n)));
+        check(&value(&scene(MAX_MICRO_SCENE_BYTES))).unwrap();
+        assert_eq!(
+            check(&value(&scene(MAX_MICRO_SCENE_BYTES + 1)))
+                .unwrap_err()
+                .field(),
+            Some("scene")
+        );
+        // NaN, which a page's number can be, is not a number here.
+        let mut v = value(&doc());
+        if let Value::Object(kv) = &mut v {
+            for (_, x) in kv.iter_mut().filter(|(k, _)| k == "roughness") {
+                *x = Value::Number(f64::NAN);
+            }
+        }
+        assert_eq!(check(&v).unwrap_err().field(), Some("roughness"));
+    }
+
+    #[test]
+    fn unknown_fields_are_dropped_as_they_always_were() {
+        let plain = check(&value(&doc())).unwrap();
+        let extra = with(|d| {
+            d["extra"] = json!(1);
+            d["camera"]["fov"] = json!(40);
+        });
+        assert_eq!(check(&value(&extra)).unwrap(), plain);
+        // `null` in a field a version 1 document lacks is its default too.
+        let s = check(&value(&with(|d| {
+            d["roughness"] = json!(null);
+            d["spp"] = json!(null);
+            d["view"] = json!(null);
+        })))
+        .unwrap();
+        let r = MicroRenderRequest::default();
+        assert_eq!(
+            (s.roughness, s.spp, s.view),
+            (r.roughness, r.spp, View::Render)
+        );
     }
 }

@@ -1,6 +1,7 @@
 //! The Tangle tool's document (what the page keeps, autosaves, saves in a
-//! project file and shares), its schema version and its checks, field by
-//! field (see [`crate::core::value`]). Field names are the page's:
+//! project file and shares), its schema version and its checks: a serde
+//! type read by [`crate::core::check::read_document`] (type errors name the
+//! field) and a [`Check`] impl for its ranges. Field names are the page's:
 //!
 //! ```text
 //! { example: name | null, grammar: text, seed,
@@ -12,15 +13,23 @@
 //!
 //! `start`, `edits`, `seed`, `wobble` and `stroke_width` are exactly the
 //! `tangle` request's fields ([`super::api::TangleRequest`]): the page sends
-//! the document as the request, so the ranges here are the request's own.
+//! the document as the request, so the types ([`StartRequest`], [`Edit`])
+//! and the ranges ([`WOBBLE`], [`STROKE_WIDTH`], [`MAX_EDITS`],
+//! [`MAX_START_SIDE`], ...) are the request's own. Where the document is
+//! stricter than a request (an edit names its step; a start is one of the
+//! four kinds the page draws) it is read through its own fields first.
+//! Unknown fields are dropped, as they always were.
 use super::api::{
     Edit, StartRequest, MAX_EDITS, MAX_START_POINTS, MAX_STEPS, STROKE_WIDTH, WOBBLE,
 };
 use super::examples::EXAMPLES;
 use super::MAX_START_SIDE;
+use crate::core::check::{
+    exactly, null_as_default, opt_text, read_document, read_part_at, text, Check, Path,
+};
 use crate::core::error::Result;
-use crate::core::value::{invalid, js_len, nullish, Value, MAX_SAFE_INTEGER};
-use serde::Serialize;
+use crate::core::value::{Value, MAX_SAFE_INTEGER};
+use serde::{Deserialize, Deserializer, Serialize};
 use std::collections::BTreeMap;
 
 /// Schema version of the Tangle state (the page's `state.version`).
@@ -37,242 +46,249 @@ pub const MAX_POLYGON_POINTS: usize = 10_000;
 pub const MAX_EDIT_PARAMS: usize = 16;
 pub const MAX_PARAM_NAME: usize = 32;
 
-/// A checked Tangle document.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A Tangle document. Its `start` is read by [`check`] after the rest,
+/// by kind (a field of another kind is dropped, as it always was).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TangleState {
+    #[serde(default, deserialize_with = "opt_text")]
     pub example: Option<String>,
+    #[serde(deserialize_with = "text")]
     pub grammar: String,
     pub seed: u64,
+    #[serde(skip_deserializing)]
     pub start: Option<StartRequest>,
     pub wobble: f64,
     pub stroke_width: f64,
+    /// Missing or `null`: none.
+    #[serde(default, deserialize_with = "edits")]
     pub edits: Vec<Edit>,
+    #[serde(default)]
     pub selected: Option<u64>,
 }
 
-fn whole(v: Option<&Value>, field: &str, max: f64) -> Result<f64> {
-    v.and_then(Value::whole)
-        .filter(|x| (0.0..=max).contains(x))
-        .ok_or_else(|| invalid(field, format!("must be a whole number from 0 to {max}")))
+/// The kinds of start a document holds (the request's [`StartRequest`]
+/// also takes `rings`, which the page never keeps).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum StartKind {
+    Rect,
+    Text,
+    Svg,
+    Polygon,
 }
 
-fn number_in(v: Option<&Value>, field: &str, (lo, hi): (f64, f64)) -> Result<f64> {
-    v.and_then(Value::finite)
-        .filter(|x| (lo..=hi).contains(x))
-        .ok_or_else(|| invalid(field, format!("must be a number from {lo} to {hi}")))
-}
-
-fn side(v: Option<&Value>, field: &str) -> Result<f64> {
-    v.and_then(Value::finite)
-        .filter(|x| *x > 0.0 && *x <= MAX_START_SIDE)
-        .ok_or_else(|| {
-            invalid(
-                field,
-                format!("must be a number above 0 and at most {MAX_START_SIDE}"),
-            )
-        })
-}
-
-fn start(raw: Option<&Value>) -> Result<Option<StartRequest>> {
-    if nullish(raw) {
-        return Ok(None);
+/// The start at `at` (`null` or missing: none): its kind, then that kind's
+/// fields, as the request's [`StartRequest`]; an error names the field
+/// (`start.width`, `start.points.2.1`).
+fn read_start(raw: Option<&Value>, at: &Path) -> Result<Option<StartRequest>> {
+    #[derive(Deserialize)]
+    struct Kind {
+        kind: StartKind,
     }
-    let s = raw.filter(|s| s.is_plain_object()).ok_or_else(|| {
-        invalid(
-            "start",
-            "must be null or a start shape {kind: rect | text | svg | polygon, ...}",
-        )
-    })?;
-    Ok(Some(match s.get("kind").and_then(Value::as_text) {
-        Some("rect") => StartRequest::Rect {
-            width: side(s.get("width"), "start.width")?,
-            height: side(s.get("height"), "start.height")?,
-        },
-        Some("text") => {
-            let text = s
-                .get("text")
-                .and_then(Value::as_text)
-                .filter(|t| !t.trim().is_empty() && t.chars().count() <= MAX_TEXT_CHARS)
-                .ok_or_else(|| {
-                    invalid(
-                        "start.text",
-                        format!("must be a word of 1 to {MAX_TEXT_CHARS} characters"),
-                    )
-                })?;
-            StartRequest::Text {
-                text: text.to_string(),
-                height: side(s.get("height"), "start.height")?,
-            }
+    #[derive(Deserialize)]
+    struct Rect {
+        width: f64,
+        height: f64,
+    }
+    #[derive(Deserialize)]
+    struct Word {
+        #[serde(deserialize_with = "text")]
+        text: String,
+        height: f64,
+    }
+    #[derive(Deserialize)]
+    struct Svg {
+        #[serde(deserialize_with = "text")]
+        svg: String,
+    }
+    #[derive(Deserialize)]
+    struct Polygon {
+        points: Vec<Point>,
+    }
+    #[derive(Deserialize)]
+    struct Point(#[serde(deserialize_with = "exactly")] [f64; 2]);
+    let Some(raw) = raw.filter(|s| !matches!(s, Value::Null)) else {
+        return Ok(None);
+    };
+    let Kind { kind } = read_part_at(raw, at)?;
+    Ok(Some(match kind {
+        StartKind::Rect => {
+            let Rect { width, height } = read_part_at(raw, at)?;
+            StartRequest::Rect { width, height }
         }
-        Some("svg") => StartRequest::Svg {
-            svg: s
-                .get("svg")
-                .and_then(Value::as_text)
-                .filter(|t| !t.trim().is_empty() && t.len() <= MAX_SVG_BYTES)
-                .ok_or_else(|| {
-                    invalid(
-                        "start.svg",
-                        format!("must be the text of an SVG file (at most {MAX_SVG_BYTES} bytes)"),
-                    )
-                })
-                .and_then(|t| {
-                    // A document too deep to parse is refused with the state,
-                    // not when the tangle grows from it.
-                    crate::tangle::geom::svg::check_depth(t)
-                        .map_err(|e| invalid("start.svg", e))?;
-                    Ok(t)
-                })?
-                .to_string(),
-        },
-        Some("polygon") => {
-            let max = MAX_POLYGON_POINTS.min(MAX_START_POINTS);
-            let list = s
-                .get("points")
-                .and_then(Value::as_list)
-                .filter(|l| (3..=max).contains(&l.len()))
-                .ok_or_else(|| {
-                    invalid(
-                        "start.points",
-                        format!("must be a list of 3 to {max} points [x, y]"),
-                    )
-                })?;
-            let mut points = Vec::with_capacity(list.len());
-            for (i, p) in list.iter().enumerate() {
-                let xy = p
-                    .as_list()
-                    .filter(|xy| xy.len() == 2)
-                    .and_then(|xy| Some([xy[0].finite()?, xy[1].finite()?]))
-                    .filter(|xy| xy.iter().all(|c| c.abs() <= MAX_START_SIDE))
-                    .ok_or_else(|| {
-                        invalid(
-                            &format!("start.points.{i}"),
-                            format!("must be a point [x, y] of numbers within ±{MAX_START_SIDE}"),
-                        )
-                    })?;
-                points.push(xy);
-            }
-            StartRequest::Polygon { points }
+        StartKind::Text => {
+            let Word { text, height } = read_part_at(raw, at)?;
+            StartRequest::Text { text, height }
         }
-        _ => {
-            return Err(invalid(
-                "start.kind",
-                "must be one of rect, text, svg, polygon",
-            ))
+        StartKind::Svg => {
+            let Svg { svg } = read_part_at(raw, at)?;
+            StartRequest::Svg { svg }
+        }
+        StartKind::Polygon => {
+            let Polygon { points } = read_part_at(raw, at)?;
+            StartRequest::Polygon {
+                points: points.into_iter().map(|p| p.0).collect(),
+            }
         }
     }))
 }
 
-fn edits(raw: Option<&Value>) -> Result<Vec<Edit>> {
-    if nullish(raw) {
-        return Ok(vec![]);
-    }
-    let list = raw
-        .and_then(Value::as_list)
-        .filter(|l| l.len() <= MAX_EDITS)
-        .ok_or_else(|| {
-            invalid(
-                "edits",
-                format!("must be a list of at most {MAX_EDITS} edits (the edit limit)"),
-            )
-        })?;
-    let mut out = Vec::with_capacity(list.len());
-    for (i, e) in list.iter().enumerate() {
-        let field = format!("edits.{i}");
-        if !e.is_plain_object() {
-            return Err(invalid(&field, "must be an edit {step, params}"));
-        }
-        let step = whole(
-            e.get("step"),
-            &format!("{field}.step"),
-            MAX_STEPS as f64 - 1.0,
-        )?;
-        let mut params = BTreeMap::new();
-        match e.get("params") {
-            None | Some(Value::Null) => {}
-            Some(Value::Object(kv)) if kv.len() <= MAX_EDIT_PARAMS => {
-                for (k, v) in kv {
-                    let pf = format!("{field}.params.{k}");
-                    if k.is_empty() || js_len(k) > MAX_PARAM_NAME {
-                        return Err(invalid(
-                            &format!("{field}.params"),
-                            format!("names parameters of 1 to {MAX_PARAM_NAME} characters"),
-                        ));
-                    }
-                    let v = v
-                        .finite()
-                        .ok_or_else(|| invalid(&pf, "must be a finite number"))?;
-                    params.insert(k.clone(), v);
-                }
-            }
-            Some(_) => {
-                return Err(invalid(
-                    &format!("{field}.params"),
-                    format!(
-                    "must be an object of at most {MAX_EDIT_PARAMS} parameters {{name: number}}"
-                ),
-                ))
-            }
-        }
-        out.push(Edit {
-            step: step as usize,
-            params,
-        });
-    }
-    Ok(out)
+/// An edit as the document holds it: its step is always named (a
+/// request's defaults to 0); `params` missing or `null` is none.
+#[derive(Deserialize)]
+struct EditFields {
+    step: u64,
+    #[serde(default, deserialize_with = "null_as_default")]
+    params: BTreeMap<String, f64>,
 }
 
-/// Check a Tangle document field by field; the error names the field at fault.
-pub fn check(raw: &Value) -> Result<TangleState> {
-    if !raw.is_plain_object() {
-        return Err(invalid("state", "is not a Tangle document"));
+/// `deserialize_with`: the edits (`null`: none) as the request's [`Edit`]s.
+fn edits<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Vec<Edit>, D::Error> {
+    let list: Option<Vec<EditFields>> = Option::deserialize(d)?;
+    Ok(list
+        .unwrap_or_default()
+        .into_iter()
+        .map(|e| Edit {
+            // Beyond a (32-bit) usize: past any step, refused by the check.
+            step: usize::try_from(e.step).unwrap_or(usize::MAX),
+            params: e.params,
+        })
+        .collect())
+}
+
+/// The last step a document may name.
+const LAST_STEP: usize = MAX_STEPS - 1;
+
+/// A side of a start shape: above 0, at most [`MAX_START_SIDE`].
+fn side(at: &Path, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 && v <= MAX_START_SIDE {
+        Ok(())
+    } else {
+        Err(at.invalid(format!(
+            "must be a number above 0 and at most {MAX_START_SIDE}"
+        )))
     }
-    let example = match raw.get("example") {
-        None | Some(Value::Null) => None,
-        Some(Value::Text(e)) if EXAMPLES.iter().any(|x| x.name == e) => Some(e.clone()),
-        Some(_) => {
-            return Err(invalid(
-                "example",
-                format!(
-                    "must be null or one of {}",
-                    EXAMPLES
-                        .iter()
-                        .map(|e| e.name)
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ))
+}
+
+/// Every field's rules but the start's ([`check`] reads and checks it).
+impl Check for TangleState {
+    fn check(&self, at: &Path) -> Result<()> {
+        if let Some(e) = &self.example {
+            if !EXAMPLES.iter().any(|x| x.name == e) {
+                let names: Vec<_> = EXAMPLES.iter().map(|e| e.name).collect();
+                return Err(at
+                    .key("example")
+                    .invalid(format!("must be null or one of {}", names.join(", "))));
+            }
         }
-    };
-    let grammar = raw
-        .get("grammar")
-        .and_then(Value::as_text)
-        .filter(|g| g.len() <= MAX_GRAMMAR_BYTES)
-        .ok_or_else(|| {
-            invalid(
-                "grammar",
-                format!("must be the text of a grammar (at most {MAX_GRAMMAR_BYTES} bytes)"),
-            )
-        })?
-        .to_string();
-    let seed = whole(raw.get("seed"), "seed", MAX_SAFE_INTEGER)? as u64;
-    let start = start(raw.get("start"))?;
-    let wobble = number_in(raw.get("wobble"), "wobble", WOBBLE)?;
-    let stroke_width = number_in(raw.get("stroke_width"), "stroke_width", STROKE_WIDTH)?;
-    let edits = edits(raw.get("edits"))?;
-    let selected = match raw.get("selected") {
-        None | Some(Value::Null) => None,
-        s => Some(whole(s, "selected", MAX_STEPS as f64 - 1.0)? as u64),
-    };
-    Ok(TangleState {
-        example,
-        grammar,
-        seed,
-        start,
-        wobble,
-        stroke_width,
-        edits,
-        selected,
-    })
+        if self.grammar.len() > MAX_GRAMMAR_BYTES {
+            return Err(at.key("grammar").invalid(format!(
+                "must be the text of a grammar (at most {MAX_GRAMMAR_BYTES} bytes)"
+            )));
+        }
+        at.key("seed")
+            .whole_in(self.seed, (0, MAX_SAFE_INTEGER as u64))?;
+        at.key("wobble").number_in(self.wobble, WOBBLE)?;
+        at.key("stroke_width")
+            .number_in(self.stroke_width, STROKE_WIDTH)?;
+        if self.edits.len() > MAX_EDITS {
+            return Err(at.key("edits").invalid(format!(
+                "must be a list of at most {MAX_EDITS} edits (the edit limit)"
+            )));
+        }
+        self.edits.check(&at.key("edits"))?;
+        if let Some(s) = self.selected {
+            at.key("selected").whole_in(s, (0, LAST_STEP as u64))?;
+        }
+        Ok(())
+    }
+}
+
+impl Check for StartRequest {
+    fn check(&self, at: &Path) -> Result<()> {
+        match self {
+            StartRequest::Rect { width, height } => {
+                side(&at.key("width"), *width)?;
+                side(&at.key("height"), *height)
+            }
+            StartRequest::Text { text, height } => {
+                if text.trim().is_empty() || text.chars().count() > MAX_TEXT_CHARS {
+                    return Err(at.key("text").invalid(format!(
+                        "must be a word of 1 to {MAX_TEXT_CHARS} characters"
+                    )));
+                }
+                side(&at.key("height"), *height)
+            }
+            StartRequest::Svg { svg } => {
+                let at = at.key("svg");
+                if svg.trim().is_empty() || svg.len() > MAX_SVG_BYTES {
+                    return Err(at.invalid(format!(
+                        "must be the text of an SVG file (at most {MAX_SVG_BYTES} bytes)"
+                    )));
+                }
+                // A document too deep to parse is refused with the state,
+                // not when the tangle grows from it.
+                crate::tangle::geom::svg::check_depth(svg).map_err(|e| at.invalid(e))
+            }
+            StartRequest::Polygon { points } => {
+                let max = MAX_POLYGON_POINTS.min(MAX_START_POINTS);
+                if !(3..=max).contains(&points.len()) {
+                    return Err(at
+                        .key("points")
+                        .invalid(format!("must be a list of 3 to {max} points [x, y]")));
+                }
+                for (i, p) in points.iter().enumerate() {
+                    if !p.iter().all(|c| c.is_finite() && c.abs() <= MAX_START_SIDE) {
+                        return Err(at.key("points").index(i).invalid(format!(
+                            "must be a point [x, y] of numbers within ±{MAX_START_SIDE}"
+                        )));
+                    }
+                }
+                Ok(())
+            }
+            // Not a document's (its type has no `rings`).
+            StartRequest::Rings { .. } => Err(at
+                .key("kind")
+                .invalid("must be one of rect, text, svg, polygon")),
+        }
+    }
+}
+
+impl Check for Edit {
+    fn check(&self, at: &Path) -> Result<()> {
+        at.key("step").whole_in(self.step, (0, LAST_STEP))?;
+        let params = at.key("params");
+        if self.params.len() > MAX_EDIT_PARAMS {
+            return Err(params.invalid(format!(
+                "must be an object of at most {MAX_EDIT_PARAMS} parameters {{name: number}}"
+            )));
+        }
+        for (k, v) in &self.params {
+            if k.is_empty() {
+                return Err(params.invalid(format!(
+                    "names parameters of 1 to {MAX_PARAM_NAME} characters"
+                )));
+            }
+            params.js_len_at_most(
+                k,
+                MAX_PARAM_NAME,
+                format!("names parameters of 1 to {MAX_PARAM_NAME} characters"),
+            )?;
+            if !v.is_finite() {
+                return Err(params.key(k).invalid("must be a finite number"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Read and check a Tangle document; the error names the field at fault.
+pub fn check(raw: &Value) -> Result<TangleState> {
+    let mut doc: TangleState = read_document(raw, "Tangle")?;
+    let at = Path::root().key("start");
+    doc.start = read_start(raw.get("start"), &at)?;
+    doc.start.check(&at)?;
+    Ok(doc)
 }
 
 #[cfg(test)]
@@ -381,8 +397,34 @@ mod tests {
                 "start",
                 json!({"kind": "polygon", "points": [[0, 0], [1, 1], [1, "x"]]})
             ),
+            "start.points.2.1"
+        );
+        assert_eq!(
+            field_of(
+                "start",
+                json!({"kind": "polygon", "points": [[0, 0], [1, 1], [1]]})
+            ),
             "start.points.2"
         );
+        assert_eq!(field_of("start", json!({"kind": "rect"})), "start.width");
+        assert_eq!(
+            field_of(
+                "start",
+                json!({"kind": "polygon", "points": [[0, 0], [1, 1], [1, 2, 3]]})
+            ),
+            "start.points.2"
+        );
+        // Text is text, not bytes (a page's Uint8Array).
+        for key in ["grammar", "example"] {
+            let mut v = value(&doc());
+            if let Value::Object(kv) = &mut v {
+                for (_, x) in kv.iter_mut().filter(|(k, _)| k == key) {
+                    *x = Value::Bytes(b"leaf".to_vec());
+                }
+            }
+            assert_eq!(check(&v).unwrap_err().field(), Some(key));
+        }
+        assert_eq!(field_of("start", json!({"kind": "rings"})), "start.kind");
         assert_eq!(field_of("edits", json!({})), "edits");
         let many: Vec<Json> = (0..=MAX_EDITS).map(|_| json!({"step": 0})).collect();
         assert_eq!(field_of("edits", json!(many)), "edits");
@@ -397,16 +439,224 @@ mod tests {
         );
     }
 
+    /// `doc()` with `edit` applied.
+    fn with(edit: impl Fn(&mut Json)) -> Json {
+        let mut d = doc();
+        edit(&mut d);
+        d
+    }
+
+    /// The `tangle` request the page sends for document `d`.
+    fn request(d: &Json) -> Result<crate::tangle::api::TangleJob> {
+        let req: TangleRequest = serde_json::from_value(d.clone()).unwrap();
+        crate::tangle::api::start_tangle(req)
+    }
+
     #[test]
-    fn the_limits_are_the_requests() {
-        let d = TangleRequest::default();
-        assert!((WOBBLE.0..=WOBBLE.1).contains(&d.wobble));
-        assert!((STROKE_WIDTH.0..=STROKE_WIDTH.1).contains(&d.stroke_width));
-        // A document at the edit limit is accepted.
-        let mut j = doc();
-        j["edits"] = json!((0..MAX_EDITS)
-            .map(|k| json!({"step": k, "params": {}}))
-            .collect::<Vec<_>>());
-        assert_eq!(check(&value(&j)).unwrap().edits.len(), MAX_EDITS);
+    fn every_range_is_inside_or_out_by_one() {
+        let up = |v: f64| json!(v.next_up());
+        let down = |v: f64| json!(v.next_down());
+        let start = |s: Json| with(move |d| d["start"] = s.clone());
+        let rect = |w: Json, h: Json| start(json!({"kind": "rect", "width": w, "height": h}));
+        let m = MAX_START_SIDE;
+        let tri = |x: Json| start(json!({"kind": "polygon", "points": [[0, 0], [m, 0], [x, m]]}));
+        let poly = |n: usize| {
+            let pts: Vec<Json> = (0..n).map(|i| json!([i % 7, i % 5])).collect();
+            start(json!({"kind": "polygon", "points": pts}))
+        };
+        let edits = |n: usize| {
+            let e: Vec<Json> = (0..n).map(|_| json!({"step": 0})).collect();
+            with(move |d| d["edits"] = json!(e))
+        };
+        let params = |n: usize| {
+            let p: serde_json::Map<_, _> = (0..n).map(|i| (format!("p{i}"), json!(i))).collect();
+            with(move |d| d["edits"] = json!([{"step": 0, "params": p}]))
+        };
+        let name = |k: String| with(move |d| d["edits"] = json!([{"step": 0, "params": {&k: 1}}]));
+        let word = |t: String| start(json!({"kind": "text", "text": t, "height": 10}));
+        let svg =
+            |n: usize| start(json!({"kind": "svg", "svg": format!("<svg>{}", " ".repeat(n - 5))}));
+        // (inside, outside, the document's field, the request's field when
+        // the `tangle` request checks the same range)
+        let cases: Vec<(Json, Json, &str, Option<&str>)> = vec![
+            (
+                with(|d| d["wobble"] = json!(WOBBLE.1)),
+                with(|d| d["wobble"] = up(WOBBLE.1)),
+                "wobble",
+                Some("wobble"),
+            ),
+            (
+                with(|d| d["wobble"] = json!(WOBBLE.0)),
+                with(|d| d["wobble"] = down(WOBBLE.0)),
+                "wobble",
+                Some("wobble"),
+            ),
+            (
+                with(|d| d["stroke_width"] = json!(STROKE_WIDTH.1)),
+                with(|d| d["stroke_width"] = up(STROKE_WIDTH.1)),
+                "stroke_width",
+                Some("stroke_width"),
+            ),
+            (
+                with(|d| d["stroke_width"] = json!(STROKE_WIDTH.0)),
+                with(|d| d["stroke_width"] = down(STROKE_WIDTH.0)),
+                "stroke_width",
+                Some("stroke_width"),
+            ),
+            (
+                edits(MAX_EDITS),
+                edits(MAX_EDITS + 1),
+                "edits",
+                Some("edits"),
+            ),
+            (
+                rect(json!(m), json!(1)),
+                rect(up(m), json!(1)),
+                "start.width",
+                Some("start"),
+            ),
+            (
+                rect(json!(1), json!(m)),
+                rect(json!(1), up(m)),
+                "start.height",
+                Some("start"),
+            ),
+            (tri(json!(0)), tri(up(m)), "start.points.2", None),
+            // The request's polygons are snapped to the overlay's grid:
+            // one ulp over is below its precision, one unit is not.
+            (
+                tri(json!(0)),
+                tri(json!(m + 1.0)),
+                "start.points.2",
+                Some("start.points"),
+            ),
+            (
+                with(|d| d["seed"] = json!(MAX_SAFE_INTEGER)),
+                with(|d| d["seed"] = json!(-1)),
+                "seed",
+                None,
+            ),
+            (
+                with(|d| d["grammar"] = json!("#".repeat(MAX_GRAMMAR_BYTES))),
+                with(|d| d["grammar"] = json!("#".repeat(MAX_GRAMMAR_BYTES + 1))),
+                "grammar",
+                None,
+            ),
+            (
+                with(|d| d["selected"] = json!(LAST_STEP)),
+                with(|d| d["selected"] = json!(MAX_STEPS)),
+                "selected",
+                None,
+            ),
+            (
+                with(|d| d["edits"] = json!([{"step": LAST_STEP}])),
+                with(|d| d["edits"] = json!([{"step": MAX_STEPS}])),
+                "edits.0.step",
+                None,
+            ),
+            (
+                params(MAX_EDIT_PARAMS),
+                params(MAX_EDIT_PARAMS + 1),
+                "edits.0.params",
+                None,
+            ),
+            // JS counts a name's length in UTF-16 units: 😀 is two.
+            (
+                name("😀".repeat(MAX_PARAM_NAME / 2)),
+                name(format!("{}a", "😀".repeat(MAX_PARAM_NAME / 2))),
+                "edits.0.params",
+                None,
+            ),
+            (
+                name("a".into()),
+                name(String::new()),
+                "edits.0.params",
+                None,
+            ),
+            (
+                poly(MAX_POLYGON_POINTS),
+                poly(MAX_POLYGON_POINTS + 1),
+                "start.points",
+                None,
+            ),
+            (poly(3), poly(2), "start.points", None),
+            (
+                word("😀".repeat(MAX_TEXT_CHARS)),
+                word("😀".repeat(MAX_TEXT_CHARS + 1)),
+                "start.text",
+                None,
+            ),
+            (
+                svg(MAX_SVG_BYTES),
+                svg(MAX_SVG_BYTES + 1),
+                "start.svg",
+                None,
+            ),
+        ];
+        for (inside, outside, field, req) in cases {
+            check(&value(&inside)).unwrap_or_else(|e| panic!("{field} inside: {e}"));
+            let e = check(&value(&outside)).unwrap_err();
+            assert_eq!(e.field(), Some(field), "{e}");
+            assert!(e.to_string().starts_with(field), "{e}");
+            if let Some(req_field) = req {
+                // The request the page sends for the same document agrees.
+                request(&inside).unwrap_or_else(|e| panic!("{field} inside, as a request: {e}"));
+                let Some(e) = request(&outside).err() else {
+                    panic!("{field} outside, as a request: accepted")
+                };
+                assert_eq!(e.field(), Some(req_field), "{e}");
+            }
+        }
+        // NaN and ±∞, which a page's numbers can be, are not numbers here.
+        for (key, at) in [("wobble", "wobble"), ("stroke_width", "stroke_width")] {
+            let mut v = value(&doc());
+            if let Value::Object(kv) = &mut v {
+                for (_, x) in kv.iter_mut().filter(|(k, _)| k == key) {
+                    *x = Value::Number(f64::NAN);
+                }
+            }
+            assert_eq!(check(&v).unwrap_err().field(), Some(at));
+        }
+    }
+
+    #[test]
+    fn unknown_fields_are_dropped_as_they_always_were() {
+        let plain = check(&value(&doc())).unwrap();
+        let extra = with(|d| {
+            d["extra"] = json!(1);
+            d["edits"][0]["why"] = json!("x");
+        });
+        assert_eq!(check(&value(&extra)).unwrap(), plain);
+        let rect = |extra: bool| {
+            let mut s = json!({"kind": "rect", "width": 4, "height": 3});
+            if extra {
+                s["label"] = json!("box");
+                // Another kind's field, even of the wrong type.
+                s["text"] = json!(3);
+            }
+            check(&value(&with(|d| d["start"] = s.clone()))).unwrap()
+        };
+        assert_eq!(rect(true), rect(false));
+        // Optional fields older documents lack: none.
+        let mut d = doc();
+        for k in ["example", "start", "edits", "selected"] {
+            d.as_object_mut().unwrap().remove(k);
+        }
+        let s = check(&value(&d)).unwrap();
+        assert_eq!(
+            (s.example, s.start, s.edits, s.selected),
+            (None, None, vec![], None)
+        );
+        let s = check(&value(&with(|d| {
+            d["edits"] = json!([{"step": 2, "params": null}])
+        })))
+        .unwrap();
+        assert_eq!(
+            s.edits,
+            [Edit {
+                step: 2,
+                params: BTreeMap::new()
+            }]
+        );
     }
 }
