@@ -428,4 +428,33 @@ mod tests {
         let too_big = read(json!({"n": 1e300})).unwrap_err();
         assert_eq!(too_big.field(), Some("n"), "{too_big}");
     }
+
+    /// The `&Value` reader reads text as text only (a page's bytes are not a
+    /// name) and a fixed-size array as exactly its items (`[1, 2, 3]` is
+    /// not a point: the third was once dropped).
+    #[test]
+    fn text_is_not_bytes_and_an_array_has_exactly_its_items() {
+        use serde_json::json;
+        #[derive(Debug, Deserialize)]
+        #[allow(dead_code)]
+        struct Named {
+            name: String,
+            point: [f64; 2],
+        }
+        impl Check for Named {
+            fn check(&self, _: &Path) -> Result<()> {
+                Ok(())
+            }
+        }
+        let read = |j: serde_json::Value| -> Result<Named> {
+            read_document(&Value::read(&j, true).unwrap(), "Test")
+        };
+        assert!(read(json!({"name": "a", "point": [1, 2]})).is_ok());
+        let e = read(json!({"name": {"$bytes": "AQI="}, "point": [1, 2]})).unwrap_err();
+        assert_eq!(e.field(), Some("name"), "{e}");
+        for point in [json!([1, 2, 3]), json!([1])] {
+            let e = read(json!({"name": "a", "point": point})).unwrap_err();
+            assert_eq!(e.field(), Some("point"), "{e}");
+        }
+    }
 }

@@ -687,11 +687,33 @@ impl<'de> Deserializer<'de> for &'de Value {
             Value::Number(n) => v.visit_f64(*n),
             Value::Text(t) => v.visit_borrowed_str(t),
             Value::Bytes(b) => v.visit_borrowed_bytes(b),
-            Value::List(l) => v.visit_seq(de::value::SeqDeserializer::new(l.iter())),
+            Value::List(l) => {
+                // A fixed-size array takes exactly its items: `[1, 2, 3]`
+                // is not a point `[x, y]` (the rest is not dropped).
+                let mut seq = de::value::SeqDeserializer::new(l.iter());
+                let out = v.visit_seq(&mut seq)?;
+                seq.end()?;
+                Ok(out)
+            }
             Value::Object(kv) => v.visit_map(de::value::MapDeserializer::new(
                 kv.iter().map(|(k, v)| (k.as_str(), v)),
             )),
         }
+    }
+
+    fn deserialize_str<V: Visitor<'de>>(self, v: V) -> std::result::Result<V::Value, Self::Error> {
+        match self {
+            // Text is text; bytes (a page's Uint8Array) are not.
+            Value::Text(t) => v.visit_borrowed_str(t),
+            other => Err(de::Error::invalid_type(other.unexpected(), &v)),
+        }
+    }
+
+    fn deserialize_string<V: Visitor<'de>>(
+        self,
+        v: V,
+    ) -> std::result::Result<V::Value, Self::Error> {
+        self.deserialize_str(v)
     }
 
     fn deserialize_option<V: Visitor<'de>>(
@@ -794,7 +816,7 @@ impl<'de> Deserializer<'de> for &'de Value {
     }
 
     serde::forward_to_deserialize_any! {
-        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 char str string
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 char
         unit unit_struct identifier ignored_any
     }
 }
