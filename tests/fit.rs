@@ -681,7 +681,9 @@ fn program_errors_are_clear_and_located() {
     let e = p
         .record(&p.defaults(), &RecordLimits::default())
         .unwrap_err();
-    assert!(matches!(e, Error::Limit(_)), "{e:?}");
+    // A limit met at a statement: its kind stays `limit`, its place is data.
+    assert_eq!(e.kind(), "limit", "{e:?}");
+    assert_eq!(e.position().map(|p| p.0), Some(4), "{e:?}");
     assert!(e.to_string().starts_with("line 4, column"), "{e}");
     let p = Program::parse("param a in [0, 1] = 0.5;\nwhile_not_a_thing(a);").unwrap();
     let e = p
