@@ -17,12 +17,15 @@ cd "$(dirname "$0")/.."
 what=("$@")
 [ ${#what[@]} -eq 0 ] && what=(all)
 want() { for w in "${what[@]}"; do [ "$w" = all ] || [ "$w" = "$1" ] && return 0; done; return 1; }
-tests=()
-want pixel && tests+=(--test pixel)
-want fit && tests+=(--test fit)
-want micro && tests+=(--test micro --test micro_fit)
-if [ ${#tests[@]} -gt 0 ]; then
-  FILIGREE_BLESS=1 cargo test "${tests[@]}"
+# The integration tests are one binary (tests/main.rs); a file's tests are
+# those under its module path (a filter matches anywhere in a name, so Fit's
+# skips Micro's `micro_fit::`).
+filters=()
+want pixel && filters+=(pixel::)
+want fit && filters+=(fit:: --skip micro_fit::)
+want micro && filters+=(micro:: micro_fit::)
+if [ ${#filters[@]} -gt 0 ]; then
+  FILIGREE_BLESS=1 cargo test --test integration -- "${filters[@]}"
 fi
 if want tangle || want texture-index; then
   cargo build --quiet --bin filigree

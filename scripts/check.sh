@@ -62,7 +62,11 @@ step "cargo test, beside the release wasm build (one module per tool)"
 FILIGREE_TEST_HOOKS=1 bash scripts/build.sh > target/wasm-build.log 2>&1 &   # pkg/ and the test-only pkg-test/
 wasm_build=$!
 trap 'pkill -f filigree-index-check 2>/dev/null || true; kill "$wasm_build" 2>/dev/null || true' EXIT
-cargo test
+# `--tests`: the library's and the binary's unit tests and the integration
+# tests (one binary, tests/main.rs). Not the research probes under
+# src/bench/examples (clippy above has checked they compile; building and
+# linking them here was fifteen more links) and no doc tests (there are none).
+cargo test --tests
 step "the release wasm build (started beside cargo test) has ended"
 if ! wait "$wasm_build"; then
   cat target/wasm-build.log

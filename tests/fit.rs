@@ -1353,7 +1353,7 @@ fn a_fit_is_bounded_by_time_as_well_as_evaluations() {
 /// number of times: a workload for `valgrind --tool=callgrind` (instructions
 /// per loss and per loss+gradient call), not a test of anything. Run with
 /// `FIT_PROFILE_EVALS=N FIT_PROFILE_CASE=circles-grid[,loss|grad] cargo test
-/// --test fit -- --ignored fit_throughput_workload`.
+/// --test integration -- --ignored fit::fit_throughput_workload`.
 #[test]
 #[ignore]
 fn fit_throughput_workload() {

@@ -3,8 +3,7 @@
 //! corpora, including the minimised inputs of past crashes, are regression
 //! tests without a fuzz run. Fuzzing itself is `cargo +nightly fuzz run
 //! <target>` (see `fuzz/README.md`).
-#[path = "support/app_projects.rs"]
-mod app_projects;
+use crate::support::app_projects;
 #[path = "../fuzz/bodies.rs"]
 mod bodies;
 
@@ -200,7 +199,7 @@ const SEED_PROGRAMS: &[&str] = &[
 
 /// Writes the seed inputs of every corpus (`fuzz/corpus/<target>/seed-*`)
 /// from the shipped programs, fixture images and strokes. Run by hand
-/// (`cargo test --test fuzz_corpus -- --ignored write_seeds`) before
+/// (`cargo test --test integration -- --ignored fuzz_corpus::write_seeds`) before
 /// fuzzing afresh; `cargo fuzz cmin` then keeps what adds coverage.
 #[test]
 #[ignore]

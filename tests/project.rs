@@ -2,8 +2,7 @@
 //! as exactly the document the app saved, and a checked state saved again
 //! opens again unchanged. (Each rule and message: unit tests in
 //! `src/api/project/tests.rs`.)
-#[path = "support/app_projects.rs"]
-mod app_projects;
+use crate::support::app_projects;
 
 use app_projects::*;
 use filigree::api::project::{self, ProjectState};

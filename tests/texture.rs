@@ -189,7 +189,7 @@ fn requests_load_the_index_by_id_and_answer_like_the_library() {
 
 /// Writes the `texture_index` fuzz corpus: the small index, and copies
 /// truncated and with a byte flipped (run by hand:
-/// `cargo test --test texture write_fuzz_seeds -- --ignored`).
+/// `cargo test --test integration texture::write_fuzz_seeds -- --ignored`).
 #[test]
 #[ignore]
 fn write_fuzz_seeds() {
