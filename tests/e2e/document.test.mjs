@@ -502,7 +502,7 @@ test('undo history survives a reload: Undo and Redo go where they went before, w
 
   // The bound: the newest HISTORY_STATES each way, and HISTORY_BYTES in all (bytes shared by states counted once).
   const bound = await page.evaluate(async () => {
-    const { keptHistory, History, HISTORY_STATES, HISTORY_BYTES } = await import('/www/app/project.js');
+    const { keptHistory, History, HISTORY_STATES, HISTORY_BYTES } = await import('/www/app/history.js');
     const run = (make, n) => {
       const h = new History(make(0));
       for (let i = 1; i <= n; i++) h.push(make(i));

@@ -151,7 +151,7 @@ test('drop anywhere: a project file opens from any tool, even dropped on an imag
   assert.equal(await page.isVisible('section.tool-pixel'), true);
   // Tangle's own project (saved by the app), dropped on Pixel's source zone: Tangle opens it.
   const project = await page.evaluate(async () => {
-    const { projectText } = await import('/www/app/project.js');
+    const { projectText } = await import('/www/app/project-file.js');
     const state = { example: null, grammar: 'start rect(300, 200) : field\nregularSplit(line, 40, 1) : field -> [strip]\n', seed: 7, start: null, wobble: 0, stroke_width: 1, edits: [], selected: null };
     return projectText('tangle', 1, state);
   });

@@ -51,7 +51,7 @@
 // `name` (tests/e2e/hooks/<tool>.js, not shipped:
 // globalThis.__filigreeHookBuilders[name](parts)) or, for a tool without
 // them, none; set as controller.testHooks[name].
-import { History } from './project.js';
+import { History } from './history.js';
 import { DocJobs } from './jobs.js';
 import { DocStorage } from './storage.js';
 import { openState, openFragment, currentShare } from './open.js';

@@ -11,7 +11,9 @@
 //   await currentShare(ctl)               → {tool, fragment, omitted?} of the shown document
 //   await copyLink(ctl)                   → the link copied (or shown), or null
 //   await openFragment(ctl, fragment, fallbackTool) → whether the link opened
-import { projectText, download, withTimeout } from './project.js';
+import { projectText } from './project-file.js';
+import { download } from '../ui/download.js';
+import { withTimeout } from '../ui/timeout.js';
 import { encodeShare, decodeShare, ShareTooBig, kb, LINK_LIMIT_TEXT } from './share.js';
 import { plainError } from './errors.js';
 import { nulls, coreDefaults, checkState } from './core-state.js';

@@ -1,5 +1,5 @@
 // Autosave of the documents, for the document controller (document.js): each
-// tool's document is written to IndexedDB (app/project.js: Autosave) after
+// tool's document is written to IndexedDB (app/autosave.js) after
 // every change, with the newest of its undo history (keptHistory), and read
 // back at the tool's first sight (checked by the core; its undo history
 // restored under it). Where storage is blocked the panel says so (the
@@ -13,7 +13,8 @@
 //   storage.restoreHistory(tool, d, saved) its kept undo history back under it
 //   storage.takeOtherTab() / keepMine()  the tabs bar's two answers
 //   storage.showNote() / showTabs()      the storage note and the tabs bar of the shown panel
-import { Autosave, keptHistory, shareBytes, onOtherTab } from './project.js';
+import { Autosave, onOtherTab } from './autosave.js';
+import { keptHistory, shareBytes } from './history.js';
 import { plainError } from './errors.js';
 import { checkState } from './core-state.js';
 

@@ -1,6 +1,6 @@
 // Files out: the pattern of the document's values as SVG (twice the
 // target's size, on its canvas), and the values with their program as JSON.
-import { download } from '../app/project.js';
+import { download } from '../ui/download.js';
 import { named } from './program.js';
 import { sizeOf } from './state.js';
 

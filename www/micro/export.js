@@ -1,6 +1,6 @@
 // Files out: the full-size picture of the document as a PNG, and the scene
 // JSON.
-import { download } from '../app/project.js';
+import { download } from '../ui/download.js';
 import { requestOf } from './state.js';
 import { FULL_SIDE } from './picture.js';
 

@@ -1,5 +1,5 @@
 // Files out: the result as a PNG, scaled up by whole pixels.
-import { download } from '../app/project.js';
+import { download } from '../ui/download.js';
 
 /** Export PNG (the button in the side panel) of the shown result (`live`: state.js). */
 export function attachExport(ctx, { q, live }) {

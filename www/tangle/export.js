@@ -1,7 +1,7 @@
 // Export: the core draws the document as SVG (pen-and-ink paths) or PNG at
 // the chosen width, on the worker that keeps its expansion, and the page
 // downloads it as `<example>-seed<seed>.svg|png`.
-import { download } from '../app/project.js';
+import { download } from '../ui/download.js';
 import { requestOf, KEEP_AFFINITY } from './state.js';
 
 /** The export buttons of a mounted panel (`q` finds its elements); returns `exportAs(format)`. */

@@ -1,6 +1,6 @@
 // Files out: the retrieved texture as a PNG (tiled as shown) and as JSON
 // (model, parameters, seed, the requested and retrieved scales).
-import { download } from '../app/project.js';
+import { download } from '../ui/download.js';
 import { pngOf } from './pictures.js';
 import { SCALES, keyOf } from './state.js';
 import { drawTiled } from './view.js';
