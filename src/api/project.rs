@@ -42,9 +42,11 @@ use std::borrow::Cow;
 
 pub mod json;
 
-// The state values and their checking helpers live below the tools, in
-// `core::value`; re-exported here for the project reader and its tests.
-pub use crate::core::value::*;
+use crate::core::value::{js_number, to_value};
+// A project's values (`core::value`, below the tools): the project reader's
+// callers outside the crate (the CLI's benches, tests, fuzzers) take them
+// from here.
+pub use crate::core::value::{base64_encode, Value};
 
 /// `format` of a project file.
 pub const PROJECT_FORMAT: &str = "filigree-project";
@@ -533,8 +535,8 @@ impl Serialize for Bytes64<'_> {
 
 /// The Inspect tool's state: the image being inspected and its file name.
 pub mod inspect_state {
-    use super::{first_chars, invalid, js_text, nullish, Value};
     use crate::core::error::Result;
+    use crate::core::value::{first_chars, invalid, js_text, nullish, Value};
     use serde::Serialize;
 
     pub const STATE_VERSION: u32 = 1;

@@ -305,30 +305,6 @@ pub fn read_part_at<'a, T: Deserialize<'a>>(raw: &'a Value, at: &Path) -> Result
     })
 }
 
-/// `deserialize_with`: text, and nothing else (not bytes).
-pub fn text<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<String, D::Error> {
-    struct Text;
-    impl serde::de::Visitor<'_> for Text {
-        type Value = String;
-        fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-            f.write_str("a string")
-        }
-        fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<String, E> {
-            Ok(v.to_string())
-        }
-    }
-    d.deserialize_str(Text)
-}
-
-/// `deserialize_with`: [`text`] or `null` (`None`).
-pub fn opt_text<'de, D: serde::Deserializer<'de>>(
-    d: D,
-) -> std::result::Result<Option<String>, D::Error> {
-    #[derive(Deserialize)]
-    struct Text(#[serde(deserialize_with = "text")] String);
-    Ok(Option::<Text>::deserialize(d)?.map(|t| t.0))
-}
-
 /// `deserialize_with` for a fixed-size list (`[T; N]`): exactly `N` items.
 /// (A [`Value`] list read as an array stops after `N` items and would drop
 /// the rest: `[1, 2, 3]` is not a point `[x, y]`.)

@@ -85,26 +85,14 @@ impl Value {
         }
     }
 
-    /// A finite number.
-    pub fn finite(&self) -> Option<f64> {
-        self.as_f64().filter(|v| v.is_finite())
-    }
-
     /// A whole number (JS `Number.isInteger`).
     pub fn whole(&self) -> Option<f64> {
-        self.finite().filter(|v| v.fract() == 0.0)
+        self.as_f64().filter(|v| v.is_finite() && v.fract() == 0.0)
     }
 
     pub fn as_text(&self) -> Option<&str> {
         match self {
             Value::Text(s) => Some(s),
-            _ => None,
-        }
-    }
-
-    pub fn as_list(&self) -> Option<&[Value]> {
-        match self {
-            Value::List(v) => Some(v),
             _ => None,
         }
     }

@@ -31,7 +31,7 @@ use super::api::{
 };
 use super::examples::EXAMPLES;
 use super::render::{Shading, StepMode};
-use crate::core::check::{exactly, opt_text, read_document, text, Check, Path};
+use crate::core::check::{read_document, Check, Path};
 use crate::core::error::Result;
 use crate::core::limits::MAX_MICRO_SCENE_BYTES;
 use crate::core::value::Value;
@@ -47,7 +47,6 @@ pub struct CameraState {
     pub yaw: f64,
     pub pitch: f64,
     pub distance: f64,
-    #[serde(deserialize_with = "exactly")]
     pub target: [f64; 3],
 }
 
@@ -84,9 +83,8 @@ pub struct MicroState {
 /// `From`).
 #[derive(Deserialize)]
 struct MicroFields {
-    #[serde(default, deserialize_with = "opt_text")]
+    #[serde(default)]
     example: Option<String>,
-    #[serde(deserialize_with = "text")]
     scene: String,
     camera: CameraState,
     steps: StepMode,

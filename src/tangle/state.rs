@@ -24,9 +24,7 @@ use super::api::{
 };
 use super::examples::EXAMPLES;
 use super::MAX_START_SIDE;
-use crate::core::check::{
-    exactly, null_as_default, opt_text, read_document, read_part_at, text, Check, Path,
-};
+use crate::core::check::{null_as_default, read_document, read_part_at, Check, Path};
 use crate::core::error::Result;
 use crate::core::value::{Value, MAX_SAFE_INTEGER};
 use serde::{Deserialize, Deserializer, Serialize};
@@ -50,9 +48,8 @@ pub const MAX_PARAM_NAME: usize = 32;
 /// by kind (a field of another kind is dropped, as it always was).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TangleState {
-    #[serde(default, deserialize_with = "opt_text")]
+    #[serde(default)]
     pub example: Option<String>,
-    #[serde(deserialize_with = "text")]
     pub grammar: String,
     pub seed: u64,
     #[serde(skip_deserializing)]
@@ -92,13 +89,11 @@ fn read_start(raw: Option<&Value>, at: &Path) -> Result<Option<StartRequest>> {
     }
     #[derive(Deserialize)]
     struct Word {
-        #[serde(deserialize_with = "text")]
         text: String,
         height: f64,
     }
     #[derive(Deserialize)]
     struct Svg {
-        #[serde(deserialize_with = "text")]
         svg: String,
     }
     #[derive(Deserialize)]
@@ -106,7 +101,7 @@ fn read_start(raw: Option<&Value>, at: &Path) -> Result<Option<StartRequest>> {
         points: Vec<Point>,
     }
     #[derive(Deserialize)]
-    struct Point(#[serde(deserialize_with = "exactly")] [f64; 2]);
+    struct Point([f64; 2]);
     let Some(raw) = raw.filter(|s| !matches!(s, Value::Null)) else {
         return Ok(None);
     };

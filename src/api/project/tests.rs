@@ -1,6 +1,7 @@
 //! Each rule of each tool state and of the project envelope, with its message.
 use super::*;
 use crate::core::limits::{MAX_IMAGE_SIDE, MAX_STROKE_POINTS};
+use crate::core::value::base64_decode;
 use serde_json::{json, Value as Json};
 
 fn b64(bytes: &[u8]) -> Json {
