@@ -803,12 +803,18 @@ pub fn picture(scene: &Scene, params: &[f64], size: (u32, u32)) -> Result<RawIma
 }
 
 /// What a `fit` with `preview` has drawn: the values of its last picture
-/// and the steps since; whether its answer has a picture (shard 0 only:
-/// every shard ends with the same result, and the pool answers shard 0's).
+/// and the steps since. The shards of a sharded fit share their bests at
+/// each exchange, after which every shard holds the same best: only shard 0
+/// (`first`) draws those (`merged`), and only it draws the answer (the
+/// pool answers shard 0's). A best a shard found on its own between
+/// exchanges (its refinement candidates) is drawn by that shard. So the
+/// page gets one picture of each best, where n shards each drawing their
+/// best sent it n copies of the shared ones.
 struct Previews {
     last: Option<Vec<f64>>,
     steps: u32,
-    answer: bool,
+    first: bool,
+    merged: Option<Vec<f64>>,
 }
 
 /// A running `fit`: the core [`FitJob`] whose result comes with its SVG.
@@ -845,6 +851,7 @@ impl FitRequestJob {
         pv.steps = pv.steps.saturating_add(1);
         let due = pv.last.is_none() || pv.steps >= PREVIEW_EVERY_STEPS;
         match &p.values {
+            Some(v) if !pv.first && pv.merged.as_ref() == Some(v) => Ok(p),
             Some(v) if due && pv.last.as_ref() != Some(v) => {
                 let pic = picture(&self.scene, v, self.size)?;
                 pv.last = Some(v.clone());
@@ -863,7 +870,7 @@ impl Job for FitRequestJob {
             Step::Running(p) => Step::Running(self.with_preview(p)?),
             Step::Done(r) => {
                 let picture = match &self.previews {
-                    Some(pv) if pv.answer => Some(picture(&self.scene, &r.params, self.size)?),
+                    Some(pv) if pv.first => Some(picture(&self.scene, &r.params, self.size)?),
                     _ => None,
                 };
                 let mut out = fit_output(&self.scene, r, self.loss, self.size)?;
@@ -876,7 +883,11 @@ impl Job for FitRequestJob {
         self.job.outbox()
     }
     fn inbox(&mut self, parts: Vec<Vec<f64>>) -> Result<()> {
-        self.job.inbox(parts)
+        self.job.inbox(parts)?;
+        if let Some(pv) = self.previews.as_mut() {
+            pv.merged = Some(self.job.best().0);
+        }
+        Ok(())
     }
 }
 
@@ -923,7 +934,8 @@ pub fn start_fit(req: &FitRequest) -> Result<FitRequestJob> {
         previews: req.preview.then_some(Previews {
             last: None,
             steps: 0,
-            answer: req.shards.is_none_or(|(k, _)| k == 0),
+            first: req.shards.is_none_or(|(k, _)| k == 0),
+            merged: None,
         }),
     })
 }
@@ -1080,7 +1092,7 @@ pub fn start_eval(req: FitEvalRequest) -> Result<EvalJob> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::core::job::run_quietly;
+    use crate::core::job::{run_quietly, Cancel};
     use crate::pattern::generators::generator;
 
     fn named(pairs: &[(&str, f64)]) -> BTreeMap<String, f64> {
@@ -1213,6 +1225,85 @@ mod tests {
             assert!(out.picture.is_none());
             assert!(!serde_json::to_string(&plain).unwrap().contains("preview"));
         }
+    }
+
+    /// A sharded fit with `preview` sends each best's picture once: after
+    /// an exchange every shard holds the same best and only shard 0 draws
+    /// it; what a shard found on its own (its refinement candidates), that
+    /// shard draws. Every picture is of the best its shard reports, and only
+    /// shard 0 answers with one.
+    #[test]
+    fn a_sharded_fit_draws_each_best_once() {
+        use crate::core::parallel::run_sharded;
+        let src = generator("circles-grid").unwrap().source;
+        let target = run_quietly(
+            start_render(RenderPatternRequest {
+                program: src.into(),
+                size: 48,
+                height: Some(32),
+                supersample: 2,
+                ..Default::default()
+            })
+            .unwrap(),
+        )
+        .unwrap()
+        .image;
+        let req = FitRequest {
+            program: src.into(),
+            target_rgba: Some(RawRgba {
+                width: target.width,
+                height: target.height,
+                rgba: target.rgba,
+            }),
+            init: Init::Genetic,
+            grid: Some(16),
+            population: Some(12),
+            generations: Some(3),
+            candidates: Some(3),
+            iterations: Some(40),
+            polish: Some(3),
+            preview: true,
+            ..Default::default()
+        };
+        let n = 3;
+        let jobs = (0..n)
+            .map(|k| {
+                start_fit(&FitRequest {
+                    shards: Some((k, n)),
+                    ..req.clone()
+                })
+                .unwrap()
+            })
+            .collect();
+        // (shard, values) of every picture, and every shard's bests.
+        let mut drawn: Vec<(usize, Vec<f64>)> = vec![];
+        let mut bests = vec![vec![]; n];
+        let out = run_sharded(jobs, &Cancel::new(), |k, p| {
+            if p.picture.is_some() {
+                drawn.push((
+                    k,
+                    p.values.clone().expect("a picture comes with its values"),
+                ));
+            }
+            if let Some(v) = &p.values {
+                bests[k].push(v.clone());
+            }
+        })
+        .unwrap();
+        assert!(drawn.iter().any(|(k, _)| *k == 0), "shard 0 drew");
+        // The shards do hold different bests at times (their own
+        // candidates), so drawing by shard 0 alone would miss some.
+        assert!(
+            (1..n).any(|k| bests[k] != bests[0]),
+            "the shards' bests differ somewhere"
+        );
+        for (i, (k, v)) in drawn.iter().enumerate() {
+            assert!(
+                !drawn[..i].iter().any(|(_, w)| w == v),
+                "shard {k} drew values already drawn"
+            );
+        }
+        assert!(out.picture.is_some(), "shard 0's answer has its picture");
     }
 
     /// A picture that is not square: `render-pattern` with `height` draws
