@@ -113,7 +113,11 @@ fn a_module_refuses_another_modules_kinds_and_documents() {
         &mut de("{}"),
     )));
     inspect_kind(refused(start_texture("decode-image", &mut de("{}"))));
+    // The Pixel page draws its source and sheet with `decode-image` in its
+    // own module (it loads no other), which reads them as its `pixel`
+    // requests do: PNG only in wasm, every format natively.
     assert!(start_pixel("decode-image", &mut de(r#"{"bytes": []}"#)).is_ok());
+    assert!(Module::Pixel.image_decoder().is_some() && Module::Inspect.image_decoder().is_some());
     // The Texture module checks Texture documents, not Fit ones.
     let e = refused(
         start_texture(
@@ -148,4 +152,17 @@ fn a_module_refuses_another_modules_kinds_and_documents() {
     .unwrap();
     let opened = serde_json::to_value(filigree::core::job::run_quietly(job).unwrap()).unwrap();
     assert_eq!(opened["checked"], true);
+    // The page opens a project unchecked, to convert its state before the
+    // check (Pixel's images into PNG: www/app/core-state.js checkState).
+    let payload = serde_json::json!({ "text": text, "unchecked": true }).to_string();
+    let job = start_pixel(
+        "open-project",
+        &mut serde_json::Deserializer::from_str(&payload),
+    )
+    .unwrap();
+    let opened = serde_json::to_value(filigree::core::job::run_quietly(job).unwrap()).unwrap();
+    assert_eq!(
+        (&opened["tool"], &opened["checked"]),
+        (&"pixel".into(), &false.into())
+    );
 }

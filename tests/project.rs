@@ -150,7 +150,13 @@ fn opening_a_project_can_be_cancelled_between_steps() {
     let cancel = Cancel::new();
     let mut steps = 0;
     let r = run_to_end(
-        project::start_open_project(project::OpenProjectRequest { text }, project::check_any),
+        project::start_open_project(
+            project::OpenProjectRequest {
+                text,
+                unchecked: false,
+            },
+            project::check_any,
+        ),
         &cancel,
         |_| {
             steps += 1;

@@ -5,7 +5,7 @@ use crate::core::error::{Error, Result};
 use crate::core::job::{Job, Progress, Step};
 use crate::core::request_limits as lim;
 use crate::inspect::{InspectJob, InspectOptions, Inspection};
-use crate::raster::{Decoding, Limits, DECODE_PIXELS_PER_STEP};
+use crate::raster::{decode, Decoder, Decoding, Limits, DECODE_PIXELS_PER_STEP};
 use serde::{Deserialize, Serialize};
 
 /// `inspect` / `filigree inspect`.
@@ -79,22 +79,35 @@ impl Job for InspectRequestJob {
     }
 }
 
-/// Check an `inspect` request and start it.
+/// Check an `inspect` request and start it (any format: the user's file).
 pub fn start_inspect(req: InspectRequest) -> Result<InspectRequestJob> {
+    start_inspect_with(req, decode)
+}
+
+/// [`start_inspect`], decoding what is not read in parts with `whole`
+/// (see [`Decoding::with`]).
+pub fn start_inspect_with(req: InspectRequest, whole: Decoder) -> Result<InspectRequestJob> {
     let opts = InspectOptions {
         tolerance: lim::finite_in("tolerance", req.tolerance, lim::TOLERANCE)?,
         ..Default::default()
     };
     Ok(InspectRequestJob {
-        decoding: Some(Decoding::new(req.bytes, opts.limits)),
+        decoding: Some(Decoding::with(req.bytes, opts.limits, whole)),
         opts,
         job: None,
     })
 }
 
-/// Start a `decode-image` request (a PNG a few rows a step, see [`Decoding`]).
+/// Start a `decode-image` request (a PNG a few rows a step, see
+/// [`Decoding`]; any format).
 pub fn start_decode(req: DecodeImageRequest) -> impl Job<Output = RawImage> {
-    DecodeJob(Decoding::new(req.bytes, Limits::default()))
+    start_decode_with(req, decode)
+}
+
+/// [`start_decode`], decoding what is not read in parts with `whole`
+/// (see [`Decoding::with`]).
+pub fn start_decode_with(req: DecodeImageRequest, whole: Decoder) -> impl Job<Output = RawImage> {
+    DecodeJob(Decoding::with(req.bytes, Limits::default(), whole))
 }
 
 /// `decode-image` as a job.

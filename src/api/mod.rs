@@ -287,14 +287,26 @@ impl Module {
         }
     }
 
-    /// Whether it also serves [`IMAGE_KINDS`]: the tools whose panels
-    /// hand the user's image files to the core as they are (Pixel's source
-    /// and elements). Fit, Micro and Texture turn a user's file into PNG in
-    /// the page (the browser decodes it), so in wasm their modules read PNG
-    /// only ([`crate::raster::decode_sent`]) and have no other decoder;
-    /// Tangle reads no images.
+    /// Whether it also serves [`IMAGE_KINDS`]: Inspect, and Pixel, whose
+    /// panel draws its source and element sheet with `decode-image` (in its
+    /// own module, so the Pixel page loads no other one). Tangle reads no
+    /// images; Fit, Micro and Texture send the PNGs their pages make and
+    /// decode them inside their own requests.
     pub const fn images(self) -> bool {
-        matches!(self, Module::Inspect | Module::Pixel)
+        self.image_decoder().is_some()
+    }
+
+    /// The decoder of its [`IMAGE_KINDS`], if it serves them. The Inspect
+    /// module reads the user's file as it is: every format. Every other
+    /// module reads what its page sends: PNG only in wasm (the page turns
+    /// any other format into PNG; [`crate::raster::decode_sent`]), so it
+    /// links no JPEG, WebP, GIF or BMP decoder; natively every format.
+    pub const fn image_decoder(self) -> Option<crate::raster::Decoder> {
+        match self {
+            Module::Inspect => Some(crate::raster::decode),
+            Module::Pixel => Some(crate::raster::decode_sent),
+            _ => None,
+        }
     }
 }
 
@@ -321,7 +333,12 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         Some(Module::Tangle) => start_tangle(kind, payload),
         Some(Module::Micro) => start_micro(kind, payload),
         Some(Module::Texture) => start_texture(kind, payload),
-        Some(Module::Inspect) | None => start_shared(kind, payload, project::check_any, true),
+        Some(Module::Inspect) | None => start_shared(
+            kind,
+            payload,
+            project::check_any,
+            Some(crate::raster::decode),
+        ),
     }
 }
 
@@ -331,7 +348,7 @@ pub fn start_inspect<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Resul
         kind,
         payload,
         project::check_inspect,
-        Module::Inspect.images(),
+        const { Module::Inspect.image_decoder() },
     )
 }
 
@@ -342,7 +359,14 @@ pub fn start_pixel<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<
             Response::Pixel(Box::new(r.into()))
         }),
         "pixel-mask" => boxed(pixel::start_mask(request(kind, payload)?), Response::Mask),
-        _ => return start_shared(kind, payload, project::check_pixel, Module::Pixel.images()),
+        _ => {
+            return start_shared(
+                kind,
+                payload,
+                project::check_pixel,
+                const { Module::Pixel.image_decoder() },
+            )
+        }
     })
 }
 
@@ -372,7 +396,14 @@ pub fn start_fit<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Bo
             pattern::start_snap(request(kind, payload)?)?,
             Response::Snap,
         ),
-        _ => return start_shared(kind, payload, project::check_fit, Module::Fit.images()),
+        _ => {
+            return start_shared(
+                kind,
+                payload,
+                project::check_fit,
+                const { Module::Fit.image_decoder() },
+            )
+        }
     })
 }
 
@@ -390,7 +421,7 @@ pub fn start_tangle<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result
                 kind,
                 payload,
                 project::check_tangle,
-                Module::Tangle.images(),
+                const { Module::Tangle.image_decoder() },
             )
         }
     })
@@ -414,7 +445,14 @@ pub fn start_micro<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<
         "micro-examples" => listing(kind, payload, || {
             Response::MicroExamples(crate::micro::examples::EXAMPLES)
         })?,
-        _ => return start_shared(kind, payload, project::check_micro, Module::Micro.images()),
+        _ => {
+            return start_shared(
+                kind,
+                payload,
+                project::check_micro,
+                const { Module::Micro.image_decoder() },
+            )
+        }
     })
 }
 
@@ -441,7 +479,7 @@ pub fn start_texture<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Resul
                 kind,
                 payload,
                 project::check_texture,
-                Module::Texture.images(),
+                const { Module::Texture.image_decoder() },
             )
         }
     })
@@ -462,42 +500,44 @@ fn listing<'de, D: Deserializer<'de>>(
 }
 
 /// The kinds every module serves; `checks`: the documents this module
-/// checks; `images`: whether it serves [`IMAGE_KINDS`] too.
+/// checks; `images`: the decoder of [`IMAGE_KINDS`] if it serves them too
+/// ([`Module::image_decoder`]).
 fn start_shared<'de, D: Deserializer<'de>>(
     kind: &str,
     payload: D,
     checks: project::StateCheck,
-    images: bool,
+    images: Option<crate::raster::Decoder>,
 ) -> Result<Box<RequestJob>> {
-    Ok(match kind {
-        "inspect" if images => boxed(inspect::start_inspect(request(kind, payload)?)?, |r| {
-            Response::Inspect(Box::new(r))
-        }),
-        "decode-image" if images => boxed(
-            inspect::start_decode(request(kind, payload)?),
+    Ok(match (kind, images) {
+        ("inspect", Some(whole)) => boxed(
+            inspect::start_inspect_with(request(kind, payload)?, whole)?,
+            |r| Response::Inspect(Box::new(r)),
+        ),
+        ("decode-image", Some(whole)) => boxed(
+            inspect::start_decode_with(request(kind, payload)?, whole),
             Response::Image,
         ),
-        "defaults" => {
+        ("defaults", _) => {
             let req: DefaultsRequest = request(kind, payload)?;
             let d = defaults(&req.tool)?;
             boxed(crate::core::job::OneShot::new(move || Ok(d)), |d| {
                 Response::Defaults(Box::new(d))
             })
         }
-        "check-state" => {
+        ("check-state", _) => {
             let req: project::CheckStateRequest = request(kind, payload)?;
             boxed(
                 crate::core::job::OneShot::new(move || project::run_check_state(&req, checks)),
                 |s| Response::State(Box::new(s)),
             )
         }
-        "open-project" => {
+        ("open-project", _) => {
             let req: project::OpenProjectRequest = request(kind, payload)?;
             boxed(project::start_open_project(req, checks), |p| {
                 Response::Project(Box::new(p))
             })
         }
-        other => match module_of(other) {
+        (other, _) => match module_of(other) {
             Some(m) => {
                 return Err(Error::input(format!(
                     "'{other}' requests are served by the {} module, not this one",

@@ -17,7 +17,9 @@
 //!   [`limits::MAX_PROJECT_BYTES`]), its envelope checked
 //!   (`format`, `version`, `tool`, `stateVersion`, `state`), byte fields
 //!   stored as `{"$bytes": base64}` decoded, and the state checked when it
-//!   has the tool's current schema version (`checked: true`). A stepped
+//!   has the tool's current schema version (`checked: true`; with
+//!   `unchecked: true` never: the page converts a state before it asks
+//!   `check-state`). A stepped
 //!   job ([`OpenProjectJob`]): the text is read a slice at a time by the
 //!   resumable [`json::Reader`], then checked, then freed.
 //!
@@ -224,6 +226,11 @@ pub struct CheckStateRequest {
 #[serde(default, deny_unknown_fields)]
 pub struct OpenProjectRequest {
     pub text: String,
+    /// Leave the state unchecked (`checked: false`) whatever its version:
+    /// the page converts it first (Pixel's images into PNG, the only format
+    /// its module reads), then asks `check-state`, as for any document
+    /// from outside.
+    pub unchecked: bool,
 }
 
 /// A state from a project file: checked, or (older schema) decoded only.
@@ -261,7 +268,13 @@ pub fn open_project(text: &str) -> Result<OpenedProject> {
 /// [`READ_FUEL`] ([`json::Reader`]), then the envelope and the state
 /// checked in one more step.
 pub fn start_open_project(req: OpenProjectRequest, checks: StateCheck) -> OpenProjectJob<'static> {
+    let checks = if req.unchecked { check_none } else { checks };
     OpenProjectJob::new(Cow::Owned(req.text)).checking(checks)
+}
+
+/// Checks no tool's state ([`OpenProjectRequest::unchecked`]).
+fn check_none(_: &str, _: &Value) -> Option<Result<ToolState>> {
+    None
 }
 
 /// Fuel of one reading step of `open-project` (see [`json::Reader::step`]):

@@ -345,7 +345,10 @@ pub fn run(only: Option<&str>) -> Result<(), String> {
             &what,
             time_job(|| {
                 Ok(filigree::api::project::start_open_project(
-                    filigree::api::project::OpenProjectRequest { text: text.clone() },
+                    filigree::api::project::OpenProjectRequest {
+                        text: text.clone(),
+                        unchecked: false,
+                    },
                     filigree::api::project::check_any,
                 ))
             })?,

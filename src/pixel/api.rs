@@ -9,7 +9,7 @@ use super::{
 use crate::core::error::{Error, Result};
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::request_limits as lim;
-use crate::raster::{decode, Decoding, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP};
+use crate::raster::{decode_sent, Decoder, Decoding, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP};
 use serde::{Deserialize, Serialize};
 
 /// A mask as the browser edits it: one byte per pixel, non-zero = textured.
@@ -65,8 +65,14 @@ pub struct PixelMaskRequest {
     pub bytes: Vec<u8>,
 }
 
-/// Decode a mask image into bits.
+/// Decode a mask image into bits (every format natively, PNG only in wasm:
+/// [`decode_sent`]).
 pub fn mask_bits(req: &PixelMaskRequest) -> Result<MaskBits> {
+    mask_bits_with(req, decode_sent)
+}
+
+/// [`mask_bits`] decoding with `decode`.
+pub fn mask_bits_with(req: &PixelMaskRequest, decode: Decoder) -> Result<MaskBits> {
     let img = decode(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
     Ok(MaskBits::of_image(&img))
 }
@@ -150,8 +156,17 @@ pub fn check_params(p: &PixelParams) -> Result<()> {
 /// Check a `pixel` request and start its job. Only the cheap checks run
 /// here; the images are decoded in the job's first steps (a PNG a few rows
 /// a step, see [`Decoding`]) and the checks that need their pixels follow,
-/// with the same errors and fields.
+/// with the same errors and fields. The images are read as
+/// [`decode_sent`] reads: every format natively (the CLI reads the user's
+/// files), PNG only in wasm (the page sends PNG, so the Pixel module links
+/// no other decoder).
 pub fn start_pixel(req: PixelRequest) -> Result<PixelRequestJob> {
+    start_pixel_with(req, decode_sent)
+}
+
+/// [`start_pixel`], with `whole` decoding what a [`Decoding`] does not read
+/// in parts ([`Decoding::with`]; [`decode_sent`] for [`start_pixel`]).
+pub fn start_pixel_with(req: PixelRequest, whole: Decoder) -> Result<PixelRequestJob> {
     check_params(&req.params)?;
     let m = &req.mask;
     if m.bits.len() as u64 != m.width as u64 * m.height as u64 {
@@ -180,9 +195,9 @@ pub fn start_pixel(req: PixelRequest) -> Result<PixelRequestJob> {
     };
     Ok(PixelRequestJob {
         reading: Some(Reading {
-            source: Decoding::new(req.source, Limits::default()),
+            source: Decoding::with(req.source, Limits::default(), whole),
             source_img: None,
-            elements: Decoding::new(elements, Limits::default()),
+            elements: Decoding::with(elements, Limits::default(), whole),
             sprite,
             mask: req.mask,
             strokes: req.strokes,

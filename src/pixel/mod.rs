@@ -937,6 +937,87 @@ mod tests {
         fails(bad, "sprite", "");
     }
 
+    /// The Pixel module's readers in wasm (`pixel` and `pixel-mask` with
+    /// [`decode_png`](crate::raster::decode_png), as
+    /// [`decode_sent`](crate::raster::decode_sent) is there) give the bytes
+    /// of every-format reading for PNG inputs (the mask's decoded in one go,
+    /// the request's images in parts), and refuse a JPEG source,
+    /// sheet or mask as `unsupported`, naming its field. This would catch a
+    /// Pixel module that reads only PNG but a page or a path that still sends
+    /// or reads another format.
+    #[test]
+    fn the_png_only_pixel_reads_pngs_as_every_format_does_and_refuses_a_jpeg() {
+        use super::api::{
+            mask_bits, mask_bits_with, start_pixel, start_pixel_with, MaskBits, PixelMaskRequest,
+            PixelRequest,
+        };
+        use crate::raster::{decode, decode_png, encode_png, Decoder};
+        use image::{ExtendedColorType, ImageEncoder};
+        let inputs = fish(8);
+        let params = PixelParams {
+            seed: 3,
+            ..Default::default()
+        };
+        let Elements::Sheet(sheet) = &inputs.elements else {
+            unreachable!()
+        };
+        let req = PixelRequest {
+            source: encode_png(&inputs.source).unwrap(),
+            mask: MaskBits::of_image(&inputs.mask),
+            sheet: Some(encode_png(sheet).unwrap()),
+            sprite: None,
+            strokes: inputs.strokes.clone(),
+            params,
+        };
+        let run = |req: PixelRequest, whole: Decoder| {
+            run_quietly(start_pixel_with(req, whole).expect("nothing is decoded at the start"))
+        };
+        let every = bits(&run_quietly(start_pixel(req.clone()).unwrap()).unwrap());
+        assert_eq!(bits(&run(req.clone(), decode).unwrap()), every);
+        assert_eq!(bits(&run(req.clone(), decode_png).unwrap()), every);
+
+        let jpeg = |img: &Rgba8Image| {
+            let rgb: Vec<u8> = img
+                .data
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            let mut out = vec![];
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 100)
+                .write_image(&rgb, img.width, img.height, ExtendedColorType::Rgb8)
+                .unwrap();
+            out
+        };
+        let refused = |e: crate::core::error::Error, field: &str| {
+            assert_eq!(e.kind(), "unsupported", "{e}");
+            assert_eq!(e.field(), Some(field), "{e}");
+            assert!(e.to_string().contains("JPEG"), "{e}");
+        };
+        let mut j = req.clone();
+        j.source = jpeg(&inputs.source);
+        assert!(
+            run(j.clone(), decode).is_ok(),
+            "natively a JPEG source is read"
+        );
+        refused(run(j, decode_png).unwrap_err(), "source");
+        let mut j = req.clone();
+        j.sheet = Some(jpeg(sheet));
+        refused(run(j, decode_png).unwrap_err(), "sheet");
+
+        let mask_png = PixelMaskRequest {
+            bytes: encode_png(&inputs.mask).unwrap(),
+        };
+        assert_eq!(
+            mask_bits_with(&mask_png, decode_png).unwrap(),
+            mask_bits(&mask_png).unwrap()
+        );
+        let mask_jpeg = PixelMaskRequest {
+            bytes: jpeg(&inputs.mask),
+        };
+        assert!(mask_bits_with(&mask_jpeg, decode).is_ok());
+        refused(mask_bits_with(&mask_jpeg, decode_png).unwrap_err(), "bytes");
+    }
+
     #[test]
     fn params_defaults_and_json_names() {
         let p: PixelParams = serde_json::from_str("{}").unwrap();

@@ -24,6 +24,7 @@ use crate::core::error::{Error, Result};
 use crate::core::limits::{MAX_IMAGE_SIDE, MAX_STROKE_POINTS};
 use crate::core::request_limits as lim;
 use crate::core::value::{first_chars, js_text, nullish, Value, MAX_SAFE_INTEGER};
+use crate::raster::{HeaderError, HeaderReader};
 use serde::de::{self, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 use std::cell::Cell;
@@ -150,19 +151,31 @@ fn page_names<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Names, D::
 
 /// The bytes start like an image file the core reads, with a size within
 /// the image limit: read from the header alone, nothing decoded (a project
-/// whose `source` was 3 bytes that are not a PNG used to open).
+/// whose `source` was 3 bytes that are not a PNG used to open). Natively
+/// every format the CLI reads; in wasm PNG only, as the Pixel module
+/// decodes ([`crate::raster::sent_header_size`]): the page turns any other
+/// format into PNG before a document reaches the core, so another format
+/// here is `unsupported`.
 fn image_header(at: &Path, bytes: &[u8]) -> Result<()> {
+    image_header_with(at, bytes, crate::raster::sent_header_size)
+}
+
+/// [`image_header`] with the header reader `size`.
+fn image_header_with(at: &Path, bytes: &[u8], size: HeaderReader) -> Result<()> {
     if bytes.is_empty() {
         return Err(at.invalid(format!("must be {IMAGE_FILE}")));
     }
-    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| at.invalid(format!("cannot be read ({e})")))?;
-    if reader.format().is_none() {
-        return Err(at.invalid("is not an image file (PNG, JPEG, WebP, GIF or BMP)"));
-    }
-    let (w, h) = reader.into_dimensions().map_err(|_| {
-        at.invalid("is not a readable image file (its header is damaged or cut short)")
+    let (w, h) = size(bytes).map_err(|e| match e {
+        HeaderError::NotImage => at.invalid("is not an image file (PNG, JPEG, WebP, GIF or BMP)"),
+        HeaderError::Damaged => {
+            at.invalid("is not a readable image file (its header is damaged or cut short)")
+        }
+        HeaderError::Unsupported(format) => Error::Unsupported(format!(
+            "{} is a {format} file, and only PNG is read here: the page turns an image into \
+             PNG before the document reaches the core (an internal error)",
+            at.as_str()
+        ))
+        .at(at.as_str()),
     })?;
     if w == 0 || h == 0 || w.max(h) > MAX_IMAGE_SIDE {
         return Err(at.invalid(format!(
@@ -335,6 +348,38 @@ mod tests {
     use crate::core::value::base64_encode;
     use crate::pixel::api::check_params;
     use serde_json::{json, Value as Json};
+
+    /// A document's image checked as the Pixel module checks it in wasm
+    /// (PNG only): a PNG as natively, a JPEG refused as `unsupported` naming
+    /// the field (the page converts it first), where natively it is read.
+    #[test]
+    fn a_png_only_check_reads_a_png_as_natively_and_refuses_a_jpeg() {
+        use crate::raster::{header_size, png_header_size};
+        use image::{ExtendedColorType, ImageEncoder};
+        let at = Path::root().key("sheet");
+        let png = crate::raster::encode_png(&crate::raster::Rgba8Image::new(5, 4)).unwrap();
+        let mut jpeg = vec![];
+        image::codecs::jpeg::JpegEncoder::new(&mut jpeg)
+            .write_image(&[9; 5 * 4 * 3], 5, 4, ExtendedColorType::Rgb8)
+            .unwrap();
+        assert!(image_header_with(&at, &png, png_header_size).is_ok());
+        assert!(image_header_with(&at, &jpeg, header_size).is_ok());
+        let e = image_header_with(&at, &jpeg, png_header_size).unwrap_err();
+        assert_eq!(e.kind(), "unsupported", "{e}");
+        assert_eq!(e.field(), Some("sheet"), "{e}");
+        assert!(e.to_string().contains("JPEG"), "{e}");
+        for size in [header_size, png_header_size] {
+            let e = image_header_with(&at, b"GIF", size).unwrap_err();
+            assert_eq!(e.kind(), "invalid-input", "{e}");
+            let big =
+                crate::raster::encode_png(&crate::raster::Rgba8Image::new(MAX_IMAGE_SIDE + 1, 1))
+                    .unwrap();
+            let e = image_header_with(&at, &big, size).unwrap_err();
+            assert!(e.to_string().contains("pixels a side"), "{e}");
+        }
+        // Natively a document's images are read in any format.
+        assert!(image_header(&at, &jpeg).is_ok());
+    }
 
     fn png(w: u32, h: u32) -> Json {
         let img = crate::raster::Rgba8Image::from_raw(w, h, vec![255; (w * h * 4) as usize]);

@@ -269,6 +269,56 @@ pub fn decode_sent(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     decode(bytes, limits)
 }
 
+/// A one-go decoder: [`decode`], [`decode_png`] or [`decode_sent`]. A
+/// [`Decoding`] keeps the one it was given, so a module links only the
+/// decoders its requests name.
+pub type Decoder = fn(&[u8], Limits) -> Result<Rgba8Image>;
+
+/// Why an image file's header gives no size ([`header_size`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HeaderError {
+    /// The bytes do not start like an image file.
+    NotImage,
+    /// An image file whose header is damaged or cut short.
+    Damaged,
+    /// An image file of this format, which this reader does not read.
+    Unsupported(&'static str),
+}
+
+/// A header reader: [`header_size`], [`png_header_size`] or
+/// [`sent_header_size`].
+pub type HeaderReader = fn(&[u8]) -> std::result::Result<(u32, u32), HeaderError>;
+
+/// The size a PNG, JPEG, WebP, GIF or BMP file declares, read from its
+/// header alone (nothing decoded).
+pub fn header_size(bytes: &[u8]) -> std::result::Result<(u32, u32), HeaderError> {
+    let format = image::guess_format(bytes).map_err(|_| HeaderError::NotImage)?;
+    ImageReader::with_format(Cursor::new(bytes), format)
+        .into_dimensions()
+        .map_err(|_| HeaderError::Damaged)
+}
+
+/// [`header_size`] for PNG only: any other image format is
+/// [`HeaderError::Unsupported`]. It links the PNG decoder alone.
+pub fn png_header_size(bytes: &[u8]) -> std::result::Result<(u32, u32), HeaderError> {
+    let format = image::guess_format(bytes).map_err(|_| HeaderError::NotImage)?;
+    if format != ImageFormat::Png {
+        return Err(HeaderError::Unsupported(format_name(format)));
+    }
+    image::codecs::png::PngDecoder::new(Cursor::new(bytes))
+        .map(|d| d.dimensions())
+        .map_err(|_| HeaderError::Damaged)
+}
+
+/// The header of an image a document or request carries, as
+/// [`decode_sent`] reads it: every format natively, PNG only in wasm.
+pub fn sent_header_size(bytes: &[u8]) -> std::result::Result<(u32, u32), HeaderError> {
+    #[cfg(target_arch = "wasm32")]
+    return png_header_size(bytes);
+    #[cfg(not(target_arch = "wasm32"))]
+    header_size(bytes)
+}
+
 /// The format of `bytes`, from their first bytes.
 fn sniff(bytes: &[u8]) -> Result<ImageFormat> {
     if bytes.is_empty() {
@@ -372,14 +422,19 @@ pub const DECODE_PIXELS_PER_STEP: usize = 131_072;
 /// non-interlaced PNG is decoded a few rows a [`Decoding::step`] (with the
 /// `png` crate, converted to RGBA exactly as [`decode`] converts it, for
 /// every colour type and bit depth); any other file, an interlaced PNG
-/// included, is decoded in one go by the first step. The image, and any
-/// error, are those of [`decode`]: on an error the bytes are decoded once
-/// more in one go to give [`decode`]'s message.
+/// included, is decoded in one go by the first step, with the [`Decoder`]
+/// it was started with ([`decode`] for [`Decoding::new`], [`decode_sent`]
+/// for [`Decoding::sent`]). The image, and any error, are that decoder's:
+/// on an error the bytes are decoded once more in one go to give its
+/// message.
 pub struct Decoding {
     bytes: Shared,
     limits: Limits,
     png: Option<PngRows>,
     done: bool,
+    /// What decodes a file that is not read in parts, and gives the error
+    /// of one that fails part way.
+    whole: Decoder,
 }
 
 /// The file's bytes, shared by the row reader and the one-go fallback.
@@ -401,8 +456,21 @@ struct PngRows {
 }
 
 impl Decoding {
-    /// Start decoding `bytes`; only the header of a PNG is read here.
+    /// Start decoding `bytes` of any format [`decode`] reads; only the
+    /// header of a PNG is read here.
     pub fn new(bytes: Vec<u8>, limits: Limits) -> Decoding {
+        Decoding::with(bytes, limits, decode)
+    }
+
+    /// [`Decoding::new`] as [`decode_sent`] reads: every format natively,
+    /// PNG only in wasm (any other format is refused as `unsupported`).
+    pub fn sent(bytes: Vec<u8>, limits: Limits) -> Decoding {
+        Decoding::with(bytes, limits, decode_sent)
+    }
+
+    /// Start decoding `bytes`, with `whole` for what is not read in parts
+    /// ([`decode`], [`decode_png`] or [`decode_sent`]).
+    pub fn with(bytes: Vec<u8>, limits: Limits, whole: Decoder) -> Decoding {
         let bytes = Shared(std::sync::Arc::new(bytes));
         let png = PngRows::start(&bytes, limits);
         Decoding {
@@ -410,6 +478,7 @@ impl Decoding {
             limits,
             png,
             done: false,
+            whole,
         }
     }
 
@@ -427,7 +496,7 @@ impl Decoding {
         }
         let Some(p) = &mut self.png else {
             self.done = true;
-            return decode(self.bytes.as_ref(), self.limits).map(Some);
+            return (self.whole)(self.bytes.as_ref(), self.limits).map(Some);
         };
         let mut spent = 0usize;
         while p.row < p.out.height && spent < budget.max(1) {
@@ -436,7 +505,7 @@ impl Decoding {
                 Err(()) => {
                     // Whatever went wrong, report it as the one-go decode does.
                     self.done = true;
-                    return match decode(self.bytes.as_ref(), self.limits) {
+                    return match (self.whole)(self.bytes.as_ref(), self.limits) {
                         Err(e) => Err(e),
                         Ok(_) => Err(Error::input("the PNG data could not be read row by row")),
                     };
@@ -633,6 +702,54 @@ mod tests {
         assert!(e.to_string().contains("JPEG"), "{e}");
         // Natively a request's image is the user's file: any format.
         assert!(decode_sent(&jpeg, Limits::default()).is_ok());
+    }
+
+    /// A [`Decoding`] started with [`decode_png`] (the Pixel module's
+    /// `pixel` and `decode-image` in wasm, [`Decoding::sent`]) gives
+    /// [`Decoding::new`]'s pixels for a PNG read in parts and for one read
+    /// in one go (interlaced), and refuses a JPEG as `unsupported`; the
+    /// PNG-only header reader gives the every-format one's size for a PNG
+    /// and refuses a JPEG by its format (a Pixel document checked in wasm).
+    #[test]
+    fn png_only_decoding_and_header_read_pngs_alike_and_refuse_a_jpeg() {
+        use image::{ExtendedColorType, ImageEncoder};
+        let (w, h) = (9u32, 6u32);
+        let px: Vec<u8> = (0..w * h * 4).map(|i| (i * 53 % 241) as u8).collect();
+        let png = encode_png(&Rgba8Image::from_raw(w, h, px.clone()).unwrap()).unwrap();
+        let interlaced = interlaced_png();
+        let mut jpeg = vec![];
+        image::codecs::jpeg::JpegEncoder::new(&mut jpeg)
+            .write_image(&px[..(w * h * 3) as usize], w, h, ExtendedColorType::Rgb8)
+            .unwrap();
+        let all = |mut d: Decoding| loop {
+            if let Some(img) = d.step(7)? {
+                return Ok::<_, Error>(img);
+            }
+        };
+        for (bytes, parts) in [(&png, true), (&interlaced, false)] {
+            let every = Decoding::new(bytes.clone(), Limits::default());
+            let only = Decoding::with(bytes.clone(), Limits::default(), decode_png);
+            assert_eq!((every.in_parts(), only.in_parts()), (parts, parts));
+            let (a, b) = (all(every).unwrap(), all(only).unwrap());
+            assert_eq!((a.width, a.height, &a.data), (b.width, b.height, &b.data));
+            assert_eq!(header_size(bytes), png_header_size(bytes));
+            assert_eq!(header_size(bytes), Ok((a.width, a.height)));
+        }
+        assert!(all(Decoding::new(jpeg.clone(), Limits::default())).is_ok());
+        let e = all(Decoding::with(jpeg.clone(), Limits::default(), decode_png)).unwrap_err();
+        assert_eq!(e.kind(), "unsupported", "{e}");
+        assert_eq!(header_size(&jpeg), Ok((w, h)));
+        assert_eq!(
+            png_header_size(&jpeg),
+            Err(HeaderError::Unsupported("JPEG"))
+        );
+        for f in [header_size, png_header_size] {
+            assert_eq!(f(b"not an image"), Err(HeaderError::NotImage));
+            assert_eq!(f(&png[..20]), Err(HeaderError::Damaged));
+        }
+        // Natively what a request or a document carries is read in any format.
+        assert!(all(Decoding::sent(jpeg.clone(), Limits::default())).is_ok());
+        assert_eq!(sent_header_size(&jpeg), Ok((w, h)));
     }
 
     #[test]

@@ -2,8 +2,9 @@
 // and its parts: the tool's defaults (the core's `Default` impls, the only
 // copy), the check of a document that comes from outside the page's own
 // edits (an autosave, a project file, a link: migrated here first by the
-// panel's `migrate`, then checked field by field by the core, `check-state`),
-// and the core's "none" made the documents' null.
+// panel's `migrate`, then made what the tool's module reads by its `toCore`
+// (Pixel: its images as PNG), then checked field by field by the core,
+// `check-state`), and the core's "none" made the documents' null.
 //
 //   await coreDefaults(pool, tool)            → the tool's default request(s), a fresh copy
 //   await checkState(pool, tool, raw, version) → the normalised state, or a plain Error
@@ -41,9 +42,12 @@ export function coreDefaults(pool, tool) {
 }
 
 /**
- * Migrate `raw` (schema `version`) for `tool` here, then have the core
+ * Migrate `raw` (schema `version`) for `tool` here, convert it for the
+ * tool's module (`state.toCore`, if the tool has one), then have the core
  * check it (`check-state`): resolves with the normalised state, rejects
  * with an Error (a JobError naming the field at fault) in plain words.
+ * Every document from outside the page's own edits comes through here
+ * (autosave and its history, the other tab's save, links, project files).
  */
 export async function checkState(pool, tool, raw, version) {
   const spec = tool.state;
@@ -54,6 +58,7 @@ export async function checkState(pool, tool, raw, version) {
     s = spec.migrate(s, version);
     version = spec.version;
   }
+  if (spec.toCore) s = await spec.toCore(s);
   // Copied, not transferred: `raw` may be a live document.
   return nulls(await pool.run('check-state', { tool: tool.id, version, state: s }, { transfer: [] }));
 }

@@ -2,7 +2,7 @@
 // the shown document saved as a project file or copied as a link, and a
 // project file or a link's state opened as a new undoable document state.
 // Whatever comes in is read and checked in full by the core (`open-project`,
-// `check-state`, after the panel's `migrate`) before anything changes; on
+// `check-state`, after the panel's `migrate` and `toCore`) before anything changes; on
 // failure the user's work stays and the panel's error area says why.
 //
 //   saveProject(ctl)                      download <name>.filigree.json
@@ -27,8 +27,8 @@ export function saveProject(ctl) {
 }
 
 /**
- * Open a project file: read and checked in full by the core
- * (`open-project`: envelope, bytes, the tool's state) before anything
+ * Open a project file: read by the core (`open-project`: envelope, bytes),
+ * its state converted and checked in full (`checkState`) before anything
  * changes; the current work stays on failure.
  */
 export async function openProjectFile(ctl, file) {
@@ -36,13 +36,14 @@ export async function openProjectFile(ctl, file) {
   let tool, state;
   try {
     const text = await file.text();
-    // Read in the current tool's module (no other module loads for it); a
-    // project of another tool comes back unchecked and is checked in its own.
-    const opened = nulls(await ctl.pool.run('open-project', { text }, { module: ctl.current?.tool.id }));
+    // Read in the current tool's module (no other module loads for it), and
+    // left unchecked: its state is checked as every document from outside is
+    // (checkState: migrated, converted by the tool's `toCore`, then checked
+    // in the tool's own module).
+    const opened = nulls(await ctl.pool.run('open-project', { text, unchecked: true }, { module: ctl.current?.tool.id }));
     tool = ctl.tool(opened.tool);
     if (!tool?.state) throw new Error(`it is a project of a tool this Filigree does not have ('${opened.tool}')`);
-    // An older state version comes back unchecked: migrate it, then check it.
-    state = opened.checked ? opened.state : await checkState(ctl.pool, tool, opened.state, opened.stateVersion);
+    state = await checkState(ctl.pool, tool, opened.state, opened.stateVersion);
   } catch (err) {
     const why = String(plainError(err) ?? 'it was cancelled').replace(/\.$/, '');
     ctx?.error(new Error(`${file.name} was not opened — ${why}. Your work is unchanged.`));

@@ -73,18 +73,19 @@ export class DocStorage {
     const ctl = this.ctl;
     const h = d.history;
     const base = h.present;
+    // The states as checked (and converted: Pixel's images as PNG), not as stored.
     const valid = async (list) => {
       if (!Array.isArray(list)) return [];
-      let i = list.length;
-      for (; i > 0; i--) {
+      const kept = [];
+      for (let i = list.length; i > 0; i--) {
         try {
-          await checkState(ctl.pool, tool, list[i - 1], tool.state.version);
+          kept.unshift(await checkState(ctl.pool, tool, list[i - 1], tool.state.version));
         } catch {
           break;
         }
         if (d.history !== h) return [];
       }
-      return list.slice(i);
+      return kept;
     };
     const past = await valid(saved?.past);
     const future = await valid(saved?.future);

@@ -1,8 +1,9 @@
 // Files in: a shipped example (one undoable step), the source, mask and
 // element sheet or sprite the user gives (the file inputs, or a source
-// dropped on the picture; each checked by the core before it is committed),
+// dropped on the picture; each turned into PNG in the page, the only format
+// the Pixel module reads, and checked by the core before it is committed),
 // and the preview of the elements.
-import { acceptFiles, putRgba } from '../ui/file-input.js';
+import { acceptFiles, asPng, putRgba } from '../ui/file-input.js';
 import { exampleDoc } from './state.js';
 
 /** The inputs of a mounted panel: {loadExample(name), showElements(doc), detach()}. */
@@ -24,9 +25,10 @@ export function createInputs(ctx, { el, q, status }) {
 
   async function loadInput(which, file) {
     ctx.clearError();
-    const bytes = new Uint8Array(await file.arrayBuffer());
     const doc = state();
     try {
+      // PNG: the Pixel module reads no other format (the browser decodes a JPEG, GIF, WebP or BMP).
+      const bytes = await asPng(file);
       if (which === 'source') {
         const img = await ctx.run('decode-image', { bytes: bytes.slice() });
         // An example's mask and strokes were drawn for the example's picture: your own

@@ -2,7 +2,11 @@
 // {example, source, sheet, sprite, mask, strokes, params, names}; its schema
 // (every field, its rules and messages) is the core's: src/pixel/state.rs,
 // applied by the document controller (`check-state`). History, autosave,
-// project files and links come from the controller (app/document.js).
+// project files and links come from the controller (app/document.js). Its
+// images are PNG (the Pixel module reads no other format): a file the user
+// gives is turned into PNG as it comes in (inputs.js), and a document from
+// outside (an autosave, a project file or a link saved before) by `toCore`.
+import { pngOf } from '../ui/file-input.js';
 
 const ASSETS = new URL('../../assets/pixel/', import.meta.url);
 const EXAMPLES = ['fish', 'trunk'];
@@ -64,6 +68,18 @@ export const pixelState = {
   version: 1,
   defaults: (ctx) => exampleDoc('fish', ctx),
   migrate: (raw) => raw,
+  // Before the core checks a document from outside: its images as PNG (one
+  // saved before the Pixel module read PNG only may hold a JPEG, GIF, WebP or
+  // BMP source or sheet). Bytes the browser cannot read as an image stay as
+  // they are, for the core to refuse in its words, naming the field.
+  async toCore(s) {
+    if (!s || typeof s !== 'object' || Array.isArray(s)) return s;
+    const out = { ...s };
+    for (const k of ['source', 'sheet', 'sprite']) {
+      if (s[k] instanceof Uint8Array && s[k].length) out[k] = await pngOf(s[k]).catch(() => s[k]);
+    }
+    return out;
+  },
   fileName: (s) => s.names?.source || 'pixel',
   // A link carries everything but an example's source (named instead) and
   // packs the mask's bits; a big source or mask makes it too big for a link.

@@ -98,27 +98,109 @@ export function hex([r, g, b, a]) {
 
 const PNG_MAGIC = [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a];
 
+/** Whether `bytes` start like a PNG file. */
+export const isPng = (bytes) => bytes.length >= 8 && PNG_MAGIC.every((b, i) => bytes[i] === b);
+
 /**
- * A user's image file as PNG bytes: a PNG as it is, any other image the
- * browser reads (JPEG, WebP, GIF, BMP, ...) decoded by the browser and
- * encoded as PNG at its own size. The Fit, Micro and Texture modules read
- * PNG only (src/raster/image_buf.rs `decode_sent`), so their panels send this.
+ * A user's image file as PNG bytes ({@link pngOf} of its bytes). The Pixel,
+ * Fit, Micro and Texture modules read PNG only (src/raster/image_buf.rs
+ * `decode_sent`), so their panels send this.
  */
 export async function asPng(file) {
-  const bytes = new Uint8Array(await file.arrayBuffer());
-  if (!bytes.length) throw new Error(`${file.name || 'the file'} is empty (0 bytes): there is no picture in it`);
-  if (PNG_MAGIC.every((b, i) => bytes[i] === b)) return bytes;
+  return pngOf(new Uint8Array(await file.arrayBuffer()), file.name);
+}
+
+/**
+ * Image bytes as PNG: a PNG as it is (the same bytes, so the core reads the
+ * same pixels as natively); any other image the browser reads (JPEG, WebP,
+ * GIF, BMP, ...) decoded by the browser with no colour-space conversion and
+ * no premultiplied alpha, and encoded as an 8-bit RGBA PNG at its own size.
+ * `name` names the file in errors.
+ */
+export async function pngOf(bytes, name = 'the file') {
+  if (!bytes.length) throw new Error(`${name} is empty (0 bytes): there is no picture in it`);
+  if (isPng(bytes)) return bytes;
   let bmp;
   try {
     bmp = await createImageBitmap(new Blob([bytes]), { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
   } catch {
-    throw new Error(`${file.name || 'the file'} is not an image this browser can read (PNG, JPEG, WebP, GIF, BMP): it may be damaged`);
+    throw new Error(`${name} is not an image this browser can read (PNG, JPEG, WebP, GIF, BMP): it may be damaged`);
   }
   try {
-    const c = new OffscreenCanvas(bmp.width, bmp.height);
-    c.getContext('2d').drawImage(bmp, 0, 0);
-    return new Uint8Array(await (await c.convertToBlob({ type: 'image/png' })).arrayBuffer());
+    return await encodePng(bmp.width, bmp.height, straightRgba(bmp));
   } finally {
     bmp.close?.();
   }
+}
+
+/**
+ * The pixels of an ImageBitmap (made with premultiplyAlpha 'none') as they
+ * are: uploaded to a WebGL texture with no premultiplication and no colour
+ * conversion and read back, since a 2D canvas keeps premultiplied pixels (a
+ * transparent pixel would lose its colour, a translucent one be rounded).
+ * Without WebGL, or for a bitmap larger than its textures, a 2D canvas:
+ * exact for opaque pixels.
+ */
+function straightRgba(bmp) {
+  const { width: w, height: h } = bmp;
+  const c = new OffscreenCanvas(w, h);
+  const gl = c.getContext('webgl', { premultipliedAlpha: false, antialias: false });
+  if (gl && Math.max(w, h) <= gl.getParameter(gl.MAX_TEXTURE_SIZE)) {
+    try {
+      const tex = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, tex);
+      gl.pixelStorei(gl.UNPACK_PREMULTIPLY_ALPHA_WEBGL, false);
+      gl.pixelStorei(gl.UNPACK_COLORSPACE_CONVERSION_WEBGL, gl.NONE);
+      gl.pixelStorei(gl.UNPACK_FLIP_Y_WEBGL, false);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA, gl.RGBA, gl.UNSIGNED_BYTE, bmp);
+      const fb = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, tex, 0);
+      if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) === gl.FRAMEBUFFER_COMPLETE) {
+        const out = new Uint8Array(w * h * 4);
+        // A texture's first row is the bitmap's top row, and readPixels reads it first.
+        gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, out);
+        if (gl.getError() === gl.NO_ERROR) return out;
+      }
+    } finally {
+      gl.getExtension('WEBGL_lose_context')?.loseContext();
+    }
+  }
+  const g = new OffscreenCanvas(w, h).getContext('2d');
+  g.drawImage(bmp, 0, 0);
+  return new Uint8Array(g.getImageData(0, 0, w, h, { colorSpace: 'srgb' }).data.buffer);
+}
+
+let crcTable = null;
+function crc32(bytes, crc = 0xffffffff) {
+  crcTable ??= Uint32Array.from({ length: 256 }, (_, n) => {
+    let c = n;
+    for (let k = 0; k < 8; k++) c = c & 1 ? 0xedb88320 ^ (c >>> 1) : c >>> 1;
+    return c;
+  });
+  for (const b of bytes) crc = crcTable[(crc ^ b) & 0xff] ^ (crc >>> 8);
+  return crc;
+}
+
+/** An 8-bit RGBA PNG of `rgba` (rows unfiltered, zlib by the browser's CompressionStream). */
+async function encodePng(w, h, rgba) {
+  const raw = new Uint8Array(h * (1 + 4 * w));
+  for (let y = 0; y < h; y++) raw.set(rgba.subarray(4 * w * y, 4 * w * (y + 1)), y * (1 + 4 * w) + 1);
+  const zlib = new Uint8Array(await new Response(new Blob([raw]).stream().pipeThrough(new CompressionStream('deflate'))).arrayBuffer());
+  const chunk = (type, data) => {
+    const out = new Uint8Array(12 + data.length);
+    const v = new DataView(out.buffer);
+    v.setUint32(0, data.length);
+    for (let i = 0; i < 4; i++) out[4 + i] = type.charCodeAt(i);
+    out.set(data, 8);
+    v.setUint32(8 + data.length, (crc32(out.subarray(4, 8 + data.length)) ^ 0xffffffff) >>> 0);
+    return out;
+  };
+  const ihdr = new Uint8Array(13);
+  const v = new DataView(ihdr.buffer);
+  v.setUint32(0, w);
+  v.setUint32(4, h);
+  ihdr.set([8, 6, 0, 0, 0], 8); // 8 bits, RGBA, deflate, no filter method, not interlaced
+  const parts = [Uint8Array.from(PNG_MAGIC), chunk('IHDR', ihdr), chunk('IDAT', zlib), chunk('IEND', new Uint8Array(0))];
+  return new Uint8Array(await new Blob(parts).arrayBuffer());
 }
