@@ -44,7 +44,7 @@ use std::borrow::Cow;
 
 pub mod json;
 
-use crate::core::value::{js_number, to_value};
+use crate::core::value::js_number;
 // A project's values (`core::value`, below the tools): the project reader's
 // callers outside the crate (the CLI's benches, tests, fuzzers) take them
 // from here.
@@ -502,7 +502,7 @@ fn check_project(doc: &mut Value, checks: StateCheck) -> Result<OpenedProject> {
 /// fields as `{"$bytes": base64}`. For tests, seeds and fuzzing (feature
 /// `json`; the page writes its own files, so the wasm build leaves it out).
 pub fn project_text(tool: &str, state_version: u32, state: &impl Serialize) -> Result<String> {
-    let state = to_value(state).map_err(Error::input)?;
+    let state = crate::core::value::to_value(state).map_err(Error::input)?;
     let doc = Value::Object(vec![
         ("format".into(), Value::Text(PROJECT_FORMAT.into())),
         ("version".into(), Value::Number(PROJECT_VERSION.into())),
