@@ -10,8 +10,8 @@
 //! shared by the shapes on both sides, so no gap or overlap can appear.
 use super::ast::{CurveDef, StippleKind};
 use crate::core::rng::Rng;
-use crate::tangle::geom::noise;
 use crate::tangle::geom::polygon::{resample_polyline, Polygon};
+use crate::tangle::geom::{noise, order};
 use glam::DVec2;
 
 /// Hand-drawn wobble: displacement amplitude and feature size in drawing
@@ -147,17 +147,24 @@ pub fn regular_split(
     } else {
         vec![]
     };
-    let mut pieces: Vec<(usize, usize, f64, Polygon)> = poly
-        .slice(&cuts)
-        .into_iter()
-        .map(|p| {
+    // Row by row, column by column, then along the row; pieces with equal
+    // keys keep the slice's order (their index is the tie-break).
+    let mut pieces = poly.slice(&cuts);
+    let band = |pos: &[f64], t: f64| pos.partition_point(|&v| v < t) as u64;
+    let ncols = cols.len() as u64 + 1; // a column band is 0..=cols.len()
+    let mut keys: Vec<order::Key> = pieces
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
             let c = p.centroid();
-            let band = |pos: &[f64], t: f64| pos.partition_point(|&v| v < t);
-            (band(&rows, c.dot(d)), band(&cols, c.dot(e)), c.dot(e), p)
+            let cell = band(&rows, c.dot(d)) * ncols + band(&cols, c.dot(e));
+            (cell, order::key(c.dot(e)), i as u64)
         })
         .collect();
-    pieces.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)).then(a.2.total_cmp(&b.2)));
-    pieces.into_iter().map(|p| p.3).collect()
+    order::sort(&mut keys);
+    keys.iter()
+        .map(|k| std::mem::take(&mut pieces[k.2 as usize]))
+        .collect()
 }
 
 /// The direction across orientation `d`: `d` turned a quarter clockwise

@@ -51,6 +51,7 @@
 //! places nothing and gives the whole region back as the remainder.
 use crate::core::rng::Rng;
 use crate::tangle::geom::edge_grid::EdgeGrid;
+use crate::tangle::geom::order;
 use crate::tangle::geom::polygon::{Polygon, SLIVER_AREA};
 use glam::DVec2;
 use std::cmp::Reverse;
@@ -301,7 +302,7 @@ impl Raster {
         }
         let mut inside = vec![false; w * h];
         for (row, xs) in rows.iter_mut().enumerate() {
-            xs.sort_by(f64::total_cmp);
+            order::sort_f64(xs);
             for pair in xs.chunks_exact(2) {
                 // Centres x with pair[0] <= x < pair[1], border excluded.
                 let first = inner(((pair[0] - origin.x) / cell - 0.5).ceil(), w);

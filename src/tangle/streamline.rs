@@ -46,6 +46,7 @@
 //! are the same bytes natively and in wasm.
 use super::ast::StreamKind;
 use crate::tangle::geom::mvc::mean_value_weights;
+use crate::tangle::geom::order;
 use crate::tangle::geom::polygon::{ring_area2, ring_length, Polygon, Ring, SLIVER_AREA};
 use glam::DVec2;
 
@@ -409,7 +410,8 @@ impl<'a> Boundary<'a> {
         // `Polygon::contains` counts them). Edges are at most a cell long,
         // so each crosses the centre lines of at most two rows.
         let mut inside = vec![false; grid.nx * grid.ny];
-        let mut xs: Vec<(usize, f64)> = Vec::new();
+        // (row, crossing as an order::key, 0), sorted by row then x.
+        let mut xs: Vec<order::Key> = Vec::new();
         for &(a, b) in &edges {
             let (y0, y1) = (a.y.min(b.y), a.y.max(b.y));
             let j0 = ((y0 - grid.lo.y) / grid.cell - 0.5).floor().max(0.0) as usize;
@@ -418,21 +420,22 @@ impl<'a> Boundary<'a> {
             for j in j0..=j1 {
                 let y = grid.lo.y + (j as f64 + 0.5) * grid.cell;
                 if (a.y > y) != (b.y > y) {
-                    xs.push((j, (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x));
+                    let x = (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x;
+                    xs.push((j as u64, order::key(x), 0));
                 }
             }
         }
-        xs.sort_by(|p, q| p.0.cmp(&q.0).then(p.1.total_cmp(&q.1)));
+        order::sort(&mut xs);
         let mut at = 0;
         for j in 0..grid.ny {
             let start = at;
-            while at < xs.len() && xs[at].0 == j {
+            while at < xs.len() && xs[at].0 == j as u64 {
                 at += 1;
             }
             let row = &xs[start..at];
             for i in 0..grid.nx {
                 let x = grid.lo.x + (i as f64 + 0.5) * grid.cell;
-                let right = row.len() - row.partition_point(|&(_, c)| c <= x);
+                let right = row.len() - row.partition_point(|&(_, c, _)| order::from_key(c) <= x);
                 inside[j * grid.nx + i] = right % 2 == 1;
             }
         }
