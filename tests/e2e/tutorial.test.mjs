@@ -86,8 +86,26 @@ async function show(sel) {
   return { frame, el };
 }
 
+/**
+ * Wait until embed `el` keeps its height (it follows its page's, which
+ * grows as the result and its status arrive), then scroll it into view as
+ * the reader would; a machine under load may still be laying it out when
+ * `show` scrolled.
+ */
+async function settle(el) {
+  let last = -1;
+  for (let same = 0, i = 0; same < 3 && i < 50; i++) {
+    const h = (await el.boundingBox())?.height ?? -1;
+    same = h === last ? same + 1 : 0;
+    last = h;
+    await page.waitForTimeout(100);
+  }
+  await el.scrollIntoViewIfNeeded();
+}
+
 /** The picture is in view: the embed inside the tutorial's window, the picture inside the embed's, nothing scrolled. */
 async function inView(frame, el) {
+  await settle(el);
   const box = await el.boundingBox();
   const vh = await page.evaluate(() => innerHeight);
   assert.ok(box.y >= 0 && box.y + box.height <= vh + 1, `the embed spans ${box.y}..${box.y + box.height} in a ${vh} px window`);

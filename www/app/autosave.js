@@ -33,16 +33,20 @@ function db() {
   return dbPromise;
 }
 
-async function withStore(mode, fn) {
+/** The transaction of `fn(store)` in `mode`: resolves with its request's result once committed, however long that takes. */
+async function transact(mode, fn) {
   const database = await db();
-  return withTimeout(new Promise((resolve, reject) => {
+  return new Promise((resolve, reject) => {
     const tx = database.transaction(STORE, mode);
     const req = fn(tx.objectStore(STORE));
     tx.oncomplete = () => resolve(req?.result);
     tx.onerror = () => reject(tx.error);
     tx.onabort = () => reject(tx.error);
-  }), STORAGE_TIMEOUT_MS, 'storage');
+  });
 }
+
+/** `transaction`, or a rejection once STORAGE_TIMEOUT_MS have passed (it may still commit later). */
+const timed = (transaction) => withTimeout(transaction, STORAGE_TIMEOUT_MS, 'storage');
 
 let persistAsked = false;
 
@@ -90,20 +94,23 @@ const revOf = (v) => (Number.isInteger(v?.rev) && v.rev > 0 ? v.rev : 0);
  * Autosave of one key: `load()` once, `save(value)` on every change
  * (debounced), `flush()` on pagehide or when leaving. Every call fails fast
  * (STORAGE_TIMEOUT_MS); `onBlocked(err)` hears about the first failure so the
- * page can say plainly that it cannot save here. A write finds a newer
+ * page can say plainly that it cannot save here, and `onUnblocked()` when a
+ * write commits after all (a slow disk, not a refusal): each change is
+ * tried again, none is dropped for good. A write finds a newer
  * revision than this tab's (another tab saved) and does not happen:
  * `onConflict(rev)` hears it and the value stays pending until
  * `flush({over: rev})` (the user keeps theirs) or `adopt(rev)` (they took
  * the other tab's).
  */
 export class Autosave {
-  constructor(key, { delayMs = 400, onBlocked, onConflict } = {}) {
+  constructor(key, { delayMs = 400, onBlocked, onUnblocked, onConflict } = {}) {
     this.key = key;
     this.delayMs = delayMs;
     this.timer = null;
     this.pending = null;
     this.lastSaved = Promise.resolve();
     this.onBlocked = onBlocked;
+    this.onUnblocked = onUnblocked;
     this.onConflict = onConflict;
     this.blocked = false;
     this.rev = 0; // the revision this tab last read or wrote
@@ -115,9 +122,14 @@ export class Autosave {
     if (!this.blocked) { this.blocked = true; this.onBlocked?.(err); }
   }
 
+  /** A write committed: storage works (again), however slow it was. */
+  worked() {
+    if (this.blocked) { this.blocked = false; this.onUnblocked?.(); }
+  }
+
   async load() {
     try {
-      const v = (await withStore('readonly', (s) => s.get(this.key))) ?? null;
+      const v = (await timed(transact('readonly', (s) => s.get(this.key)))) ?? null;
       this.rev = revOf(v);
       if (this.conflict <= this.rev) this.conflict = 0;
       return v;
@@ -172,14 +184,13 @@ export class Autosave {
   flush({ over = 0 } = {}) {
     clearTimeout(this.timer);
     if (this.pending === null) return this.lastSaved;
-    if (this.blocked) { this.pending = null; return this.lastSaved; }
     if (this.conflict && over < this.conflict) return this.lastSaved; // held until the user decides
     const value = typeof this.pending === 'function' ? this.pending() : this.pending;
     this.pending = null;
     const base = Math.max(this.rev, over);
     let wrote = 0;
     let found = 0;
-    this.lastSaved = withStore('readwrite', (s) => {
+    const write = transact('readwrite', (s) => {
       const get = s.get(this.key);
       get.onsuccess = () => {
         found = revOf(get.result);
@@ -188,16 +199,25 @@ export class Autosave {
         s.put({ ...value, rev: wrote, tab: TAB_ID }, this.key);
       };
       return get;
-    }).then(() => {
+    });
+    // What the write did is recorded when it commits, even after the timeout
+    // has called storage blocked: a slow write that lands still moves this
+    // tab's revision on and tells the other tabs, and a failed one is tried
+    // again with the next change.
+    write.then(() => {
+      this.worked();
       if (wrote) {
-        this.rev = wrote;
+        this.rev = Math.max(this.rev, wrote);
         if (this.conflict <= over) this.conflict = 0;
         tabChannel()?.postMessage({ key: this.key, rev: wrote, tab: TAB_ID });
       } else {
         if (this.pending === null) this.pending = value; // kept for Keep mine
         this.noteOther(found);
       }
-    }, (err) => this.fail(err));
+    }, () => {
+      if (this.pending === null) this.pending = value; // written with the next change, if storage comes back
+    });
+    this.lastSaved = timed(write).catch((err) => this.fail(err));
     return this.lastSaved;
   }
 }

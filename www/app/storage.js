@@ -24,7 +24,7 @@ const AUTOSAVE_FORMAT = 'filigree-autosave';
 export class DocStorage {
   constructor(ctl) {
     this.ctl = ctl;
-    this.blocked = false; // a storage call failed: the page says it cannot save here
+    this.blocked = false; // an autosave's last storage call failed: the page says it cannot save here
   }
 
   /** Flush on pagehide; hear other tabs' saves; ask before closing a tab whose change is held. */
@@ -44,7 +44,11 @@ export class DocStorage {
   }
 
   autosaveFor(tool) {
-    return new Autosave(tool.id, { onBlocked: () => this.onBlocked(), onConflict: () => this.showTabs() });
+    return new Autosave(tool.id, {
+      onBlocked: () => this.onBlocked(),
+      onUnblocked: () => this.onBlocked(),
+      onConflict: () => this.showTabs(),
+    });
   }
 
   /** Write `tool`'s document `d` (debounced: what is written is made then). */
@@ -118,8 +122,9 @@ export class DocStorage {
     return tool.state.defaults(ctx);
   }
 
+  /** An autosave found storage refused, or working again: the note says so while any is refused. */
   onBlocked() {
-    this.blocked = true;
+    this.blocked = [...this.ctl.docs.values()].some((d) => d.autosave?.blocked);
     this.showNote();
   }
 
