@@ -20,7 +20,7 @@ use crate::core::error::{Error, Result};
 use crate::core::job::{Job, OneShot, Progress, Step};
 use crate::core::request_limits as lim;
 use crate::raster::RawImage;
-use crate::raster::{decode_sent, Limits, Rgba8Image};
+use crate::raster::{decode_file, Limits, Rgba8Image};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -288,9 +288,13 @@ pub struct PatternSnapRequest {
     /// Program text.
     pub program: String,
     pub params: BTreeMap<String, f64>,
-    /// The uploaded image file.
+    /// The uploaded image: its pixels (`rgba`, what the page sends: the
+    /// browser decodes the user's file), or natively its file (`bytes`, any
+    /// format). Exactly one of the two.
     #[serde(with = "serde_bytes")]
     pub bytes: Vec<u8>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rgba: Option<RawRgba>,
     /// Longer side of the snapped picture, 8..=2048 (256); the shorter
     /// side keeps the upload's aspect (`Canvas::grid`), so a fit to it
     /// sees the design unstretched.
@@ -305,6 +309,7 @@ impl Default for PatternSnapRequest {
             program: String::new(),
             params: BTreeMap::new(),
             bytes: vec![],
+            rgba: None,
             size: 256,
             tolerance: 60.0,
         }
@@ -334,7 +339,24 @@ pub struct SnapResponse {
 pub fn snap_target(req: &PatternSnapRequest) -> Result<SnapResponse> {
     let size = lim::int_in("size", req.size, lim::SNAP_SIZE)?;
     let tolerance = lim::finite_in("tolerance", req.tolerance, lim::TOLERANCE)?;
-    let img = decode_sent(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?;
+    let img = match (&req.rgba, req.bytes.is_empty()) {
+        (Some(r), true) => {
+            Rgba8Image::from_raw(r.width, r.height, r.rgba.clone()).map_err(|e| e.at("rgba"))?
+        }
+        (None, false) => decode_file(&req.bytes, Limits::default()).map_err(|e| e.at("bytes"))?,
+        (Some(_), false) => {
+            return Err(Error::input(
+                "give the image once: its pixels (`rgba`) or its file (`bytes`), not both",
+            )
+            .at("rgba"))
+        }
+        (None, true) => {
+            return Err(Error::input(
+                "there is no image: give its pixels (`rgba`) or its file (`bytes`)",
+            )
+            .at("rgba"))
+        }
+    };
     let (_, scene, _) = scene_of(&req.program, &req.params)?;
     let colours = &scene.rec.colours;
     let (w, h) = super::fit::image_canvas(&img).grid(size);
@@ -695,7 +717,7 @@ impl<X> FitRequestOf<X> {
     ) -> Result<TargetSource<'a>> {
         let tol = lim::finite_in("tolerance", self.tolerance, lim::TOLERANCE)?;
         if let Some(bytes) = &self.target_png {
-            *img = Some(decode_sent(bytes, Limits::default()).map_err(|e| e.at("target_png"))?);
+            *img = Some(decode_file(bytes, Limits::default()).map_err(|e| e.at("target_png"))?);
         } else if let Some(r) = &self.target_rgba {
             *img = Some(
                 Rgba8Image::from_raw(r.width, r.height, r.rgba.clone())
@@ -1352,6 +1374,61 @@ mod tests {
         })
         .unwrap();
         assert_eq!((snapped.image.width, snapped.image.height), (128, 102));
+    }
+
+    /// The page sends an upload's pixels (`rgba`; the browser decoded the
+    /// user's file), the CLI its file (`bytes`): the same image snaps to the
+    /// same picture either way, and a request with both or neither is
+    /// refused naming `rgba`.
+    #[test]
+    fn a_snap_of_pixels_is_the_snap_of_their_png() {
+        let src = generator("circles-grid").unwrap().source;
+        let mut img = crate::raster::Rgba8Image::new(90, 70);
+        let mut rng = crate::core::rng::Rng::new(7);
+        for v in img.data.iter_mut() {
+            *v = (rng.next_u64() >> 56) as u8;
+        }
+        let base = PatternSnapRequest {
+            program: src.into(),
+            size: 64,
+            ..Default::default()
+        };
+        let raw = RawRgba {
+            width: 90,
+            height: 70,
+            rgba: img.data.clone(),
+        };
+        let png = crate::raster::encode_png(&img).unwrap();
+        let from_pixels = snap_target(&PatternSnapRequest {
+            rgba: Some(raw.clone()),
+            ..base.clone()
+        })
+        .unwrap();
+        let from_file = snap_target(&PatternSnapRequest {
+            bytes: png.clone(),
+            ..base.clone()
+        })
+        .unwrap();
+        assert_eq!(from_pixels.image, from_file.image);
+        assert_eq!(from_pixels.unmatched, from_file.unmatched);
+        for req in [
+            PatternSnapRequest {
+                rgba: Some(raw.clone()),
+                bytes: png,
+                ..base.clone()
+            },
+            base.clone(),
+            PatternSnapRequest {
+                rgba: Some(RawRgba {
+                    rgba: vec![0; 10],
+                    ..raw
+                }),
+                ..base
+            },
+        ] {
+            let err = snap_target(&req).unwrap_err();
+            assert_eq!(err.field(), Some("rgba"), "{err}");
+        }
     }
 
     #[test]

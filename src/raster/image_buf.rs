@@ -255,16 +255,36 @@ pub fn decode_png(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     finish(decoder, "PNG", limits)
 }
 
-/// An image a request of Fit, Micro or Texture carries. Natively that is
+/// An image a request of Micro or Texture carries. Natively that is
 /// the user's file (the CLI reads it): any format, [`decode`]. In the
 /// browser the page has already decoded the user's file and sends PNG
-/// (Texture's example, Micro's slice, Fit's uploaded target), so the wasm
+/// (Texture's example, Micro's slice), so the wasm
 /// build reads PNG only ([`decode_png`]) and those tools' modules link no
 /// JPEG, WebP, GIF or BMP decoder. The same PNG gives the same pixels in
 /// both.
 pub fn decode_sent(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
     #[cfg(target_arch = "wasm32")]
     return decode_png(bytes, limits);
+    #[cfg(not(target_arch = "wasm32"))]
+    decode(bytes, limits)
+}
+
+/// An image file in a request whose page sends pixels instead (Fit: its
+/// target upload goes as `rgba`). Natively that is the user's file, read by
+/// the CLI or a library user: any format, [`decode`]. In the browser the
+/// page decodes the user's image itself, so the wasm build reads no file at
+/// all (an encoded image is refused as `unsupported`) and the module links
+/// no image decoder.
+pub fn decode_file(bytes: &[u8], limits: Limits) -> Result<Rgba8Image> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = (bytes, limits);
+        Err(Error::Unsupported(
+            "an image file is read here only natively: the page sends the image's pixels \
+             (an internal error)"
+                .into(),
+        ))
+    }
     #[cfg(not(target_arch = "wasm32"))]
     decode(bytes, limits)
 }

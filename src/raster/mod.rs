@@ -3,8 +3,9 @@ mod image_buf;
 mod palette;
 
 pub use image_buf::{
-    decode, decode_png, decode_sent, encode_png, header_size, png_header_size, sent_header_size,
-    Decoder, Decoding, HeaderError, HeaderReader, Limits, Rgba8Image, DECODE_PIXELS_PER_STEP,
+    decode, decode_file, decode_png, decode_sent, encode_png, header_size, png_header_size,
+    sent_header_size, Decoder, Decoding, HeaderError, HeaderReader, Limits, Rgba8Image,
+    DECODE_PIXELS_PER_STEP,
 };
 pub use palette::{
     check_tolerance, cluster_counts, cluster_order, cluster_palette, colour_counts, count_colours,

@@ -1,8 +1,10 @@
-// Fit, Micro and Texture send the core PNG that the page made (the browser
-// decodes the user's JPEG, WebP or GIF), so their wasm modules carry the PNG
-// decoder only (src/raster/image_buf.rs `decode_sent`). A JPEG or WebP
-// uploaded as a Fit target is still read, and nothing but the Fit module is
-// fetched for it.
+// Fit sends the core the pixels of the user's image (the browser decodes the
+// PNG, JPEG, WebP or GIF; src/raster/image_buf.rs `decode_file`), so its wasm
+// module carries no image decoder at all. A JPEG or WebP uploaded as a Fit
+// target is still read, and nothing but the Fit module is fetched for it; a
+// PNG file sent to the Fit module is refused as unsupported, and a PNG whose
+// header declares a size over the core's limits is refused by the page
+// before the browser decodes it.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, pickGenerator } from './harness.mjs';
@@ -49,3 +51,33 @@ for (const [type, name] of [['image/jpeg', 'stripes.jpg'], ['image/webp', 'strip
     assert.deepEqual([...modules].filter((m) => m !== 'fit'), [], `modules fetched for the file: ${[...modules].join(', ')}`);
   });
 }
+
+test('fit: the module reads pixels, not files; a PNG over the size limit is refused before it is decoded', async () => {
+  const page = await env.newPage({ path: '#tool=fit' });
+  await pickGenerator(page, 'dots');
+  // A PNG file sent as such: the Fit module has no decoder, and says so.
+  const refused = await page.evaluate(async () => {
+    const c = new OffscreenCanvas(8, 8);
+    c.getContext('2d').fillRect(0, 0, 8, 8);
+    const bytes = new Uint8Array(await (await c.convertToBlob({ type: 'image/png' })).arrayBuffer());
+    const { program } = window.filigree.testHooks.fit.state();
+    try {
+      await window.filigree.pool.run('pattern-snap', { program, params: {}, bytes, size: 64 });
+      return null;
+    } catch (err) {
+      return { kind: err.kind, field: err.field, message: err.message };
+    }
+  });
+  assert.equal(refused?.kind, 'unsupported', JSON.stringify(refused));
+  assert.equal(refused.field, 'bytes');
+  // A PNG whose header says 20000 × 20000 (the file itself is tiny and broken):
+  // refused by its declared size, with the limits in words.
+  const png = Buffer.alloc(40);
+  Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13, 0x49, 0x48, 0x44, 0x52]).copy(png);
+  png.writeUInt32BE(20000, 16);
+  png.writeUInt32BE(20000, 20);
+  const [chooser] = await Promise.all([page.waitForEvent('filechooser'), page.click('.fit-target button.pick')]);
+  await chooser.setFiles({ name: 'huge.png', mimeType: 'image/png', buffer: png });
+  await page.waitForSelector('[data-testid=doc-error]:not([hidden])');
+  assert.match(await page.textContent('[data-testid=doc-error]'), /^huge\.png is 20000×20000 pixels: images up to 4096 pixels a side/);
+});

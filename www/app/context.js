@@ -109,7 +109,8 @@ export function panelContext(ctl, cur) {
       const message = plainError(err);
       if (message === null) return;
       ctx.clearError();
-      errorEl.textContent = prefix ? `${prefix}: ${message}` : message;
+      // A message that already starts with the prefix (a file's name) is not prefixed twice.
+      errorEl.textContent = prefix && !message.startsWith(`${prefix} `) ? `${prefix}: ${message}` : message;
       errorEl.dataset.source = source;
       errorEl.hidden = false;
       if (err?.field) {

@@ -1,7 +1,7 @@
 // The target: drawn with a brush in the program's colours (the last one,
 // the background, erases), uploaded (or dropped, or pasted) and snapped to
 // the program's palette, made from the current values, or cleared.
-import { acceptFiles, asPng, hex } from '../ui/file-input.js';
+import { acceptFiles, hex, pixelsOf } from '../ui/file-input.js';
 import { radioGroup } from '../ui/radio-group.js';
 import { named, rgbOf } from './program.js';
 import { backgroundTarget, targetRequest, TARGET_SIZE } from './state.js';
@@ -113,9 +113,9 @@ export function createTarget(ctx, { q, live, status }) {
   async function upload(file) {
     ctx.clearError();
     try {
-      // PNG: the Fit module reads no other format (the browser decodes a JPEG or WebP).
-      const bytes = await asPng(file);
-      const r = await ctx.run('pattern-snap', { program: doc().program, params: named(live.info, doc().values), bytes, size: TARGET_SIZE });
+      // Its pixels: the browser reads the file (the Fit module reads no image file).
+      const rgba = await pixelsOf(file);
+      const r = await ctx.run('pattern-snap', { program: doc().program, params: named(live.info, doc().values), rgba, size: TARGET_SIZE });
       ctx.commit({ ...doc(), target: { width: r.width, height: r.height, rgba: r.rgba }, truth: null });
       status(`${file.name}: snapped to the program's colours (${Math.round(r.unmatched * 100)}% of pixels were far from all of them)`);
     } catch (err) {

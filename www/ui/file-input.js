@@ -103,7 +103,7 @@ export const isPng = (bytes) => bytes.length >= 8 && PNG_MAGIC.every((b, i) => b
 
 /**
  * A user's image file as PNG bytes ({@link pngOf} of its bytes). The Pixel,
- * Fit, Micro and Texture modules read PNG only (src/raster/image_buf.rs
+ * Micro and Texture modules read PNG only (src/raster/image_buf.rs
  * `decode_sent`), so their panels send this.
  */
 export async function asPng(file) {
@@ -118,8 +118,39 @@ export async function asPng(file) {
  * `name` names the file in errors.
  */
 export async function pngOf(bytes, name = 'the file') {
-  if (!bytes.length) throw new Error(`${name} is empty (0 bytes): there is no picture in it`);
   if (isPng(bytes)) return bytes;
+  const { width, height, rgba } = await pixelsOfBytes(bytes, name);
+  return encodePng(width, height, rgba);
+}
+
+/**
+ * A user's image file as its pixels, {width, height, rgba}: decoded by the
+ * browser (any format it reads) with no colour-space conversion and no
+ * premultiplied alpha, 8 bits a channel. The Fit module reads no image
+ * file (src/raster/image_buf.rs `decode_file`), so its target upload sends
+ * this. An image larger than the core takes (IMAGE_LIMITS) is refused
+ * before its pixels are read back.
+ */
+export async function pixelsOf(file) {
+  return pixelsOfBytes(new Uint8Array(await file.arrayBuffer()), file.name);
+}
+
+/** The core's image limits (src/core/limits.rs MAX_IMAGE_SIDE, MAX_IMAGE_PIXELS); the core checks them again. */
+export const IMAGE_LIMITS = { side: 4096, pixels: 16 * 1024 * 1024 };
+
+function tooLarge(width, height, name) {
+  if (Math.max(width, height) > IMAGE_LIMITS.side || width * height > IMAGE_LIMITS.pixels) {
+    throw new Error(`${name} is ${width}×${height} pixels: images up to ${IMAGE_LIMITS.side} pixels a side and 16 megapixels are read`);
+  }
+}
+
+async function pixelsOfBytes(bytes, name) {
+  if (!bytes.length) throw new Error(`${name} is empty (0 bytes): there is no picture in it`);
+  // A PNG's size is in its header: a huge one is refused before the browser decodes it.
+  if (isPng(bytes) && bytes.length >= 24) {
+    const header = new DataView(bytes.buffer, bytes.byteOffset + 16, 8);
+    tooLarge(header.getUint32(0), header.getUint32(4), name);
+  }
   let bmp;
   try {
     bmp = await createImageBitmap(new Blob([bytes]), { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
@@ -127,7 +158,9 @@ export async function pngOf(bytes, name = 'the file') {
     throw new Error(`${name} is not an image this browser can read (PNG, JPEG, WebP, GIF, BMP): it may be damaged`);
   }
   try {
-    return await encodePng(bmp.width, bmp.height, straightRgba(bmp));
+    const { width, height } = bmp;
+    tooLarge(width, height, name);
+    return { width, height, rgba: straightRgba(bmp) };
   } finally {
     bmp.close?.();
   }
