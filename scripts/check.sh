@@ -29,6 +29,20 @@ bash scripts/setup.sh
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
+# The release wasm build (one module per tool, and the test-hooks Inspect
+# module) starts now and runs beside clippy and `cargo test`: they share no
+# build directory, and it is one long chain that keeps a single core busy
+# for long stretches (the library's one codegen unit, then each module's
+# LTO link), while clippy and the tests leave a core idle at times (the
+# final crate's check, the links, single-threaded test binaries). Started
+# first, its chain ends sooner; together they take less than one after the
+# other.
+step "the release wasm build starts (in the background)"
+mkdir -p target
+FILIGREE_TEST_HOOKS=1 bash scripts/build.sh > target/wasm-build.log 2>&1 &   # pkg/ and the test-only pkg-test/
+wasm_build=$!
+trap 'kill "$wasm_build" 2>/dev/null || true' EXIT
+
 step "clippy (native, all targets)"
 cargo clippy --all-targets -- -D warnings
 step "clippy (wasm32: the web boundary and a tool module with the test hooks)"
@@ -50,24 +64,16 @@ if ! bash scripts/check-texture-index.sh --unchanged; then
     > target/texture-index-check.log 2>&1 &
   index_check=$!
 fi
-# If a step below fails, the rebuild stops too.
-trap 'pkill -f filigree-index-check 2>/dev/null || true' EXIT
-
-# The release wasm build (one module per tool, and the test-hooks Inspect
-# module) runs beside `cargo test`: they share no build directory, and each
-# leaves a core idle for long stretches (the modules' single-threaded LTO
-# links; the tests' links and single-threaded test binaries), so together
-# they take less than one after the other.
-step "cargo test, beside the release wasm build (one module per tool)"
-FILIGREE_TEST_HOOKS=1 bash scripts/build.sh > target/wasm-build.log 2>&1 &   # pkg/ and the test-only pkg-test/
-wasm_build=$!
+# If a step below fails, the rebuild and the wasm build stop too.
 trap 'pkill -f filigree-index-check 2>/dev/null || true; kill "$wasm_build" 2>/dev/null || true' EXIT
+
+step "cargo test, beside the release wasm build (one module per tool)"
 # `--tests`: the library's and the binary's unit tests and the integration
 # tests (one binary, tests/main.rs). Not the research probes under
 # src/bench/examples (clippy above has checked they compile; building and
 # linking them here was fifteen more links) and no doc tests (there are none).
 cargo test --tests
-step "the release wasm build (started beside cargo test) has ended"
+step "the release wasm build (started before clippy) has ended"
 if ! wait "$wasm_build"; then
   cat target/wasm-build.log
   exit 1
