@@ -1055,3 +1055,57 @@ pub fn final_shapes(x: &Expansion) -> Vec<&Shape> {
         .map(|(_, r)| &r.shape)
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tangle::ast::Op;
+
+    /// The leaf example at seed 1, as the Tangle panel first shows it: one
+    /// square's 5-unit inset came back from the offset engine as two pieces
+    /// sharing its diagonal (a pentagon and a triangle), drawn with a line
+    /// across the square. Every outline step's inner pieces of one shape
+    /// must be apart: the union of any two of them is still two pieces.
+    #[test]
+    fn each_outline_gives_an_inset_whose_pieces_do_not_touch() {
+        let req = TangleRequest {
+            grammar: crate::tangle::examples::EXAMPLES[0].grammar.into(),
+            seed: 1,
+            ..Default::default()
+        };
+        assert_eq!(crate::tangle::examples::EXAMPLES[0].name, "leaf");
+        let mut x = start_tangle(req).unwrap().x.take().unwrap();
+        x.run().unwrap();
+        let outlines: Vec<_> = x
+            .steps
+            .iter()
+            .filter(|s| matches!(s.op, Op::Outline { .. }))
+            .collect();
+        assert!(outlines.len() >= 4, "the leaf has outline steps");
+        for s in outlines {
+            let inner_tag = &x.grammar().rules[s.rule].outputs[0];
+            for &input in &s.inputs {
+                // The inner pieces this input gave: the step's outputs with the
+                // inner tag whose box lies inside the input's.
+                let (lo, hi) = x.records[input as usize].shape.poly.bbox();
+                let pieces: Vec<&Polygon> = s
+                    .outputs
+                    .iter()
+                    .map(|&o| &x.records[o as usize].shape)
+                    .filter(|sh| &x.tags[sh.tag as usize] == inner_tag)
+                    .map(|sh| &*sh.poly)
+                    .filter(|p| {
+                        let (a, b) = p.bbox();
+                        a.x >= lo.x && a.y >= lo.y && b.x <= hi.x && b.y <= hi.y
+                    })
+                    .collect();
+                for (i, a) in pieces.iter().enumerate() {
+                    for b in &pieces[..i] {
+                        let u = Polygon::union_all(&[(*a).clone(), (*b).clone()]);
+                        assert_eq!(u.len(), 2, "two inset pieces of shape {input} touch");
+                    }
+                }
+            }
+        }
+    }
+}

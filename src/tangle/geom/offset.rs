@@ -319,7 +319,7 @@ pub fn inset(poly: &Polygon, d: f64) -> Option<Vec<Polygon>> {
                 }
             }
         }
-        return Some(assemble(outers, holes));
+        return Some(merge_touching(assemble(outers, holes)));
     }
     let shape = Shape::from_plines(plines);
     // The outer ring must be counter-clockwise and the holes clockwise.
@@ -334,7 +334,64 @@ pub fn inset(poly: &Polygon, d: f64) -> Option<Vec<Polygon>> {
             .collect()
     };
     let (outers, holes) = (rings(&out.ccw_plines), rings(&out.cw_plines));
-    Some(assemble(outers, holes))
+    Some(merge_touching(assemble(outers, holes)))
+}
+
+/// The inset's pieces, with pieces that touch or overlap made one. The
+/// engine sometimes closes one inset outline as two loops that share an
+/// edge (the leaf example, seed 1: one square's inset came back as a
+/// pentagon and a triangle along its diagonal, drawn with a line across
+/// it). Pieces whose boxes meet are united; a group whose union has as many
+/// pieces as it had (pieces that truly pinched off) is kept as it was, so
+/// only a split outline changes.
+fn merge_touching(polys: Vec<Polygon>) -> Vec<Polygon> {
+    if polys.len() < 2 {
+        return polys;
+    }
+    let boxes: Vec<(DVec2, DVec2)> = polys.iter().map(Polygon::bbox).collect();
+    let meet = |i: usize, j: usize| {
+        let ((a0, a1), (b0, b1)) = (boxes[i], boxes[j]);
+        a0.x <= b1.x && b0.x <= a1.x && a0.y <= b1.y && b0.y <= a1.y
+    };
+    // Groups of pieces whose boxes meet, directly or through others.
+    let mut group: Vec<usize> = (0..polys.len()).collect();
+    fn root(group: &mut [usize], mut i: usize) -> usize {
+        while group[i] != i {
+            group[i] = group[group[i]];
+            i = group[i];
+        }
+        i
+    }
+    for i in 0..polys.len() {
+        for j in 0..i {
+            if meet(i, j) {
+                let (a, b) = (root(&mut group, i), root(&mut group, j));
+                group[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let roots: Vec<usize> = (0..polys.len()).map(|i| root(&mut group, i)).collect();
+    let mut out = Vec::with_capacity(polys.len());
+    for (i, p) in polys.iter().enumerate() {
+        if roots[i] != i {
+            continue; // taken with its group's first piece
+        }
+        let members: Vec<Polygon> = (i..polys.len())
+            .filter(|&k| roots[k] == i)
+            .map(|k| polys[k].clone())
+            .collect();
+        if members.len() == 1 {
+            out.push(p.clone());
+            continue;
+        }
+        let united = Polygon::union_all(&members);
+        if united.len() < members.len() {
+            out.extend(united);
+        } else {
+            out.extend(members);
+        }
+    }
+    out
 }
 
 /// Outer rings and holes (none crossing another) as polygons: each hole
