@@ -44,21 +44,36 @@ export const HOOK_SCRIPTS = fs.readdirSync(path.join(ROOT, 'tests/e2e/hooks'))
   .filter((n) => n.endsWith('.js')).sort().map((n) => path.join(ROOT, 'tests/e2e/hooks', n));
 
 /** Start server (serving `root`, the repository by default) + browser (extra Chromium `args`).
- * Returns {url, browser, server, newPage({path, ...context options}), close()};
- * newPage goes to `path` (the home view by default; null: nowhere) and waits
- * until it is ready (see `ready`). Its pages (and their frames) are test pages:
- * the panels' test hooks are in `window.filigree.testHooks[<tool id or name>]`
- * (`ctx.expose`, www/app/document.js, built by HOOK_SCRIPTS). */
+ * Returns {url, browser, server, newPage({path, keep, ...context options}), closeTestPages(), close()};
+ * newPage opens a page in a new browser context, goes to `path` (the home view by
+ * default; null: nowhere) and waits until it is ready (see `ready`). Its pages
+ * (and their frames) are test pages: the panels' test hooks are in
+ * `window.filigree.testHooks[<tool id or name>]` (`ctx.expose`,
+ * www/app/document.js, built by HOOK_SCRIPTS).
+ *
+ * Cost: every app page runs its tool's Web Workers, and a page left open keeps
+ * computing (a fit, a tangle, a texture) and takes CPU from the tests after it.
+ * So a test file calls `afterEach(() => env?.closeTestPages())`: each test's
+ * contexts close when it ends, except those opened with `keep: true` (a page a
+ * file shares across tests, made in `before`), which close with `close()`.
+ * And a context blocks the app's service worker unless the test asks for it
+ * (`serviceWorkers: 'allow'`, in the tests about offline use, updates, the
+ * precache and where the worker may or may not be registered): installing it
+ * precaches every tool module and the editor bundle, and the app works without
+ * it (as it does in an embed, where it never registers one). */
 export async function launch({ root = ROOT, args = [] } = {}) {
   const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
   const browser = await chromium.launch({ executablePath: CHROMIUM, args: [...ARGS, ...args], headless: true });
-  const contexts = [];
+  const kept = [];
+  let perTest = [];
   const env = {
     url, browser, server,
-    async newPage({ path: p = '', ...opts } = {}) {
-      const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true, ...opts });
-      contexts.push(context);
+    async newPage({ path: p = '', keep = false, ...opts } = {}) {
+      const context = await browser.newContext({
+        viewport: { width: 1280, height: 800 }, acceptDownloads: true, serviceWorkers: 'block', ...opts,
+      });
+      (keep ? kept : perTest).push(context);
       await context.addInitScript(() => { globalThis.__filigreeTestHooks = true; });
       for (const file of HOOK_SCRIPTS) await context.addInitScript({ path: file });
       const page = await context.newPage();
@@ -69,8 +84,15 @@ export async function launch({ root = ROOT, args = [] } = {}) {
       }
       return page;
     },
+    /** Close the contexts newPage opened without `keep` (a test's own pages). */
+    async closeTestPages() {
+      const open = perTest;
+      perTest = [];
+      await Promise.all(open.map((c) => c.close().catch(() => {})));
+    },
     async close() {
-      for (const c of contexts) await c.close().catch(() => {});
+      await env.closeTestPages();
+      for (const c of kept) await c.close().catch(() => {});
       await browser.close();
       await new Promise((r) => server.close(r));
     },

@@ -3,12 +3,13 @@
 // decoder only (src/raster/image_buf.rs `decode_sent`). A JPEG or WebP
 // uploaded as a Fit target is still read, and nothing but the Fit module is
 // fetched for it.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, pickGenerator } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 /** A 200 × 160 picture of red stripes on cream, encoded by the browser as `type`. */
