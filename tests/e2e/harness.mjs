@@ -11,10 +11,16 @@ export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '
 export const fixture = (name) => path.join(ROOT, 'tests/fixtures', name);
 
 const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
+// The GPU is SwiftShader (software Vulkan/GL): WebGL and the GPU 2-D canvas
+// run on it as on a real GPU, but compositing every frame of every page
+// through it is what cost most CPU in the whole suite (the jobs file: 107 →
+// 52 CPU-seconds with `--disable-gpu-compositing`; CPU of the whole browser, wall
+// halved). So the compositor draws in software; canvases and WebGL stay
+// "hardware accelerated" (chrome://gpu), the paths a user's GPU takes.
 const ARGS = [
   '--headless=new', '--no-sandbox', '--disable-background-networking', '--disable-component-update',
   '--disable-sync', '--no-first-run', '--disable-quic',
-  '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
+  '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-gpu-compositing',
 ];
 
 /** Whether `path` (what follows the server's URL) opens a tool rather than the home view. */
