@@ -17,10 +17,27 @@ const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
 // 52 CPU-seconds with `--disable-gpu-compositing`; CPU of the whole browser, wall
 // halved). So the compositor draws in software; canvases and WebGL stay
 // "hardware accelerated" (chrome://gpu), the paths a user's GPU takes.
+//
+// Every context is a browser window, and each window preloads the address
+// bar's two WebUI popups (a renderer each, about 1 CPU-second per context:
+// the a11y file, 30 contexts, 95 → 62 CPU-seconds without them). A test
+// browser has no address bar to type in, so they are turned off. Playwright
+// passes its own `--disable-features=<list>` and Chromium keeps only the last
+// such switch, so ours repeats Playwright's list, read from playwright-core
+// (pinned in package.json); a launch with its own `--disable-features` in
+// `args` (frames.test.mjs) keeps overriding both, as before.
+const NO_FEATURES = ['WebUIOmniboxPopup', 'WebUIOmniboxAimPopup'];
+function playwrightDisabledFeatures() {
+  const bundle = fs.readFileSync(path.join(ROOT, 'node_modules/playwright-core/lib/coreBundle.js'), 'utf8');
+  const list = bundle.match(/\bdisabledFeatures = \[([^\]]*)\]/)?.[1].match(/"[^"]+"/g)?.map((q) => q.slice(1, -1));
+  if (!list?.length) throw new Error("tests/e2e/harness.mjs: Playwright's --disable-features list not found in playwright-core; update playwrightDisabledFeatures()");
+  return list;
+}
 const ARGS = [
   '--headless=new', '--no-sandbox', '--disable-background-networking', '--disable-component-update',
   '--disable-sync', '--no-first-run', '--disable-quic',
   '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-gpu-compositing',
+  `--disable-features=${[...playwrightDisabledFeatures(), ...NO_FEATURES].join(',')}`,
 ];
 
 /** Whether `path` (what follows the server's URL) opens a tool rather than the home view. */
