@@ -3,7 +3,7 @@
 // are real buttons; an image pasted with Ctrl+V is read; axe-core (npm,
 // injected into the page) finds no serious or critical violation in any view,
 // and each view has exactly one h1; each tool's Help opens and closes by keyboard.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -13,6 +13,7 @@ const AXE = fs.readFileSync(path.join(ROOT, 'node_modules/axe-core/axe.min.js'),
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const READY = {

@@ -2,12 +2,13 @@
 // rectangle per frame (one putImageData), does no layout work on pointermove,
 // maps pointers to image pixels at any zoom, and paints within a frame.
 // Prints the input-to-paint latency medians for 1024² and 4096² images.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 async function brushDrag(page, size) {

@@ -4,7 +4,7 @@
 // touching the user's work; leaving a tool or changing the generator during
 // a fit stops it cleanly; examples are undoable; blocked storage is said
 // plainly and the app still works; test hooks exist only in a test page.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -14,6 +14,7 @@ import { launch, pickGenerator, ready, ROOT, HOOK_SCRIPTS } from './harness.mjs'
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const ERROR = '[data-testid=doc-error]';

@@ -6,13 +6,14 @@
 // (an SVG start or a grammar; a scene JSON) dropped anywhere, and a project
 // file opens from any tool, wherever it lands; a bad file is refused in
 // plain words and the document stays.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { launch, dropFile, fixture, rgbPng } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 test('drop anywhere: Pixel, Fit, Inspect and Texture take a file dropped outside their zone', async () => {

@@ -2,7 +2,7 @@
 // a second origin (127.0.0.1 vs the app's localhost: another site, so the
 // frame is a real third-party context), embed mode read-only and
 // interactive, "Open in Filigree", and the user's autosave left alone.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
 import { launch, pickGenerator, ROOT } from './harness.mjs';
@@ -16,6 +16,7 @@ before(async () => {
   host = await start(0, path.join(ROOT, 'tests/e2e/pages'));
   hostUrl = `http://127.0.0.1:${host.address().port}/`;
 });
+afterEach(() => env?.closeTestPages());
 after(async () => {
   await env?.close();
   await new Promise((r) => (host ? host.close(r) : r()));
@@ -247,7 +248,7 @@ test('read-only "Open in Filigree" arrives with the same state', async () => {
 
 test('an interactive embed on the app\'s own origin never writes the user\'s autosave nor registers a service worker', async () => {
   // The user's own work: the full app with honeycomb, autosaved.
-  const page = await env.newPage({ path: '#tool=fit' });
+  const page = await env.newPage({ path: '#tool=fit', serviceWorkers: 'allow' });
   await pickGenerator(page, 'honeycomb');
   const dump = () => page.evaluate(async () => {
     const names = (await indexedDB.databases()).map((d) => d.name).filter(Boolean).sort();

@@ -1,12 +1,13 @@
 // A limit a program meets at a statement (too many shapes, a loop that never
 // ends) is marked under that statement's line, from the error's `line` and
 // `column` fields: the page reads no place out of the message text.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 test('fit: a shape limit met at line 3 is marked under line 3, from the error\'s place', async () => {

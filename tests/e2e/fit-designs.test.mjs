@@ -5,7 +5,7 @@
 // paper's GA ended at the angle's bound (stripes at ~28° instead of 45°,
 // IoU 0.24); the default global stage (spectra, then a phase sweep) finds
 // the right basin, and the status names the stage while it runs.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -13,6 +13,7 @@ import { launch, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const design = (file) => fs.readFileSync(path.join(ROOT, 'bench/designs', file));

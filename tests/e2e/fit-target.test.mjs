@@ -2,12 +2,13 @@
 // on an empty target (it waits, saying how to make one); the target and the
 // pattern drawn over it look different; after Cancel the overlay shows the
 // values that were kept, not the abandoned candidate.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const ready = (page) => page.waitForFunction(() => !!document.querySelector('[data-testid=fit-sliders] input'));

@@ -2,7 +2,7 @@
 // cross-origin iframe, an iframe in an about:blank page, and the app served
 // under a sub-path. It must work, say plainly when it cannot save, and keep
 // the console free of error storms.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -18,6 +18,7 @@ before(async () => {
   host = await start(0, path.join(ROOT, 'tests/e2e/pages'));
   hostUrl = `http://127.0.0.1:${host.address().port}/`;
 });
+afterEach(() => env?.closeTestPages());
 after(async () => {
   await env?.close();
   await new Promise((r) => (host ? host.close(r) : r()));
@@ -72,7 +73,7 @@ async function storageFacts(frame) {
 }
 
 test('the app in a cross-origin iframe works and its storage state is said plainly', async () => {
-  const page = await env.newPage({ path: null });
+  const page = await env.newPage({ path: null, serviceWorkers: 'allow' });
   const errors = await watchErrors(page);
   const swNoise = [];
   page.on('console', (m) => { if (/service ?worker/i.test(m.text())) swNoise.push(`${m.type()}: ${m.text()}`); });
@@ -99,7 +100,7 @@ test('the app in an about:blank host works, says it cannot save there, and stays
   // deployed app is not on localhost, so they are turned off for this test.
   const blankEnv = await launch({ args: ['--disable-features=LocalNetworkAccessChecks'] });
   try {
-    const page = await blankEnv.newPage({ path: null });
+    const page = await blankEnv.newPage({ path: null, serviceWorkers: 'allow' });
     const errors = await watchErrors(page);
     await page.goto('about:blank');
     await page.evaluate((src) => {

@@ -11,10 +11,33 @@ export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '
 export const fixture = (name) => path.join(ROOT, 'tests/fixtures', name);
 
 const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
+// The GPU is SwiftShader (software Vulkan/GL): WebGL and the GPU 2-D canvas
+// run on it as on a real GPU, but compositing every frame of every page
+// through it is what cost most CPU in the whole suite (the jobs file: 107 →
+// 52 CPU-seconds with `--disable-gpu-compositing`; CPU of the whole browser, wall
+// halved). So the compositor draws in software; canvases and WebGL stay
+// "hardware accelerated" (chrome://gpu), the paths a user's GPU takes.
+//
+// Every context is a browser window, and each window preloads the address
+// bar's two WebUI popups (a renderer each, about 1 CPU-second per context:
+// the a11y file, 30 contexts, 95 → 62 CPU-seconds without them). A test
+// browser has no address bar to type in, so they are turned off. Playwright
+// passes its own `--disable-features=<list>` and Chromium keeps only the last
+// such switch, so ours repeats Playwright's list, read from playwright-core
+// (pinned in package.json); a launch with its own `--disable-features` in
+// `args` (frames.test.mjs) keeps overriding both, as before.
+const NO_FEATURES = ['WebUIOmniboxPopup', 'WebUIOmniboxAimPopup'];
+function playwrightDisabledFeatures() {
+  const bundle = fs.readFileSync(path.join(ROOT, 'node_modules/playwright-core/lib/coreBundle.js'), 'utf8');
+  const list = bundle.match(/\bdisabledFeatures = \[([^\]]*)\]/)?.[1].match(/"[^"]+"/g)?.map((q) => q.slice(1, -1));
+  if (!list?.length) throw new Error("tests/e2e/harness.mjs: Playwright's --disable-features list not found in playwright-core; update playwrightDisabledFeatures()");
+  return list;
+}
 const ARGS = [
   '--headless=new', '--no-sandbox', '--disable-background-networking', '--disable-component-update',
   '--disable-sync', '--no-first-run', '--disable-quic',
-  '--enable-unsafe-swiftshader', '--use-angle=swiftshader',
+  '--enable-unsafe-swiftshader', '--use-angle=swiftshader', '--disable-gpu-compositing',
+  `--disable-features=${[...playwrightDisabledFeatures(), ...NO_FEATURES].join(',')}`,
 ];
 
 /** Whether `path` (what follows the server's URL) opens a tool rather than the home view. */
@@ -44,21 +67,36 @@ export const HOOK_SCRIPTS = fs.readdirSync(path.join(ROOT, 'tests/e2e/hooks'))
   .filter((n) => n.endsWith('.js')).sort().map((n) => path.join(ROOT, 'tests/e2e/hooks', n));
 
 /** Start server (serving `root`, the repository by default) + browser (extra Chromium `args`).
- * Returns {url, browser, server, newPage({path, ...context options}), close()};
- * newPage goes to `path` (the home view by default; null: nowhere) and waits
- * until it is ready (see `ready`). Its pages (and their frames) are test pages:
- * the panels' test hooks are in `window.filigree.testHooks[<tool id or name>]`
- * (`ctx.expose`, www/app/document.js, built by HOOK_SCRIPTS). */
+ * Returns {url, browser, server, newPage({path, keep, ...context options}), closeTestPages(), close()};
+ * newPage opens a page in a new browser context, goes to `path` (the home view by
+ * default; null: nowhere) and waits until it is ready (see `ready`). Its pages
+ * (and their frames) are test pages: the panels' test hooks are in
+ * `window.filigree.testHooks[<tool id or name>]` (`ctx.expose`,
+ * www/app/document.js, built by HOOK_SCRIPTS).
+ *
+ * Cost: every app page runs its tool's Web Workers, and a page left open keeps
+ * computing (a fit, a tangle, a texture) and takes CPU from the tests after it.
+ * So a test file calls `afterEach(() => env?.closeTestPages())`: each test's
+ * contexts close when it ends, except those opened with `keep: true` (a page a
+ * file shares across tests, made in `before`), which close with `close()`.
+ * And a context blocks the app's service worker unless the test asks for it
+ * (`serviceWorkers: 'allow'`, in the tests about offline use, updates, the
+ * precache and where the worker may or may not be registered): installing it
+ * precaches every tool module and the editor bundle, and the app works without
+ * it (as it does in an embed, where it never registers one). */
 export async function launch({ root = ROOT, args = [] } = {}) {
   const server = await start(0, root);
   const url = `http://localhost:${server.address().port}/`;
   const browser = await chromium.launch({ executablePath: CHROMIUM, args: [...ARGS, ...args], headless: true });
-  const contexts = [];
+  const kept = [];
+  let perTest = [];
   const env = {
     url, browser, server,
-    async newPage({ path: p = '', ...opts } = {}) {
-      const context = await browser.newContext({ viewport: { width: 1280, height: 800 }, acceptDownloads: true, ...opts });
-      contexts.push(context);
+    async newPage({ path: p = '', keep = false, ...opts } = {}) {
+      const context = await browser.newContext({
+        viewport: { width: 1280, height: 800 }, acceptDownloads: true, serviceWorkers: 'block', ...opts,
+      });
+      (keep ? kept : perTest).push(context);
       await context.addInitScript(() => { globalThis.__filigreeTestHooks = true; });
       for (const file of HOOK_SCRIPTS) await context.addInitScript({ path: file });
       const page = await context.newPage();
@@ -69,8 +107,15 @@ export async function launch({ root = ROOT, args = [] } = {}) {
       }
       return page;
     },
+    /** Close the contexts newPage opened without `keep` (a test's own pages). */
+    async closeTestPages() {
+      const open = perTest;
+      perTest = [];
+      await Promise.all(open.map((c) => c.close().catch(() => {})));
+    },
     async close() {
-      for (const c of contexts) await c.close().catch(() => {});
+      await env.closeTestPages();
+      for (const c of kept) await c.close().catch(() => {});
       await browser.close();
       await new Promise((r) => server.close(r));
     },

@@ -5,12 +5,13 @@
 // PNG file sent to the Fit module is refused as unsupported, and a PNG whose
 // header declares a size over the core's limits is refused by the page
 // before the browser decodes it.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, pickGenerator } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 /** A 200 × 160 picture of red stripes on cream, encoded by the browser as `type`. */

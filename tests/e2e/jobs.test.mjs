@@ -3,12 +3,13 @@
 // progress, and it is there when they come back; Stop keeps the best
 // values so far for "Apply fitted values"; a fit ended by a change says
 // it was cancelled and why.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, pickGenerator } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const STATUS = '[data-testid=fit-status]';

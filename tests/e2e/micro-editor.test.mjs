@@ -3,12 +3,13 @@
 // error is printed under its line and the picture keeps its last good frame;
 // Roughness and Specular show only for GGX; the Reconstruct plot's axis
 // reads the numbers the status gives.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 /** The picture's pixels: a grey level per pixel. */

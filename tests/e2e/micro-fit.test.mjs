@@ -5,7 +5,7 @@
 // loss fall on the plot; apply the fitted value to the scene as one
 // undoable change. And fit wasm = native: the shared fit requests give, in
 // the worker, the native core's results to the bit.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -13,6 +13,7 @@ import { launch, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const state = (page) => page.evaluate(() => window.filigree.testHooks.micro.state());

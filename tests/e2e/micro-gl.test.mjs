@@ -10,7 +10,7 @@
 // Then the panel: the interactive view runs on the GPU (coarse frames while
 // the camera moves, refined to full size when idle), and without WebGL2 it
 // says so in plain words and draws on the CPU.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
@@ -20,6 +20,7 @@ const SIDE = 64;
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 /** In the page: render every shipped scene both ways, return the comparison per scene. */

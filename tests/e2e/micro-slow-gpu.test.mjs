@@ -4,12 +4,13 @@
 // tiled `micro-render` path), and the choice holds for the tab's session,
 // a reload included, until "Use the GPU again". The threshold is lowered by
 // a test hook, so no slow GPU is needed.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, ready } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const NOTE = '[data-testid=micro-renderer]';

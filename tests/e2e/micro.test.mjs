@@ -5,7 +5,7 @@
 // core's line, the slice view (`micro-slice`), and the document kept by the
 // autosave across a reload. WebGL2 is hidden here so the worker path is
 // what runs; the GPU view has its own tests (micro-gl.test.mjs).
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -14,6 +14,7 @@ import { launch, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const runs = (page) => page.$eval('[data-testid=micro-status]', (el) => Number(el.dataset.runs || 0));

@@ -1,13 +1,14 @@
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, dropFile, fixture } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 test('after one visit the app loads and inspects offline', async () => {
-  const page = await env.newPage({ path: '#tool=inspect' });
+  const page = await env.newPage({ path: '#tool=inspect', serviceWorkers: 'allow' });
   // Wait until the service worker controls the page (first install claims clients).
   await page.evaluate(async () => {
     await navigator.serviceWorker.ready;

@@ -2,13 +2,14 @@
 // stack of the release wasm in the worker: the deepest program of every
 // kind of nesting runs, one level more is a located limit error, and
 // nothing ever traps (a trap would surface as kind 'crash').
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 import { FAMILIES, runIn } from './pattern-depth-families.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const located = (r) => Number.isInteger(r.line) || /line \d+, column \d+/.test(r.message);

@@ -3,12 +3,13 @@
 // window narrows from a desktop's 1280×800 (a phone turned, a window
 // resized). The program editors stay inside their cards: long lines scroll
 // inside the editor, never the page.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const PHONE = { width: 390, height: 844 };

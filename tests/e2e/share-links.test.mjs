@@ -4,7 +4,7 @@
 // link has the same pixels; an
 // example too big for a link is named before anything is copied, and the
 // link copied on the user's word leaves it out and says so.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -13,6 +13,7 @@ import { launch, dropFile, rgbPng } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const state = (page) => page.evaluate(() => window.filigree.testHooks.texture.state());

@@ -1,12 +1,13 @@
 // The shell: home view, layouts that fit a 1280×800 desktop and a 390×844
 // touch phone, the code editor (CodeMirror bundle and its textarea fallback).
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { launch, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const PHONE = { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true, deviceScaleFactor: 2 };
@@ -215,7 +216,7 @@ test('the editor bundle ships: served from our origin and listed in the service 
 test('offline after one visit, the program editor is still CodeMirror (the bundle is precached)', async () => {
   const own = await launch();
   try {
-    const page = await own.newPage({ path: '#tool=fit' });
+    const page = await own.newPage({ path: '#tool=fit', serviceWorkers: 'allow' });
     await page.evaluate(async () => {
       await navigator.serviceWorker.ready;
       if (!navigator.serviceWorker.controller) {

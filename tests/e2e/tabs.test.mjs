@@ -3,12 +3,13 @@
 // Keep mine; a tab never writes over the other's newer save without the
 // user choosing so (each autosave carries a revision, checked in the same
 // transaction as the write).
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, ready } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const BAR = '[data-testid=doc-tabs]';

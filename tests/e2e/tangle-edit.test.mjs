@@ -18,12 +18,13 @@
 // composite edge pixels up to 9 levels in 255 apart. A line drawn where
 // there is none, or missing, differs by far more at its core: pixels off by
 // more than 100 levels must be none, and those off by more than 2 a few.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, tangleRuns as runs, waitForTangle as waitForResult } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch({ args: ['--disable-accelerated-2d-canvas'] }); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 /** Select a step with a `distance` (outline, place) whose subtree has `lo`–`hi` shapes; set its distance to `v`. */

@@ -2,12 +2,13 @@
 // list chosen with the keyboard and in sync with the drawing's selection;
 // a typed start word applies as you type; no Canvas2D read-back warning
 // while the drawing is zoomed and its layers are drawn ahead.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const selected = (page) => page.evaluate(() => window.filigree.testHooks.tangle.state().selected);

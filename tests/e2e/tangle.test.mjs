@@ -5,13 +5,14 @@
 // export (parsed, one <path> per final shape, the same bytes as the native
 // CLI: tests/golden/tangle-leaf-seed1.svg.sha256 holds the SHA-256 and byte
 // length of `filigree tangle --grammar assets/tangle/leaf.tangle --seed 1 --out x.svg`).
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { launch, tangleRuns as runs, waitForTangle as waitForResult } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const count = (page) => page.$eval('[data-testid=tangle-count]', (el) => Number(el.dataset.count));

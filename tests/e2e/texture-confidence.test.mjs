@@ -3,12 +3,13 @@
 // likely first and the predicted one on top; a picture that is no
 // procedural texture (a smooth grey ramp) says "No close
 // model" and still lists the nearest three. Both are kept in the document, so a reload shows them.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch, dropFile } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const state = (page) => page.evaluate(() => window.filigree.testHooks.texture.state());

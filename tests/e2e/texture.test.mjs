@@ -5,13 +5,14 @@
 // export is a real picture of the shown size. The index asset is fetched
 // only by this panel; a corrupt, wrong-version or missing index is said in
 // the panel with the core's message while the page keeps working.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { launch, dropFile } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 const REGULARITY = 9; // index of "regularity" in the scales (src/texture/scales.rs)

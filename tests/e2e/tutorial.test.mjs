@@ -4,7 +4,7 @@
 // steps, orbit; Reset brings the author's state back) and nothing persists;
 // the wheel scrolls the tutorial until the reader clicks into an embed;
 // heights follow the content or the author's `height`.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import path from 'node:path';
 import { launch, ROOT } from './harness.mjs';
@@ -37,7 +37,7 @@ before(async () => {
   env = await launch();
   host = await start(0, path.join(ROOT, 'tests/e2e/pages'));
   // The user's own work in the full app, autosaved; and the tutorial's states, made in the app.
-  app = await env.newPage({ path: '#tool=fit' });
+  app = await env.newPage({ path: '#tool=fit', keep: true }); // shared by every test
   await app.waitForSelector('[data-testid=fit-sliders] .row');
   // A target made from the values, then the values moved off it: the author's Fit problem.
   await app.click('button[data-act=make-target]');
@@ -68,6 +68,7 @@ before(async () => {
   await page.goto(`http://127.0.0.1:${host.address().port}/tutorial.html?${q}#${encodeURIComponent(JSON.stringify(states))}`);
   await page.waitForFunction(() => customElements.get('filigree-embed'));
 });
+afterEach(() => env?.closeTestPages());
 after(async () => {
   await env?.close();
   await new Promise((r) => (host ? host.close(r) : r()));

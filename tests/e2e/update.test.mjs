@@ -1,6 +1,6 @@
 // A new build is offered, not forced: the waiting service worker takes over
 // only when the person clicks the offer, and then the new files are served.
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
@@ -18,13 +18,14 @@ before(async () => {
   }
   env = await launch({ root });
 });
+afterEach(() => env?.closeTestPages());
 after(async () => {
   await env?.close();
   fs.rmSync(root, { recursive: true, force: true });
 });
 
 test('a new version is offered and applied only when accepted', async () => {
-  const page = await env.newPage({ path: '#tool=inspect' });
+  const page = await env.newPage({ path: '#tool=inspect', serviceWorkers: 'allow' });
   await page.evaluate(async () => {
     await navigator.serviceWorker.ready;
     if (!navigator.serviceWorker.controller) {

@@ -1,4 +1,4 @@
-import { test, before, after } from 'node:test';
+import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -30,6 +30,7 @@ async function testCorePage(env) {
 
 let env;
 before(async () => { env = await launch(); });
+afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
 test('a worker that crashes mid-job is reported and replaced; the next job succeeds', async () => {
