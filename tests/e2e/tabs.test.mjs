@@ -106,17 +106,19 @@ test('two tabs: a save in one is offered to the other, which never overwrites it
 // "blocked", dropping every later change.)
 test('a save that commits after the storage timeout still counts: the other tab hears of it, and saving goes on', async () => {
   const a = await env.newPage({ path: null });
-  // Each readwrite transaction of this tab says it completed `__slowWrites` ms late.
+  // Each readwrite transaction of this tab commits `__slowWrites` ms late, as
+  // on a slow disk: it is kept open by reads until then, so it also holds
+  // back the next transaction on the store.
   await a.addInitScript(() => {
     const open = IDBDatabase.prototype.transaction;
     IDBDatabase.prototype.transaction = function (...args) {
       const tx = open.apply(this, args);
       const delay = window.__slowWrites;
       if (args[1] === 'readwrite' && delay) {
-        Object.defineProperty(tx, 'oncomplete', {
-          set(fn) { tx.addEventListener('complete', (e) => setTimeout(() => fn.call(tx, e), delay)); },
-          configurable: true,
-        });
+        const store = tx.objectStore(Array.isArray(args[0]) ? args[0][0] : args[0]);
+        const end = Date.now() + delay;
+        const hold = () => { if (Date.now() < end) store.count().onsuccess = hold; };
+        hold();
       }
       return tx;
     };
@@ -127,13 +129,18 @@ test('a save that commits after the storage timeout still counts: the other tab 
 
   await a.evaluate(() => { window.__slowWrites = 2500; }); // past STORAGE_TIMEOUT_MS (1.5 s)
   await nudge(a, 'dx');
-  const mine = await values(a);
   await a.waitForSelector(`${NOTE}:not([hidden])`, { timeout: 5000 });
   assert.match(await a.textContent(NOTE), /cannot save your work here/);
+  // A second change while the first write is still out: its write runs after
+  // the first commits, and A does not take its own save for another tab's.
+  await nudge(a, 'dy');
+  const mine = await values(a);
   // The write lands: B is told, and A takes back what it said.
   await b.waitForSelector(`${BAR}:not([hidden])`, { timeout: 8000 });
   await a.waitForSelector(`${NOTE}[hidden]`, { state: 'attached', timeout: 5000 });
-  assert.deepEqual((await stored(a))?.values, mine);
+  const landed = await until(a, (x) => same(x?.values, mine));
+  assert.deepEqual(landed?.values, mine, 'both changes were written, the later last');
+  assert.equal(await a.isHidden(BAR), true, 'A was not told its own save came from another tab');
 
   // Saving goes on: A's next change (at normal speed) is written too.
   await a.evaluate(() => { window.__slowWrites = 0; });

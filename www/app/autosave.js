@@ -187,12 +187,15 @@ export class Autosave {
     if (this.conflict && over < this.conflict) return this.lastSaved; // held until the user decides
     const value = typeof this.pending === 'function' ? this.pending() : this.pending;
     this.pending = null;
-    const base = Math.max(this.rev, over);
     let wrote = 0;
     let found = 0;
     const write = transact('readwrite', (s) => {
       const get = s.get(this.key);
       get.onsuccess = () => {
+        // This tab's revision as of now: a write of this tab still out when
+        // this one was started has committed (the store runs them in turn)
+        // and is not taken for another tab's.
+        const base = Math.max(this.rev, over);
         found = revOf(get.result);
         if (found > base) return; // another tab saved after this one last read: do not overwrite it
         wrote = found + 1;
