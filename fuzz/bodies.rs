@@ -261,6 +261,7 @@ pub fn run_request(kind: &str, payload: &[u8]) {
             assert_eq!(m.bits.len() as u64, m.width as u64 * m.height as u64);
         }
         Response::Generators(g) => assert!(!g.is_empty()),
+        Response::TanglePng(r) => assert!(r.png.starts_with(b"\x89PNG\r\n\x1a\n")),
         _ => {}
     }
 }

@@ -31,7 +31,7 @@ import { launch, ROOT } from '../tests/e2e/harness.mjs';
 const runs = Number(process.argv[2] || 3);
 const root = path.resolve(process.argv[3] || ROOT);
 const TOOLS = ['pixel', 'fit', 'inspect', 'tangle', 'micro', 'texture'];
-const MODULES = ['inspect', 'pixel', 'fit', 'tangle', 'micro', 'texture'];
+const MODULES = ['inspect', 'pixel', 'fit', 'tangle', 'tangle-png', 'micro', 'texture'];
 const CASES = [
   ...TOOLS.map((id) => ({ name: id, path: `#tool=${id}`, core: true })),
   { name: 'home', path: '', core: false },

@@ -6,8 +6,9 @@
 #   pixel          tests/golden/pixel/*.png      the browser's bytes (tests/e2e/pixel.test.mjs)
 #   fit            tests/golden/fit/*.{png,svg}  none (our renderer's own output)
 #   micro          tests/fixtures/micro-native/  the browser's bytes (tests/e2e/micro*.test.mjs)
-#   tangle         tests/golden/tangle-leaf-seed1.svg.sha256
+#   tangle         tests/golden/tangle-leaf-seed1.svg.sha256, tangle-leaf-seed1-800.png.sha256
 #                                                the browser's SVG export (tests/e2e/tangle.test.mjs)
+#                                                and PNG export (tests/e2e/tangle-png.test.mjs)
 #   texture-index  assets/texture-index.bin + .inputs
 #                                                none (rebuilt from scratch when its inputs change,
 #                                                scripts/check-texture-index.sh)
@@ -35,6 +36,10 @@ if want tangle; then
   target/debug/filigree tangle --grammar assets/tangle/leaf.tangle --seed 1 --out "$svg" > /dev/null
   echo "$(sha256sum "$svg" | cut -c1-64) $(stat -c %s "$svg")" > tests/golden/tangle-leaf-seed1.svg.sha256
   echo "bless: tests/golden/tangle-leaf-seed1.svg.sha256"
+  png=target/tangle-leaf-seed1-800.png
+  target/debug/filigree tangle --grammar assets/tangle/leaf.tangle --seed 1 --png-width 800 --out "$png" > /dev/null
+  echo "$(sha256sum "$png" | cut -c1-64) $(stat -c %s "$png")" > tests/golden/tangle-leaf-seed1-800.png.sha256
+  echo "bless: tests/golden/tangle-leaf-seed1-800.png.sha256"
 fi
 if want texture-index; then
   target/debug/filigree build-index --out assets/texture-index.bin > target/texture-index.rebuilt.json

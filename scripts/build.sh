@@ -9,7 +9,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-MODULES="inspect pixel fit tangle micro texture"
+MODULES="inspect pixel fit tangle tangle-png micro texture"
 out=target/wasm32-unknown-unknown/release/filigree_wasm.wasm
 mkdir -p target/wasm-modules
 rm -rf pkg

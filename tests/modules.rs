@@ -4,7 +4,8 @@
 use filigree::api::{module_of, Module, IMAGE_KINDS, KINDS, SHARED_KINDS};
 use std::collections::BTreeMap;
 
-/// `name: ['a', 'b'],` lines of MODULE_KINDS, and the SHARED_KINDS list.
+/// `name: ['a', 'b'],` lines of MODULE_KINDS (a name may be quoted,
+/// `//` lines are comments), and the SHARED_KINDS list.
 fn page_tables() -> (BTreeMap<String, Vec<String>>, Vec<String>, Vec<String>) {
     let js = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/www/app/protocol.js"))
         .expect("www/app/protocol.js");
@@ -21,9 +22,13 @@ fn page_tables() -> (BTreeMap<String, Vec<String>>, Vec<String>, Vec<String>) {
         .and_then(|s| s.split("});").next())
         .expect("MODULE_KINDS in protocol.js");
     let mut modules = BTreeMap::new();
-    for line in body.lines().map(str::trim).filter(|l| !l.is_empty()) {
+    for line in body
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("//"))
+    {
         let (name, list) = line.split_once(':').expect("name: [kinds]");
-        modules.insert(name.trim().to_string(), strings(list));
+        modules.insert(name.trim().trim_matches('\'').to_string(), strings(list));
     }
     let shared = js
         .split("export const SHARED_KINDS = Object.freeze(")

@@ -61,6 +61,9 @@ pub const KINDS: &[&str] = &[
     "texture-retrieve",
     "micro-fit",
     "micro-glsl",
+    // Last, so the fuzz corpora's kind bytes (an index into this list) keep
+    // their meaning.
+    "tangle-png",
 ];
 
 /// The answer of any request (serialised as the inner value alone).
@@ -81,6 +84,7 @@ pub enum Response {
     State(Box<project::ToolState>),
     Project(Box<project::OpenedProject>),
     Tangle(Box<tangle::TangleResponse>),
+    TanglePng(tangle::TanglePngResponse),
     TangleExamples(&'static [crate::tangle::examples::Example]),
     MicroRender(Box<micro::MicroRenderResponse>),
     MicroGlsl(Box<micro::MicroGlslResponse>),
@@ -155,6 +159,7 @@ pub enum DefaultRequest {
     CheckState(project::CheckStateRequest),
     OpenProject(project::OpenProjectRequest),
     Tangle(Box<tangle::TangleRequest>),
+    TanglePng(Box<tangle::TanglePngRequest>),
     MicroRender(Box<micro::MicroRenderRequest>),
     MicroSlice(Box<micro::MicroSliceRequest>),
     TextureRender(texture::TextureRenderRequest),
@@ -200,6 +205,7 @@ pub fn defaults(tool: &str) -> Result<Defaults> {
         "texture-analyse" => D::TextureAnalyse(Default::default()),
         "texture-retrieve" => D::TextureRetrieve(Default::default()),
         "tangle" => D::Tangle(Default::default()),
+        "tangle-png" => D::TanglePng(Default::default()),
         "micro-render" | "micro-glsl" => D::MicroRender(Default::default()),
         "micro-slice" => D::MicroSlice(Default::default()),
         "micro-fit" => D::MicroFit(Default::default()),
@@ -230,16 +236,20 @@ pub enum Module {
     Pixel,
     Fit,
     Tangle,
+    /// Tangle's PNG export, loaded on the first export: the rasteriser and
+    /// the PNG encoder stay out of the Tangle module.
+    TanglePng,
     Micro,
     Texture,
 }
 
 impl Module {
-    pub const ALL: [Module; 6] = [
+    pub const ALL: [Module; 7] = [
         Module::Inspect,
         Module::Pixel,
         Module::Fit,
         Module::Tangle,
+        Module::TanglePng,
         Module::Micro,
         Module::Texture,
     ];
@@ -251,6 +261,7 @@ impl Module {
             Module::Pixel => "pixel",
             Module::Fit => "fit",
             Module::Tangle => "tangle",
+            Module::TanglePng => "tangle-png",
             Module::Micro => "micro",
             Module::Texture => "texture",
         }
@@ -270,6 +281,7 @@ impl Module {
                 "pattern-snap",
             ],
             Module::Tangle => &["tangle", "tangle-examples"],
+            Module::TanglePng => &["tangle-png"],
             Module::Micro => &[
                 "micro-render",
                 "micro-slice",
@@ -331,6 +343,7 @@ pub fn start<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result<Box<Re
         Some(Module::Pixel) => start_pixel(kind, payload),
         Some(Module::Fit) => start_fit(kind, payload),
         Some(Module::Tangle) => start_tangle(kind, payload),
+        Some(Module::TanglePng) => start_tangle_png(kind, payload),
         Some(Module::Micro) => start_micro(kind, payload),
         Some(Module::Texture) => start_texture(kind, payload),
         Some(Module::Inspect) | None => start_shared(
@@ -422,6 +435,28 @@ pub fn start_tangle<'de, D: Deserializer<'de>>(kind: &str, payload: D) -> Result
                 payload,
                 project::check_tangle,
                 const { Module::Tangle.image_decoder() },
+            )
+        }
+    })
+}
+
+/// The `tangle-png` module's kinds: Tangle's PNG export. It holds no
+/// documents, so it checks none.
+pub fn start_tangle_png<'de, D: Deserializer<'de>>(
+    kind: &str,
+    payload: D,
+) -> Result<Box<RequestJob>> {
+    Ok(match kind {
+        "tangle-png" => boxed(
+            tangle::start_png(request(kind, payload)?)?,
+            Response::TanglePng,
+        ),
+        _ => {
+            return start_shared(
+                kind,
+                payload,
+                project::check_none,
+                const { Module::TanglePng.image_decoder() },
             )
         }
     })

@@ -137,6 +137,13 @@ pub fn check_any(tool_id: &str, state: &Value) -> Option<Result<ToolState>> {
     checks.iter().find_map(|c| c(tool_id, state))
 }
 
+/// Checks no tool's state: an unchecked `open-project`
+/// ([`OpenProjectRequest::unchecked`]), and the module that holds no
+/// documents (Tangle's PNG export), which leaves them to their tools'.
+pub fn check_none(_tool_id: &str, _state: &Value) -> Option<Result<ToolState>> {
+    None
+}
+
 /// One tool's state check, as a [`StateCheck`].
 macro_rules! state_check {
     ($name:ident, $id:literal, $variant:ident, $check:path) => {
@@ -270,11 +277,6 @@ pub fn open_project(text: &str) -> Result<OpenedProject> {
 pub fn start_open_project(req: OpenProjectRequest, checks: StateCheck) -> OpenProjectJob<'static> {
     let checks = if req.unchecked { check_none } else { checks };
     OpenProjectJob::new(Cow::Owned(req.text)).checking(checks)
-}
-
-/// Checks no tool's state ([`OpenProjectRequest::unchecked`]).
-fn check_none(_: &str, _: &Value) -> Option<Result<ToolState>> {
-    None
 }
 
 /// Fuel of one reading step of `open-project` (see [`json::Reader::step`]):

@@ -132,6 +132,148 @@ impl Default for TangleRequest {
     }
 }
 
+/// `tangle-png`: a tangle's final shapes drawn as a PNG, the page's PNG
+/// export. The page holds the `tangle` answer and sends its final shapes
+/// (`died` −1) in the answer's own layout, so this kind, alone in the small
+/// `tangle-png` wasm module, needs no grammar or expansion; natively a
+/// `tangle` request with `export: "png"` draws the same
+/// [`export::Drawing`], so both give the same bytes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TanglePngRequest {
+    /// x, y of every ring's points, shape after shape (little-endian f32
+    /// bytes, as the answer's `points`).
+    #[serde(with = "serde_bytes")]
+    pub points: Vec<u8>,
+    /// Points per ring (little-endian u32 bytes).
+    #[serde(with = "serde_bytes")]
+    pub rings: Vec<u8>,
+    /// Rings per shape (little-endian u32 bytes), the outer ring first.
+    #[serde(with = "serde_bytes")]
+    pub shapes: Vec<u8>,
+    /// Each shape's fill tone (little-endian f32 bytes, as the answer's `fill`).
+    #[serde(with = "serde_bytes")]
+    pub fill: Vec<u8>,
+    /// Each shape's flags (1 white lines, 2 mark, as the answer's `flags`).
+    #[serde(with = "serde_bytes")]
+    pub flags: Vec<u8>,
+    /// Pen width, drawing units, and the PNG's width in pixels: as a
+    /// `tangle` request's (same defaults and ranges).
+    pub stroke_width: f64,
+    pub png_width: u32,
+}
+
+impl Default for TanglePngRequest {
+    fn default() -> Self {
+        let t = TangleRequest::default();
+        TanglePngRequest {
+            points: vec![],
+            rings: vec![],
+            shapes: vec![],
+            fill: vec![],
+            flags: vec![],
+            stroke_width: t.stroke_width,
+            png_width: t.png_width,
+        }
+    }
+}
+
+/// The answer of `tangle-png`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TanglePngResponse {
+    #[serde(with = "serde_bytes")]
+    pub png: Vec<u8>,
+}
+
+/// A column of little-endian `N`-byte values; an error names `field` when
+/// its length is not a multiple of `N`.
+fn le_column<T, const N: usize>(
+    bytes: &[u8],
+    field: &str,
+    read: impl Fn([u8; N]) -> T,
+) -> Result<Vec<T>> {
+    if !bytes.len().is_multiple_of(N) {
+        return Err(Error::input(format!(
+            "{} bytes is not a whole number of {N}-byte values",
+            bytes.len()
+        ))
+        .at(field));
+    }
+    Ok(bytes
+        .chunks_exact(N)
+        .map(|c| read(c.try_into().expect("N bytes")))
+        .collect())
+}
+
+impl TanglePngRequest {
+    /// The drawing it sends, checked ([`export::Drawing::check`]).
+    pub fn drawing(&self) -> Result<export::Drawing> {
+        if self.points.len() / 8 > export::MAX_DRAWING_POINTS {
+            return Err(Error::limit(format!(
+                "{} points; a drawing has at most {}",
+                self.points.len() / 8,
+                export::MAX_DRAWING_POINTS
+            ))
+            .at("points"));
+        }
+        let rings = le_column(&self.shapes, "shapes", u32::from_le_bytes)?;
+        let fill = le_column(&self.fill, "fill", f32::from_le_bytes)?;
+        if fill.len() != rings.len() || self.flags.len() != rings.len() {
+            let field = if fill.len() != rings.len() {
+                "fill"
+            } else {
+                "flags"
+            };
+            return Err(Error::input(format!(
+                "{} shapes, {} fills and {} flags: one of each per shape",
+                rings.len(),
+                fill.len(),
+                self.flags.len()
+            ))
+            .at(field));
+        }
+        if let Some(i) = self.flags.iter().position(|&f| f > 3) {
+            return Err(Error::input(format!(
+                "shape {i}'s flags are {} (1 white lines, 2 mark, or both)",
+                self.flags[i]
+            ))
+            .at("flags"));
+        }
+        let d = export::Drawing {
+            points: le_column(&self.points, "points", f32::from_le_bytes)?,
+            rings: le_column(&self.rings, "rings", u32::from_le_bytes)?,
+            shapes: rings
+                .into_iter()
+                .zip(fill)
+                .zip(&self.flags)
+                .map(|((n, fill), &f)| {
+                    let ink = super::Ink {
+                        fill,
+                        white_lines: f & 1 != 0,
+                        mark: f & 2 != 0,
+                    };
+                    (n, ink)
+                })
+                .collect(),
+        };
+        d.check()?;
+        Ok(d)
+    }
+}
+
+/// Start a `tangle-png` job: the request checked now, drawn and encoded
+/// when it runs.
+pub fn start_png(req: TanglePngRequest) -> Result<impl Job<Output = TanglePngResponse>> {
+    lim::finite_in("stroke_width", req.stroke_width, STROKE_WIDTH)?;
+    lim::int_in("png_width", req.png_width, (1, export::MAX_PNG_SIDE))?;
+    let d = req.drawing()?;
+    Ok(crate::core::job::OneShot::new(move || {
+        Ok(TanglePngResponse {
+            png: export::png(&d, req.png_width, req.stroke_width)?,
+        })
+    }))
+}
+
 /// Hard limits on a request's settings.
 pub const MAX_STEPS: usize = 100_000;
 pub const MAX_SHAPES: usize = 250_000;
@@ -1018,10 +1160,7 @@ fn answer(
     let (svg, png) = match req.export {
         ExportFormat::None => (None, None),
         ExportFormat::Svg => (Some(export::svg(&finals, req.stroke_width)), None),
-        ExportFormat::Png => (
-            None,
-            Some(export::png(&finals, req.png_width, req.stroke_width)?),
-        ),
+        ExportFormat::Png => (None, Some(png_export(&finals, req)?)),
     };
     if !lo.is_finite() {
         (lo, hi) = (DVec2::ZERO, DVec2::ZERO);
@@ -1044,6 +1183,29 @@ fn answer(
         svg,
         png,
     })
+}
+
+/// A `tangle` request's PNG export: natively the drawing of its final
+/// shapes ([`export::png`]); in the browser the page sends that drawing to
+/// the `tangle-png` module instead ([`TanglePngRequest`]), so the Tangle
+/// module links no rasteriser and refuses it.
+fn png_export(finals: &[&Shape], req: &TangleRequest) -> Result<Vec<u8>> {
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = (finals, req);
+        Err(Error::Unsupported(
+            "in the browser a tangle's PNG is drawn by the tangle-png module: send its final \
+             shapes as a tangle-png request"
+                .into(),
+        )
+        .at("export"))
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    export::png(
+        &export::Drawing::of(finals),
+        req.png_width,
+        req.stroke_width,
+    )
 }
 
 /// The shapes of the final tangle, in the order they were made.
@@ -1107,5 +1269,156 @@ mod tests {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod png_tests {
+    use super::*;
+    use crate::core::job::run_quietly;
+
+    /// The little-endian bytes of `v`'s values.
+    fn le<T: Copy, const N: usize>(v: impl IntoIterator<Item = T>, f: fn(T) -> [u8; N]) -> Vec<u8> {
+        v.into_iter().flat_map(f).collect()
+    }
+
+    /// What the page sends (`www/tangle/export.js` `drawingOf`): the final
+    /// shapes (`died` −1) of a full answer, in the answer's own layout.
+    fn drawing_of(r: &TangleResponse) -> TanglePngRequest {
+        let finals: Vec<&ShapeOut> = r.shapes.iter().filter(|s| s.died == -1).collect();
+        let mut points = vec![];
+        for s in &finals {
+            let n: u32 = s.rings.iter().sum();
+            let at = 2 * s.first as usize;
+            points.extend_from_slice(&r.points[at..at + 2 * n as usize]);
+        }
+        TanglePngRequest {
+            points: le(points, f32::to_le_bytes),
+            rings: le(
+                finals.iter().flat_map(|s| s.rings.clone()),
+                u32::to_le_bytes,
+            ),
+            shapes: le(
+                finals.iter().map(|s| s.rings.len() as u32),
+                u32::to_le_bytes,
+            ),
+            fill: le(finals.iter().map(|s| s.fill), f32::to_le_bytes),
+            flags: finals
+                .iter()
+                .map(|s| s.white_lines as u8 | (s.mark as u8) << 1)
+                .collect(),
+            ..Default::default()
+        }
+    }
+
+    fn tangle(req: TangleRequest) -> TangleResponse {
+        run_quietly(start_tangle(req).unwrap()).unwrap()
+    }
+
+    fn png(req: TanglePngRequest) -> Result<Vec<u8>> {
+        Ok(run_quietly(start_png(req)?)?.png)
+    }
+
+    /// The browser's PNG export (the page's drawing of the answer, drawn by
+    /// the `tangle-png` module) is the CLI's (`tangle` with `export: png`),
+    /// byte for byte, for every shipped example: between them they have
+    /// fills, marks, white lines and holes.
+    #[test]
+    fn the_png_of_the_answers_final_shapes_is_the_tangle_export() {
+        let (mut marks, mut fills, mut white, mut holes) = (0, 0, 0, 0);
+        for ex in crate::tangle::examples::EXAMPLES {
+            let req = TangleRequest {
+                grammar: ex.grammar.into(),
+                seed: 3,
+                stroke_width: 1.5,
+                png_width: 300,
+                ..Default::default()
+            };
+            let cli = tangle(TangleRequest {
+                export: ExportFormat::Png,
+                ..req.clone()
+            })
+            .png
+            .unwrap();
+            let answer = tangle(req);
+            let sent = drawing_of(&answer);
+            marks += sent.flags.iter().filter(|&&f| f & 2 != 0).count();
+            white += sent.flags.iter().filter(|&&f| f & 1 != 0).count();
+            fills += sent.fill.chunks_exact(4).filter(|f| f != &[0; 4]).count();
+            holes += sent.shapes.chunks_exact(4).filter(|n| n[0] > 1).count();
+            let page = png(TanglePngRequest {
+                stroke_width: 1.5,
+                png_width: 300,
+                ..sent
+            })
+            .unwrap();
+            assert!(cli == page, "{}: the two PNGs differ", ex.name);
+            let img = crate::raster::decode(&page, crate::raster::Limits::default()).unwrap();
+            assert_eq!(img.width, 300, "{}", ex.name);
+            assert!(
+                img.data.chunks_exact(4).any(|p| p[0] < 64),
+                "{}: ink on the paper",
+                ex.name
+            );
+        }
+        assert!(
+            marks > 0 && fills > 0 && white > 0 && holes > 0,
+            "marks {marks}, fills {fills}, white lines {white}, holes {holes}"
+        );
+    }
+
+    /// A drawing whose parts do not fit together, or whose numbers are not
+    /// finite, is refused, naming the field; nothing is drawn.
+    #[test]
+    fn a_png_request_whose_parts_do_not_fit_is_refused_naming_the_field() {
+        // One square: 4 points in one ring of one shape.
+        let square = TanglePngRequest {
+            points: le(
+                [0.0f32, 0.0, 10.0, 0.0, 10.0, 10.0, 0.0, 10.0],
+                f32::to_le_bytes,
+            ),
+            rings: le([4u32], u32::to_le_bytes),
+            shapes: le([1u32], u32::to_le_bytes),
+            fill: le([0.5f32], f32::to_le_bytes),
+            flags: vec![0],
+            png_width: 64,
+            ..Default::default()
+        };
+        assert!(png(square.clone()).is_ok());
+        let field = |r: TanglePngRequest| match png(r) {
+            Err(e) => e.field().unwrap_or("").to_string(),
+            Ok(_) => panic!("accepted"),
+        };
+        let mut r = square.clone();
+        r.points.pop();
+        assert_eq!(field(r), "points", "not whole f32s");
+        let mut r = square.clone();
+        r.points
+            .extend_from_slice(&le([1.0f32, 1.0], f32::to_le_bytes));
+        assert_eq!(field(r), "points", "a point more than the rings have");
+        let mut r = square.clone();
+        r.points[0..4].copy_from_slice(&f32::NAN.to_le_bytes());
+        assert_eq!(field(r), "points", "NaN");
+        let mut r = square.clone();
+        r.shapes = le([2u32], u32::to_le_bytes);
+        assert_eq!(field(r), "rings", "a ring fewer than the shapes have");
+        let mut r = square.clone();
+        r.rings = le([u32::MAX], u32::to_le_bytes);
+        assert_eq!(field(r), "points", "a ring longer than the points");
+        let mut r = square.clone();
+        r.fill.clear();
+        assert_eq!(field(r), "fill");
+        let mut r = square.clone();
+        r.fill = le([f32::INFINITY], f32::to_le_bytes);
+        assert_eq!(field(r), "fill");
+        let mut r = square.clone();
+        r.flags = vec![4];
+        assert_eq!(field(r), "flags");
+        let mut r = square.clone();
+        r.png_width = 0;
+        assert_eq!(field(r), "png_width");
+        let mut r = square;
+        r.stroke_width = f64::NAN;
+        assert_eq!(field(r), "stroke_width");
     }
 }

@@ -1,7 +1,7 @@
 //! Pen-and-ink output of a tangle: SVG (one `<path>` per shape, even-odd
 //! fill so holes stay holes) and PNG (anti-aliased with tiny-skia: black
 //! strokes on paper white, stroke width a setting).
-use super::Shape;
+use super::{Ink, Shape};
 use crate::core::error::{Error, Result};
 use crate::raster::{encode_png, Rgba8Image};
 use crate::tangle::geom::polygon::Polygon;
@@ -131,16 +131,115 @@ pub fn svg(shapes: &[&Shape], stroke_width: f64) -> String {
     out
 }
 
-/// The tangle as a PNG `width` pixels wide (height to scale).
-pub fn png(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Vec<u8>> {
-    let img = raster(shapes, width, stroke_width)?;
+/// What the PNG export draws: the final shapes' rings as f32 points (the
+/// `tangle` answer's `points`, so the browser, which holds the answer,
+/// draws the same picture as the CLI) and each shape's ink. The Tangle
+/// module never draws PNG in the browser: the page sends its drawing to
+/// the small `tangle-png` module ([`crate::tangle::api::TanglePngRequest`]),
+/// loaded on the first PNG export, so the Tangle module links no
+/// rasteriser or PNG encoder.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Drawing {
+    /// x, y of every ring's points, ring after ring, shape after shape.
+    pub points: Vec<f32>,
+    /// Points per ring.
+    pub rings: Vec<u32>,
+    /// Rings per shape (its first ring is the outer one) and its ink.
+    pub shapes: Vec<(u32, Ink)>,
+}
+
+/// At most this many points in a drawing sent for a PNG (8 bytes each):
+/// the largest tangle the limits allow has far fewer.
+pub const MAX_DRAWING_POINTS: usize = 1 << 24;
+
+impl Drawing {
+    /// The drawing of `shapes`, their points rounded to f32 as the `tangle`
+    /// answer sends them.
+    pub fn of(shapes: &[&Shape]) -> Drawing {
+        let mut d = Drawing::default();
+        for s in shapes {
+            for ring in &s.poly.rings {
+                d.rings.push(ring.len() as u32);
+                d.points
+                    .extend(ring.iter().flat_map(|p| [p.x as f32, p.y as f32]));
+            }
+            d.shapes.push((s.poly.rings.len() as u32, s.ink));
+        }
+        d
+    }
+
+    /// Whether its parts fit together: every shape's rings and every ring's
+    /// points present, no point more, every coordinate and fill finite.
+    /// Errors name the request field at fault (`points`, `rings`, `shapes`,
+    /// `fill`).
+    pub fn check(&self) -> Result<()> {
+        if self.points.len() / 2 > MAX_DRAWING_POINTS {
+            return Err(Error::limit(format!(
+                "{} points; a drawing has at most {MAX_DRAWING_POINTS}",
+                self.points.len() / 2
+            ))
+            .at("points"));
+        }
+        let rings: u64 = self.shapes.iter().map(|&(n, _)| n as u64).sum();
+        if rings != self.rings.len() as u64 {
+            return Err(Error::input(format!(
+                "the shapes have {rings} rings but {} ring lengths were sent",
+                self.rings.len()
+            ))
+            .at("rings"));
+        }
+        let points: u64 = self.rings.iter().map(|&n| n as u64).sum();
+        if 2 * points != self.points.len() as u64 {
+            return Err(Error::input(format!(
+                "the rings have {points} points but {} coordinates were sent",
+                self.points.len()
+            ))
+            .at("points"));
+        }
+        if let Some(i) = self.points.iter().position(|v| !v.is_finite()) {
+            return Err(
+                Error::input(format!("coordinate {i} is not a finite number")).at("points"),
+            );
+        }
+        if let Some(i) = self
+            .shapes
+            .iter()
+            .position(|(_, ink)| !ink.fill.is_finite())
+        {
+            return Err(
+                Error::input(format!("shape {i}'s fill is not a finite number")).at("fill"),
+            );
+        }
+        Ok(())
+    }
+
+    /// The box around its points padded by `pad` (a unit box when empty).
+    fn bounds(&self, pad: f64) -> (DVec2, DVec2) {
+        let mut lo = DVec2::splat(f64::INFINITY);
+        let mut hi = DVec2::splat(f64::NEG_INFINITY);
+        for p in self.points.chunks_exact(2) {
+            let p = DVec2::new(p[0] as f64, p[1] as f64);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        if !lo.is_finite() || !hi.is_finite() {
+            return (DVec2::ZERO, DVec2::splat(1.0));
+        }
+        (lo - DVec2::splat(pad), hi + DVec2::splat(pad))
+    }
+}
+
+/// The drawing as a PNG `width` pixels wide (height to scale).
+pub fn png(d: &Drawing, width: u32, stroke_width: f64) -> Result<Vec<u8>> {
+    let img = raster(d, width, stroke_width)?;
     encode_png(&img)
 }
 
-/// The tangle rasterised: white paper, black ink, anti-aliased.
-pub fn raster(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Rgba8Image> {
+/// The drawing rasterised: white paper, black ink, anti-aliased.
+pub fn raster(d: &Drawing, width: u32, stroke_width: f64) -> Result<Rgba8Image> {
     use tiny_skia::{FillRule, Paint, PathBuilder, Pixmap, Stroke, Transform};
-    let (lo, hi) = bounds(shapes, stroke_width.max(0.0) + 2.0);
+    d.check()?;
+    let (lo, hi) = d.bounds(stroke_width.max(0.0) + 2.0);
     let size = hi - lo;
     if !(1..=MAX_PNG_SIDE).contains(&width) {
         return Err(Error::limit(format!(
@@ -168,30 +267,34 @@ pub fn raster(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Rgba8I
         line_join: tiny_skia::LineJoin::Round,
         ..Default::default()
     };
-    for s in shapes {
+    let (mut ring, mut at) = (0, 0);
+    for &(n, ink) in &d.shapes {
         let mut pb = PathBuilder::new();
-        for ring in &s.poly.rings {
-            for (k, p) in ring.iter().enumerate() {
+        for &len in &d.rings[ring..ring + n as usize] {
+            let pts = &d.points[at..at + 2 * len as usize];
+            for (k, p) in pts.chunks_exact(2).enumerate() {
                 if k == 0 {
-                    pb.move_to(p.x as f32, p.y as f32);
+                    pb.move_to(p[0], p[1]);
                 } else {
-                    pb.line_to(p.x as f32, p.y as f32);
+                    pb.line_to(p[0], p[1]);
                 }
             }
             pb.close();
+            at += 2 * len as usize;
         }
+        ring += n as usize;
         let Some(path) = pb.finish() else { continue };
         let mut paint = Paint {
             anti_alias: true,
             ..Default::default()
         };
-        if s.ink.mark || s.ink.fill > 0.0 {
-            let g = if s.ink.mark { 0 } else { grey(s.ink.fill) };
+        if ink.mark || ink.fill > 0.0 {
+            let g = if ink.mark { 0 } else { grey(ink.fill) };
             paint.set_color_rgba8(g, g, g, 255);
             pm.fill_path(&path, &paint, FillRule::EvenOdd, t, None);
         }
-        if !s.ink.mark && stroke.width > 0.0 {
-            let g = if s.ink.white_lines { 255 } else { 0 };
+        if !ink.mark && stroke.width > 0.0 {
+            let g = if ink.white_lines { 255 } else { 0 };
             paint.set_color_rgba8(g, g, g, 255);
             pm.stroke_path(&path, &paint, &stroke, t, None);
         }
@@ -203,7 +306,6 @@ pub fn raster(shapes: &[&Shape], width: u32, stroke_width: f64) -> Result<Rgba8I
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tangle::Ink;
     use std::sync::Arc;
 
     fn shape(poly: Polygon, ink: Ink) -> Shape {
@@ -260,7 +362,7 @@ mod tests {
             Polygon::rect(DVec2::ZERO, DVec2::splat(100.0)),
             Ink::default(),
         );
-        let img = raster(&[&a], 208, 2.0).unwrap();
+        let img = raster(&Drawing::of(&[&a]), 208, 2.0).unwrap();
         assert_eq!(img.width, 208);
         let (w, h) = (img.width, img.height);
         assert_eq!(
@@ -271,6 +373,6 @@ mod tests {
         // The outline at x = 0 is 2 units + 1 px of padding in: (2+2)·2 px.
         let edge = img.get(8, h / 2);
         assert!(edge[0] < 80, "the line is inked: {edge:?}");
-        assert!(raster(&[&a], 0, 1.0).is_err());
+        assert!(raster(&Drawing::of(&[&a]), 0, 1.0).is_err());
     }
 }

@@ -15,6 +15,8 @@ const MODULE: (&str, Start) = ("pixel", filigree::api::start_pixel);
 const MODULE: (&str, Start) = ("fit", filigree::api::start_fit);
 #[cfg(feature = "tangle")]
 const MODULE: (&str, Start) = ("tangle", filigree::api::start_tangle);
+#[cfg(feature = "tangle-png")]
+const MODULE: (&str, Start) = ("tangle-png", filigree::api::start_tangle_png);
 #[cfg(feature = "micro")]
 const MODULE: (&str, Start) = ("micro", filigree::api::start_micro);
 #[cfg(feature = "texture")]
@@ -25,6 +27,7 @@ const MODULE: (&str, Start) = ("texture", filigree::api::start_texture);
     feature = "pixel",
     feature = "fit",
     feature = "tangle",
+    feature = "tangle-png",
     feature = "micro",
     feature = "texture"
 )))]

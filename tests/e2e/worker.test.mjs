@@ -2,6 +2,7 @@ import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
+import { MODULE_KINDS } from '../../www/app/protocol.js';
 import { launch, dropFile, fixture, ROOT } from './harness.mjs';
 
 // The deliberate-crash request ('debug-abort', feature test-hooks of
@@ -111,7 +112,7 @@ test('the shipped core has no test hooks', async () => {
     .then(() => null, (e) => ({ kind: e.kind, message: e.message })));
   assert.equal(e?.kind, 'invalid-input');
   assert.match(e.message, /unknown request kind 'debug-abort'/);
-  for (const m of ['inspect', 'pixel', 'fit', 'tangle', 'micro', 'texture']) {
+  for (const m of Object.keys(MODULE_KINDS)) {
     const wasm = fs.readFileSync(path.join(ROOT, `pkg/filigree_${m}_bg.wasm`));
     assert.equal(wasm.includes('deliberate crash'), false, `pkg/filigree_${m}_bg.wasm carries the debug-abort job`);
   }

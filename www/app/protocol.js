@@ -73,6 +73,8 @@ export const MODULE_KINDS = Object.freeze({
   pixel: ['pixel', 'pixel-mask'],
   fit: ['fit', 'fit-eval', 'render-pattern', 'pattern-info', 'pattern-generators', 'pattern-snap'],
   tangle: ['tangle', 'tangle-examples'],
+  // Tangle's PNG export (www/tangle/export.js), loaded on the first export.
+  'tangle-png': ['tangle-png'],
   micro: ['micro-render', 'micro-slice', 'micro-examples', 'micro-fit', 'micro-glsl'],
   texture: ['texture-models', 'texture-render', 'texture-index', 'texture-analyse', 'texture-retrieve'],
 });
