@@ -25,8 +25,9 @@ D = sys.argv[1]
 meta = np.genfromtxt(f"{D}/rows.csv", delimiter=",", skip_header=1, dtype=np.int64)
 dim = int(meta[0, 7])
 X = np.fromfile(f"{D}/rows.f32", dtype="<f4").reshape(len(meta), -1)
-xm = np.genfromtxt(f"{D}/xset.csv", delimiter=",", skip_header=1, dtype=np.int64)
-XS = np.fromfile(f"{D}/xset.f32", dtype="<f4").reshape(len(xm), -1)
+XT = __import__("os").environ.get("XSET", "xset")
+xm = np.genfromtxt(f"{D}/{XT}.csv", delimiter=",", skip_header=1, dtype=np.int64)
+XS = np.fromfile(f"{D}/{XT}.f32", dtype="<f4").reshape(len(xm), -1)
 model, base, held, look, light, crop, ptest = (meta[:, i] for i in range(7))
 K = 23
 import os
@@ -209,7 +210,12 @@ def run(kind, paper=True):
     img = xm[:, 0]
     n = img.max() + 1
     res = {}
-    for name, sel in (("x", xm[:, 2] == 0), ("tta8", np.ones(len(xm), bool)), ("tta2", xm[:, 2] <= 1)):
+    reads = (("x", xm[:, 2] == 0), ("tta8", np.ones(len(xm), bool)), ("tta2", xm[:, 2] <= 1))
+    if XT == "xset-scales":
+        # 1x both windows / 1x first window + the halved image / all three / halved alone
+        reads = (("x", xm[:, 2] == 0), ("tta2", ((xm[:, 2] == 0) & (xm[:, 3] == 0)) | (xm[:, 2] == 1)),
+                 ("tta8", np.ones(len(xm), bool)), ("half", xm[:, 2] == 1))
+    for name, sel in reads:
         S = np.zeros((n, K))
         np.add.at(S, img[sel], sc[sel])
         want = np.zeros(n, int)
@@ -218,6 +224,11 @@ def run(kind, paper=True):
         rank = (S > S[np.arange(n), want][:, None]).sum(1)
         top3 = (rank < 3).mean()
         res[name] = (top1, top3)
+        if os.environ.get("PER") and name == "x":
+            names = open("src/texture/models/mod.rs").read()
+            for m in range(K):
+                k = want == m
+                print(f"   model {m:2d}: {(S.argmax(1)[k] == m).sum()}/{k.sum()}  top3 {(rank[k] < 3).sum()}")
     pp = float("nan")
     if paper:
         ptr = ptest == 0
@@ -226,6 +237,8 @@ def run(kind, paper=True):
         pclf = make(kind, PR[ptr], model[ptr])
         te = ptest == 1
         pp = (pclf(PR[te]).argmax(1) == model[te]).mean()
+    if XT == "xset-scales":
+        print("   (xset-scales: x = 1x two windows, tta2 = 1x first window + halved image, tta8 = all three, half = halved alone: ", {k: v for k, v in res.items()}, ")")
     print(f"{label:22s} held {ho:.3f} looks {lo:.3f} paper {pp:.3f} | xset top1/top3 {res['x'][0]:.3f}/{res['x'][1]:.3f}"
           f" tta2 {res['tta2'][0]:.3f}/{res['tta2'][1]:.3f} tta8 {res['tta8'][0]:.3f}/{res['tta8'][1]:.3f} ({time.time()-t:.0f}s)",
           flush=True)

@@ -1,6 +1,6 @@
 //! Issue 36's classifier experiments, features computed once:
 //! `cargo run --release --example texture_xset_dump -- OUT_DIR [--looks L]
-//! [--per-model N] [--xset DIR]`.
+//! [--per-model N] [--config INDEX_CONFIG_JSON] [--xset DIR] [--scales]`.
 //!
 //! Renders the dataset as `texture_xset` does, learns the filters from the
 //! training bases (the bases `bench texture` holds out, `build::split`
@@ -11,7 +11,11 @@
 //! draws it). The cross-implementation set's **validation** images (never
 //! its test part) go to `xset.f32` / `xset.csv`: each image's view rows
 //! ([`Index::view_features`]) under the eight rotations and mirrors of the
-//! square (transform 0 is the image itself), for test-time augmentation.
+//! square (transform 0 is the image itself), for test-time augmentation;
+//! with `--scales` only these, to `xset-scales.f32` / `.csv`, as read
+//! (transform 0) and halved (transform 1, its 2 × 2 means).
+//! `src/bench/examples/texture_xset_classifiers.py` reads the files;
+//! findings in `docs/bench/texture-xset-2026-12-06b.md`.
 // A native experiment: wall-clock time is what it reports.
 #![allow(clippy::disallowed_methods)]
 use filigree::core::parallel::par_map;
@@ -56,6 +60,9 @@ fn dihedral(img: &Gray, t: usize) -> Gray {
     out
 }
 
+/// One validation image's view row: its model, transform, view and features.
+type ViewRow = (usize, usize, usize, Vec<f32>);
+
 fn write_rows(path: &str, rows: &[Vec<f32>]) {
     let mut f = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
     for r in rows {
@@ -99,6 +106,10 @@ fn main() {
     let train = build::training(&samples, |b| !held[b]);
     let pcn = Index::train_pcn(&train, &cfg.index).expect("filters");
     drop(train);
+    let scales = args.iter().any(|a| a == "--scales");
+    if scales {
+        return xset(&out, &dir, pcn, &cfg, true);
+    }
     let t = Instant::now();
     let rows: Vec<Vec<f32>> = par_map(&samples, |(s, _)| {
         Index::image_features(&pcn, &s.image).expect("features")
@@ -136,7 +147,29 @@ fn main() {
         );
     }
     std::fs::write(format!("{out}/rows.csv"), csv).unwrap();
+    xset(&out, &dir, pcn, &cfg, false);
+}
 
+/// Half the image's side: the mean of each 2 × 2 block.
+fn halved(img: &Gray) -> Gray {
+    let (w, h) = (img.width / 2, img.height / 2);
+    let mut out = Gray {
+        width: w,
+        height: h,
+        data: vec![0.0; w * h],
+    };
+    for y in 0..h {
+        for x in 0..w {
+            let at = |dx: usize, dy: usize| img.data[(2 * y + dy) * img.width + 2 * x + dx];
+            out.data[y * w + x] = (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1)) / 4.0;
+        }
+    }
+    out
+}
+
+/// The validation images' view rows under the eight symmetries, or (with
+/// `scales`) as read and halved (transforms 0 and 1).
+fn xset(out: &str, dir: &str, pcn: filigree::texture::pcn::Pcn, cfg: &BuildConfig, scales: bool) {
     let names: Vec<String> = MODELS.iter().map(|m| m.id.to_string()).collect();
     let index = Index {
         model_names: names,
@@ -171,16 +204,16 @@ fn main() {
         jobs.push((want, cols[0].to_string()));
     }
     let t = Instant::now();
-    let per: Vec<Vec<(usize, usize, usize, Vec<f32>)>> = par_map(&jobs, |(want, file)| {
+    let per: Vec<Vec<ViewRow>> = par_map(&jobs, |(want, file)| {
         let img = api::decode_gray(&std::fs::read(format!("{dir}/{file}")).unwrap()).unwrap();
         let mut v = Vec::new();
-        for t in 0..8 {
-            for (k, f) in index
-                .view_features(&dihedral(&img, t))
-                .unwrap()
-                .into_iter()
-                .enumerate()
-            {
+        let reads: Vec<Gray> = if scales {
+            vec![img.clone(), halved(&img)]
+        } else {
+            (0..8).map(|t| dihedral(&img, t)).collect()
+        };
+        for (t, read) in reads.iter().enumerate() {
+            for (k, f) in index.view_features(read).unwrap().into_iter().enumerate() {
                 v.push((*want, t, k, f));
             }
         }
@@ -195,6 +228,7 @@ fn main() {
             rows.push(f);
         }
     }
-    write_rows(&format!("{out}/xset.f32"), &rows);
-    std::fs::write(format!("{out}/xset.csv"), csv).unwrap();
+    let tag = if scales { "xset-scales" } else { "xset" };
+    write_rows(&format!("{out}/{tag}.f32"), &rows);
+    std::fs::write(format!("{out}/{tag}.csv"), csv).unwrap();
 }
