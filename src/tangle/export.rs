@@ -11,8 +11,11 @@ use std::fmt::Write;
 /// Paper colour.
 const PAPER: [u8; 3] = [255, 255, 255];
 
-/// The largest PNG side we render.
-pub const MAX_PNG_SIDE: u32 = 8192;
+/// The largest PNG side: every image the core makes keeps to
+/// [`crate::core::limits::MAX_IMAGE_SIDE`]. (It was 8192 here, so an export
+/// wider or taller than 4096 px drew an up to 8192² pixmap, 256 MB, and
+/// was then refused by the image's own limit.)
+pub const MAX_PNG_SIDE: u32 = crate::core::limits::MAX_IMAGE_SIDE;
 
 /// Grey of a fill tone (0 = paper, 1 = black).
 fn grey(tone: f32) -> u8 {
@@ -248,7 +251,18 @@ pub fn raster(d: &Drawing, width: u32, stroke_width: f64) -> Result<Rgba8Image> 
         .at("png_width"));
     }
     let scale = width as f64 / size.x.max(1e-9);
-    let height = (size.y * scale).ceil().clamp(1.0, MAX_PNG_SIDE as f64) as u32;
+    // The height the picture needs at this width, checked before anything
+    // is drawn (clamping it cut a tall tangle's bottom off).
+    let height = (size.y * scale).ceil().max(1.0);
+    if height > MAX_PNG_SIDE as f64 {
+        let fits = ((MAX_PNG_SIDE as f64 * size.x / size.y).floor() as u32).max(1);
+        return Err(Error::limit(format!(
+            "at {width} px wide this PNG would be {height} px tall, over the {MAX_PNG_SIDE} px \
+             limit of an image; at most {fits} px wide fits"
+        ))
+        .at("png_width"));
+    }
+    let height = height as u32;
     let mut pm = Pixmap::new(width, height)
         .ok_or_else(|| Error::limit(format!("a {width}×{height} image cannot be made")))?;
     pm.fill(tiny_skia::Color::from_rgba8(
@@ -374,5 +388,39 @@ mod tests {
         let edge = img.get(8, h / 2);
         assert!(edge[0] < 80, "the line is inked: {edge:?}");
         assert!(raster(&Drawing::of(&[&a]), 0, 1.0).is_err());
+    }
+
+    /// A tall, narrow tangle is refused, before a pixmap is made, at a width
+    /// whose height would be over the image limit; the error names the width
+    /// and says what fits, and that width draws the whole picture.
+    #[test]
+    fn a_png_taller_than_the_limit_is_refused_naming_its_width() {
+        let tall = shape(
+            Polygon::rect(DVec2::ZERO, DVec2::new(100.0, 2000.0)),
+            Ink::default(),
+        );
+        let d = Drawing::of(&[&tall]);
+        let e = raster(&d, 400, 1.0).unwrap_err();
+        assert_eq!(e.kind(), "limit");
+        assert_eq!(e.field(), Some("png_width"));
+        let fits: u32 = e
+            .to_string()
+            .split("at most ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{e}"));
+        let img = raster(&d, fits, 1.0).unwrap();
+        assert!(img.height <= MAX_PNG_SIDE, "{}", img.height);
+        assert!(
+            raster(&d, fits + 1, 1.0).is_err(),
+            "{fits} px is the widest that fits"
+        );
+        // The bottom of the outline is inked: nothing was cut off.
+        let bottom = (img.height - 12..img.height)
+            .flat_map(|y| (0..img.width).map(move |x| (x, y)))
+            .any(|(x, y)| img.get(x, y)[0] < 128);
+        assert!(bottom, "the bottom edge is drawn");
+        assert!(raster(&d, MAX_PNG_SIDE + 1, 1.0).is_err());
     }
 }
