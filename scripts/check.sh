@@ -2,7 +2,8 @@
 # Runs every check CI runs, in the same order, from a fresh clone on a fresh
 # Debian machine with Rust: installs what is missing (Chromium via apt, npm dev
 # dependencies, the wasm target and the matching wasm-bindgen-cli), then
-# fmt, clippy (the workspace, -D warnings), cargo tests, the release
+# fmt, clippy (the workspace, -D warnings) inside the cargo test build, the
+# cargo tests, the release
 # wasm build (one module per tool), the texture index checked (rebuilt in
 # the background, and compared with the committed one, only when its
 # inputs changed), and the browser end-to-end tests in headless Chromium.
@@ -13,45 +14,66 @@ cd "$(dirname "$0")/.."
 step() { printf '\n== %s (at %d s)\n' "$*" "$SECONDS"; }
 
 step "installing what is missing"
-if [ ! -x "${CHROMIUM_PATH:-/usr/bin/chromium}" ]; then
+rustup component list --installed | grep -q '^clippy' || rustup component add clippy
+rustup component list --installed | grep -q '^rustfmt' || rustup component add rustfmt
+mkdir -p target
+# The Rust side (the wasm target, and the wasm-bindgen CLI that cargo
+# compiles for about two minutes on a new machine) runs beside apt and npm,
+# which mostly wait on the network.
+bash scripts/setup.sh rust > target/setup.log 2>&1 &
+setup_rust=$!
+packages=()
+[ -x "${CHROMIUM_PATH:-/usr/bin/chromium}" ] || packages+=(chromium)
+if [ "${FILIGREE_WASM_OPT:-1}" != 0 ] && ! command -v wasm-opt >/dev/null; then packages+=(binaryen); fi
+if [ "${#packages[@]}" != 0 ]; then
   sudo=""; [ "$(id -u)" = 0 ] || sudo="sudo"
   $sudo apt-get update
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y chromium
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y "${packages[@]}"
 fi
 if [ ! -d node_modules/playwright-core ] || [ ! -d node_modules/esbuild ] || [ ! -d node_modules/@codemirror/view ] || [ ! -d node_modules/axe-core ]; then
   # The browser is Debian's; never let a tool download its own.
   PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund
 fi
-rustup component list --installed | grep -q '^clippy' || rustup component add clippy
-rustup component list --installed | grep -q '^rustfmt' || rustup component add rustfmt
-bash scripts/setup.sh
+if ! wait "$setup_rust"; then
+  cat target/setup.log
+  exit 1
+fi
+cat target/setup.log
 
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
 # The release wasm build (one module per tool, and the test-hooks Inspect
-# module) starts now and runs beside clippy and `cargo test`: they share no
+# module) starts now and runs beside the native test build: they share no
 # build directory, and it is one long chain that keeps a single core busy
 # for long stretches (the library's one codegen unit, then each module's
-# LTO link), while clippy and the tests leave a core idle at times (the
+# LTO link), while the test build and the tests leave a core idle at times (the
 # final crate's check, the links, single-threaded test binaries). Started
 # first, its chain ends sooner; together they take less than one after the
 # other.
 step "the release wasm build starts (in the background)"
-mkdir -p target
 FILIGREE_TEST_HOOKS=1 bash scripts/build.sh > target/wasm-build.log 2>&1 &   # pkg/ and the test-only pkg-test/
 wasm_build=$!
 trap 'kill "$wasm_build" 2>/dev/null || true' EXIT
 
-# One clippy over the whole workspace, natively: the library with the
-# `web` boundary (src/web/) and the wasm crate (src/wasm/, with its test
-# hooks) compile natively too, so one check covers every file. A second
-# clippy for wasm32 checked every dependency again for that target (2.7
-# minutes of CI) to see only the few `cfg(target_arch = "wasm32")` blocks;
-# those are compiled by the release wasm build, which denies rustc's
-# warnings (.cargo/config.toml).
-step "clippy (the workspace, all targets, with the web boundary)"
-cargo clippy --workspace --all-targets --features filigree-wasm/inspect,filigree-wasm/test-hooks -- -D warnings
+# clippy runs inside the one native build: cargo hands the workspace's own
+# crates (never a dependency) to clippy-driver, as `cargo clippy` does, and
+# clippy-driver lints each one and then compiles it as rustc would. A
+# separate `cargo clippy` checked every dependency and our crates once more
+# before the test build compiled them (about 3 minutes of CI); now each is
+# compiled once. What it covers is what `cargo clippy --workspace
+# --all-targets` did: every target of both crates (the research probes
+# under src/bench/examples too), natively, with the `web` boundary
+# (src/web/) and the wasm crate's test hooks. The few
+# `cfg(target_arch = "wasm32")` blocks are compiled by the release wasm
+# build, which denies rustc's warnings (.cargo/config.toml). Clippy leaves
+# MIR unoptimised (LLVM still optimises at -O2): the tests' numbers are
+# the same, IEEE operations are never reordered.
+lint_and_build() {
+  RUSTC_WORKSPACE_WRAPPER="$(rustup which clippy-driver)" \
+    CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__" \
+    cargo "$@" --workspace --features filigree-wasm/inspect,filigree-wasm/test-hooks
+}
 
 step "the texture index: its inputs' hash, then (only when it changed) the rebuild in the background"
 # The index is rebuilt only when the hash of its inputs differs from the
@@ -63,7 +85,7 @@ step "the texture index: its inputs' hash, then (only when it changed) the rebui
 # builds the CLI with the rest.
 index_check=""
 if ! bash scripts/check-texture-index.sh --unchanged; then
-  cargo build --quiet --bin filigree
+  lint_and_build build --bin filigree
   cp target/debug/filigree target/filigree-index-check
   FILIGREE_BIN=target/filigree-index-check nice -n 19 bash scripts/check-texture-index.sh \
     > target/texture-index-check.log 2>&1 &
@@ -72,13 +94,12 @@ fi
 # If a step below fails, the rebuild and the wasm build stop too.
 trap 'pkill -f filigree-index-check 2>/dev/null || true; kill "$wasm_build" 2>/dev/null || true' EXIT
 
-step "cargo test, beside the release wasm build (one module per tool)"
+step "clippy and cargo test (one build), beside the release wasm build"
 # `--tests`: the library's and the binary's unit tests and the integration
-# tests (one binary, tests/main.rs). Not the research probes under
-# src/bench/examples (clippy above has checked they compile; building and
-# linking them here was fifteen more links) and no doc tests (there are none).
-cargo test --tests
-step "the release wasm build (started before clippy) has ended"
+# tests (one binary, tests/main.rs); `--examples`: the research probes
+# are built (linted) and have no tests to run. No doc tests (there are none).
+lint_and_build test --tests --examples
+step "the release wasm build (started before the tests) has ended"
 if ! wait "$wasm_build"; then
   cat target/wasm-build.log
   exit 1
@@ -98,6 +119,10 @@ if [ -n "$index_check" ]; then
 fi
 
 step "browser end-to-end tests (headless Chromium)"
-node --test --test-concurrency=1 tests/e2e/
+# Two test files at a time: one file leaves a core idle much of the time
+# (Chromium waits on its GPU process, on timers, on page loads); two took
+# 308 s against 400 s for the suite, and each test stays far inside its
+# waits (the slowest, micro-gl, 36 s of its 120 s).
+node --test --test-concurrency=2 tests/e2e/
 
 step "all checks passed"
