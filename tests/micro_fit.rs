@@ -142,6 +142,9 @@ fn cmaes_fits_two_parameters_of_a_sheet_gyroid() {
 /// frequency planes, then amplitudes, then the paper's loss) brings every
 /// seed below 1e-3 with the same budget (measured: 3.5e-5, 2.2e-5,
 /// 2.3e-9), and its reported loss is the paper's loss of its answer.
+/// Every seed of both is `filigree bench micro` (Table 3); here, the fast
+/// check: seed 2, where the paper's loss alone ends on the plateau
+/// (validation 3.04, η 377).
 #[test]
 fn coarse_to_fine_recovers_gyroid_3d_where_the_paper_loss_alone_does_not() {
     let gyroid = |eta: f64, a: f64, t: f64| {
@@ -191,50 +194,48 @@ fn coarse_to_fine_recovers_gyroid_3d_where_the_paper_loss_alone_does_not() {
         coarse_to_fine,
         ..Default::default()
     };
-    let mut plateau = 0;
-    for seed in 1..=3 {
-        let exact = fit(req(seed, false));
-        let c2f = fit(req(seed, true));
-        eprintln!(
-            "seed {seed}: paper loss alone {:?} (validation {:?}); coarse to fine {:?} \
-             (validation {:?}, loss {})",
-            exact.values, exact.validation, c2f.values, c2f.validation, c2f.loss
-        );
-        plateau += usize::from(exact.validation.unwrap() > 0.1);
-        assert!(
-            c2f.validation.unwrap() < 1e-3,
-            "seed {seed}: {:?}",
-            c2f.validation
-        );
-        assert!(
-            (c2f.values[0] - 100.0).abs() < 0.1,
-            "seed {seed}: {:?}",
-            c2f.values
-        );
-        assert!(c2f.evaluations <= C2F_TEST_BUDGET as u64);
-        // Honest: the reported loss is the paper's loss of the answer.
-        let again = fit(MicroFitRequest {
-            scene: c2f.scene.clone(),
-            budget: 1,
-            ..req(seed, false)
-        });
-        // Only deep in the needle, not equal: the start's values pass
-        // through the normalised coordinates and back, which may move
-        // them an ulp, and that near the minimum moves bins of rounding
-        // noise across the phase floor (seen: −13.4 → −6.0).
-        let l = again.initial_loss;
-        assert!(
-            l < -5.0 && c2f.loss < -5.0,
-            "seed {seed}: {l}, {}",
-            c2f.loss
-        );
-        assert_eq!(c2f.history.last(), Some(&c2f.loss));
-    }
-    assert!(
-        plateau >= 2,
-        "the paper's loss alone found {} of 3",
-        3 - plateau
+    let seed = 2;
+    let exact = fit(req(seed, false));
+    let c2f = fit(req(seed, true));
+    eprintln!(
+        "seed {seed}: paper loss alone {:?} (validation {:?}); coarse to fine {:?} \
+         (validation {:?}, loss {})",
+        exact.values, exact.validation, c2f.values, c2f.validation, c2f.loss
     );
+    assert!(
+        exact.validation.unwrap() > 0.1,
+        "the paper's loss alone found it: {:?} (validation {:?})",
+        exact.values,
+        exact.validation
+    );
+    assert!(
+        c2f.validation.unwrap() < 1e-3,
+        "seed {seed}: {:?}",
+        c2f.validation
+    );
+    assert!(
+        (c2f.values[0] - 100.0).abs() < 0.1,
+        "seed {seed}: {:?}",
+        c2f.values
+    );
+    assert!(c2f.evaluations <= C2F_TEST_BUDGET as u64);
+    // Honest: the reported loss is the paper's loss of the answer.
+    let again = fit(MicroFitRequest {
+        scene: c2f.scene.clone(),
+        budget: 1,
+        ..req(seed, false)
+    });
+    // Only deep in the needle, not equal: the start's values pass
+    // through the normalised coordinates and back, which may move
+    // them an ulp, and that near the minimum moves bins of rounding
+    // noise across the phase floor (seen: −13.4 → −6.0).
+    let l = again.initial_loss;
+    assert!(
+        l < -5.0 && c2f.loss < -5.0,
+        "seed {seed}: {l}, {}",
+        c2f.loss
+    );
+    assert_eq!(c2f.history.last(), Some(&c2f.loss));
     // Stages and all, shards give the unsharded run bit for bit (they
     // exchange both losses of each point).
     let short = MicroFitRequest {

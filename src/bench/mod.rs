@@ -85,6 +85,11 @@ pub enum Which {
         /// With --designs: the designs' folder.
         #[arg(long, default_value = "bench/designs")]
         designs_dir: std::path::PathBuf,
+        /// Instead: fit every shipped designer example to its own render
+        /// drawn away from its defaults, and the fish scales to three
+        /// truths (issue 9); --only names some.
+        #[arg(long, conflicts_with = "designs")]
+        own: bool,
     },
     /// Step times of every request kind at its largest realistic size
     /// (render-pattern 2048², fit-eval at grid 1024, pixel 4096² full mask,
@@ -209,6 +214,12 @@ pub enum Which {
 
 pub fn run(w: Which) -> Result<(), String> {
     match w {
+        Which::Fit {
+            only,
+            threads,
+            own: true,
+            ..
+        } => fit_designs::run_own(only.as_deref(), crate::cmd::threads(threads)?),
         Which::Fit {
             only,
             threads,

@@ -154,3 +154,38 @@ test('fit: the program editor is as wide as the view; a broken program\'s error 
   await page.click('button[data-act=apply-program]');
   await page.waitForSelector('.fit-editor .cm-inline-error', { state: 'detached' });
 });
+
+// The program's text in the editor, as the user sees it (CodeMirror draws
+// one element per line).
+const programText = (page) => page.evaluate(() => [...document.querySelectorAll('.fit-editor .cm-line')]
+  .map((l) => l.textContent).join('\n'));
+
+test('fit: program text typed while the core loads, or typed and not yet applied, is never replaced behind the user\'s back', async () => {
+  // Seen on a loaded machine: a program pasted into the editor before the
+  // first document's facts arrived was replaced by the document's program
+  // when they did, and Apply then applied the old one.
+  const page = await env.newPage({ path: null });
+  let release;
+  const gate = new Promise((resolve) => { release = resolve; });
+  await page.route('**/filigree_fit_bg.wasm', async (route) => { await gate; await route.continue(); });
+  await page.goto(`${env.url}#tool=fit`);
+  await page.click('button[data-act=show-program]');
+  await page.waitForSelector('.fit-editor .code-editor .cm-content');
+  const early = 'int param n in [1, 4] = 2;\nparam a in [0.05, 0.1] = 0.08;\nfor i in 0..n { circle(0.2 + i * 0.25, 0.5, a, fill: "#000000"); }\n';
+  await page.fill('[data-testid=fit-program]', early);
+  release();
+  await ready(page); // the first document's facts have arrived: its sliders are drawn
+  assert.equal(await programText(page), early, 'the text typed while the core loaded is still there');
+  await page.click('button[data-act=apply-program]');
+  await page.waitForFunction(() => /2 shapes/.test(document.querySelector('[data-testid=fit-facts]').textContent));
+  // Typed, not applied; then an int parameter moves, which re-reads the
+  // program's facts (it shapes what the program draws).
+  const draft = `${early}// not applied yet\n`;
+  await page.fill('[data-testid=fit-program]', draft);
+  await page.$eval('[data-testid=fit-sliders] .row[data-param=n] input', (el) => {
+    el.value = '3';
+    el.dispatchEvent(new Event('change'));
+  });
+  await page.waitForFunction(() => /3 shapes/.test(document.querySelector('[data-testid=fit-facts]').textContent));
+  assert.equal(await programText(page), draft, 'the edit not yet applied is still there');
+});

@@ -10,11 +10,23 @@ import { programInfo } from './program.js';
 export function createProgramEditor(ctx, { q, live, stopFit }) {
   const doc = () => ctx.state();
   let editor = null;
+  // The program the editor was last given from the document (null: none
+  // yet). The text is replaced only when the document's program changes
+  // (undo, a file, a generator, Apply): a program being typed and not yet
+  // applied survives everything else (an int slider, a target), and so
+  // does text typed before the first document arrived.
+  let shown = null;
+  const show = (d) => {
+    if (!editor || d.program === shown) return;
+    const typedFirst = shown === null && editor.getValue() !== '';
+    if (!typedFirst && editor.getValue() !== d.program) editor.setValue(d.program);
+    shown = d.program;
+  };
   const editorReady = createCodeEditor(q('.program-editor'), {
     language: 'filigree', label: 'pattern program', attributes: { 'data-testid': 'fit-program', 'data-field': 'program' },
   }).then((ed) => {
     editor = ed;
-    if (doc()) ed.setValue(doc().program);
+    if (doc()) show(doc());
     return ed;
   });
   const picker = q('[name=generator]');
@@ -73,7 +85,7 @@ export function createProgramEditor(ctx, { q, live, stopFit }) {
     generatorsReady,
     /** The editor and the picker follow document `d`. */
     sync(d) {
-      if (editor && editor.getValue() !== d.program) editor.setValue(d.program);
+      show(d);
       showGenerator(d);
     },
     /** An error about the program: open its text and mark where the core says (`line`, `column`). */
