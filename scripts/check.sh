@@ -119,10 +119,10 @@ if [ -n "$index_check" ]; then
 fi
 
 step "browser end-to-end tests (headless Chromium)"
-# Two test files at a time: one file leaves a core idle much of the time
-# (Chromium waits on its GPU process, on timers, on page loads); two took
-# 308 s against 400 s for the suite, and each test stays far inside its
-# waits (the slowest, micro-gl, 36 s of its 120 s).
+# Two test files at a time: one at a time left the second core idle for
+# much of the suite (timers, page loads, waits on workers); two took 285–312 s
+# against 400 s on this 2-core machine. The slowest test, micro-gl, then
+# takes 36 s of its 120 s wait.
 node --test --test-concurrency=2 tests/e2e/
 
 step "all checks passed"
