@@ -23,7 +23,8 @@ const spread = (g) => { const m = g.reduce((a, b) => a + b, 0) / g.length; retur
 
 test('micro: the scene JSON is pretty-printed and full width; an error shows under its line and the picture stays', async () => {
   const wide = await env.newPage({ path: '#tool=micro' });
-  await wide.waitForSelector('.micro-editor .cm-content');
+  // The editor is there before the document is; wait for its scene.
+  await wide.waitForFunction(() => [...document.querySelectorAll('.micro-editor .cm-line')].some((l) => l.textContent.trim()));
   // One field a line, not one long line.
   const lines = await wide.$$eval('.micro-editor .cm-line', (ls) => ls.map((l) => l.textContent));
   assert.ok(lines.length >= 5, `the gyroid's JSON on ${lines.length} lines: ${lines.join(' | ')}`);
