@@ -296,9 +296,6 @@ pub fn run(
     let out = json!({"bench": "fit", "budget": if quick {"quick"} else {"paper"}, "threads": threads,
                      "summary": summary, "fits": fits, "throughput_one_core": speed,
                      "throughput_method": "best and median of three 0.3 s windows, one thread; before_*: the reference path (Objective::reference) in the same run", "units": units});
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    crate::cmd::print_json(&out)?;
     Ok(())
 }

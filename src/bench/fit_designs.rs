@@ -74,10 +74,7 @@ pub fn run(
     let out = json!({"bench": "fit-designs", "split": split, "hard": hard, "init": init, "threads": threads,
         "settings": "defaults (the Fit button's request: program and target image only)",
         "good_iou": GOOD_IOU, "good": good, "of": rows.len(), "designs": rows});
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    crate::cmd::print_json(&out)?;
     Ok(())
 }
 
@@ -270,10 +267,7 @@ pub fn run_own(only: Option<&str>, threads: usize) -> Result<(), String> {
         "scales": {"pitch_within": SCALES_PITCH, "width_within": SCALES_WIDTH, "iou_at_least": SCALES_IOU,
             "good": scales.iter().filter(|r| r["good"] == json!(true)).count(), "of": scales.len(),
             "truths": scales}});
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    crate::cmd::print_json(&out)?;
     Ok(())
 }
 

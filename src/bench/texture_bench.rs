@@ -481,10 +481,7 @@ pub fn bench(a: BenchArgs) -> Result<(), String> {
         "index_bytes": full.to_bytes().len(),
         "index_config": cfg.index,
     });
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    crate::cmd::print_json(&out)?;
     Ok(())
 }
 
@@ -578,10 +575,7 @@ pub fn models(
             "seconds": secs,
         });
     }
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    crate::cmd::print_json(&out)?;
     Ok(())
 }
 

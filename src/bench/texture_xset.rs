@@ -140,10 +140,7 @@ pub fn run(index: &Path, dir: &Path, split: &str) -> Result<(), String> {
     let bytes = std::fs::read(index).map_err(|e| format!("{}: {e}", index.display()))?;
     let index = api::parse_index(&bytes).map_err(|e| format!("{}: {e}", index.display()))?;
     let out = evaluate(&index, dir, split)?;
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    crate::cmd::print_json(&out)?;
     Ok(())
 }
 

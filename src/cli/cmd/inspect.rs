@@ -32,10 +32,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let job = start_inspect(req).map_err(|e| explain(e, &origins))?;
     let r = drive(job, true, &origins)?.info;
     if a.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&r).map_err(|e| e.to_string())?
-        );
+        super::print_json(&r)?;
         return Ok(());
     }
     println!(

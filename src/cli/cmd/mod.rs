@@ -155,6 +155,15 @@ pub fn put<T: Serialize>(
     Ok(())
 }
 
+/// Print `value` as pretty JSON on stdout (what `--json` and `bench` print).
+pub fn print_json(value: &impl Serialize) -> Result<(), String> {
+    println!(
+        "{}",
+        serde_json::to_string_pretty(value).map_err(|e| e.to_string())?
+    );
+    Ok(())
+}
+
 /// `--threads`: the asked number when in range, else all cores
 /// ([`filigree::core::parallel::threads`]).
 pub fn threads(asked: Option<usize>) -> Result<usize, String> {

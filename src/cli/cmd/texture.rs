@@ -82,10 +82,7 @@ pub fn run(w: Which) -> Result<(), String> {
                     })
                 })
                 .collect();
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&list).map_err(|e| e.to_string())?
-            );
+            super::print_json(&list)?;
             Ok(())
         }
         Which::Measure {
@@ -112,10 +109,7 @@ pub fn run(w: Which) -> Result<(), String> {
                     .collect();
                 out.push(json!({"model": m.id, "params": p, "raw": named}));
             }
-            println!(
-                "{}",
-                serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-            );
+            super::print_json(&out)?;
             Ok(())
         }
         Which::Sheet { size, seed, out } => {
