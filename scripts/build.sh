@@ -2,7 +2,7 @@
 # Release wasm build: one module per tool (the `filigree-wasm` crate in
 # src/wasm/, one feature per tool) → wasm-opt → wasm-bindgen --target web →
 # pkg/filigree_<tool>.js + pkg/filigree_<tool>_bg.wasm; then the code editor
-# bundle (scripts/bundle-editor.mjs) and the service worker's precache
+# bundle and the page bundle (scripts/bundle.mjs) and the service worker's precache
 # manifest (content hashes of every shipped file). The library is compiled
 # once; each tool's build links it, and link-time optimisation keeps only
 # what that tool's `start_job` reaches.
@@ -42,7 +42,7 @@ for m in $MODULES; do
   fi
   wasm-bindgen --target web --no-typescript --out-dir pkg --out-name "filigree_$m" "$wasm"
 done
-node scripts/bundle-editor.mjs
+node scripts/bundle.mjs
 node scripts/precache.mjs
 # FILIGREE_TEST_HOOKS=1: also an Inspect module with the test-only request
 # kind `debug-abort` (feature test-hooks) in pkg-test/, which the e2e tests

@@ -1,4 +1,4 @@
-// Source of www/vendor/code-editor.bundle.js (built by scripts/bundle-editor.mjs
+// Source of www/vendor/code-editor.bundle.js (built by scripts/bundle.mjs
 // with esbuild; the bundle is generated, not committed). It turns CodeMirror 6
 // into the small API www/ui/code-editor.js documents; nothing else imports it.
 import { EditorState, Compartment, StateField, StateEffect } from '@codemirror/state';

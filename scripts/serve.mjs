@@ -1,4 +1,5 @@
-// A dependency-free static server for the app, and an exported start() the
+// A static server for the app (no npm dependency; esbuild, when installed,
+// only remakes the page bundle), and an exported start() the
 // end-to-end tests use with a random port.
 //
 // Every response is `cache-control: no-cache` (the browser revalidates each
@@ -16,6 +17,7 @@ import crypto from 'node:crypto';
 import zlib from 'node:zlib';
 import { promisify } from 'node:util';
 import { fileURLToPath } from 'node:url';
+import { APP_BUNDLE, appBundle } from './bundle.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
 const TYPES = {
@@ -153,6 +155,17 @@ export function start(port = 8080, root = ROOT) {
       if (!file.startsWith(root + path.sep) || FORBIDDEN.test(path.relative(root, file))) {
         res.writeHead(403).end('forbidden');
         return;
+      }
+      // The page's bundle of www/ (scripts/bundle.mjs), remade first when a
+      // source is newer, so an edit is served as edited. A source that does
+      // not build is a 500 with esbuild's message, not the old bundle.
+      if (file === APP_BUNDLE) {
+        try {
+          await appBundle({ ifStale: true });
+        } catch (err) {
+          res.writeHead(500, { 'content-type': 'text/plain; charset=utf-8' }).end(`bundle: ${err.message}`);
+          return;
+        }
       }
       const entry = await load(cache, file);
       const ext = path.extname(file);

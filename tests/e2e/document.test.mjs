@@ -614,7 +614,9 @@ test('what the tests compute from a panel is test-only code: not precached, not 
   assert.deepEqual(HOOK_SCRIPTS.map((f) => path.basename(f)), ['fit.js', 'micro.js', 'pixel.js', 'tangle.js', 'texture.js'],
     'the test layer has a hook file a tool');
   assert.deepEqual(urls.filter((u) => u.startsWith('tests/')), [], 'nothing of tests/ ships');
-  const scripts = urls.filter((u) => /\.m?js$/.test(u) && fs.existsSync(path.join(ROOT, u)))
+  // The page bundle (scripts/bundle.mjs) is these same sources concatenated,
+  // and the code editor's is CodeMirror: the sources are what is read.
+  const scripts = urls.filter((u) => /\.m?js$/.test(u) && !u.endsWith('.bundle.js') && fs.existsSync(path.join(ROOT, u)))
     .map((u) => [u, fs.readFileSync(path.join(ROOT, u), 'utf8')]);
   // Only the controller names the test layer's builders; no shipped script makes one.
   const naming = scripts.filter(([, text]) => text.includes('__filigreeHookBuilders')).map(([u]) => u);

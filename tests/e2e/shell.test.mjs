@@ -3,7 +3,7 @@
 import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import { launch, ROOT } from './harness.mjs';
+import { launch, ready, ROOT } from './harness.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -233,5 +233,23 @@ test('offline after one visit, the program editor is still CodeMirror (the bundl
     own.server.listen(0);
   } finally {
     await own.close();
+  }
+});
+
+test('a page loads its code as one script: the page bundle, then only the worker and the modules it imports', async () => {
+  // scripts/bundle.mjs: www/app/main.js and what it imports in one file
+  // (about 100 modules otherwise: ~110 requests and ~0.8 CPU-s a page load).
+  for (const p of ['', '#tool=tangle']) {
+    const page = await env.newPage({ path: null });
+    const scripts = [];
+    page.on('request', (r) => { const u = new URL(r.url()); if (u.pathname.endsWith('.js')) scripts.push(u.pathname); });
+    await page.goto(env.url + p);
+    await ready(page, p);
+    const own = scripts.filter((s) => s.startsWith('/www/'));
+    assert.equal(own[0], '/www/app/main.bundle.js', `${p || 'home'}: the page's first script`);
+    // And the code editor's bundle, which Tangle's grammar editor imports.
+    const allowed = ['/www/app/main.bundle.js', '/www/app/protocol.js', '/www/app/worker.js', '/www/vendor/code-editor.bundle.js'];
+    assert.deepEqual(own.filter((s) => !allowed.includes(s)), [], `${p || 'home'}: no module of www/ but the bundle and the worker's`);
+    await env.closeTestPages();
   }
 });
