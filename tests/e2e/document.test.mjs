@@ -11,6 +11,7 @@ import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
 import { launch, pickGenerator, ready, ROOT, HOOK_SCRIPTS } from './harness.mjs';
+import { bundledOnly } from '../../scripts/bundle.mjs';
 
 let env;
 before(async () => { env = await launch(); });
@@ -610,13 +611,18 @@ test('what the tests compute from a panel is test-only code: not precached, not 
   // What ships: the service worker's precache list (scripts/precache.mjs).
   const manifest = fs.readFileSync(path.join(ROOT, 'pkg/precache-manifest.js'), 'utf8');
   const urls = [...manifest.matchAll(/"url": "\.\/([^"]+)"/g)].map((m) => m[1]);
-  assert.ok(urls.includes('www/app/document.js') && urls.includes('www/micro/panel.js'), 'the list names what ships');
+  assert.ok(urls.includes('www/app/main.bundle.js') && urls.includes('www/app/worker.js'), 'the list names what ships');
   assert.deepEqual(HOOK_SCRIPTS.map((f) => path.basename(f)), ['fit.js', 'micro.js', 'pixel.js', 'tangle.js', 'texture.js'],
     'the test layer has a hook file a tool');
   assert.deepEqual(urls.filter((u) => u.startsWith('tests/')), [], 'nothing of tests/ ships');
-  // The page bundle (scripts/bundle.mjs) is these same sources concatenated,
-  // and the code editor's is CodeMirror: the sources are what is read.
-  const scripts = urls.filter((u) => /\.m?js$/.test(u) && !u.endsWith('.bundle.js') && fs.existsSync(path.join(ROOT, u)))
+  // The page bundle ships the modules it holds (scripts/bundle.mjs: their
+  // text concatenated), and the code editor's is CodeMirror: the sources are
+  // what is read.
+  const inBundle = [...await bundledOnly()];
+  assert.ok(inBundle.includes('www/app/document.js') && inBundle.includes('www/micro/panel.js'), 'the bundle holds the panels');
+  assert.deepEqual(urls.filter((u) => inBundle.includes(u)), [], 'no module inside the page bundle is precached on its own');
+  const scripts = [...urls.filter((u) => !u.endsWith('.bundle.js')), ...inBundle]
+    .filter((u) => /\.m?js$/.test(u) && fs.existsSync(path.join(ROOT, u)))
     .map((u) => [u, fs.readFileSync(path.join(ROOT, u), 'utf8')]);
   // Only the controller names the test layer's builders; no shipped script makes one.
   const naming = scripts.filter(([, text]) => text.includes('__filigreeHookBuilders')).map(([u]) => u);
