@@ -475,13 +475,27 @@ mod painter {
     pub struct Drawing<'a> {
         rec: &'a Recording,
         nodes: Vec<f64>,
+        /// Each path piece's polyline (segments and flattened quadratics),
+        /// made once: the painter asks for every piece five times a pixel.
+        pieces: Vec<Vec<P>>,
     }
 
     impl<'a> Drawing<'a> {
         pub fn new(rec: &'a Recording, params: &[f64]) -> Self {
             let mut nodes = vec![];
             rec.tape.forward(params, &mut nodes);
-            Drawing { rec, nodes }
+            let mut d = Drawing {
+                rec,
+                nodes,
+                pieces: vec![],
+            };
+            d.pieces = (0..rec.prims.len() as u32)
+                .map(|i| match d.prim(i) {
+                    (k @ (PrimKind::Segment | PrimKind::Quad), f) => piece(k, &f),
+                    _ => vec![],
+                })
+                .collect();
+            d
         }
 
         fn prim(&self, i: u32) -> (PrimKind, [f64; 6]) {
@@ -493,13 +507,15 @@ mod painter {
             (p.kind, f)
         }
 
-        fn polylines(&self, first: u32, len: u32) -> Vec<Vec<P>> {
-            (first..first + len)
-                .map(|i| {
-                    let (k, f) = self.prim(i);
-                    piece(k, &f)
-                })
-                .collect()
+        /// Piece `i`'s polyline; a piece of another kind has none.
+        fn piece(&self, i: u32) -> &[P] {
+            let line = &self.pieces[i as usize];
+            assert!(!line.is_empty(), "{:?} inside a path", self.prim(i).0);
+            line
+        }
+
+        fn polylines(&self, first: u32, len: u32) -> impl Iterator<Item = &[P]> {
+            (first..first + len).map(|i| self.piece(i))
         }
 
         /// Whether `p` is inside the geometry (zero-area geometry never is).
@@ -539,24 +555,31 @@ mod painter {
             }
         }
 
-        /// Distance from `p` to the geometry's outline (or to the geometry
-        /// itself when it has no area).
-        fn outline(&self, g: &Geom, p: P) -> f64 {
+        /// Whether `p` is closer than `r` to the geometry's outline (or to
+        /// the geometry itself when it has no area). A polyline whose
+        /// bounding box is `r` or farther away has no segment closer, so it
+        /// is skipped.
+        fn near_outline(&self, g: &Geom, p: P, r: f64) -> bool {
+            let near_line = |line: &[P]| {
+                let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+                for q in line {
+                    for k in 0..2 {
+                        lo[k] = lo[k].min(q[k]);
+                        hi[k] = hi[k].max(q[k]);
+                    }
+                }
+                let gap = |k: usize| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0);
+                dist([gap(0), gap(1)], [0.0, 0.0]) < r
+                    && line.windows(2).any(|s| seg_dist(p, s[0], s[1]) < r)
+            };
             match g {
                 Geom::Prim(i) => match self.prim(*i) {
-                    (PrimKind::Point, f) => dist(p, [f[0], f[1]]),
-                    (PrimKind::Circle, f) => (dist(p, [f[0], f[1]]) - f[2]).abs(),
-                    (PrimKind::Rect, f) => rect_outline(&f, p),
-                    (k, f) => piece(k, &f)
-                        .windows(2)
-                        .map(|s| seg_dist(p, s[0], s[1]))
-                        .fold(f64::INFINITY, f64::min),
+                    (PrimKind::Point, f) => dist(p, [f[0], f[1]]) < r,
+                    (PrimKind::Circle, f) => (dist(p, [f[0], f[1]]) - f[2]).abs() < r,
+                    (PrimKind::Rect, f) => rect_outline(&f, p) < r,
+                    _ => near_line(self.piece(*i)),
                 },
-                Geom::Path { first, len, .. } => self
-                    .polylines(*first, *len)
-                    .iter()
-                    .flat_map(|l| l.windows(2).map(|s| seg_dist(p, s[0], s[1])))
-                    .fold(f64::INFINITY, f64::min),
+                Geom::Path { first, len, .. } => self.polylines(*first, *len).any(near_line),
                 Geom::Bool(..) => panic!("the brute force does not stroke boolean shapes"),
             }
         }
@@ -572,7 +595,7 @@ mod painter {
                 }
                 if let Some(stroke) = s.stroke {
                     let w = self.nodes[s.width as usize].max(0.0);
-                    if self.outline(&s.geom, p) < 0.5 * w {
+                    if self.near_outline(&s.geom, p, 0.5 * w) {
                         c = stroke;
                     }
                 }

@@ -5,7 +5,8 @@
 // MAX_HIT_MISS of the pixels may disagree on hit or miss, the mean absolute
 // difference over all channels is at most MAX_MEAN levels of 255, and the
 // summed work counters (steps per ray) stay within 10% of the CPU's. The
-// test prints SwiftShader frame times and the average steps per ray.
+// test prints the average steps per ray; SwiftShader's frame times are
+// micro-gl.bench.mjs's.
 //
 // Then the panel: the interactive view runs on the GPU (coarse frames while
 // the camera moves, refined to full size when idle), and without WebGL2 it
@@ -13,6 +14,7 @@
 import { test, before, after, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { launch } from './harness.mjs';
+import { compareAll, VIEWS } from './micro-gl-compare.mjs';
 
 const MAX_HIT_MISS = 0.02;
 const MAX_MEAN = 4;
@@ -23,93 +25,15 @@ before(async () => { env = await launch(); });
 afterEach(() => env?.closeTestPages());
 after(async () => { await env?.close(); });
 
-/** In the page: render every shipped scene both ways, return the comparison per scene. */
-async function compareAll(page, { side, steps, cameras, extra = {}, only = null, bigSide = 0 }) {
-  return page.evaluate(async ({ side, steps, cameras, extra, only, bigSide }) => {
-    const { MicroGl } = await import('/www/micro/gl.js');
-    const pool = window.filigree.pool;
-    const examples = await pool.run('micro-examples', {});
-    const gl = new MicroGl();
-    const decode = async (png) => {
-      const bmp = await createImageBitmap(new Blob([png], { type: 'image/png' }));
-      const c = new OffscreenCanvas(bmp.width, bmp.height);
-      const g = c.getContext('2d');
-      g.drawImage(bmp, 0, 0);
-      return g.getImageData(0, 0, bmp.width, bmp.height).data;
-    };
-    const out = [];
-    for (const ex of examples.filter((e) => !only || only.includes(e.name))) {
-      for (const camera of cameras) {
-        const req = { scene: ex.scene, width: side, height: side, steps, camera, ...extra };
-        const [shader, cpu] = await Promise.all([pool.run('micro-glsl', req), pool.run('micro-render', req)]);
-        const t0 = performance.now();
-        gl.use(shader);
-        const compileMs = performance.now() - t0;
-        // One warm-up frame, then timed frames.
-        gl.draw(camera, side, side, { stats: true });
-        const times = [];
-        let last;
-        for (let i = 0; i < 1; i++) {
-          const t = performance.now();
-          last = gl.draw(camera, side, side, { stats: true });
-          times.push(performance.now() - t);
-        }
-        // The first view once more at bigSide (one frame, no warm-up: the
-        // shader is compiled), for the frame-time summary; only where the
-        // small frame was quick (a 256² frame costs ~16× a 64² one: tens of
-        // seconds in SwiftShader for the heavy scenes, too long for CI).
-        let bigMs = null;
-        if (bigSide && camera === cameras[0] && Math.min(...times) < 20) {
-          const t = performance.now();
-          gl.draw(camera, bigSide, bigSide);
-          bigMs = performance.now() - t;
-        }
-        const a = await decode(cpu.png);
-        const b = last.rgba;
-        const bg = extra.background || [24, 26, 30];
-        const isBg = (d, i) => d[i] === bg[0] && d[i + 1] === bg[1] && d[i + 2] === bg[2];
-        let hitMiss = 0, sum = 0, cpuHits = 0;
-        for (let i = 0; i < a.length; i += 4) {
-          if (isBg(a, i) !== isBg(b, i)) hitMiss++;
-          if (!isBg(a, i)) cpuHits++;
-          sum += Math.abs(a[i] - b[i]) + Math.abs(a[i + 1] - b[i + 1]) + Math.abs(a[i + 2] - b[i + 2]);
-        }
-        const n = a.length / 4;
-        out.push({
-          name: ex.name, camera, functions: shader.functions, fragmentBytes: shader.fragment.length,
-          hitMiss: hitMiss / n, mean: sum / (3 * n), cpuHitFraction: cpuHits / n,
-          cpuStats: cpu.stats, glStats: last.stats,
-          compileMs, frameMs: Math.min(...times), bigMs,
-        });
-      }
-    }
-    return out;
-  }, { side, steps, cameras, extra, only, bigSide });
-}
-
-const VIEWS = [
-  { yaw: 35, pitch: 28, distance: 3.6, target: [0, 0, 0], fov: 40 },
-  { yaw: 200, pitch: -15, distance: 0.9, target: [0.1, 0.2, 0.3], fov: 40 },
-];
-
 test('micro-gl: every shipped scene on the GPU agrees with the CPU reference (fixed steps, two views)', async () => {
   const page = await env.newPage({ path: '#tool=micro' });
-  const rows = await compareAll(page, { side: SIDE, steps: 'fixed', cameras: VIEWS, bigSide: 256 });
+  const rows = await compareAll(page, { side: SIDE, steps: 'fixed', cameras: VIEWS });
   assert.ok(rows.length >= 2 * 6, `${rows.length} renders`);
-  // One JSON line for the bench notes (issue 12): SwiftShader frame ms per
-  // scene, first view, at 64² (best of the timed frames) and 256² (one frame).
-  const first = rows.filter((r) => r.camera.distance === VIEWS[0].distance);
-  console.log(JSON.stringify({
-    bench: 'micro-gl', renderer: 'SwiftShader (software WebGL2)', steps: 'fixed', view: VIEWS[0],
-    note: '256: one frame, timed only where the 64² frame took under 20 ms (null: skipped)',
-    frame_ms: Object.fromEntries(first.map((r) => [r.name, { [SIDE]: +r.frameMs.toFixed(1), 256: r.bigMs === null ? null : +r.bigMs.toFixed(1),
-      steps_per_ray: +(r.glStats.steps / r.glStats.rays).toFixed(1) }])),
-  }));
   for (const r of rows) {
     const steps = { cpu: r.cpuStats.steps / r.cpuStats.rays, gl: r.glStats.steps / r.glStats.rays };
     console.log(`[micro-gl] ${r.name} d=${r.camera.distance}: hit/miss ${(r.hitMiss * 100).toFixed(2)}%, mean |Δ| ${r.mean.toFixed(2)}, `
       + `coverage ${(r.cpuHitFraction * 100).toFixed(1)}%, steps/ray cpu ${steps.cpu.toFixed(1)} gpu ${steps.gl.toFixed(1)}, `
-      + `SwiftShader ${SIDE}² frame ${r.frameMs.toFixed(0)} ms (compile ${r.compileMs.toFixed(0)} ms, ${r.functions} functions, ${r.fragmentBytes} bytes)`);
+      + `${r.functions} functions, ${r.fragmentBytes} bytes of GLSL`);
     assert.ok(r.hitMiss <= MAX_HIT_MISS, `${r.name}: ${(r.hitMiss * 100).toFixed(2)}% of pixels disagree on hit or miss`);
     assert.ok(r.mean <= MAX_MEAN, `${r.name}: mean absolute difference ${r.mean.toFixed(2)}`);
     assert.equal(r.glStats.rays, SIDE * SIDE);
