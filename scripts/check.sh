@@ -127,7 +127,8 @@ step "browser end-to-end tests (headless Chromium)"
 # Two test files at a time: one at a time left the second core idle for
 # much of the suite (timers, page loads, waits on workers); two took 285–312 s
 # against 400 s on this 2-core machine. The slowest test, micro-gl, then
-# takes 36 s of its 120 s wait.
+# takes about 34 s of its 120 s wait (its frame timings are
+# tests/e2e/micro-gl.bench.mjs's).
 node --test --test-concurrency=2 tests/e2e/
 
 step "all checks passed"
