@@ -13,6 +13,8 @@ a suffix ! skips the paper's split (a second training). Environment: GW
 (weight of the standardised global values, 1), LBPW / PCNW (weights of the
 LBP and PCN histograms, h- only), LOOKDUP=k (look rows k times in training),
 NOLIGHT1=1 (drop the second light's clean images from training).
+EXTRA=PREFIX,... (more training rows: another implementation's images,
+dumped with texture_xset_dump --views-only; EXTRAT, EXTRADUP below),
 ONLYPAPER=1 (only the paper's split), XSET=xset-scales (the dump's
 --scales reads; PER=1 prints each model's validation counts).
 Prints held-out bases (first images, their looks), the paper's split and
@@ -31,6 +33,20 @@ XT = __import__("os").environ.get("XSET", "xset")
 xm = np.genfromtxt(f"{D}/{XT}.csv", delimiter=",", skip_header=1, dtype=np.int64)
 XS = np.fromfile(f"{D}/{XT}.f32", dtype="<f4").reshape(len(xm), -1)
 model, base, held, look, light, crop, ptest = (meta[:, i] for i in range(7))
+# EXTRA=PREFIX[,PREFIX...]: more training rows, another implementation's
+# images as `--views-only` dumped them (PREFIX.f32 / PREFIX.csv: image,
+# model, transform, view); EXTRAT=t keeps transforms < t (8: all).
+EXTRA = [e for e in __import__("os").environ.get("EXTRA", "").split(",") if e]
+if EXTRA:
+    _t = int(__import__("os").environ.get("EXTRAT", "8"))
+    _xs, _ys = [], []
+    for e in EXTRA:
+        em = np.genfromtxt(f"{e}.csv", delimiter=",", skip_header=1, dtype=np.int64)
+        ex = np.fromfile(f"{e}.f32", dtype="<f4").reshape(len(em), -1)
+        keep = em[:, 2] < _t
+        _xs.append(ex[keep]); _ys.append(em[keep, 1])
+    EX, EY = np.vstack(_xs), np.concatenate(_ys)
+    print(f"extra training rows: {len(EX)}", flush=True)
 K = 23
 import os
 GW = float(os.environ.get('GW', '1'))
@@ -198,7 +214,7 @@ def run(kind, paper=True):
     label = kind
     kind = kind[2:] if hell else kind
     tr = held == 0
-    rows = Rows(X[tr], hell)
+    rows = Rows(np.vstack([X[tr]] + ([EX] if EXTRA else [])), hell)
     R = rows(X)
     ti = np.nonzero(tr)[0]
     dup = int(os.environ.get("LOOKDUP", "1"))
@@ -208,6 +224,10 @@ def run(kind, paper=True):
         ti = ti[(look[ti] == 1) | (light[ti] == 0)]
     if os.environ.get("ONLYPAPER"):
         clf = lambda Q: np.zeros((len(Q), K))
+    elif EXTRA:
+        dupx = int(os.environ.get("EXTRADUP", "1"))
+        ER = rows(EX)
+        clf = make(kind, np.vstack([R[ti]] + [ER] * dupx), np.concatenate([model[ti]] + [EY] * dupx))
     else:
         clf = make(kind, R[ti], model[ti])
     # held-out bases: first image (light 0, first crop seen), and their looks

@@ -13,7 +13,9 @@
 //! ([`Index::view_features`]) under the eight rotations and mirrors of the
 //! square (transform 0 is the image itself), for test-time augmentation;
 //! with `--scales` only these, to `xset-scales.f32` / `.csv`, as read
-//! (transform 0) and halved (transform 1, its 2 × 2 means).
+//! (transform 0) and halved (transform 1, its 2 × 2 means); with
+//! `--views-only` only the eight symmetries' rows (for a labelled
+//! directory of extra images, e.g. another implementation's renders).
 //! `src/bench/examples/texture_xset_classifiers.py` reads the files;
 //! findings in `docs/bench/texture-xset-2026-12-06b.md`.
 // A native experiment: wall-clock time is what it reports.
@@ -103,12 +105,38 @@ fn main() {
         samples.len(),
         t.elapsed().as_secs_f64()
     );
+    if let Some(dir) = arg(&args, "--write-images") {
+        // The dataset's images as 8-bit PNGs with rows.csv's order in
+        // labels.csv, for probes that compute their own features.
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut csv = String::from("file,model,split,variant\n");
+        for (i, (s, _)) in samples.iter().enumerate() {
+            let g = &s.image;
+            let px: Vec<u8> = g
+                .data
+                .iter()
+                .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+                .collect();
+            let img = image::GrayImage::from_raw(g.width as u32, g.height as u32, px).unwrap();
+            let name = format!("d{i:05}.png");
+            img.save(format!("{dir}/{name}")).unwrap();
+            csv += &format!(
+                "{name},{},validation,{}\n",
+                MODELS[s.model].name, held[s.base] as u8
+            );
+        }
+        std::fs::write(format!("{dir}/labels.csv"), csv).unwrap();
+        return;
+    }
     let train = build::training(&samples, |b| !held[b]);
     let pcn = Index::train_pcn(&train, &cfg.index).expect("filters");
     drop(train);
     let scales = args.iter().any(|a| a == "--scales");
     if scales {
         return xset(&out, &dir, pcn, &cfg, true);
+    }
+    if args.iter().any(|a| a == "--views-only") {
+        return xset(&out, &dir, pcn, &cfg, false);
     }
     let t = Instant::now();
     let rows: Vec<Vec<f32>> = par_map(&samples, |(s, _)| {
