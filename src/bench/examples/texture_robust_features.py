@@ -1,7 +1,7 @@
 """Issue 36 probe: shading-, rotation- and scale-robust texture descriptors
 computed in Python on labelled PNG directories (any `labels.csv` with
 `file,model,...`), to judge a feature family before it is written in Rust.
-python3 src/bench/examples/texture_robust_features.py DIR OUT.npz
+python3 src/bench/examples/texture_robust_features.py DIR OUT.npz [--half]
 
 Per 128² window (a 128² image is one window; a 256² image is its two
 diagonal quadrants, averaged, as the index's `Pcn::views` reads a query):
@@ -14,7 +14,10 @@ diagonal quadrants, averaged, as the index's `Pcn::views` reads a query):
   12 orientation bins sorted (anisotropy without a direction);
 - intensity skew and kurtosis, the share of flat pixels, gradient skew
   and kurtosis.
-189 values. Needs numpy, scipy, pillow, scikit-image, kymatio (pip).
+With --half a 256² image is read whole instead: scattering and spectrum
+on it halved to 128² (its 2 × 2 means), LBP on it and on it halved,
+moments on it; the variant that read the cross-implementation set
+better (the report). 189 values. Needs numpy, scipy, pillow, scikit-image, kymatio (pip).
 Findings: docs/bench/texture-xset-2026-12-07b.md.
 """
 import sys, csv, numpy as np
@@ -96,7 +99,12 @@ def one(path):
     if img.shape == (128, 128):
         return feat(img)
     assert img.shape == (256, 256), img.shape
+    if HALF:
+        small = img.reshape(128, 2, 128, 2).mean((1, 3))
+        return np.concatenate([scat(small), lbp(img), spectral(small), inten(img)])
     return (feat(img[:128, :128]) + feat(img[128:, 128:])) / 2
+
+HALF = "--half" in sys.argv
 
 if __name__ == "__main__":
     d, out = sys.argv[1], sys.argv[2]
