@@ -15,7 +15,9 @@
 //! with `--scales` only these, to `xset-scales.f32` / `.csv`, as read
 //! (transform 0) and halved (transform 1, its 2 × 2 means); with
 //! `--views-only` only the eight symmetries' rows (for a labelled
-//! directory of extra images, e.g. another implementation's renders).
+//! directory of extra images, e.g. another implementation's renders);
+//! with `--write-images DIR` only the dataset's images, as 8-bit PNGs with
+//! a `labels.csv` whose last column is 1 for the bases held out.
 //! `src/bench/examples/texture_xset_classifiers.py` reads the files;
 //! findings in `docs/bench/texture-xset-2026-12-06b.md`.
 // A native experiment: wall-clock time is what it reports.
