@@ -10,7 +10,9 @@ probabilities; the first 2, 4, ... TRAIN sets with their images
 weighted 2W/n (n sets; W in 2, 4, 8), so that together they weigh as
 much as two sets at weight W, whatever n. Prints cross-implementation top-1, top-3 and the
 expected calibration error (10 bins), and the same on our held-out bases.
-Also: bench/texture-train alone, and our training bases alone.
+Also: bench/texture-train alone, and our training bases alone. PER=1:
+only ours + all TRAIN sets at weight 2, with each model's validation
+counts (top-1, top-3, the two commonest wrong answers) and per family.
 Needs numpy, scikit-learn. Findings: docs/bench/texture-xset-2026-12-07b.md.
 """
 import csv
@@ -47,6 +49,24 @@ def evaluate(clf, sc, X, y):
     return f"{right.mean():.3f} / {(top[:, :3] == y[:, None]).any(1).mean():.3f} / {ece:.3f}"
 
 
+def per_model(clf, sc):
+    import collections
+    P = clf.predict_proba(sc.transform(V))
+    top = clf.classes_[np.argsort(-P, 1)]
+    for m in sorted(set(yv)):
+        k = yv == m
+        wrong = collections.Counter(top[k, 0][top[k, 0] != m]).most_common(2)
+        print(f"| {m} | {(top[k, 0] == m).sum()}/{k.sum()} | {(top[k, :3] == m).any(1).sum()}/{k.sum()} | "
+              + ", ".join(f"{a} {b}" for a, b in wrong) + " |")
+    prefixes = ("Folding", "Fusion", "Texton", "Fractal", "CA")
+    fam = np.vectorize(lambda m: next((p for p in prefixes if m.startswith(p)), m))
+    ff, pf = fam(yv), fam(top[:, 0])
+    print(f"family right {(ff == pf).mean():.3f}")
+    for f in sorted(set(ff)):
+        k = ff == f
+        print(f"| {f} | {(top[k, 0] == yv[k]).sum()} / {(pf[k] == f).sum()} of {k.sum()} |")
+
+
 def run(label, parts):
     X = np.vstack([p[0] for p in parts])
     y = np.concatenate([p[1] for p in parts])
@@ -55,6 +75,13 @@ def run(label, parts):
     clf = SVC(C=C, probability=True, random_state=0).fit(sc.transform(X), y, sample_weight=w)
     print(f"{label:44s} xval top1/top3/ECE {evaluate(clf, sc, V, yv)}"
           f" | ours held-out {evaluate(clf, sc, O[held], yo[held])}", flush=True)
+    return clf, sc
+
+
+if os.environ.get("PER"):
+    per_model(*run(f"ours + {len(D3)} texture-train sets, weight 2",
+                   [(O[~held], yo[~held], 1.0)] + [(X, y, 4 / len(D3)) for X, y in D3]))
+    sys.exit()
 
 
 run("texture-train only (all sets)", [(X, y, 1.0) for X, y in D3])
