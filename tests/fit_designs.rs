@@ -59,3 +59,35 @@ fn the_global_stage_finds_the_stripes_basin_the_ga_misses() {
     let iou = fit_real_design("diagonal-stripes", Init::Periodic);
     assert!(iou >= 0.95, "default fit: IoU {iou:.4} < 0.95");
 }
+
+/// The browser shards a fit over its worker pool, whose size follows the
+/// machine's cores, so every shard count must give the one fit's answer
+/// bit for bit. On the diagonal stripes 3 and 4 shards once ended
+/// elsewhere: the field evaluator's memo kept marks from the evaluation
+/// before, so a shard's results depended on which points it had evaluated
+/// first (CI failed on a machine whose pool differed from ours).
+#[test]
+fn the_stripes_fit_is_the_same_in_any_number_of_shards() {
+    use filigree::core::job::Cancel;
+    use filigree::core::parallel::run_sharded_threads;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/designs");
+    let req = FitRequest {
+        program: std::fs::read_to_string(dir.join("diagonal-stripes.flg")).unwrap(),
+        target_png: Some(std::fs::read(dir.join("diagonal-stripes.png")).unwrap()),
+        ..Default::default()
+    };
+    let one = run_quietly(start_fit(&req).unwrap().into_fit()).unwrap();
+    for n in [2, 3, 4] {
+        let jobs = (0..n)
+            .map(|k| {
+                let shard = FitRequest {
+                    shards: Some((k, n)),
+                    ..req.clone()
+                };
+                start_fit(&shard).unwrap().into_fit()
+            })
+            .collect();
+        let sharded = run_sharded_threads(jobs, &Cancel::new(), |_, _| {}).unwrap();
+        assert_eq!(sharded, one, "{n} shards");
+    }
+}

@@ -455,6 +455,48 @@ mod tests {
         }
     }
 
+    /// An evaluation is a function of its point alone: an evaluator reused
+    /// over a sequence of points gives at each the bits of a fresh one.
+    /// (Its memo of the items a big tile uses once kept marks from the
+    /// evaluation before, so an item could be left out of a tile: a sharded
+    /// fit, whose shards evaluate different points first, then ended
+    /// elsewhere than one fit. Found by the browser's diagonal-stripes fit.)
+    #[test]
+    fn a_reused_evaluator_gives_the_bits_of_a_fresh_one() {
+        let src = "background \"#0d3b66\";\n\
+             param angle in [-1.2, -0.4] = -0.62;\n\
+             param spacing in [0.09, 0.2] = 0.115;\n\
+             param width in [0.03, 0.08] = 0.04;\n\
+             let c = cos(angle); let s = sin(angle);\n\
+             for k in 0..20 { let d = (k - 10) * spacing;\n\
+               segment(0.5 - s * d - c, 0.5 + c * d - s, 0.5 - s * d + c, 0.5 + c * d + s, stroke: \"#f4d35e\", width: width); }\n\
+             for i in 0..4 { circle(0.2 + i * 0.2, 0.5, width * 2, fill: \"#aa0000\"); }";
+        let sc = scene(src);
+        let mut rng = crate::core::rng::Rng::new(7);
+        let mut reused = Evaluator::new(96, 1.0);
+        let mut nodes = vec![];
+        for point in 0..40 {
+            let values = [
+                -1.2 + 0.8 * rng.f64(),
+                0.09 + 0.11 * rng.f64(),
+                0.03 + 0.05 * rng.f64(),
+            ];
+            sc.rec.tape.forward(&values, &mut nodes);
+            reused.eval(&sc, &nodes, point % 2 == 0);
+            let mut fresh = Evaluator::new(96, 1.0);
+            fresh.eval(&sc, &nodes, point % 2 == 0);
+            assert!(
+                reused
+                    .s
+                    .iter()
+                    .zip(&fresh.s)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "point {point} {values:?}: the fields depend on the evaluation before"
+            );
+            assert_eq!(reused.work, fresh.work, "point {point}");
+        }
+    }
+
     use proptest::prelude::*;
 
     /// A number in `[lo, hi)` written with 3 decimals.

@@ -160,6 +160,12 @@ impl Evaluator {
             self.win.resize(nc * nn, NO_CODE);
         }
         self.centre_vals.resize(scene.items.len(), 0.0);
+        // `stamp[i] == tile_id`: item `i` is already in the current big
+        // tile's `used`. The ids restart at every evaluation, so the stamps
+        // of the last one must go: a stale stamp equal to a new tile's id
+        // would leave an item out of that tile, and the fields would depend
+        // on the evaluation before (a sharded fit then differed from one fit).
+        self.stamp.clear();
         self.stamp.resize(scene.items.len(), u32::MAX);
         self.tile_id = 0;
         self.raw_work = 0;
