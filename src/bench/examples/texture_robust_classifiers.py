@@ -13,6 +13,10 @@ expected calibration error (10 bins), and the same on our held-out bases.
 Also: bench/texture-train alone, and our training bases alone. PER=1:
 only ours + all TRAIN sets at weight 2, with each model's validation
 counts (top-1, top-3, the two commonest wrong answers) and per family.
+INDOMAIN=1: the ceiling inside one implementation: the last TRAIN set
+is held out, and the first 2, 4, ... of the others train (no Platt
+step; C 10 and 100); top-1 on the held-out set, then the commonest
+confusions of the largest training.
 Needs numpy, scikit-learn. Findings: docs/bench/texture-xset-2026-12-07b.md.
 """
 import csv
@@ -76,6 +80,25 @@ def run(label, parts):
     print(f"{label:44s} xval top1/top3/ECE {evaluate(clf, sc, V, yv)}"
           f" | ours held-out {evaluate(clf, sc, O[held], yo[held])}", flush=True)
     return clf, sc
+
+
+if os.environ.get("INDOMAIN"):
+    import collections
+    (T, yt), train = D3[-1], D3[:-1]
+    n = 2
+    while True:
+        n = min(n, len(train))
+        X = np.vstack([d[0] for d in train[:n]])
+        y = np.concatenate([d[1] for d in train[:n]])
+        sc = StandardScaler().fit(X)
+        for c in (10.0, 100.0):
+            p = SVC(C=c, random_state=0).fit(sc.transform(X), y).predict(sc.transform(T))
+            print(f"in-domain: {n} texture-train sets, C {c:g}: top-1 {(p == yt).mean():.3f}", flush=True)
+        if n == len(train):
+            break
+        n *= 2
+    print(collections.Counter((t, q) for t, q in zip(yt, p) if t != q).most_common(10))
+    sys.exit()
 
 
 if os.environ.get("PER"):
