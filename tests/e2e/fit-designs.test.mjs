@@ -53,7 +53,10 @@ test('a real diagonal-stripes design fits with the defaults: the global stage fi
   }));
   const fitted = Object.fromEntries(params.map((p, i) => [p.name, values[i]]));
   const truth = JSON.parse(design('diagonal-stripes.truth.json'));
-  assert.ok(Math.abs(fitted.angle - truth.angle) < 0.02, `angle ${fitted.angle}, truth ${truth.angle}`);
-  assert.ok(Math.abs(fitted.spacing - truth.spacing) < 0.003, `spacing ${fitted.spacing}, truth ${truth.spacing}`);
-  assert.ok(Math.abs(fitted.width - truth.width) < 0.004, `width ${fitted.width}, truth ${truth.width}`);
+  // What a failure needs to be read on another machine: the pool's size
+  // (the fit is sharded over it) and the stages the fit went through.
+  const seen = `(cores ${await page.evaluate(() => navigator.hardwareConcurrency)}; stages ${[...new Set(statuses.map((s) => s.replace(/ \d+%.*$/, '')))].join(' | ')})`;
+  assert.ok(Math.abs(fitted.angle - truth.angle) < 0.02, `angle ${fitted.angle}, truth ${truth.angle} ${seen}`);
+  assert.ok(Math.abs(fitted.spacing - truth.spacing) < 0.003, `spacing ${fitted.spacing}, truth ${truth.spacing} ${seen}`);
+  assert.ok(Math.abs(fitted.width - truth.width) < 0.004, `width ${fitted.width}, truth ${truth.width} ${seen}`);
 });
