@@ -35,6 +35,30 @@ async function dragStroke(page, points) {
   return w;
 }
 
+// Found when CI ran beside other work: the example's run finished before
+// the page had decoded its source for the canvas, and the decode then threw
+// that run's result away as "the old source's", leaving the source on screen
+// and no result under a "done" status. The decode is slowed here on purpose.
+test('a run that finishes before its source is decoded keeps its result', async () => {
+  const page = await env.newPage({ path: '#tool=pixel' });
+  await page.evaluate(() => {
+    const pool = window.filigree.pool;
+    const run = pool.run.bind(pool);
+    pool.run = (kind, ...rest) => (kind === 'decode-image'
+      ? new Promise((r) => setTimeout(r, 2500)).then(() => run(kind, ...rest))
+      : run(kind, ...rest));
+  });
+  await page.click('button[data-example=fish]');
+  await waitForResult(page);
+  const got = await page.evaluate(() => {
+    const r = window.filigree.testHooks.pixel.result();
+    return r && { width: r.width, height: r.height };
+  });
+  assert.deepEqual(got, { width: 128, height: 128 }, 'the fish\'s result is kept');
+  const stats = await page.$$eval('[data-stat]', (els) => els.length);
+  assert.ok(stats > 0, 'its figures are kept too');
+});
+
 test('texture the fish: strokes, mask-only changes, palette, density, export', async () => {
   const page = await env.newPage({ path: '#tool=pixel' });
   await page.click('button[data-example=fish]');

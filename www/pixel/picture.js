@@ -38,11 +38,14 @@ export function createPicture(ctx, { q, live }) {
       live.sourceBitmap = bitmap;
       live.sourceImg = { width: img.width, height: img.height };
       live.sourceOf = bytes;
-      // The old result belongs to the old source.
-      live.result = null;
-      ctx.release(live.resultBitmap);
-      live.resultBitmap = null;
-      q('.stats').replaceChildren();
+      // The old result belongs to the old source. A run of this source
+      // can finish before its decode (a slow machine): that result stays.
+      if (live.resultFor !== bytes) {
+        live.result = null;
+        ctx.release(live.resultBitmap);
+        live.resultBitmap = null;
+        q('.stats').replaceChildren();
+      }
       canvas.setImage(live.sourceBitmap, img.width, img.height);
       canvas.setMask(state().mask);
       drawBase();

@@ -44,6 +44,7 @@ export function createRunner(ctx, { q, live, picture, statusEl, status }) {
       const bitmap = await ctx.bitmap(new ImageData(new Uint8ClampedArray(r.rgba), r.width, r.height));
       if (running !== ctrl) { ctx.release(bitmap); return; }
       live.result = r;
+      live.resultFor = doc.source;
       ctx.release(live.resultBitmap);
       live.resultBitmap = bitmap;
       ctx.clearError('run');

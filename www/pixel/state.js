@@ -118,6 +118,7 @@ export function createLive() {
     sourceLoading: null, // the decoding under way (a promise)
     loadingFor: null, // the source bytes being decoded
     result: null, // the core's answer for the current state, or the last good one
+    resultFor: null, // the source bytes that result was made from
     resultBitmap: null,
     drawing: null, // the stroke or mask edit in progress
   };
