@@ -65,7 +65,8 @@ fn the_global_stage_finds_the_stripes_basin_the_ga_misses() {
 /// bit for bit. On the diagonal stripes 3 and 4 shards once ended
 /// elsewhere: the field evaluator's memo kept marks from the evaluation
 /// before, so a shard's results depended on which points it had evaluated
-/// first (CI failed on a machine whose pool differed from ours).
+/// first (found while looking into a CI failure of the browser's stripes
+/// fit on another machine, which this alone may not explain).
 #[test]
 fn the_stripes_fit_is_the_same_in_any_number_of_shards() {
     use filigree::core::job::Cancel;
