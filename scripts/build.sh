@@ -37,7 +37,7 @@ for m in $MODULES; do
   if [ "${FILIGREE_WASM_OPT:-1}" != 0 ]; then
     wasm-opt -O3 --enable-simd --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
       --enable-mutable-globals --enable-reference-types "$wasm" -o "$wasm.opt"
-    echo "build: $m: wasm-opt -O3 $(stat -c %s "$wasm") → $(stat -c %s "$wasm.opt") bytes"
+    echo "build: $m: wasm-opt -O3 $(stat -c %s "$wasm") → $(stat -c %s "$wasm.opt") bytes (at $SECONDS s of the build)"
     mv "$wasm.opt" "$wasm"
   fi
   wasm-bindgen --target web --no-typescript --out-dir pkg --out-name "filigree_$m" "$wasm"

@@ -9,9 +9,22 @@
 # inputs changed), and the browser end-to-end tests in headless Chromium.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-# Each step says when it starts (seconds since the start), so a slow CI
-# run shows where its time went.
-step() { printf '\n== %s (at %d s)\n' "$*" "$SECONDS"; }
+# Each step says when it starts (seconds since the start) and how busy the
+# machine's cores were since the step before (core-seconds busy of those
+# available, from /proc/stat), so a slow CI run shows where its time went
+# and whether it waited or computed. (On this 2-core machine every phase
+# keeps both cores 95-100% busy: CI time is its CPU work over the cores,
+# docs/bench/ci-budget-2026-12-07.md.)
+cpu_ticks() { [ -r /proc/stat ] && awk '/^cpu /{print $2+$3+$4+$7+$8+$9, $5+$6; exit}' /proc/stat || echo "0 0"; }
+read -r busy_last idle_last <<< "$(cpu_ticks)"
+step() {
+  local busy idle hz
+  read -r busy idle <<< "$(cpu_ticks)"
+  hz=$(getconf CLK_TCK 2>/dev/null || echo 100)
+  printf '\n== %s (at %d s; since the last step %d core-s busy of %d)\n' "$*" "$SECONDS" \
+    $(( (busy - busy_last) / hz )) $(( (busy - busy_last + idle - idle_last) / hz ))
+  busy_last=$busy idle_last=$idle
+}
 # A fresh clone has no incremental cache to reuse, and writing one costs:
 # with the dev profile's `lto = "off"` (Cargo.toml), the native test build
 # took 508 CPU-s incrementally and 435 without, in 16 codegen units a crate
