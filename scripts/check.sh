@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 # machine's cores were since the step before (core-seconds busy of those
 # available, from /proc/stat), so a slow CI run shows where its time went
 # and whether it waited or computed. (On this 2-core machine every phase
-# keeps both cores 95-100% busy: CI time is its CPU work over the cores,
+# keeps both cores 93-99% busy: CI time is its CPU work over the cores,
 # docs/bench/ci-budget-2026-12-07.md.)
 cpu_ticks() { [ -r /proc/stat ] && awk '/^cpu /{print $2+$3+$4+$7+$8+$9, $5+$6; exit}' /proc/stat || echo "0 0"; }
 read -r busy_last idle_last <<< "$(cpu_ticks)"
